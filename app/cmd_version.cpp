@@ -1,0 +1,24 @@
+#include <CLI/CLI.hpp>
+#include <Eigen/Core>
+#include <cstdio>
+
+#include "app/commands.h"
+#include "build_info.h"
+
+namespace sirl::app {
+
+void register_version(CLI::App& app, Runner& run) {
+  app.add_subcommand("version", "Print the version, git commit, compiler and flags of this build");
+  run = [] {
+    std::printf("sirl-bench %s\n", SIRL_VERSION);
+    std::printf("commit:    %s\n", SIRL_GIT_COMMIT);
+    std::printf("build:     %s\n", SIRL_BUILD_TYPE);
+    std::printf("compiler:  %s\n", SIRL_CXX_COMPILER);
+    std::printf("flags:     %s\n", SIRL_CXX_FLAGS);
+    std::printf("eigen:     %d.%d.%d (SIMD: %s)\n", EIGEN_WORLD_VERSION, EIGEN_MAJOR_VERSION,
+                EIGEN_MINOR_VERSION, Eigen::SimdInstructionSetsInUse());
+    return 0;
+  };
+}
+
+}  // namespace sirl::app

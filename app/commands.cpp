@@ -1,0 +1,28 @@
+#include "app/commands.h"
+
+#include <CLI/CLI.hpp>
+#include <map>
+#include <string>
+
+namespace sirl::app {
+namespace {
+std::map<std::string, Runner>& runners() {
+  static std::map<std::string, Runner> r;
+  return r;
+}
+}  // namespace
+
+void register_all(CLI::App& app) {
+  register_version(app, runners()["version"]);
+  register_reproduce(app, runners()["reproduce"]);
+}
+
+int run_selected(CLI::App& app) {
+  for (auto* sub : app.get_subcommands()) {
+    auto it = runners().find(sub->get_name());
+    if (it != runners().end() && it->second) return it->second();
+  }
+  return 2;
+}
+
+}  // namespace sirl::app

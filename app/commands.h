@@ -1,0 +1,26 @@
+// Registry of the `sirl` subcommands. Each cmd_*.cpp defines one `register_*` function that
+// adds its CLI11 subcommand and sets `callback` (run after a successful parse).
+#pragma once
+#include <functional>
+#include <stdexcept>
+
+namespace CLI {
+class App;
+}
+
+namespace sirl::app {
+
+// A bad value found after parsing (e.g. a file that does not exist): exit code 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+using Runner = std::function<int()>;
+
+void register_version(CLI::App& app, Runner& run);
+void register_reproduce(CLI::App& app, Runner& run);
+
+void register_all(CLI::App& app);
+int run_selected(CLI::App& app);
+
+}  // namespace sirl::app

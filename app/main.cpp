@@ -1,0 +1,38 @@
+// The `sirl` command line: one executable, one subcommand per job.
+// Each subcommand lives in its own app/cmd_*.cpp and registers itself through commands.h.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+
+#include "app/commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "sirl-bench: reproduces the SIRL paper (Bobu, Liu et al., HRI 2023) - learning robot-behaviour\n"
+      "representations from 'which two of these three are most alike?' answers - as a fast,\n"
+      "deterministic benchmark. Run `sirl <command> --help` for the options of each command.",
+      "sirl"};
+  app.require_subcommand(1);
+  app.fallthrough(false);
+  sirl::app::register_all(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // One line naming the option and what it accepts; exit code 2 for every usage error.
+    std::fprintf(stderr, "sirl: error: %s (see `sirl --help`)\n", e.what());
+    return 2;
+  }
+  try {
+    return sirl::app::run_selected(app);
+  } catch (const sirl::app::UsageError& e) {
+    std::fprintf(stderr, "sirl: error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "sirl: error: %s\n", e.what());
+    return 1;
+  }
+}

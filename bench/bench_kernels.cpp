@@ -1,0 +1,70 @@
+// Kernel micro-benchmarks (Google Benchmark). Every case reports GFLOP/s through a counter:
+// FLOPs = 2·in·out per layer per sample forward, ×3 for forward + backward (DESIGN.md §9).
+//   sirl_bench_kernels --benchmark_format=json > kernels.json
+#include <benchmark/benchmark.h>
+
+#include <vector>
+
+#include "engine/train_step.h"
+#include "kernels/rng.h"
+
+namespace {
+using namespace sirl;
+
+std::vector<float> random_inputs(int rows, int cols, Rng& rng) {
+  std::vector<float> x(size_t(rows) * cols);
+  for (auto& v : x) v = float(rng.normal());
+  return x;
+}
+
+std::vector<float> init_params(const MlpShape& s, int models, Rng& rng) {
+  std::vector<float> p(s.param_count() * models);
+  for (int m = 0; m < models; ++m) mlp_init(s, p.data() + m * s.param_count(), rng);
+  return p;
+}
+
+// One SIRL training step: 64 triplets (192 trajectories) through φ, triplet loss, backward, Adam.
+// Args: {input width, hidden width, threads}.
+void BM_SirlStep(benchmark::State& state) {
+  const int in = int(state.range(0)), hidden = int(state.range(1)), threads = int(state.range(2));
+  const int B = 64, T = 1000;
+  MlpShape s{{in, hidden, hidden, 6}};
+  Rng rng(1);
+  auto X = random_inputs(T, in, rng);
+  Trainer t(s, AdamConfig{0.004, 0.99999}, init_params(s, 1, rng));
+  std::vector<int32_t> trip(3 * B);
+  for (auto& v : trip) v = int32_t(rng.uniform_int(T));
+  for (auto _ : state) benchmark::DoNotOptimize(triplet_train_step(t, X.data(), trip.data(), B, 1.f, threads));
+  const double flops = 3 * s.forward_flops(3 * B);
+  state.counters["GFLOP/s"] = benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["steps/s"] = benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_SirlStep)->ArgNames({"in", "hidden", "threads"})
+    ->Args({19, 128, 1})->Args({2037, 1024, 1})->Args({2037, 1024, 2})
+    ->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// 20 TPA reward heads (6→h→h→1) trained side by side, 64 pairs (128 trajectories) each.
+// Args: {hidden width, threads}.
+void BM_TpaHeadsStep(benchmark::State& state) {
+  const int hidden = int(state.range(0)), threads = int(state.range(1));
+  const int M = 20, B = 64, T = 1000;
+  MlpShape s{{6, hidden, hidden, 1}};
+  Rng rng(2);
+  auto X = random_inputs(T, 6, rng);
+  BatchedTrainer t(s, M, AdamConfig{0.001, 1.0}, init_params(s, M, rng));
+  std::vector<int32_t> pairs(size_t(M) * B * 2);
+  std::vector<float> label(size_t(M) * B);
+  for (auto& v : pairs) v = int32_t(rng.uniform_int(T));
+  for (auto& v : label) v = float(rng.uniform_int(2));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(preference_train_step_batched(t, X.data(), pairs.data(), label.data(), B, 10.f, threads));
+  const double flops = 3 * s.forward_flops(2 * B) * M;
+  state.counters["GFLOP/s"] = benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["steps/s"] = benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_TpaHeadsStep)->ArgNames({"hidden", "threads"})
+    ->Args({128, 1})->Args({128, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();

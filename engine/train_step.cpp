@@ -1,0 +1,94 @@
+#include "engine/train_step.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include "kernels/bradley_terry_loss.h"
+#include "kernels/triplet_loss.h"
+
+namespace sirl {
+
+Trainer::Trainer(MlpShape s, AdamConfig cfg, std::vector<float> initial_params)
+    : shape(std::move(s)),
+      adam_cfg(cfg),
+      params(std::move(initial_params)),
+      grad(params.size(), 0.f),
+      adam(params.size()) {
+  validate(shape);
+}
+
+void gather_rows(const float* X, int in, const int32_t* rows, int n, float* out) {
+  for (int i = 0; i < n; ++i) std::memcpy(out + size_t(i) * in, X + size_t(rows[i]) * in, sizeof(float) * in);
+}
+
+float triplet_train_step(Trainer& t, const float* X, const int32_t* triplets, int B, float margin,
+                         int threads) {
+  const int in = t.shape.in(), d = t.shape.out();
+  t.batch_x.resize(size_t(3) * B * in);
+  for (int role = 0; role < 3; ++role)
+    for (int i = 0; i < B; ++i)
+      std::memcpy(t.batch_x.data() + (size_t(role) * B + i) * in,
+                  X + size_t(triplets[3 * i + role]) * in, sizeof(float) * in);
+  mlp_forward(t.shape, t.params.data(), t.batch_x.data(), 3 * B, t.tape, threads);
+  t.d_out.resize(size_t(3) * B * d);
+  const float loss = symmetric_triplet_loss(t.tape.output(), B, d, margin, t.d_out.data());
+  std::fill(t.grad.begin(), t.grad.end(), 0.f);
+  mlp_backward(t.shape, t.params.data(), t.tape, t.d_out.data(), t.grad.data(), static_cast<float*>(nullptr), threads);
+  adam_step(t.adam_cfg, t.adam, t.params.data(), t.grad.data(), t.params.size());
+  return loss;
+}
+
+float preference_train_step(Trainer& t, const float* X, const int32_t* pairs, const float* label,
+                            int B, float l2_weight, int threads) {
+  const int in = t.shape.in();
+  t.batch_x.resize(size_t(2) * B * in);
+  for (int role = 0; role < 2; ++role)
+    for (int i = 0; i < B; ++i)
+      std::memcpy(t.batch_x.data() + (size_t(role) * B + i) * in,
+                  X + size_t(pairs[2 * i + role]) * in, sizeof(float) * in);
+  mlp_forward(t.shape, t.params.data(), t.batch_x.data(), 2 * B, t.tape, threads);
+  t.d_out.resize(size_t(2) * B);
+  const float loss = bradley_terry_loss(t.tape.output(), label, B, l2_weight, t.d_out.data());
+  std::fill(t.grad.begin(), t.grad.end(), 0.f);
+  mlp_backward(t.shape, t.params.data(), t.tape, t.d_out.data(), t.grad.data(), static_cast<float*>(nullptr), threads);
+  adam_step(t.adam_cfg, t.adam, t.params.data(), t.grad.data(), t.params.size());
+  return loss;
+}
+
+BatchedTrainer::BatchedTrainer(MlpShape s, int m, AdamConfig cfg, std::vector<float> initial)
+    : shape(std::move(s)),
+      models(m),
+      adam_cfg(cfg),
+      params(std::move(initial)),
+      grad(params.size(), 0.f),
+      adam(params.size()),
+      losses(m, 0.f) {
+  validate(shape);
+}
+
+float preference_train_step_batched(BatchedTrainer& t, const float* X, const int32_t* pairs,
+                                    const float* label, int B, float l2_weight, int threads) {
+  const int in = t.shape.in(), M = t.models;
+  const size_t per_model = size_t(2) * B * in;
+  t.batch_x.resize(M * per_model);
+  for (int m = 0; m < M; ++m)
+    for (int role = 0; role < 2; ++role)
+      for (int i = 0; i < B; ++i)
+        std::memcpy(t.batch_x.data() + m * per_model + (size_t(role) * B + i) * in,
+                    X + size_t(pairs[(size_t(m) * B + i) * 2 + role]) * in, sizeof(float) * in);
+  mlp_forward_batched(t.shape, M, t.params.data(), t.batch_x.data(), 2 * B, t.tapes, threads);
+  t.d_out.resize(size_t(M) * 2 * B);
+  float total = 0;
+  for (int m = 0; m < M; ++m) {
+    t.losses[m] = bradley_terry_loss(t.tapes[m].output(), label + size_t(m) * B, B, l2_weight,
+                                     t.d_out.data() + size_t(m) * 2 * B);
+    total += t.losses[m];
+  }
+  std::fill(t.grad.begin(), t.grad.end(), 0.f);
+  mlp_backward_batched(t.shape, M, t.params.data(), t.tapes, t.d_out.data(), t.grad.data(),
+                       static_cast<float*>(nullptr), threads);
+  adam_step(t.adam_cfg, t.adam, t.params.data(), t.grad.data(), t.params.size());
+  return total / M;
+}
+
+}  // namespace sirl

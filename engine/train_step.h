@@ -1,0 +1,57 @@
+// One optimizer step of each training objective: forward, loss, backward, Adam.
+// A Trainer is the mutable workspace of one training run (MuJoCo's mjData in spirit): it owns
+// the parameters, gradients, optimizer moments and activation buffers; nothing is global.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "kernels/adam.h"
+#include "kernels/mlp.h"
+
+namespace sirl {
+
+struct Trainer {
+  MlpShape shape;
+  AdamConfig adam_cfg;
+  std::vector<float> params, grad;  // [P]
+  AdamState adam;
+  MlpTape<float> tape;
+  std::vector<float> batch_x, d_out;  // gathered inputs, ∂L/∂output
+
+  Trainer(MlpShape s, AdamConfig cfg, std::vector<float> initial_params);
+};
+
+// rows [n] indices into X [T, in] → out [n, in].
+void gather_rows(const float* X, int in, const int32_t* rows, int n, float* out);
+
+// Symmetric triplet step on B triplets given as row indices into X:
+//   triplets [B, 3] = (P1, P2, N); the network sees [3B, in] stacked P1 | P2 | N.
+// Returns the loss before the update.
+float triplet_train_step(Trainer& t, const float* X, const int32_t* triplets, int B, float margin,
+                         int threads = 1);
+
+// Bradley–Terry step for a reward network R: pairs [B, 2] = (A, B) row indices into X,
+// label [B] (1 = A preferred). Returns the loss before the update.
+float preference_train_step(Trainer& t, const float* X, const int32_t* pairs, const float* label,
+                            int B, float l2_weight, int threads = 1);
+
+// M reward heads of one shape trained side by side (the 20 TPA heads of a cell, or seeds),
+// each with its own weights, its own pairs and its own labels; one Adam over all M·P values.
+struct BatchedTrainer {
+  MlpShape shape;
+  int models = 0;
+  AdamConfig adam_cfg;
+  std::vector<float> params, grad;  // [M, P]
+  AdamState adam;
+  std::vector<MlpTape<float>> tapes;
+  std::vector<float> batch_x, d_out;  // [M, 2B, in], [M, 2B]
+  std::vector<float> losses;          // [M] loss of each head at the last step
+
+  BatchedTrainer(MlpShape s, int models, AdamConfig cfg, std::vector<float> initial_params);
+};
+
+// pairs [M, B, 2] row indices into X [T, in]; label [M, B]. Returns the mean loss over heads.
+float preference_train_step_batched(BatchedTrainer& t, const float* X, const int32_t* pairs,
+                                    const float* label, int B, float l2_weight, int threads = 1);
+
+}  // namespace sirl

@@ -1,0 +1,31 @@
+// Adam with an exponentially decaying learning rate lr·decay^step, matching
+// torch.optim.Adam (β1 0.9, β2 0.999, ε 1e-8, no weight decay) stepped with
+// torch.optim.lr_scheduler.ExponentialLR(γ = decay) after every optimizer step.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace sirl {
+
+struct AdamConfig {
+  double lr = 1e-3;
+  double decay = 1.0;  // per step; the paper uses 0.99999
+  double beta1 = 0.9;
+  double beta2 = 0.999;
+  double eps = 1e-8;
+};
+
+struct AdamState {
+  std::vector<float> m, v;  // first and second moments, one per parameter
+  int64_t step = 0;         // optimizer steps taken so far
+  explicit AdamState(size_t n = 0) : m(n, 0.f), v(n, 0.f) {}
+};
+
+// Learning rate used by step number `t` (1-based): lr·decay^(t−1).
+double adam_lr(const AdamConfig& cfg, int64_t t);
+
+// One step over params [n] with gradient grad [n] (PyTorch's arithmetic, in float).
+void adam_step(const AdamConfig& cfg, AdamState& state, float* params, const float* grad, size_t n);
+
+}  // namespace sirl

@@ -1,0 +1,19 @@
+// The FPE probe: least squares Y ≈ [X 1]·β with a bias, solved in closed form (double precision).
+#pragma once
+#include <vector>
+
+namespace sirl {
+
+struct LinearProbe {
+  int in = 0, out = 0;
+  std::vector<double> weights;  // [in + 1, out]: rows 0..in−1 for the inputs, row `in` the bias
+};
+
+// X [n, in], Y [n, out] row-major. Column-pivoting QR, so rank-deficient X (dead or constant
+// embedding units) still gives the minimum-residual fit. Throws std::invalid_argument if n < 1.
+LinearProbe fit_linear_probe(const float* X, const float* Y, int n, int in, int out);
+
+// Mean over the n·out entries of (prediction − Y)².
+double linear_probe_mse(const LinearProbe& probe, const float* X, const float* Y, int n);
+
+}  // namespace sirl

@@ -1,0 +1,142 @@
+#include "kernels/mlp.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "kernels/gemm.h"
+
+namespace sirl {
+
+void validate(const MlpShape& shape) {
+  if (shape.widths.size() < 2)
+    throw std::invalid_argument("MLP needs at least an input and an output width");
+  for (int w : shape.widths)
+    if (w < 1) throw std::invalid_argument("MLP width must be >= 1, got " + std::to_string(w));
+}
+
+size_t MlpShape::weight_offset(int layer) const {
+  size_t off = 0;
+  for (int l = 0; l < layer; ++l) off += size_t(widths[l]) * widths[l + 1] + widths[l + 1];
+  return off;
+}
+
+size_t MlpShape::param_count() const { return weight_offset(layers()); }
+
+double MlpShape::forward_flops(int batch) const {
+  double f = 0;
+  for (int l = 0; l < layers(); ++l) f += 2.0 * widths[l] * widths[l + 1];
+  return f * batch;
+}
+
+template <typename T>
+void mlp_forward(const MlpShape& s, const T* params, const T* x, int batch, MlpTape<T>& tape,
+                 int threads) {
+  const int L = s.layers();
+  tape.batch = batch;
+  tape.input = x;
+  tape.act.resize(L);
+  const T* in = x;
+  for (int l = 0; l < L; ++l) {
+    const int ni = s.widths[l], no = s.widths[l + 1];
+    auto& y = tape.act[l];
+    y.resize(size_t(batch) * no);
+    const T* W = params + s.weight_offset(l);  // [no, ni]
+    const T* b = params + s.bias_offset(l);    // [no]
+    // y [batch, no] = in [batch, ni] · Wᵀ
+    matmul_nt(y.data(), in, W, batch, no, ni, false, threads);
+    const bool relu = l + 1 < L || s.relu_on_output;
+    for (int r = 0; r < batch; ++r) {
+      T* row = y.data() + size_t(r) * no;
+      if (relu)
+        for (int j = 0; j < no; ++j) row[j] = std::max(row[j] + b[j], T(0));
+      else
+        for (int j = 0; j < no; ++j) row[j] += b[j];
+    }
+    in = y.data();
+  }
+}
+
+template <typename T>
+void mlp_backward(const MlpShape& s, const T* params, MlpTape<T>& tape,
+                  const std::type_identity_t<T>* dout, std::type_identity_t<T>* dparams,
+                  std::type_identity_t<T>* dx, int threads) {
+  const int L = s.layers(), batch = tape.batch;
+  const int maxw = *std::max_element(s.widths.begin(), s.widths.end());
+  tape.grad.resize(size_t(batch) * maxw);
+  tape.grad_next.resize(size_t(batch) * maxw);
+  // g holds ∂L/∂(pre-activation) of layer l, [batch, no].
+  std::copy(dout, dout + size_t(batch) * s.out(), tape.grad.data());
+  for (int l = L - 1; l >= 0; --l) {
+    const int ni = s.widths[l], no = s.widths[l + 1];
+    T* g = tape.grad.data();
+    const bool relu = l + 1 < L || s.relu_on_output;
+    if (relu) {  // the ReLU mask: output > 0 ⇔ pre-activation > 0
+      const T* y = tape.act[l].data();
+      for (size_t i = 0; i < size_t(batch) * no; ++i)
+        if (y[i] <= T(0)) g[i] = T(0);
+    }
+    const T* in = l == 0 ? tape.input : tape.act[l - 1].data();  // [batch, ni]
+    T* dW = dparams + s.weight_offset(l);                          // [no, ni]
+    T* db = dparams + s.bias_offset(l);                            // [no]
+    // dW [no, ni] += gᵀ [no, batch] · in [batch, ni]
+    matmul_tn(dW, g, in, no, ni, batch, true, threads);
+    for (int r = 0; r < batch; ++r)
+      for (int j = 0; j < no; ++j) db[j] += g[size_t(r) * no + j];
+    if (l > 0 || dx) {
+      // d_in [batch, ni] = g [batch, no] · W [no, ni]
+      T* d_in = l > 0 ? tape.grad_next.data() : dx;
+      matmul_nn(d_in, g, params + s.weight_offset(l), batch, ni, no, false, threads);
+      if (l > 0) std::swap(tape.grad, tape.grad_next);
+    }
+  }
+}
+
+template <typename T>
+void mlp_forward_batched(const MlpShape& s, int models, const T* params, const T* x, int batch,
+                         std::vector<MlpTape<T>>& tapes, int threads) {
+  const size_t P = s.param_count(), X = size_t(batch) * s.in();
+  tapes.resize(models);
+#pragma omp parallel for num_threads(std::max(1, threads)) schedule(static) if (threads > 1)
+  for (int m = 0; m < models; ++m) mlp_forward(s, params + m * P, x + m * X, batch, tapes[m], 1);
+}
+
+template <typename T>
+void mlp_backward_batched(const MlpShape& s, int models, const T* params,
+                          std::vector<MlpTape<T>>& tapes, const std::type_identity_t<T>* dout,
+                          std::type_identity_t<T>* dparams, std::type_identity_t<T>* dx,
+                          int threads) {
+  const size_t P = s.param_count(), X = size_t(tapes.empty() ? 0 : tapes[0].batch) * s.in();
+#pragma omp parallel for num_threads(std::max(1, threads)) schedule(static) if (threads > 1)
+  for (int m = 0; m < models; ++m) {
+    const size_t O = size_t(tapes[m].batch) * s.out();
+    mlp_backward(s, params + m * P, tapes[m], dout + m * O, dparams + m * P,
+                 dx ? dx + m * X : nullptr, 1);
+  }
+}
+
+void mlp_init(const MlpShape& s, float* params, Rng& rng) {
+  validate(s);
+  for (int l = 0; l < s.layers(); ++l) {
+    const int ni = s.widths[l], no = s.widths[l + 1];
+    const double bound = 1.0 / std::sqrt(double(ni));
+    float* W = params + s.weight_offset(l);
+    for (size_t i = 0; i < size_t(no) * ni; ++i) W[i] = float(rng.uniform(-bound, bound));
+    float* b = params + s.bias_offset(l);
+    for (int j = 0; j < no; ++j) b[j] = float(rng.uniform(-bound, bound));
+  }
+}
+
+#define SIRL_INSTANTIATE(T)                                                                       \
+  template void mlp_forward<T>(const MlpShape&, const T*, const T*, int, MlpTape<T>&, int);       \
+  template void mlp_backward<T>(const MlpShape&, const T*, MlpTape<T>&, const T*, T*, T*, int);   \
+  template void mlp_forward_batched<T>(const MlpShape&, int, const T*, const T*, int,             \
+                                       std::vector<MlpTape<T>>&, int);                            \
+  template void mlp_backward_batched<T>(const MlpShape&, int, const T*, std::vector<MlpTape<T>>&, \
+                                        const T*, T*, T*, int);
+SIRL_INSTANTIATE(float)
+SIRL_INSTANTIATE(double)
+#undef SIRL_INSTANTIATE
+
+}  // namespace sirl

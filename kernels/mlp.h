@@ -1,0 +1,73 @@
+// Multi-layer perceptron: Linear (+ReLU) stacks of any widths, forward and backward over a
+// batch, llm.c style. All parameters of one model live in one flat buffer:
+//   for each layer l: W_l [out_l, in_l] row-major (PyTorch's nn.Linear layout), then b_l [out_l].
+// Activations are row-major [batch, width]: one sample per row.
+// Templated on the scalar so gradient checks can run the very same code in double.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <type_traits>
+#include <vector>
+
+#include "kernels/rng.h"
+
+namespace sirl {
+
+struct MlpShape {
+  std::vector<int> widths;      // [in, hidden..., out], at least two entries
+  bool relu_on_output = false;  // ReLU after the last Linear too (default: linear output)
+
+  int layers() const { return static_cast<int>(widths.size()) - 1; }
+  int in() const { return widths.front(); }
+  int out() const { return widths.back(); }
+  size_t param_count() const;
+  size_t weight_offset(int layer) const;
+  size_t bias_offset(int layer) const { return weight_offset(layer) + size_t(widths[layer]) * widths[layer + 1]; }
+  // 2·in·out multiply-adds per layer per sample (biases and ReLU not counted).
+  double forward_flops(int batch) const;
+};
+
+// Throws std::invalid_argument on fewer than two widths or a width < 1.
+void validate(const MlpShape& shape);
+
+// What one forward pass keeps for its backward pass.
+template <typename T>
+struct MlpTape {
+  int batch = 0;
+  const T* input = nullptr;         // [batch, in], not owned: must outlive the backward call
+  std::vector<std::vector<T>> act;  // act[l]: [batch, widths[l+1]] output of layer l (post-ReLU)
+  std::vector<T> grad, grad_next;   // backward scratch, [batch, max width]
+  const T* output() const { return act.back().data(); }
+  T* output() { return act.back().data(); }
+};
+
+// x [batch, in] → tape.output() [batch, out].
+template <typename T>
+void mlp_forward(const MlpShape& shape, const T* params, const T* x, int batch, MlpTape<T>& tape,
+                 int threads = 1);
+
+// dout [batch, out] = ∂L/∂output. Adds ∂L/∂params into dparams [P] (accumulates: zero it first
+// for a fresh gradient). Writes ∂L/∂x into dx [batch, in] when dx is not null.
+template <typename T>
+void mlp_backward(const MlpShape& shape, const T* params, MlpTape<T>& tape,
+                  const std::type_identity_t<T>* dout, std::type_identity_t<T>* dparams,
+                  std::type_identity_t<T>* dx, int threads = 1);
+
+// B models of one shape at once, each with its own weights and its own mini-batch:
+//   params [B, P], x [B, batch, in], tapes[b] holds model b's activations.
+// `threads` > 1 spreads the models over OpenMP threads (results identical for any count).
+template <typename T>
+void mlp_forward_batched(const MlpShape& shape, int models, const T* params, const T* x, int batch,
+                         std::vector<MlpTape<T>>& tapes, int threads = 1);
+// dout [B, batch, out]; dparams [B, P] accumulated; dx [B, batch, in] or null.
+template <typename T>
+void mlp_backward_batched(const MlpShape& shape, int models, const T* params,
+                          std::vector<MlpTape<T>>& tapes, const std::type_identity_t<T>* dout,
+                          std::type_identity_t<T>* dparams, std::type_identity_t<T>* dx,
+                          int threads = 1);
+
+// PyTorch's nn.Linear default: W ~ U(±1/√fan_in) (Kaiming-uniform with a = √5), b ~ U(±1/√fan_in).
+// Draws layer by layer, W row-major then b, from `rng`.
+void mlp_init(const MlpShape& shape, float* params, Rng& rng);
+
+}  // namespace sirl

@@ -1,0 +1,77 @@
+#include "kernels/vae.h"
+
+#include <cmath>
+
+namespace sirl {
+
+VaeShape make_vae_shape(int in, const std::vector<int>& hidden, int latent) {
+  VaeShape s;
+  s.latent = latent;
+  s.encoder.widths = {in};
+  s.encoder.widths.insert(s.encoder.widths.end(), hidden.begin(), hidden.end());
+  s.encoder.widths.push_back(2 * latent);
+  s.decoder.widths = {latent};
+  s.decoder.widths.insert(s.decoder.widths.end(), hidden.rbegin(), hidden.rend());
+  s.decoder.widths.push_back(in);
+  validate(s.encoder);
+  validate(s.decoder);
+  return s;
+}
+
+template <typename T>
+T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const T* eps,
+                    T kl_weight, T* dparams, VaeWorkspace<T>& ws, VaeLossParts* parts,
+                    int threads) {
+  const int in = s.encoder.in(), d = s.latent;
+  const T* enc_p = params;
+  const T* dec_p = params + s.encoder.param_count();
+  // Encode: h [B, 2d] = (μ | log σ²); sample z [B, d].
+  mlp_forward(s.encoder, enc_p, x, B, ws.enc, threads);
+  const T* h = ws.enc.output();
+  ws.z.resize(size_t(B) * d);
+  for (int i = 0; i < B; ++i)
+    for (int k = 0; k < d; ++k) {
+      const T mu = h[size_t(i) * 2 * d + k], lv = h[size_t(i) * 2 * d + d + k];
+      ws.z[size_t(i) * d + k] = mu + std::exp(T(0.5) * lv) * eps[size_t(i) * d + k];
+    }
+  // Decode: x̂ [B, in].
+  mlp_forward(s.decoder, dec_p, ws.z.data(), B, ws.dec, threads);
+  const T* xr = ws.dec.output();
+  T rec = 0, kl = 0;
+  const T inv_n = T(1) / (T(B) * in), inv_b = T(1) / T(B);
+  ws.d_recon.resize(size_t(B) * in);
+  for (size_t j = 0; j < size_t(B) * in; ++j) {
+    const T e = xr[j] - x[j];
+    rec += e * e;
+    ws.d_recon[j] = 2 * e * inv_n;
+  }
+  rec *= inv_n;
+  ws.d_z.resize(size_t(B) * d);
+  if (dparams) mlp_backward(s.decoder, dec_p, ws.dec, ws.d_recon.data(), dparams + s.encoder.param_count(), ws.d_z.data(), threads);
+  ws.d_enc_out.resize(size_t(B) * 2 * d);
+  for (int i = 0; i < B; ++i)
+    for (int k = 0; k < d; ++k) {
+      const size_t im = size_t(i) * 2 * d + k, il = im + d, iz = size_t(i) * d + k;
+      const T mu = h[im], lv = h[il], sd = std::exp(T(0.5) * lv);
+      kl += T(-0.5) * (1 + lv - mu * mu - sd * sd);
+      // through z = μ + σ·ε, plus the KL term's own gradient
+      ws.d_enc_out[im] = ws.d_z[iz] + kl_weight * mu * inv_b;
+      ws.d_enc_out[il] = ws.d_z[iz] * eps[iz] * T(0.5) * sd + kl_weight * T(0.5) * (sd * sd - 1) * inv_b;
+    }
+  kl *= inv_b;
+  if (dparams) mlp_backward(s.encoder, enc_p, ws.enc, ws.d_enc_out.data(), dparams, static_cast<T*>(nullptr), threads);
+  if (parts) {
+    parts->reconstruction = double(rec);
+    parts->kl = double(kl);
+  }
+  return rec + kl_weight * kl;
+}
+
+template float vae_loss_and_grad<float>(const VaeShape&, const float*, const float*, int,
+                                        const float*, float, float*, VaeWorkspace<float>&,
+                                        VaeLossParts*, int);
+template double vae_loss_and_grad<double>(const VaeShape&, const double*, const double*, int,
+                                          const double*, double, double*, VaeWorkspace<double>&,
+                                          VaeLossParts*, int);
+
+}  // namespace sirl

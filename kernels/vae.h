@@ -1,0 +1,42 @@
+// Variational auto-encoder loss and gradient (Kingma & Welling), the paper's unsupervised
+// pre-training: Gaussian encoder → reparameterised sample → decoder.
+//   encoder MLP: in → hidden… → 2·latent   (columns [0,latent) = mean μ, [latent,2·latent) = log σ²)
+//   decoder MLP: latent → hidden… → in
+// The encoder's mean head has exactly φ's shape (in → hidden… → latent), so SIRL+VAE copies it.
+#pragma once
+#include <vector>
+
+#include "kernels/mlp.h"
+
+namespace sirl {
+
+struct VaeShape {
+  MlpShape encoder, decoder;
+  int latent = 0;
+  size_t param_count() const { return encoder.param_count() + decoder.param_count(); }
+};
+
+// hidden = e.g. {128, 128}: encoder in→128→128→2·latent, decoder latent→128→128→in.
+VaeShape make_vae_shape(int in, const std::vector<int>& hidden, int latent);
+
+struct VaeLossParts {
+  double reconstruction = 0;  // mean over batch·in of (x̂ − x)²
+  double kl = 0;              // mean over batch of KL(q(z|x) ‖ N(0, I))
+};
+
+template <typename T>
+struct VaeWorkspace {
+  MlpTape<T> enc, dec;
+  std::vector<T> z, d_recon, d_z, d_enc_out;
+};
+
+// params = [encoder params | decoder params]; x [B, in]; eps [B, latent] standard-normal noise
+// (drawn by the caller so the step is a pure function). z = μ + exp(½ log σ²)·eps.
+//   L = (1/(B·in)) Σ (x̂ − x)²  +  λ · (1/B) Σ_i −½ Σ_k (1 + log σ² − μ² − σ²)
+// Adds ∂L/∂params into dparams (zero it first). Returns L.
+template <typename T>
+T vae_loss_and_grad(const VaeShape& shape, const T* params, const T* x, int B, const T* eps,
+                    T kl_weight, T* dparams, VaeWorkspace<T>& ws, VaeLossParts* parts = nullptr,
+                    int threads = 1);
+
+}  // namespace sirl

@@ -1,0 +1,136 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "kernels/mlp.h"
+#include "tests/grad_check.h"
+
+namespace sirl {
+namespace {
+
+std::vector<double> random_vec(size_t n, Rng& rng, double scale = 1.0) {
+  std::vector<double> v(n);
+  for (auto& x : v) x = scale * rng.normal();
+  return v;
+}
+
+// L = Σ c ⊙ MLP(x): checks ∂L/∂params and ∂L/∂x against finite differences.
+void check_mlp_gradients(const MlpShape& shape, int batch) {
+  Rng rng(42);
+  auto params = random_vec(shape.param_count(), rng, 0.7);
+  auto x = random_vec(size_t(batch) * shape.in(), rng);
+  auto c = random_vec(size_t(batch) * shape.out(), rng);
+  auto loss = [&](const std::vector<double>& p, const std::vector<double>& xin) {
+    MlpTape<double> tape;
+    mlp_forward(shape, p.data(), xin.data(), batch, tape);
+    double s = 0;
+    for (size_t i = 0; i < c.size(); ++i) s += c[i] * tape.output()[i];
+    return s;
+  };
+  MlpTape<double> tape;
+  mlp_forward(shape, params.data(), x.data(), batch, tape);
+  std::vector<double> dp(params.size(), 0.0), dx(x.size(), 0.0);
+  mlp_backward(shape, params.data(), tape, c.data(), dp.data(), dx.data());
+  test::expect_gradient_matches([&](const std::vector<double>& p) { return loss(p, x); }, params, dp);
+  test::expect_gradient_matches([&](const std::vector<double>& xi) { return loss(params, xi); }, x, dx);
+}
+
+TEST(Mlp, ParamLayoutMatchesPyTorchOrder) {
+  MlpShape s{{19, 128, 128, 6}};
+  EXPECT_EQ(s.param_count(), size_t(19 * 128 + 128 + 128 * 128 + 128 + 128 * 6 + 6));
+  EXPECT_EQ(s.weight_offset(1), size_t(19 * 128 + 128));
+  EXPECT_EQ(s.bias_offset(0), size_t(19 * 128));
+  EXPECT_DOUBLE_EQ(s.forward_flops(1), 2.0 * (19 * 128 + 128 * 128 + 128 * 6));
+}
+
+TEST(Mlp, ForwardMatchesHandComputation) {
+  // 2 → 2 → 1: W0 = [[1, −1], [2, 0.5]], b0 = [0, −1]; W1 = [[1, 3]], b1 = [0.25]
+  MlpShape s{{2, 2, 1}};
+  std::vector<float> p = {1, -1, 2, 0.5f, 0, -1, 1, 3, 0.25f};
+  std::vector<float> x = {1, 2, -1, 0};  // two samples
+  MlpTape<float> t;
+  mlp_forward(s, p.data(), x.data(), 2, t);
+  // sample 1: h = relu([−1, 2+1−1]) = [0, 2] → 0 + 6 + 0.25
+  // sample 2: h = relu([−1, −2−1]) = [0, 0] → 0.25
+  EXPECT_FLOAT_EQ(t.output()[0], 6.25f);
+  EXPECT_FLOAT_EQ(t.output()[1], 0.25f);
+}
+
+TEST(Mlp, GradientsMatchFiniteDifferences) { check_mlp_gradients(MlpShape{{5, 7, 4, 3}}, 4); }
+TEST(Mlp, GradientsWithReluOutput) { check_mlp_gradients(MlpShape{{3, 6, 2}, true}, 5); }
+TEST(Mlp, SingleLayerGradients) { check_mlp_gradients(MlpShape{{4, 3}}, 3); }
+
+TEST(Mlp, ThreadedGemmIsBitIdentical) {
+  MlpShape s{{70, 300, 130, 6}};
+  Rng rng(7);
+  std::vector<float> p(s.param_count()), x(33 * 70), dout(33 * 6);
+  mlp_init(s, p.data(), rng);
+  for (auto& v : x) v = float(rng.normal());
+  for (auto& v : dout) v = float(rng.normal());
+  MlpTape<float> t1, t2;
+  std::vector<float> g1(p.size(), 0), g2(p.size(), 0);
+  mlp_forward(s, p.data(), x.data(), 33, t1, 1);
+  mlp_backward(s, p.data(), t1, dout.data(), g1.data(), nullptr, 1);
+  mlp_forward(s, p.data(), x.data(), 33, t2, 2);
+  mlp_backward(s, p.data(), t2, dout.data(), g2.data(), nullptr, 2);
+  EXPECT_EQ(std::vector<float>(t1.output(), t1.output() + 33 * 6),
+            std::vector<float>(t2.output(), t2.output() + 33 * 6));
+  EXPECT_EQ(g1, g2);
+}
+
+TEST(Mlp, BatchedEqualsOneModelAtATime) {
+  MlpShape s{{6, 16, 16, 1}};
+  const int models = 5, batch = 9;
+  const size_t P = s.param_count();
+  Rng rng(3);
+  std::vector<float> p(models * P), x(models * batch * 6), dout(models * batch);
+  for (int m = 0; m < models; ++m) mlp_init(s, p.data() + m * P, rng);
+  for (auto& v : x) v = float(rng.normal());
+  for (auto& v : dout) v = float(rng.normal());
+  for (int threads : {1, 2}) {
+    std::vector<MlpTape<float>> tapes;
+    std::vector<float> g(models * P, 0.f), dx(x.size(), 0.f);
+    mlp_forward_batched(s, models, p.data(), x.data(), batch, tapes, threads);
+    mlp_backward_batched(s, models, p.data(), tapes, dout.data(), g.data(), dx.data(), threads);
+    for (int m = 0; m < models; ++m) {
+      MlpTape<float> t;
+      std::vector<float> gm(P, 0.f), dxm(batch * 6, 0.f);
+      mlp_forward(s, p.data() + m * P, x.data() + m * batch * 6, batch, t);
+      mlp_backward(s, p.data() + m * P, t, dout.data() + m * batch, gm.data(), dxm.data());
+      for (int i = 0; i < batch; ++i) EXPECT_EQ(tapes[m].output()[i], t.output()[i]);
+      for (size_t i = 0; i < P; ++i) ASSERT_EQ(g[m * P + i], gm[i]);
+      for (int i = 0; i < batch * 6; ++i) ASSERT_EQ(dx[m * batch * 6 + i], dxm[i]);
+    }
+  }
+}
+
+TEST(Mlp, InitFollowsPyTorchLinearBounds) {
+  MlpShape s{{100, 400, 1}};
+  std::vector<float> p(s.param_count());
+  Rng rng(11);
+  mlp_init(s, p.data(), rng);
+  const float bound0 = 1.f / 10.f, bound1 = 1.f / 20.f;
+  double mean_abs = 0;
+  for (size_t i = 0; i < s.bias_offset(0); ++i) {
+    ASSERT_LE(std::abs(p[i]), bound0);
+    mean_abs += std::abs(p[i]);
+  }
+  mean_abs /= double(s.bias_offset(0));
+  EXPECT_NEAR(mean_abs, bound0 / 2, 0.002);  // |U(−b, b)| has mean b/2
+  for (size_t i = s.weight_offset(1); i < p.size(); ++i) ASSERT_LE(std::abs(p[i]), bound1);
+  // Same seed → same weights; different seed → different.
+  std::vector<float> q(p.size()), r(p.size());
+  Rng a(11), b(12);
+  mlp_init(s, q.data(), a);
+  mlp_init(s, r.data(), b);
+  EXPECT_EQ(p, q);
+  EXPECT_NE(p, r);
+}
+
+TEST(Mlp, RejectsBadShapes) {
+  EXPECT_THROW(validate(MlpShape{{5}}), std::invalid_argument);
+  EXPECT_THROW(validate(MlpShape{{5, 0, 2}}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sirl
