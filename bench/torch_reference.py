@@ -1,0 +1,102 @@
+#!/usr/bin/python3
+"""The PyTorch code people would otherwise write, timed on the same work as bench_kernels.cpp.
+
+Prints one JSON object: {case: {"ms": median step time, "gflops": ..., "steps_per_s": ...}}.
+FLOPs are counted as in the C++ benchmark: 2·in·out per layer per sample forward, ×3 with backward.
+Usage: /usr/bin/python3 bench/torch_reference.py [--repeats 5] [--threads 1]
+"""
+import argparse
+import json
+import statistics
+import time
+
+import torch
+
+
+def mlp(widths):
+    layers = []
+    for i in range(len(widths) - 1):
+        layers.append(torch.nn.Linear(widths[i], widths[i + 1]))
+        if i + 2 < len(widths):
+            layers.append(torch.nn.ReLU())
+    return torch.nn.Sequential(*layers)
+
+
+def flops(widths, samples):
+    return 3 * samples * sum(2 * widths[i] * widths[i + 1] for i in range(len(widths) - 1))
+
+
+def sirl_step_case(widths, B=64, T=1000):
+    net = mlp(widths)
+    x = torch.randn(T, widths[0])
+    trip = torch.randint(0, T, (B, 3))
+    opt = torch.optim.Adam(net.parameters(), lr=0.004)
+    sched = torch.optim.lr_scheduler.ExponentialLR(opt, gamma=0.99999)
+
+    def step():
+        e1, e2, en = net(x[trip[:, 0]]), net(x[trip[:, 1]]), net(x[trip[:, 2]])
+        d12 = ((e1 - e2) ** 2).sum(1)
+        loss = (torch.relu(d12 - ((e1 - en) ** 2).sum(1) + 1) + torch.relu(d12 - ((e2 - en) ** 2).sum(1) + 1)).mean()
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        sched.step()
+    return step, flops(widths, 3 * B)
+
+
+def tpa_heads_case(hidden, M=20, B=64, T=1000):
+    widths = [6, hidden, hidden, 1]
+    heads = [mlp(widths) for _ in range(M)]
+    x = torch.randn(T, 6)
+    pairs = torch.randint(0, T, (M, B, 2))
+    labels = torch.randint(0, 2, (M, B)).float()
+    opt = torch.optim.Adam([p for h in heads for p in h.parameters()], lr=0.001)
+
+    def step():
+        total = 0
+        for m, h in enumerate(heads):
+            ra, rb = h(x[pairs[m, :, 0]]).squeeze(1), h(x[pairs[m, :, 1]]).squeeze(1)
+            logits = ra - rb
+            loss = torch.nn.functional.binary_cross_entropy_with_logits(logits, labels[m])
+            total = total + loss + 10 * (ra ** 2 + rb ** 2).mean()
+        opt.zero_grad()
+        total.backward()
+        opt.step()
+    return step, flops(widths, 2 * B) * M
+
+
+def time_case(step, min_time=1.0, repeats=5):
+    for _ in range(3):
+        step()
+    samples = []
+    for _ in range(repeats):
+        n, t0 = 0, time.perf_counter()
+        while time.perf_counter() - t0 < min_time / repeats:
+            step()
+            n += 1
+        samples.append((time.perf_counter() - t0) / n)
+    return statistics.median(samples)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--min-time", type=float, default=2.0, help="seconds per case")
+    args = ap.parse_args()
+    torch.set_num_threads(args.threads)
+    torch.manual_seed(0)
+    cases = {
+        "sirl_step_grid": sirl_step_case([19, 128, 128, 6]),
+        "sirl_step_jaco": sirl_step_case([2037, 1024, 1024, 6]),
+        "tpa_heads_grid": tpa_heads_case(128),
+    }
+    out = {"torch": torch.__version__, "threads": args.threads}
+    for name, (step, fl) in cases.items():
+        s = time_case(step, args.min_time, args.repeats)
+        out[name] = {"ms": s * 1e3, "gflops": fl / s * 1e-9, "steps_per_s": 1 / s}
+    print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main()
