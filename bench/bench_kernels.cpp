@@ -40,7 +40,7 @@ void BM_SirlStep(benchmark::State& state) {
   state.counters["steps/s"] = benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_SirlStep)->ArgNames({"in", "hidden", "threads"})
-    ->Args({19, 128, 1})->Args({2037, 1024, 1})->Args({2037, 1024, 2})
+    ->Args({19, 128, 1})->Args({19, 128, 2})->Args({2037, 1024, 1})->Args({2037, 1024, 2})
     ->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // 20 TPA reward heads (6→h→h→1) trained side by side, 64 pairs (128 trajectories) each.

@@ -16,10 +16,11 @@ using Map = Eigen::Map<RowMat<T>>;
 // C's columns are cut into fixed 256-wide slices whatever the thread count: Eigen picks its
 // blocking (and so its summation order) from the slice shape, so fixed slices keep every
 // result bit-identical across thread counts; threads only decide who computes which slice.
-constexpr int kSlice = 256;
-
+// Narrow matrices (N ≤ 256, e.g. the Grid nets' 128 units) use 64-wide slices so two threads
+// still find work; the width depends on N only.
 template <typename Fn>
 void for_column_slices(int N, int threads, Fn&& fn) {
+  const int kSlice = N <= 256 ? 64 : 256;
   const int slices = (N + kSlice - 1) / kSlice;
   if (threads <= 1 || slices <= 1) {
     for (int p = 0; p < slices; ++p) fn(p * kSlice, std::min(kSlice, N - p * kSlice));
