@@ -15,6 +15,8 @@ std::map<std::string, Runner>& runners() {
 void register_all(CLI::App& app) {
   register_version(app, runners()["version"]);
   register_reproduce(app, runners()["reproduce"]);
+  register_dataset(app, runners()["dataset"]);
+  register_inspect(app, runners()["inspect"]);
 }
 
 int run_selected(CLI::App& app) {

@@ -19,6 +19,8 @@ using Runner = std::function<int()>;
 
 void register_version(CLI::App& app, Runner& run);
 void register_reproduce(CLI::App& app, Runner& run);
+void register_dataset(CLI::App& app, Runner& run);
+void register_inspect(CLI::App& app, Runner& run);
 
 void register_all(CLI::App& app);
 int run_selected(CLI::App& app);

@@ -1,0 +1,143 @@
+// `sirl dataset`: build an environment's trajectory space, answer every query set with a
+// simulated teacher, and store it all in HDF5. `sirl inspect`: read one back and summarise it.
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+
+#include "app/commands.h"
+#include "build_info.h"
+#include "datasets/grid_robot.h"
+#include "results/dataset_store.h"
+#include "results/h5.h"
+
+namespace sirl::app {
+namespace {
+
+struct DatasetArgs {
+  std::string env = "grid", out;
+  uint64_t seed = 0;
+  int64_t similarity = 1000, preference = 1000, tpa_pairs = 250, fpe = 1000;
+  double beta = std::numeric_limits<double>::infinity(), mistake = 0, skip = 0, equal = 0;
+  std::vector<std::string> features;
+  std::vector<int> obstacle1{1, 3}, obstacle2{3, 1}, laptop{2, 2};
+};
+
+Teacher make_teacher(const DatasetArgs& a, const Dataset& d) {
+  Teacher t{a.beta, a.mistake, a.skip, a.equal, {}};
+  if (!a.features.empty()) {
+    t.mask.assign(d.feature_count(), 0);
+    for (const auto& name : a.features) {
+      bool found = false;
+      for (int k = 0; k < d.feature_count(); ++k)
+        if (d.feature_names[k] == name) t.mask[k] = 1, found = true;
+      if (!found) {
+        std::string known;
+        for (const auto& n : d.feature_names) known += (known.empty() ? "" : ", ") + n;
+        throw UsageError("--features: unknown feature '" + name + "' (known: " + known + ")");
+      }
+    }
+  }
+  try {
+    validate(t, d.feature_count());
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  return t;
+}
+
+int run_dataset(const DatasetArgs& a) {
+  if (a.env == "jaco") throw UsageError("--env jaco: the JacoRobot environment has not landed yet; use --env grid");
+  GridConfig g;
+  g.obstacle1 = {a.obstacle1[0], a.obstacle1[1]};
+  g.obstacle2 = {a.obstacle2[0], a.obstacle2[1]};
+  g.laptop = {a.laptop[0], a.laptop[1]};
+  Dataset d;
+  try {
+    d = make_grid_dataset(g);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  QueryBundleConfig qc;
+  qc.similarity = a.similarity;
+  qc.preference = a.preference;
+  qc.tpa_pairs = a.tpa_pairs;
+  qc.fpe_trajectories = a.fpe;
+  qc.teacher = make_teacher(a, d);
+  const QueryBundle q = make_query_bundle(d, qc, a.seed);
+  // Write to a temporary name and rename: a crash never leaves a half-written file at --out.
+  const std::string tmp = a.out + ".partial";
+  {
+    H5File f = H5File::create(tmp);
+    f.set_attr("/", "engine_version", std::string(SIRL_VERSION));
+    f.set_attr("/", "git_commit", std::string(SIRL_GIT_COMMIT));
+    write_dataset(f, d, q, SIRL_VERSION);
+  }
+  std::filesystem::rename(tmp, a.out);
+  std::printf("wrote %s: /datasets/%s with %lld trajectories x %d inputs, %d features; %lld similarity triplets "
+              "(%lld skipped), 3 x %lld preference pairs, %d test rewards x %lld TPA pairs, FPE %zu/%zu\n",
+              a.out.c_str(), d.env.c_str(), (long long)d.count, d.input_dim, d.feature_count(),
+              (long long)q.similarity.count, (long long)q.similarity.skipped, (long long)qc.preference,
+              q.rewards.test.count, (long long)qc.tpa_pairs, q.fpe.train.size(), q.fpe.test.size());
+  return 0;
+}
+
+int run_inspect(const std::string& file, const std::string& env) {
+  const H5File f = H5File::open_read(file);
+  const StoredDataset s = read_dataset(f, env);
+  const Dataset& d = s.data;
+  std::printf("%s /datasets/%s (engine %s, seed %llu)\n", file.c_str(), env.c_str(), s.engine_version.c_str(),
+              (unsigned long long)s.queries.seed);
+  std::printf("  trajectories %lld x %d inputs\n", (long long)d.count, d.input_dim);
+  for (int k = 0; k < d.feature_count(); ++k)
+    std::printf("  feature %-20s raw range [%g, %g]\n", d.feature_names[k].c_str(), d.feature_min[k], d.feature_max[k]);
+  const auto& q = s.queries;
+  std::printf("  similarity %lld, singlepref %lld, multipref10 %lld, multipref50 %lld, tpa %zu x %lld, fpe %zu/%zu\n",
+              (long long)q.similarity.count, (long long)q.singlepref.count, (long long)q.multipref10.count,
+              (long long)q.multipref50.count, q.tpa.size(), (long long)q.config.tpa_pairs, q.fpe.train.size(),
+              q.fpe.test.size());
+  return 0;
+}
+
+}  // namespace
+
+void register_dataset(CLI::App& app, Runner& run) {
+  static DatasetArgs a;
+  auto* cmd = app.add_subcommand("dataset",
+                                 "Build an environment's trajectory space and query sets (answered by a simulated "
+                                 "teacher) and write them to HDF5 under /datasets/<env>/");
+  cmd->add_option("--env", a.env, "Environment")->check(CLI::IsMember({"grid", "jaco"}))->capture_default_str();
+  cmd->add_option("--out", a.out, "Output HDF5 file (written atomically)")->required();
+  cmd->add_option("--seed", a.seed, "Seed of the rewards and query sets")->capture_default_str();
+  cmd->add_option("--similarity", a.similarity, "Similarity triplets N")->check(CLI::Range(int64_t(1), int64_t(10000000)))->capture_default_str();
+  cmd->add_option("--preference", a.preference, "Preference pairs for each of SinglePref, MultiPref-10, MultiPref-50")
+      ->check(CLI::Range(int64_t(1), int64_t(10000000)))->capture_default_str();
+  cmd->add_option("--tpa-pairs", a.tpa_pairs, "Labelled pairs per test reward (80 % train, 20 % test)")
+      ->check(CLI::Range(int64_t(5), int64_t(1000000)))->capture_default_str();
+  cmd->add_option("--fpe", a.fpe, "Labelled trajectories for FPE (clamped to the dataset size)")
+      ->check(CLI::Range(int64_t(2), int64_t(100000000)))->capture_default_str();
+  cmd->add_option("--beta", a.beta, "Teacher's Boltzmann rationality (inf = perfect oracle, the paper's)")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--mistake", a.mistake, "Teacher's probability of flipping an answer")->check(CLI::Range(0.0, 1.0))->capture_default_str();
+  cmd->add_option("--skip", a.skip, "Teacher withholds answers when options differ by less than this")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--equal", a.equal, "Teacher answers 'equal' when options differ by less than this")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--features", a.features, "Features the teacher perceives (default all), e.g. laptop_distance")->delimiter(',');
+  cmd->add_option("--obstacle1", a.obstacle1, "GridRobot obstacle 1 cell x,y")->delimiter(',')->expected(2)->capture_default_str();
+  cmd->add_option("--obstacle2", a.obstacle2, "GridRobot obstacle 2 cell x,y")->delimiter(',')->expected(2)->capture_default_str();
+  cmd->add_option("--laptop", a.laptop, "GridRobot laptop cell x,y")->delimiter(',')->expected(2)->capture_default_str();
+  run = [] { return run_dataset(a); };
+}
+
+void register_inspect(CLI::App& app, Runner& run) {
+  static std::string file, env = "grid";
+  auto* cmd = app.add_subcommand("inspect", "Read a dataset file back (checking every shape and type) and summarise it");
+  cmd->add_option("file", file, "HDF5 file written by `sirl dataset`")->required();
+  cmd->add_option("--env", env, "Environment group to read")->check(CLI::IsMember({"grid", "jaco"}))->capture_default_str();
+  run = [] { return run_inspect(file, env); };
+}
+
+}  // namespace sirl::app

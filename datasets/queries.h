@@ -1,0 +1,65 @@
+// Reward sets and query sampling (paper §4.2): all draws uniform over Ξ from the caller's Rng,
+// whose seed derives from the task key.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "datasets/dataset.h"
+#include "datasets/simulated_human.h"
+
+namespace sirl {
+
+struct RewardSet {
+  std::string name;
+  int count = 0, dim = 0;
+  std::vector<float> weights;  // [count, dim], each row unit-norm
+};
+
+// Unit-norm directions w = g/‖g‖, g ~ N(0, I) (weights of either sign: a human may want a
+// feature high or low), from the stream seed_from_key(name, seed).
+RewardSet make_random_rewards(const std::string& name, int count, int dim, uint64_t seed);
+
+// The paper's reward sets from one named seed: 20 test rewards, 10 and 50 MultiPref training
+// humans, and SinglePref's equal weights 1/√dim. Each from its own stream; the sets are checked
+// disjoint (no weight vector appears twice).
+struct RewardSets {
+  RewardSet test, multipref10, multipref50, singlepref;
+};
+RewardSets make_reward_sets(int dim, uint64_t seed);
+
+// N similarity triplets [N, 3] as (positive 1, positive 2, negative) row indices of Ξ.
+struct TripletSet {
+  std::vector<int32_t> idx;
+  int64_t count = 0, skipped = 0;  // skipped: queries the teacher withheld (re-drawn)
+};
+TripletSet sample_similarity_queries(const Dataset& d, int64_t N, const Teacher& t, Rng& rng);
+
+// N preference pairs [N, 2] (A, B) with labels [N] (1 = A preferred, 0.5 = equal) and the human
+// (row of `rewards`) who answered each. The N queries are split evenly over the K humans:
+// human k answers N/K of them (the first N mod K humans one more), in blocks by human.
+struct PreferenceSet {
+  std::vector<int32_t> pairs;
+  std::vector<float> label;
+  std::vector<int32_t> human;
+  int64_t count = 0, skipped = 0;
+};
+PreferenceSet sample_preference_queries(const Dataset& d, int64_t N, const RewardSet& rewards, const Teacher& t,
+                                        Rng& rng);
+
+// One reward's labelled pairs for TPA: the first `train` rows train the head (M ≤ train), the
+// rest are held out (80/20 by default).
+struct TpaSet {
+  PreferenceSet pairs;
+  int64_t train = 0;
+};
+TpaSet sample_tpa_set(const Dataset& d, int64_t total, const RewardSet& rewards, int reward_row, const Teacher& t,
+                      Rng& rng, double train_fraction = 0.8);
+
+// FPE's labelled trajectories: `total` distinct rows of Ξ, shuffled; the first 80 % train the probe.
+struct FpeSplit {
+  std::vector<int32_t> train, test;
+};
+FpeSplit sample_fpe_split(const Dataset& d, int64_t total, Rng& rng, double train_fraction = 0.8);
+
+}  // namespace sirl

@@ -1,0 +1,55 @@
+// A thin, checked layer over the HDF5 C API: the only place in sirl-bench that includes hdf5.h.
+// Every failure becomes an sirl::H5Error naming the file and object, never an HDF5 error stack
+// on stderr or a crash.
+#pragma once
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace sirl {
+
+struct H5Error : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+class H5File {
+ public:
+  static H5File create(const std::string& path);     // truncates an existing file
+  static H5File open_read(const std::string& path);  // throws H5Error: missing, not HDF5, truncated
+  static H5File open_rw(const std::string& path);
+  H5File(H5File&& o) noexcept;
+  H5File& operator=(H5File&&) = delete;
+  ~H5File();
+  const std::string& path() const { return path_; }
+  int64_t id() const { return id_; }
+  void flush();
+
+  bool exists(const std::string& object) const;
+  // Arrays: row-major, dims as given; parent groups are created as needed.
+  void write(const std::string& name, const float* data, const std::vector<uint64_t>& dims);
+  void write(const std::string& name, const int32_t* data, const std::vector<uint64_t>& dims);
+  void write(const std::string& name, const double* data, const std::vector<uint64_t>& dims);
+  // Reads and checks the element type and shape; a dim of -1 in `expect` matches any extent.
+  std::vector<float> read_f32(const std::string& name, const std::vector<int64_t>& expect,
+                              std::vector<uint64_t>* dims = nullptr) const;
+  std::vector<int32_t> read_i32(const std::string& name, const std::vector<int64_t>& expect,
+                                std::vector<uint64_t>* dims = nullptr) const;
+  // Attributes on a group or dataset (created if missing).
+  void group(const std::string& name);
+  void set_attr(const std::string& object, const std::string& attr, const std::string& value);
+  void set_attr(const std::string& object, const std::string& attr, double value);
+  void set_attr(const std::string& object, const std::string& attr, int64_t value);
+  void set_attr(const std::string& object, const std::string& attr, const std::vector<std::string>& values);
+  std::string attr_string(const std::string& object, const std::string& attr) const;
+  double attr_double(const std::string& object, const std::string& attr) const;
+  int64_t attr_int(const std::string& object, const std::string& attr) const;
+  std::vector<std::string> attr_strings(const std::string& object, const std::string& attr) const;
+
+ private:
+  H5File(int64_t id, std::string path) : id_(id), path_(std::move(path)) {}
+  int64_t id_;
+  std::string path_;
+};
+
+}  // namespace sirl
