@@ -30,7 +30,8 @@ def main():
     torch2 = json.loads(subprocess.run([sys.executable, os.path.join(HERE, "torch_reference.py"), "--threads", "2"],
                                        check=True, capture_output=True, text=True).stdout)
     rows = [
-        ("SIRL step, Grid 19→128→128→6, 64 triplets", "BM_SirlStep/in:19/hidden:128/threads:1/real_time", "sirl_step_grid", 1),
+        ("SIRL step, Grid 19→128→128→6, 64 triplets, 1 thread", "BM_SirlStep/in:19/hidden:128/threads:1/real_time", "sirl_step_grid", 1),
+        ("SIRL step, Grid 19→128→128→6, 64 triplets, 2 threads", "BM_SirlStep/in:19/hidden:128/threads:2/real_time", "sirl_step_grid", 2),
         ("SIRL step, Jaco 2037→1024→1024→6, 64 triplets, 1 thread", "BM_SirlStep/in:2037/hidden:1024/threads:1/real_time", "sirl_step_jaco", 1),
         ("SIRL step, Jaco 2037→1024→1024→6, 64 triplets, 2 threads", "BM_SirlStep/in:2037/hidden:1024/threads:2/real_time", "sirl_step_jaco", 2),
         ("20 TPA heads 6→128→128→1, 64 pairs, 1 thread", "BM_TpaHeadsStep/hidden:128/threads:1/real_time", "tpa_heads_grid", 1),
