@@ -49,7 +49,8 @@ Teacher make_teacher(const DatasetArgs& a, const Dataset& d) {
 }
 
 int run_dataset(const DatasetArgs& a) {
-  if (a.env == "jaco") throw UsageError("--env jaco: the JacoRobot environment has not landed yet; use --env grid");
+  if (a.env == "jaco")
+    throw UsageError("--env jaco: the JacoRobot environment has not landed yet; use --env grid");
   GridConfig g;
   g.obstacle1 = {a.obstacle1[0], a.obstacle1[1]};
   g.obstacle2 = {a.obstacle2[0], a.obstacle2[1]};
@@ -76,11 +77,13 @@ int run_dataset(const DatasetArgs& a) {
     write_dataset(f, d, q, SIRL_VERSION);
   }
   std::filesystem::rename(tmp, a.out);
-  std::printf("wrote %s: /datasets/%s with %lld trajectories x %d inputs, %d features; %lld similarity triplets "
-              "(%lld skipped), 3 x %lld preference pairs, %d test rewards x %lld TPA pairs, FPE %zu/%zu\n",
-              a.out.c_str(), d.env.c_str(), (long long)d.count, d.input_dim, d.feature_count(),
-              (long long)q.similarity.count, (long long)q.similarity.skipped, (long long)qc.preference,
-              q.rewards.test.count, (long long)qc.tpa_pairs, q.fpe.train.size(), q.fpe.test.size());
+  std::printf(
+      "wrote %s: /datasets/%s with %lld trajectories x %d inputs, %d features; %lld similarity "
+      "triplets "
+      "(%lld skipped), 3 x %lld preference pairs, %d test rewards x %lld TPA pairs, FPE %zu/%zu\n",
+      a.out.c_str(), d.env.c_str(), (long long)d.count, d.input_dim, d.feature_count(),
+      (long long)q.similarity.count, (long long)q.similarity.skipped, (long long)qc.preference,
+      q.rewards.test.count, (long long)qc.tpa_pairs, q.fpe.train.size(), q.fpe.test.size());
   return 0;
 }
 
@@ -88,16 +91,19 @@ int run_inspect(const std::string& file, const std::string& env) {
   const H5File f = H5File::open_read(file);
   const StoredDataset s = read_dataset(f, env);
   const Dataset& d = s.data;
-  std::printf("%s /datasets/%s (engine %s, seed %llu)\n", file.c_str(), env.c_str(), s.engine_version.c_str(),
-              (unsigned long long)s.queries.seed);
+  std::printf("%s /datasets/%s (engine %s, seed %llu)\n", file.c_str(), env.c_str(),
+              s.engine_version.c_str(), (unsigned long long)s.queries.seed);
   std::printf("  trajectories %lld x %d inputs\n", (long long)d.count, d.input_dim);
   for (int k = 0; k < d.feature_count(); ++k)
-    std::printf("  feature %-20s raw range [%g, %g]\n", d.feature_names[k].c_str(), d.feature_min[k], d.feature_max[k]);
+    std::printf("  feature %-20s raw range [%g, %g]\n", d.feature_names[k].c_str(),
+                d.feature_min[k], d.feature_max[k]);
   const auto& q = s.queries;
-  std::printf("  similarity %lld, singlepref %lld, multipref10 %lld, multipref50 %lld, tpa %zu x %lld, fpe %zu/%zu\n",
-              (long long)q.similarity.count, (long long)q.singlepref.count, (long long)q.multipref10.count,
-              (long long)q.multipref50.count, q.tpa.size(), (long long)q.config.tpa_pairs, q.fpe.train.size(),
-              q.fpe.test.size());
+  std::printf(
+      "  similarity %lld, singlepref %lld, multipref10 %lld, multipref50 %lld, tpa %zu x %lld, fpe "
+      "%zu/%zu\n",
+      (long long)q.similarity.count, (long long)q.singlepref.count, (long long)q.multipref10.count,
+      (long long)q.multipref50.count, q.tpa.size(), (long long)q.config.tpa_pairs,
+      q.fpe.train.size(), q.fpe.test.size());
   return 0;
 }
 
@@ -105,38 +111,70 @@ int run_inspect(const std::string& file, const std::string& env) {
 
 void register_dataset(CLI::App& app, Runner& run) {
   static DatasetArgs a;
-  auto* cmd = app.add_subcommand("dataset",
-                                 "Build an environment's trajectory space and query sets (answered by a simulated "
-                                 "teacher) and write them to HDF5 under /datasets/<env>/");
-  cmd->add_option("--env", a.env, "Environment")->check(CLI::IsMember({"grid", "jaco"}))->capture_default_str();
+  auto* cmd = app.add_subcommand(
+      "dataset",
+      "Build an environment's trajectory space and query sets (answered by a simulated "
+      "teacher) and write them to HDF5 under /datasets/<env>/");
+  cmd->add_option("--env", a.env, "Environment")
+      ->check(CLI::IsMember({"grid", "jaco"}))
+      ->capture_default_str();
   cmd->add_option("--out", a.out, "Output HDF5 file (written atomically)")->required();
   cmd->add_option("--seed", a.seed, "Seed of the rewards and query sets")->capture_default_str();
-  cmd->add_option("--similarity", a.similarity, "Similarity triplets N")->check(CLI::Range(int64_t(1), int64_t(10000000)))->capture_default_str();
-  cmd->add_option("--preference", a.preference, "Preference pairs for each of SinglePref, MultiPref-10, MultiPref-50")
-      ->check(CLI::Range(int64_t(1), int64_t(10000000)))->capture_default_str();
-  cmd->add_option("--tpa-pairs", a.tpa_pairs, "Labelled pairs per test reward (80 % train, 20 % test)")
-      ->check(CLI::Range(int64_t(5), int64_t(1000000)))->capture_default_str();
+  cmd->add_option("--similarity", a.similarity, "Similarity triplets N")
+      ->check(CLI::Range(int64_t(1), int64_t(10000000)))
+      ->capture_default_str();
+  cmd->add_option("--preference", a.preference,
+                  "Preference pairs for each of SinglePref, MultiPref-10, MultiPref-50")
+      ->check(CLI::Range(int64_t(1), int64_t(10000000)))
+      ->capture_default_str();
+  cmd->add_option("--tpa-pairs", a.tpa_pairs,
+                  "Labelled pairs per test reward (80 % train, 20 % test)")
+      ->check(CLI::Range(int64_t(5), int64_t(1000000)))
+      ->capture_default_str();
   cmd->add_option("--fpe", a.fpe, "Labelled trajectories for FPE (clamped to the dataset size)")
-      ->check(CLI::Range(int64_t(2), int64_t(100000000)))->capture_default_str();
-  cmd->add_option("--beta", a.beta, "Teacher's Boltzmann rationality (inf = perfect oracle, the paper's)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--mistake", a.mistake, "Teacher's probability of flipping an answer")->check(CLI::Range(0.0, 1.0))->capture_default_str();
-  cmd->add_option("--skip", a.skip, "Teacher withholds answers when options differ by less than this")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
-  cmd->add_option("--equal", a.equal, "Teacher answers 'equal' when options differ by less than this")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
-  cmd->add_option("--features", a.features, "Features the teacher perceives (default all), e.g. laptop_distance")->delimiter(',');
-  cmd->add_option("--obstacle1", a.obstacle1, "GridRobot obstacle 1 cell x,y")->delimiter(',')->expected(2)->capture_default_str();
-  cmd->add_option("--obstacle2", a.obstacle2, "GridRobot obstacle 2 cell x,y")->delimiter(',')->expected(2)->capture_default_str();
-  cmd->add_option("--laptop", a.laptop, "GridRobot laptop cell x,y")->delimiter(',')->expected(2)->capture_default_str();
+      ->check(CLI::Range(int64_t(2), int64_t(100000000)))
+      ->capture_default_str();
+  cmd->add_option("--beta", a.beta,
+                  "Teacher's Boltzmann rationality (inf = perfect oracle, the paper's)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--mistake", a.mistake, "Teacher's probability of flipping an answer")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--skip", a.skip,
+                  "Teacher withholds answers when options differ by less than this")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--equal", a.equal,
+                  "Teacher answers 'equal' when options differ by less than this")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--features", a.features,
+                  "Features the teacher perceives (default all), e.g. laptop_distance")
+      ->delimiter(',');
+  cmd->add_option("--obstacle1", a.obstacle1, "GridRobot obstacle 1 cell x,y")
+      ->delimiter(',')
+      ->expected(2)
+      ->capture_default_str();
+  cmd->add_option("--obstacle2", a.obstacle2, "GridRobot obstacle 2 cell x,y")
+      ->delimiter(',')
+      ->expected(2)
+      ->capture_default_str();
+  cmd->add_option("--laptop", a.laptop, "GridRobot laptop cell x,y")
+      ->delimiter(',')
+      ->expected(2)
+      ->capture_default_str();
   run = [] { return run_dataset(a); };
 }
 
 void register_inspect(CLI::App& app, Runner& run) {
   static std::string file, env = "grid";
-  auto* cmd = app.add_subcommand("inspect", "Read a dataset file back (checking every shape and type) and summarise it");
+  auto* cmd = app.add_subcommand(
+      "inspect", "Read a dataset file back (checking every shape and type) and summarise it");
   cmd->add_option("file", file, "HDF5 file written by `sirl dataset`")->required();
-  cmd->add_option("--env", env, "Environment group to read")->check(CLI::IsMember({"grid", "jaco"}))->capture_default_str();
+  cmd->add_option("--env", env, "Environment group to read")
+      ->check(CLI::IsMember({"grid", "jaco"}))
+      ->capture_default_str();
   run = [] { return run_inspect(file, env); };
 }
 

@@ -8,7 +8,8 @@
 
 int main(int argc, char** argv) {
   CLI::App app{
-      "sirl-bench: reproduces the SIRL paper (Bobu, Liu et al., HRI 2023) - learning robot-behaviour\n"
+      "sirl-bench: reproduces the SIRL paper (Bobu, Liu et al., HRI 2023) - learning "
+      "robot-behaviour\n"
       "representations from 'which two of these three are most alike?' answers - as a fast,\n"
       "deterministic benchmark. Run `sirl <command> --help` for the options of each command.",
       "sirl"};

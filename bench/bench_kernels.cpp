@@ -34,14 +34,21 @@ void BM_SirlStep(benchmark::State& state) {
   Trainer t(s, AdamConfig{0.004, 0.99999}, init_params(s, 1, rng));
   std::vector<int32_t> trip(3 * B);
   for (auto& v : trip) v = int32_t(rng.uniform_int(T));
-  for (auto _ : state) benchmark::DoNotOptimize(triplet_train_step(t, X.data(), trip.data(), B, 1.f, threads));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(triplet_train_step(t, X.data(), trip.data(), B, 1.f, threads));
   const double flops = 3 * s.forward_flops(3 * B);
-  state.counters["GFLOP/s"] = benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["GFLOP/s"] =
+      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["steps/s"] = benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_SirlStep)->ArgNames({"in", "hidden", "threads"})
-    ->Args({19, 128, 1})->Args({19, 128, 2})->Args({2037, 1024, 1})->Args({2037, 1024, 2})
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SirlStep)
+    ->ArgNames({"in", "hidden", "threads"})
+    ->Args({19, 128, 1})
+    ->Args({19, 128, 2})
+    ->Args({2037, 1024, 1})
+    ->Args({2037, 1024, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // 20 TPA reward heads (6→h→h→1) trained side by side, 64 pairs (128 trajectories) each.
 // Args: {hidden width, threads}.
@@ -57,13 +64,19 @@ void BM_TpaHeadsStep(benchmark::State& state) {
   for (auto& v : pairs) v = int32_t(rng.uniform_int(T));
   for (auto& v : label) v = float(rng.uniform_int(2));
   for (auto _ : state)
-    benchmark::DoNotOptimize(preference_train_step_batched(t, X.data(), pairs.data(), label.data(), B, 10.f, threads));
+    benchmark::DoNotOptimize(
+        preference_train_step_batched(t, X.data(), pairs.data(), label.data(), B, 10.f, threads));
   const double flops = 3 * s.forward_flops(2 * B) * M;
-  state.counters["GFLOP/s"] = benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["GFLOP/s"] =
+      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["steps/s"] = benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_TpaHeadsStep)->ArgNames({"hidden", "threads"})
-    ->Args({128, 1})->Args({128, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_TpaHeadsStep)
+    ->ArgNames({"hidden", "threads"})
+    ->Args({128, 1})
+    ->Args({128, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

@@ -19,7 +19,8 @@ void normalise_features(Dataset& d) {
   for (int64_t i = 0; i < d.count; ++i)
     for (int f = 0; f < F; ++f) {
       const float span = d.feature_max[f] - d.feature_min[f];
-      d.features[i * F + f] = span > 0 ? (d.features_raw[i * F + f] - d.feature_min[f]) / span : 0.f;
+      d.features[i * F + f] =
+          span > 0 ? (d.features_raw[i * F + f] - d.feature_min[f]) / span : 0.f;
     }
 }
 

@@ -8,20 +8,24 @@ namespace sirl {
 
 void validate(const GridConfig& c) {
   if (c.size != 5)
-    throw std::invalid_argument("grid size must be 5 (9-state corner-to-corner paths), got " + std::to_string(c.size));
+    throw std::invalid_argument("grid size must be 5 (9-state corner-to-corner paths), got " +
+                                std::to_string(c.size));
   for (const auto& o : {c.obstacle1, c.obstacle2, c.laptop})
     if (o[0] < 0 || o[0] >= c.size || o[1] < 0 || o[1] >= c.size)
-      throw std::invalid_argument("grid object (" + std::to_string(o[0]) + ", " + std::to_string(o[1]) +
-                                  ") lies outside the " + std::to_string(c.size) + "x" + std::to_string(c.size) + " grid");
+      throw std::invalid_argument("grid object (" + std::to_string(o[0]) + ", " +
+                                  std::to_string(o[1]) + ") lies outside the " +
+                                  std::to_string(c.size) + "x" + std::to_string(c.size) + " grid");
 }
 
-std::array<float, 4> grid_features(const GridConfig& c, const std::array<std::array<int, 2>, kGridStates>& cells,
+std::array<float, 4> grid_features(const GridConfig& c,
+                                   const std::array<std::array<int, 2>, kGridStates>& cells,
                                    int angle_deg) {
   std::array<float, 4> f{};
   const std::array<std::array<int, 2>, 3> objects{c.obstacle1, c.obstacle2, c.laptop};
   for (int o = 0; o < 3; ++o) {
     double s = 0;
-    for (const auto& p : cells) s += std::hypot(double(p[0] - objects[o][0]), double(p[1] - objects[o][1]));
+    for (const auto& p : cells)
+      s += std::hypot(double(p[0] - objects[o][0]), double(p[1] - objects[o][1]));
     f[o] = float(s / kGridStates);
   }
   f[3] = float(std::abs(angle_deg));
@@ -42,7 +46,8 @@ Dataset make_grid_dataset(const GridConfig& c) {
   }
   const int n = c.size - 1;
   // Ordered corner pairs: (0,0)→(n,n), (n,n)→(0,0), (0,n)→(n,0), (n,0)→(0,n).
-  const std::array<std::array<int, 4>, 4> corners{{{0, 0, n, n}, {n, n, 0, 0}, {0, n, n, 0}, {n, 0, 0, n}}};
+  const std::array<std::array<int, 4>, 4> corners{
+      {{0, 0, n, n}, {n, n, 0, 0}, {0, n, n, 0}, {n, 0, 0, n}}};
   for (const auto& cp : corners) {
     const int dx = cp[2] > cp[0] ? 1 : -1, dy = cp[3] > cp[1] ? 1 : -1;
     // Every choice of which 4 of the 8 moves go along x (bit set) is one monotone path.
@@ -52,7 +57,10 @@ Dataset make_grid_dataset(const GridConfig& c) {
       cells[0] = {cp[0], cp[1]};
       for (int m = 0; m < 2 * n; ++m) {
         cells[m + 1] = cells[m];
-        if (mask >> m & 1) cells[m + 1][0] += dx; else cells[m + 1][1] += dy;
+        if (mask >> m & 1)
+          cells[m + 1][0] += dx;
+        else
+          cells[m + 1][1] += dy;
       }
       for (int angle : kGridAngles) {
         for (const auto& p : cells) {

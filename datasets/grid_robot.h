@@ -35,7 +35,8 @@ void validate(const GridConfig& cfg);
 Dataset make_grid_dataset(const GridConfig& cfg = {});
 
 // The 4 raw features of one trajectory given its 9 cells and angle (exposed for tests).
-std::array<float, 4> grid_features(const GridConfig& cfg, const std::array<std::array<int, 2>, kGridStates>& cells,
+std::array<float, 4> grid_features(const GridConfig& cfg,
+                                   const std::array<std::array<int, 2>, kGridStates>& cells,
                                    int angle_deg);
 
 }  // namespace sirl

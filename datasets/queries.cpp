@@ -25,13 +25,16 @@ RewardSet make_random_rewards(const std::string& name, int count, int dim, uint6
 }
 
 RewardSets make_reward_sets(int dim, uint64_t seed) {
-  RewardSets s{make_random_rewards("test", 20, dim, seed), make_random_rewards("multipref10", 10, dim, seed),
-               make_random_rewards("multipref50", 50, dim, seed),
-               RewardSet{"singlepref", 1, dim, std::vector<float>(dim, float(1 / std::sqrt(double(dim))))}};
+  RewardSets s{
+      make_random_rewards("test", 20, dim, seed), make_random_rewards("multipref10", 10, dim, seed),
+      make_random_rewards("multipref50", 50, dim, seed),
+      RewardSet{"singlepref", 1, dim, std::vector<float>(dim, float(1 / std::sqrt(double(dim))))}};
   std::set<std::vector<float>> seen;
   for (const RewardSet* r : {&s.test, &s.multipref10, &s.multipref50, &s.singlepref})
     for (int i = 0; i < r->count; ++i)
-      if (!seen.insert(std::vector<float>(r->weights.begin() + size_t(i) * dim, r->weights.begin() + size_t(i + 1) * dim)).second)
+      if (!seen.insert(std::vector<float>(r->weights.begin() + size_t(i) * dim,
+                                          r->weights.begin() + size_t(i + 1) * dim))
+               .second)
         throw std::logic_error("reward sets overlap: " + r->name + " row " + std::to_string(i));
   return s;
 }
@@ -39,12 +42,15 @@ RewardSets make_reward_sets(int dim, uint64_t seed) {
 namespace {
 void check_sample_size(const Dataset& d, int64_t n, int per_query, const char* what) {
   if (n < 0) throw std::invalid_argument(std::string(what) + ": negative query count");
-  if (d.count < per_query) throw std::invalid_argument(std::string(what) + ": dataset has too few trajectories");
+  if (d.count < per_query)
+    throw std::invalid_argument(std::string(what) + ": dataset has too few trajectories");
 }
 // A teacher who withholds almost every answer would loop forever; give up with a message.
 void check_attempts(int64_t attempts, int64_t n, const char* what) {
   if (attempts > 1000 * (n + 10))
-    throw std::runtime_error(std::string(what) + ": the teacher skipped more than 99.9% of queries; lower its skip threshold");
+    throw std::runtime_error(
+        std::string(what) +
+        ": the teacher skipped more than 99.9% of queries; lower its skip threshold");
 }
 }  // namespace
 
@@ -58,9 +64,12 @@ TripletSet sample_similarity_queries(const Dataset& d, int64_t N, const Teacher&
     check_attempts(++attempts, N, "similarity queries");
     std::array<int32_t, 3> q;
     q[0] = int32_t(rng.uniform_int(d.count));
-    do q[1] = int32_t(rng.uniform_int(d.count)); while (q[1] == q[0]);
-    do q[2] = int32_t(rng.uniform_int(d.count)); while (q[2] == q[0] || q[2] == q[1]);
-    const auto a = answer_similarity(t, d.feature(q[0]), d.feature(q[1]), d.feature(q[2]), d.feature_count(), rng);
+    do q[1] = int32_t(rng.uniform_int(d.count));
+    while (q[1] == q[0]);
+    do q[2] = int32_t(rng.uniform_int(d.count));
+    while (q[2] == q[0] || q[2] == q[1]);
+    const auto a = answer_similarity(t, d.feature(q[0]), d.feature(q[1]), d.feature(q[2]),
+                                     d.feature_count(), rng);
     if (!a) {
       ++s.skipped;
       continue;
@@ -72,16 +81,17 @@ TripletSet sample_similarity_queries(const Dataset& d, int64_t N, const Teacher&
 }
 
 namespace {
-void append_pairs(const Dataset& d, int64_t n, const RewardSet& r, int row, const Teacher& t, Rng& rng,
-                  PreferenceSet& s) {
+void append_pairs(const Dataset& d, int64_t n, const RewardSet& r, int row, const Teacher& t,
+                  Rng& rng, PreferenceSet& s) {
   int64_t done = 0, attempts = 0;
   while (done < n) {
     check_attempts(++attempts, n, "preference queries");
     const int32_t a = int32_t(rng.uniform_int(d.count));
     int32_t b;
-    do b = int32_t(rng.uniform_int(d.count)); while (b == a);
-    const auto l = answer_preference(t, r.weights.data() + size_t(row) * r.dim, d.feature(a), d.feature(b),
-                                     d.feature_count(), rng);
+    do b = int32_t(rng.uniform_int(d.count));
+    while (b == a);
+    const auto l = answer_preference(t, r.weights.data() + size_t(row) * r.dim, d.feature(a),
+                                     d.feature(b), d.feature_count(), rng);
     if (!l) {
       ++s.skipped;
       continue;
@@ -95,20 +105,22 @@ void append_pairs(const Dataset& d, int64_t n, const RewardSet& r, int row, cons
 }
 }  // namespace
 
-PreferenceSet sample_preference_queries(const Dataset& d, int64_t N, const RewardSet& r, const Teacher& t, Rng& rng) {
+PreferenceSet sample_preference_queries(const Dataset& d, int64_t N, const RewardSet& r,
+                                        const Teacher& t, Rng& rng) {
   check_sample_size(d, N, 2, "preference queries");
   validate(t, d.feature_count());
   if (r.dim != d.feature_count())
-    throw std::invalid_argument("reward set " + r.name + " has " + std::to_string(r.dim) + " weights, the dataset " +
-                                std::to_string(d.feature_count()) + " features");
+    throw std::invalid_argument("reward set " + r.name + " has " + std::to_string(r.dim) +
+                                " weights, the dataset " + std::to_string(d.feature_count()) +
+                                " features");
   PreferenceSet s;
   const int K = r.count;
   for (int k = 0; k < K; ++k) append_pairs(d, N / K + (k < N % K ? 1 : 0), r, k, t, rng, s);
   return s;
 }
 
-TpaSet sample_tpa_set(const Dataset& d, int64_t total, const RewardSet& r, int row, const Teacher& t, Rng& rng,
-                      double train_fraction) {
+TpaSet sample_tpa_set(const Dataset& d, int64_t total, const RewardSet& r, int row,
+                      const Teacher& t, Rng& rng, double train_fraction) {
   check_sample_size(d, total, 2, "TPA pairs");
   validate(t, d.feature_count());
   if (row < 0 || row >= r.count) throw std::invalid_argument("TPA reward row out of range");
@@ -120,13 +132,17 @@ TpaSet sample_tpa_set(const Dataset& d, int64_t total, const RewardSet& r, int r
 
 FpeSplit sample_fpe_split(const Dataset& d, int64_t total, Rng& rng, double train_fraction) {
   if (total < 2 || total > d.count)
-    throw std::invalid_argument("FPE set size must be in [2, " + std::to_string(d.count) + "], got " + std::to_string(total));
+    throw std::invalid_argument("FPE set size must be in [2, " + std::to_string(d.count) +
+                                "], got " + std::to_string(total));
   std::vector<int32_t> all(d.count);
   std::iota(all.begin(), all.end(), 0);
   // Partial Fisher–Yates: the first `total` entries become a uniform random subset, shuffled.
-  for (int64_t i = 0; i < total; ++i) std::swap(all[i], all[i + int64_t(rng.uniform_int(d.count - i))]);
-  const int64_t ntr = std::clamp<int64_t>(std::llround(train_fraction * double(total)), 1, total - 1);
-  return FpeSplit{std::vector<int32_t>(all.begin(), all.begin() + ntr), std::vector<int32_t>(all.begin() + ntr, all.begin() + total)};
+  for (int64_t i = 0; i < total; ++i)
+    std::swap(all[i], all[i + int64_t(rng.uniform_int(d.count - i))]);
+  const int64_t ntr =
+      std::clamp<int64_t>(std::llround(train_fraction * double(total)), 1, total - 1);
+  return FpeSplit{std::vector<int32_t>(all.begin(), all.begin() + ntr),
+                  std::vector<int32_t>(all.begin() + ntr, all.begin() + total)};
 }
 
 }  // namespace sirl

@@ -44,8 +44,8 @@ struct PreferenceSet {
   std::vector<int32_t> human;
   int64_t count = 0, skipped = 0;
 };
-PreferenceSet sample_preference_queries(const Dataset& d, int64_t N, const RewardSet& rewards, const Teacher& t,
-                                        Rng& rng);
+PreferenceSet sample_preference_queries(const Dataset& d, int64_t N, const RewardSet& rewards,
+                                        const Teacher& t, Rng& rng);
 
 // One reward's labelled pairs for TPA: the first `train` rows train the head (M ≤ train), the
 // rest are held out (80/20 by default).
@@ -53,10 +53,11 @@ struct TpaSet {
   PreferenceSet pairs;
   int64_t train = 0;
 };
-TpaSet sample_tpa_set(const Dataset& d, int64_t total, const RewardSet& rewards, int reward_row, const Teacher& t,
-                      Rng& rng, double train_fraction = 0.8);
+TpaSet sample_tpa_set(const Dataset& d, int64_t total, const RewardSet& rewards, int reward_row,
+                      const Teacher& t, Rng& rng, double train_fraction = 0.8);
 
-// FPE's labelled trajectories: `total` distinct rows of Ξ, shuffled; the first 80 % train the probe.
+// FPE's labelled trajectories: `total` distinct rows of Ξ, shuffled; the first 80 % train the
+// probe.
 struct FpeSplit {
   std::vector<int32_t> train, test;
 };

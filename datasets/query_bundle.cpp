@@ -14,9 +14,12 @@ QueryBundle make_query_bundle(const Dataset& d, const QueryBundleConfig& cfg, ui
   Rng sim = stream("similarity");
   b.similarity = sample_similarity_queries(d, cfg.similarity, cfg.teacher, sim);
   Rng sp = stream("singlepref"), m10 = stream("multipref10"), m50 = stream("multipref50");
-  b.singlepref = sample_preference_queries(d, cfg.preference, b.rewards.singlepref, cfg.teacher, sp);
-  b.multipref10 = sample_preference_queries(d, cfg.preference, b.rewards.multipref10, cfg.teacher, m10);
-  b.multipref50 = sample_preference_queries(d, cfg.preference, b.rewards.multipref50, cfg.teacher, m50);
+  b.singlepref =
+      sample_preference_queries(d, cfg.preference, b.rewards.singlepref, cfg.teacher, sp);
+  b.multipref10 =
+      sample_preference_queries(d, cfg.preference, b.rewards.multipref10, cfg.teacher, m10);
+  b.multipref50 =
+      sample_preference_queries(d, cfg.preference, b.rewards.multipref50, cfg.teacher, m50);
   for (int r = 0; r < b.rewards.test.count; ++r) {
     Rng tr = stream("tpa/" + std::to_string(r));
     b.tpa.push_back(sample_tpa_set(d, cfg.tpa_pairs, b.rewards.test, r, cfg.teacher, tr));

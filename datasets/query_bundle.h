@@ -9,11 +9,11 @@
 namespace sirl {
 
 struct QueryBundleConfig {
-  int64_t similarity = 1000;   // triplets (the largest N of the paper)
-  int64_t preference = 1000;   // pairs for each of SinglePref, MultiPref-10, MultiPref-50
-  int64_t tpa_pairs = 250;     // labelled pairs per test reward (80 % train ⇒ M up to 200)
+  int64_t similarity = 1000;        // triplets (the largest N of the paper)
+  int64_t preference = 1000;        // pairs for each of SinglePref, MultiPref-10, MultiPref-50
+  int64_t tpa_pairs = 250;          // labelled pairs per test reward (80 % train ⇒ M up to 200)
   int64_t fpe_trajectories = 1000;  // labelled trajectories for FPE (clamped to |Ξ|)
-  Teacher teacher;             // default: the paper's perfect oracle
+  Teacher teacher;                  // default: the paper's perfect oracle
 };
 
 struct QueryBundle {

@@ -9,12 +9,15 @@ namespace sirl {
 
 void validate(const Teacher& t, int F) {
   if (!(t.beta > 0)) throw std::invalid_argument("teacher beta must be > 0 (inf = perfect oracle)");
-  if (!(t.mistake >= 0 && t.mistake <= 1)) throw std::invalid_argument("teacher mistake probability must be in [0, 1]");
-  if (!(t.skip >= 0) || !(t.equal >= 0)) throw std::invalid_argument("teacher skip/equal thresholds must be >= 0");
+  if (!(t.mistake >= 0 && t.mistake <= 1))
+    throw std::invalid_argument("teacher mistake probability must be in [0, 1]");
+  if (!(t.skip >= 0) || !(t.equal >= 0))
+    throw std::invalid_argument("teacher skip/equal thresholds must be >= 0");
   if (!t.mask.empty()) {
     if (int(t.mask.size()) != F)
-      throw std::invalid_argument("teacher feature mask has " + std::to_string(t.mask.size()) + " entries, the environment has " +
-                                  std::to_string(F) + " features");
+      throw std::invalid_argument("teacher feature mask has " + std::to_string(t.mask.size()) +
+                                  " entries, the environment has " + std::to_string(F) +
+                                  " features");
     if (std::none_of(t.mask.begin(), t.mask.end(), [](uint8_t m) { return m != 0; }))
       throw std::invalid_argument("teacher feature mask hides every feature");
   }
@@ -36,13 +39,14 @@ double reward(const float* w, const float* f, int F, const std::vector<uint8_t>&
   return r;
 }
 
-std::optional<TripletAnswer> answer_similarity(const Teacher& t, const float* f1, const float* f2, const float* f3,
-                                               int F, Rng& rng) {
+std::optional<TripletAnswer> answer_similarity(const Teacher& t, const float* f1, const float* f2,
+                                               const float* f3, int F, Rng& rng) {
   // Pair k and its odd one out: 0 = (1,2 | 3), 1 = (1,3 | 2), 2 = (2,3 | 1).
   static constexpr std::array<TripletAnswer, 3> kPairs{{{0, 1, 2}, {0, 2, 1}, {1, 2, 0}}};
   const std::array<double, 3> d{masked_sqdist(f1, f2, F, t.mask), masked_sqdist(f1, f3, F, t.mask),
                                 masked_sqdist(f2, f3, F, t.mask)};
-  const double dmin = *std::min_element(d.begin(), d.end()), dmax = *std::max_element(d.begin(), d.end());
+  const double dmin = *std::min_element(d.begin(), d.end()),
+               dmax = *std::max_element(d.begin(), d.end());
   if (t.skip > 0 && dmax - dmin < t.skip) return std::nullopt;
   int k = 0;
   if (std::isinf(t.beta)) {
@@ -63,8 +67,8 @@ std::optional<TripletAnswer> answer_similarity(const Teacher& t, const float* f1
   return kPairs[k];
 }
 
-std::optional<float> answer_preference(const Teacher& t, const float* w, const float* fa, const float* fb, int F,
-                                       Rng& rng) {
+std::optional<float> answer_preference(const Teacher& t, const float* w, const float* fa,
+                                       const float* fb, int F, Rng& rng) {
   const double diff = reward(w, fa, F, t.mask) - reward(w, fb, F, t.mask);
   if (t.skip > 0 && std::abs(diff) < t.skip) return std::nullopt;
   if (t.equal > 0 && std::abs(diff) < t.equal) return 0.5f;

@@ -29,7 +29,10 @@ struct Teacher {
   double equal = 0.0;
   std::vector<uint8_t> mask;  // [F] 1 = perceived; empty = all features
 
-  bool perfect() const { return beta == std::numeric_limits<double>::infinity() && mistake == 0 && skip == 0 && equal == 0; }
+  bool perfect() const {
+    return beta == std::numeric_limits<double>::infinity() && mistake == 0 && skip == 0 &&
+           equal == 0;
+  }
 };
 
 // Throws std::invalid_argument for β ≤ 0, ε ∉ [0, 1], negative thresholds, or a mask whose
@@ -42,12 +45,12 @@ struct TripletAnswer {
 };
 
 // f1, f2, f3: normalised φ* [F] of the three trajectories. nullopt = skipped.
-std::optional<TripletAnswer> answer_similarity(const Teacher& t, const float* f1, const float* f2, const float* f3,
-                                               int F, Rng& rng);
+std::optional<TripletAnswer> answer_similarity(const Teacher& t, const float* f1, const float* f2,
+                                               const float* f3, int F, Rng& rng);
 
 // Label ∈ {0, 0.5, 1} (1 = A preferred) under reward R = w·(mask ⊙ φ*). nullopt = skipped.
-std::optional<float> answer_preference(const Teacher& t, const float* w, const float* fa, const float* fb, int F,
-                                       Rng& rng);
+std::optional<float> answer_preference(const Teacher& t, const float* w, const float* fa,
+                                       const float* fb, int F, Rng& rng);
 
 double reward(const float* w, const float* f, int F, const std::vector<uint8_t>& mask = {});
 

@@ -18,7 +18,8 @@ Trainer::Trainer(MlpShape s, AdamConfig cfg, std::vector<float> initial_params)
 }
 
 void gather_rows(const float* X, int in, const int32_t* rows, int n, float* out) {
-  for (int i = 0; i < n; ++i) std::memcpy(out + size_t(i) * in, X + size_t(rows[i]) * in, sizeof(float) * in);
+  for (int i = 0; i < n; ++i)
+    std::memcpy(out + size_t(i) * in, X + size_t(rows[i]) * in, sizeof(float) * in);
 }
 
 float triplet_train_step(Trainer& t, const float* X, const int32_t* triplets, int B, float margin,
@@ -33,7 +34,8 @@ float triplet_train_step(Trainer& t, const float* X, const int32_t* triplets, in
   t.d_out.resize(size_t(3) * B * d);
   const float loss = symmetric_triplet_loss(t.tape.output(), B, d, margin, t.d_out.data());
   std::fill(t.grad.begin(), t.grad.end(), 0.f);
-  mlp_backward(t.shape, t.params.data(), t.tape, t.d_out.data(), t.grad.data(), static_cast<float*>(nullptr), threads);
+  mlp_backward(t.shape, t.params.data(), t.tape, t.d_out.data(), t.grad.data(),
+               static_cast<float*>(nullptr), threads);
   adam_step(t.adam_cfg, t.adam, t.params.data(), t.grad.data(), t.params.size());
   return loss;
 }
@@ -50,7 +52,8 @@ float preference_train_step(Trainer& t, const float* X, const int32_t* pairs, co
   t.d_out.resize(size_t(2) * B);
   const float loss = bradley_terry_loss(t.tape.output(), label, B, l2_weight, t.d_out.data());
   std::fill(t.grad.begin(), t.grad.end(), 0.f);
-  mlp_backward(t.shape, t.params.data(), t.tape, t.d_out.data(), t.grad.data(), static_cast<float*>(nullptr), threads);
+  mlp_backward(t.shape, t.params.data(), t.tape, t.d_out.data(), t.grad.data(),
+               static_cast<float*>(nullptr), threads);
   adam_step(t.adam_cfg, t.adam, t.params.data(), t.grad.data(), t.params.size());
   return loss;
 }

@@ -4,7 +4,9 @@
 
 namespace sirl {
 
-double adam_lr(const AdamConfig& cfg, int64_t t) { return cfg.lr * std::pow(cfg.decay, double(t - 1)); }
+double adam_lr(const AdamConfig& cfg, int64_t t) {
+  return cfg.lr * std::pow(cfg.decay, double(t - 1));
+}
 
 void adam_step(const AdamConfig& cfg, AdamState& st, float* p, const float* g, size_t n) {
   const int64_t t = ++st.step;

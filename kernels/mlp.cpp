@@ -22,7 +22,9 @@ size_t MlpShape::weight_offset(int layer) const {
   return off;
 }
 
-size_t MlpShape::param_count() const { return weight_offset(layers()); }
+size_t MlpShape::param_count() const {
+  return weight_offset(layers());
+}
 
 double MlpShape::forward_flops(int batch) const {
   double f = 0;
@@ -78,8 +80,8 @@ void mlp_backward(const MlpShape& s, const T* params, MlpTape<T>& tape,
         if (y[i] <= T(0)) g[i] = T(0);
     }
     const T* in = l == 0 ? tape.input : tape.act[l - 1].data();  // [batch, ni]
-    T* dW = dparams + s.weight_offset(l);                          // [no, ni]
-    T* db = dparams + s.bias_offset(l);                            // [no]
+    T* dW = dparams + s.weight_offset(l);                        // [no, ni]
+    T* db = dparams + s.bias_offset(l);                          // [no]
     // dW [no, ni] += gᵀ [no, batch] · in [batch, ni]
     matmul_tn(dW, g, in, no, ni, batch, true, threads);
     for (int r = 0; r < batch; ++r)

@@ -22,7 +22,9 @@ struct MlpShape {
   int out() const { return widths.back(); }
   size_t param_count() const;
   size_t weight_offset(int layer) const;
-  size_t bias_offset(int layer) const { return weight_offset(layer) + size_t(widths[layer]) * widths[layer + 1]; }
+  size_t bias_offset(int layer) const {
+    return weight_offset(layer) + size_t(widths[layer]) * widths[layer + 1];
+  }
   // 2·in·out multiply-adds per layer per sample (biases and ReLU not counted).
   double forward_flops(int batch) const;
 };

@@ -31,7 +31,7 @@ T symmetric_triplet_loss(const T* emb, int B, int d, T margin, T* demb) {
     T* gn = demb + size_t(2 * B + i) * d;
     for (int k = 0; k < d; ++k) {
       T a = 0, b = 0, c = 0;  // ∂/∂p1, ∂/∂p2, ∂/∂n
-      if (h1 > 0) {  // ∂h1: p1 → 2(n − p2), p2 → 2(p2 − p1), n → 2(p1 − n)
+      if (h1 > 0) {           // ∂h1: p1 → 2(n − p2), p2 → 2(p2 − p1), n → 2(p1 − n)
         a += 2 * (n[k] - p2[k]);
         b += 2 * (p2[k] - p1[k]);
         c += 2 * (p1[k] - n[k]);

@@ -4,8 +4,8 @@
 namespace sirl {
 
 // emb [3B, d]: rows [0,B) = φ(ξ_P1), [B,2B) = φ(ξ_P2), [2B,3B) = φ(ξ_N).
-// d(a,b) = ‖a − b‖²;  L = (1/B) Σ_i  max(d(P1,P2) − d(P1,N) + α, 0) + max(d(P2,P1) − d(P2,N) + α, 0)
-// (the paper writes a sum; we take the batch mean, as PyTorch losses do, so the learning rate
+// d(a,b) = ‖a − b‖²;  L = (1/B) Σ_i  max(d(P1,P2) − d(P1,N) + α, 0) + max(d(P2,P1) − d(P2,N) + α,
+// 0) (the paper writes a sum; we take the batch mean, as PyTorch losses do, so the learning rate
 // does not depend on the batch size). Writes ∂L/∂emb into demb [3B, d] when not null.
 template <typename T>
 T symmetric_triplet_loss(const T* emb, int B, int d, T margin, T* demb);

@@ -47,7 +47,9 @@ T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const
   }
   rec *= inv_n;
   ws.d_z.resize(size_t(B) * d);
-  if (dparams) mlp_backward(s.decoder, dec_p, ws.dec, ws.d_recon.data(), dparams + s.encoder.param_count(), ws.d_z.data(), threads);
+  if (dparams)
+    mlp_backward(s.decoder, dec_p, ws.dec, ws.d_recon.data(), dparams + s.encoder.param_count(),
+                 ws.d_z.data(), threads);
   ws.d_enc_out.resize(size_t(B) * 2 * d);
   for (int i = 0; i < B; ++i)
     for (int k = 0; k < d; ++k) {
@@ -56,10 +58,13 @@ T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const
       kl += T(-0.5) * (1 + lv - mu * mu - sd * sd);
       // through z = μ + σ·ε, plus the KL term's own gradient
       ws.d_enc_out[im] = ws.d_z[iz] + kl_weight * mu * inv_b;
-      ws.d_enc_out[il] = ws.d_z[iz] * eps[iz] * T(0.5) * sd + kl_weight * T(0.5) * (sd * sd - 1) * inv_b;
+      ws.d_enc_out[il] =
+          ws.d_z[iz] * eps[iz] * T(0.5) * sd + kl_weight * T(0.5) * (sd * sd - 1) * inv_b;
     }
   kl *= inv_b;
-  if (dparams) mlp_backward(s.encoder, enc_p, ws.enc, ws.d_enc_out.data(), dparams, static_cast<T*>(nullptr), threads);
+  if (dparams)
+    mlp_backward(s.encoder, enc_p, ws.enc, ws.d_enc_out.data(), dparams, static_cast<T*>(nullptr),
+                 threads);
   if (parts) {
     parts->reconstruction = double(rec);
     parts->kl = double(kl);

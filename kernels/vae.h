@@ -1,7 +1,7 @@
 // Variational auto-encoder loss and gradient (Kingma & Welling), the paper's unsupervised
 // pre-training: Gaussian encoder → reparameterised sample → decoder.
-//   encoder MLP: in → hidden… → 2·latent   (columns [0,latent) = mean μ, [latent,2·latent) = log σ²)
-//   decoder MLP: latent → hidden… → in
+//   encoder MLP: in → hidden… → 2·latent   (columns [0,latent) = mean μ, [latent,2·latent) = log
+//   σ²) decoder MLP: latent → hidden… → in
 // The encoder's mean head has exactly φ's shape (in → hidden… → latent), so SIRL+VAE copies it.
 #pragma once
 #include <vector>

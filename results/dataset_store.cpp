@@ -14,9 +14,10 @@ void write_pref(H5File& f, const std::string& g, const PreferenceSet& p, const s
   f.write(g + "/pairs", p.pairs.data(), {u64(p.count), 2});
   f.write(g + "/label", p.label.data(), {u64(p.count)});
   f.write(g + "/human", p.human.data(), {u64(p.count)});
-  f.set_attr(g, "description", "preference queries answered by " + who +
-                                   ": pairs [N,2] rows of inputs (A, B); label [N] 1 = A preferred, 0 = B, 0.5 = "
-                                   "equal; human [N] row of the reward set that answered");
+  f.set_attr(g, "description",
+             "preference queries answered by " + who +
+                 ": pairs [N,2] rows of inputs (A, B); label [N] 1 = A preferred, 0 = B, 0.5 = "
+                 "equal; human [N] row of the reward set that answered");
   f.set_attr(g, "skipped", p.skipped);
 }
 
@@ -33,10 +34,12 @@ PreferenceSet read_pref(const H5File& f, const std::string& g) {
 
 void write_rewards(H5File& f, const std::string& name, const RewardSet& r) {
   f.write(name, r.weights.data(), {u64(r.count), u64(r.dim)});
-  f.set_attr(name, "description", "reward weights w [K, F] over the normalised features; R = w . phi*; unit norm rows");
+  f.set_attr(name, "description",
+             "reward weights w [K, F] over the normalised features; R = w . phi*; unit norm rows");
 }
 
-RewardSet read_rewards(const H5File& f, const std::string& name, const std::string& short_name, int F) {
+RewardSet read_rewards(const H5File& f, const std::string& name, const std::string& short_name,
+                       int F) {
   RewardSet r;
   std::vector<u64> dims;
   r.name = short_name;
@@ -46,11 +49,12 @@ RewardSet read_rewards(const H5File& f, const std::string& name, const std::stri
   return r;
 }
 
-void check_index_range(const H5File& f, const std::string& name, const std::vector<int32_t>& v, int64_t T) {
+void check_index_range(const H5File& f, const std::string& name, const std::vector<int32_t>& v,
+                       int64_t T) {
   for (int32_t i : v)
     if (i < 0 || i >= T)
-      throw H5Error(f.path() + ": " + name + " holds row index " + std::to_string(i) + " outside [0, " +
-                    std::to_string(T) + ")");
+      throw H5Error(f.path() + ": " + name + " holds row index " + std::to_string(i) +
+                    " outside [0, " + std::to_string(T) + ")");
 }
 
 }  // namespace
@@ -75,24 +79,31 @@ void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q, const std:
   f.set_attr(g, "teacher_features", mask);
 
   f.write(g + "/inputs", d.inputs.data(), {T, u64(d.input_dim)});
-  f.set_attr(g + "/inputs", "description",
-             d.env == "grid" ? "trajectory inputs [T,19] float32: 9 states x (x, y) in cells/(size-1) in [0,1], then "
-                               "end-effector angle/90 deg in [-1,1]"
-                             : "trajectory inputs [T,D] float32");
+  f.set_attr(
+      g + "/inputs", "description",
+      d.env == "grid"
+          ? "trajectory inputs [T,19] float32: 9 states x (x, y) in cells/(size-1) in [0,1], then "
+            "end-effector angle/90 deg in [-1,1]"
+          : "trajectory inputs [T,D] float32");
   f.write(g + "/features_raw", d.features_raw.data(), {T, F});
-  f.set_attr(g + "/features_raw", "description", "true features phi* [T,F] in physical units (see @units)");
+  f.set_attr(g + "/features_raw", "description",
+             "true features phi* [T,F] in physical units (see @units)");
   f.set_attr(g + "/features_raw", "feature_names", d.feature_names);
   f.set_attr(g + "/features_raw", "units",
-             d.env == "grid" ? std::vector<std::string>{"cells", "cells", "cells", "degrees"} : std::vector<std::string>{});
+             d.env == "grid" ? std::vector<std::string>{"cells", "cells", "cells", "degrees"}
+                             : std::vector<std::string>{});
   f.write(g + "/features", d.features.data(), {T, F});
   f.set_attr(g + "/features", "description",
-             "normalised true features [T,F]: (raw - feature_min) / (feature_max - feature_min) over all T trajectories");
+             "normalised true features [T,F]: (raw - feature_min) / (feature_max - feature_min) "
+             "over all T trajectories");
   f.set_attr(g + "/features", "feature_names", d.feature_names);
   f.write(g + "/feature_min", d.feature_min.data(), {F});
   f.write(g + "/feature_max", d.feature_max.data(), {F});
-  f.write(g + "/objects", d.object_positions.data(), {u64(d.object_names.size()), u64(d.object_dim)});
+  f.write(g + "/objects", d.object_positions.data(),
+          {u64(d.object_names.size()), u64(d.object_dim)});
   f.set_attr(g + "/objects", "names", d.object_names);
-  f.set_attr(g + "/objects", "description", d.env == "grid" ? "object cells (x, y) [O,2]" : "object centres [O,3] in m");
+  f.set_attr(g + "/objects", "description",
+             d.env == "grid" ? "object cells (x, y) [O,2]" : "object centres [O,3] in m");
 
   write_rewards(f, g + "/rewards/test", q.rewards.test);
   write_rewards(f, g + "/rewards/multipref10", q.rewards.multipref10);
@@ -117,17 +128,20 @@ void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q, const std:
   f.write(g + "/queries/tpa/pairs", pairs.data(), {R, P, 2});
   f.write(g + "/queries/tpa/label", labels.data(), {R, P});
   f.set_attr(g + "/queries/tpa", "description",
-             "per test reward r: pairs [R,P,2] and labels [R,P]; the first @train of each reward train the head, the rest test");
+             "per test reward r: pairs [R,P,2] and labels [R,P]; the first @train of each reward "
+             "train the head, the rest test");
   f.set_attr(g + "/queries/tpa", "train", R ? q.tpa[0].train : int64_t(0));
   f.write(g + "/queries/fpe/train", q.fpe.train.data(), {u64(q.fpe.train.size())});
   f.write(g + "/queries/fpe/test", q.fpe.test.data(), {u64(q.fpe.test.size())});
-  f.set_attr(g + "/queries/fpe", "description", "FPE probe split: rows of inputs, 80 % train / 20 % test");
+  f.set_attr(g + "/queries/fpe", "description",
+             "FPE probe split: rows of inputs, 80 % train / 20 % test");
   f.flush();
 }
 
 StoredDataset read_dataset(const H5File& f, const std::string& env) {
   const std::string g = "/datasets/" + env;
-  if (!f.exists(g)) throw H5Error(f.path() + ": no dataset for env '" + env + "' (missing group " + g + ")");
+  if (!f.exists(g))
+    throw H5Error(f.path() + ": no dataset for env '" + env + "' (missing group " + g + ")");
   StoredDataset s;
   Dataset& d = s.data;
   d.env = f.attr_string(g, "env");
@@ -138,8 +152,8 @@ StoredDataset read_dataset(const H5File& f, const std::string& env) {
   d.count = int64_t(dims[0]);
   d.input_dim = int(dims[1]);
   if (d.count != f.attr_int(g, "trajectories"))
-    throw H5Error(f.path() + ": " + g + "/inputs has " + std::to_string(d.count) + " rows, @trajectories says " +
-                  std::to_string(f.attr_int(g, "trajectories")));
+    throw H5Error(f.path() + ": " + g + "/inputs has " + std::to_string(d.count) +
+                  " rows, @trajectories says " + std::to_string(f.attr_int(g, "trajectories")));
   d.feature_names = f.attr_strings(g + "/features", "feature_names");
   const int F = d.feature_count();
   d.features_raw = f.read_f32(g + "/features_raw", {d.count, F});
@@ -174,7 +188,8 @@ StoredDataset read_dataset(const H5File& f, const std::string& env) {
   q.singlepref = read_pref(f, g + "/queries/singlepref");
   q.multipref10 = read_pref(f, g + "/queries/multipref10");
   q.multipref50 = read_pref(f, g + "/queries/multipref50");
-  for (const auto* p : {&q.singlepref, &q.multipref10, &q.multipref50}) check_index_range(f, g + "/queries", p->pairs, d.count);
+  for (const auto* p : {&q.singlepref, &q.multipref10, &q.multipref50})
+    check_index_range(f, g + "/queries", p->pairs, d.count);
   const auto pairs = f.read_i32(g + "/queries/tpa/pairs", {q.rewards.test.count, -1, 2}, &dims);
   const int64_t P = int64_t(dims[1]);
   const auto labels = f.read_f32(g + "/queries/tpa/label", {q.rewards.test.count, P});

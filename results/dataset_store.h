@@ -14,7 +14,8 @@ namespace sirl {
 
 class H5File;
 
-void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q, const std::string& engine_version);
+void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q,
+                   const std::string& engine_version);
 
 struct StoredDataset {
   Dataset data;

@@ -11,9 +11,13 @@ namespace {
 struct QuietHdf5 {
   QuietHdf5() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
 };
-void quiet() { static QuietHdf5 q; }
+void quiet() {
+  static QuietHdf5 q;
+}
 
-[[noreturn]] void fail(const std::string& file, const std::string& what) { throw H5Error(file + ": " + what); }
+[[noreturn]] void fail(const std::string& file, const std::string& what) {
+  throw H5Error(file + ": " + what);
+}
 
 // RAII for any hid_t.
 struct Hid {
@@ -32,21 +36,22 @@ hid_t lcpl_intermediate() {
   return p;
 }
 
-void write_any(hid_t file, const std::string& path, const std::string& name, hid_t type, const void* data,
-               const std::vector<uint64_t>& dims) {
+void write_any(hid_t file, const std::string& path, const std::string& name, hid_t type,
+               const void* data, const std::vector<uint64_t>& dims) {
   std::vector<hsize_t> d(dims.begin(), dims.end());
   Hid space(H5Screate_simple(int(d.size()), d.data(), nullptr), H5Sclose);
   if (H5Lexists(file, name.c_str(), H5P_DEFAULT) > 0) H5Ldelete(file, name.c_str(), H5P_DEFAULT);
   Hid lcpl(lcpl_intermediate(), H5Pclose);
   Hid ds(H5Dcreate2(file, name.c_str(), type, space, lcpl, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
   if (ds < 0) fail(path, "cannot create dataset " + name);
-  if (H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) fail(path, "cannot write dataset " + name);
+  if (H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
+    fail(path, "cannot write dataset " + name);
 }
 
 template <typename T>
-std::vector<T> read_any(hid_t file, const std::string& path, const std::string& name, hid_t mem_type,
-                        H5T_class_t cls, const std::vector<int64_t>& expect, std::vector<uint64_t>* dims_out,
-                        const char* type_name) {
+std::vector<T> read_any(hid_t file, const std::string& path, const std::string& name,
+                        hid_t mem_type, H5T_class_t cls, const std::vector<int64_t>& expect,
+                        std::vector<uint64_t>* dims_out, const char* type_name) {
   if (H5Lexists(file, name.c_str(), H5P_DEFAULT) <= 0) fail(path, "missing dataset " + name);
   Hid ds(H5Dopen2(file, name.c_str(), H5P_DEFAULT), H5Dclose);
   if (ds < 0) fail(path, "cannot open dataset " + name + " (file corrupt?)");
@@ -59,7 +64,8 @@ std::vector<T> read_any(hid_t file, const std::string& path, const std::string& 
   H5Sget_simple_extent_dims(space, d.data(), nullptr);
   auto shape_str = [](const auto& v) {
     std::string s = "[";
-    for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + (int64_t(v[i]) < 0 ? std::string("*") : std::to_string(v[i]));
+    for (size_t i = 0; i < v.size(); ++i)
+      s += (i ? ", " : "") + (int64_t(v[i]) < 0 ? std::string("*") : std::to_string(v[i]));
     return s + "]";
   };
   bool ok = size_t(rank) == expect.size();
@@ -75,25 +81,28 @@ std::vector<T> read_any(hid_t file, const std::string& path, const std::string& 
 }
 
 Hid open_object(hid_t file, const std::string& path, const std::string& object) {
-  if (object != "/" && H5Lexists(file, object.c_str(), H5P_DEFAULT) <= 0) fail(path, "missing object " + object);
+  if (object != "/" && H5Lexists(file, object.c_str(), H5P_DEFAULT) <= 0)
+    fail(path, "missing object " + object);
   hid_t o = H5Oopen(file, object.c_str(), H5P_DEFAULT);
   if (o < 0) fail(path, "cannot open " + object);
   return Hid(o, H5Oclose);
 }
 
-Hid open_attr(hid_t file, const std::string& path, const std::string& object, const std::string& attr) {
+Hid open_attr(hid_t file, const std::string& path, const std::string& object,
+              const std::string& attr) {
   Hid o = open_object(file, path, object);
   if (H5Aexists(o, attr.c_str()) <= 0) fail(path, "missing attribute " + object + "@" + attr);
   return Hid(H5Aopen(o, attr.c_str(), H5P_DEFAULT), H5Aclose);
 }
 
-void write_attr(hid_t file, const std::string& path, const std::string& object, const std::string& attr, hid_t type,
-                const void* data, hsize_t n, bool scalar) {
+void write_attr(hid_t file, const std::string& path, const std::string& object,
+                const std::string& attr, hid_t type, const void* data, hsize_t n, bool scalar) {
   Hid o = open_object(file, path, object);
   if (H5Aexists(o, attr.c_str()) > 0) H5Adelete(o, attr.c_str());
   Hid space(scalar ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &n, nullptr), H5Sclose);
   Hid a(H5Acreate2(o, attr.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-  if (a < 0 || H5Awrite(a, type, data) < 0) fail(path, "cannot write attribute " + object + "@" + attr);
+  if (a < 0 || H5Awrite(a, type, data) < 0)
+    fail(path, "cannot write attribute " + object + "@" + attr);
 }
 
 Hid vlen_string_type() {
@@ -132,7 +141,9 @@ H5File H5File::open_rw(const std::string& path) {
   return H5File(f, path);
 }
 
-H5File::H5File(H5File&& o) noexcept : id_(o.id_), path_(std::move(o.path_)) { o.id_ = -1; }
+H5File::H5File(H5File&& o) noexcept : id_(o.id_), path_(std::move(o.path_)) {
+  o.id_ = -1;
+}
 H5File::~H5File() {
   if (id_ >= 0) H5Fclose(id_);
 }
@@ -157,10 +168,12 @@ void H5File::write(const std::string& n, const int32_t* d, const std::vector<uin
 void H5File::write(const std::string& n, const double* d, const std::vector<uint64_t>& dims) {
   write_any(id_, path_, n, H5T_NATIVE_DOUBLE, d, dims);
 }
-std::vector<float> H5File::read_f32(const std::string& n, const std::vector<int64_t>& e, std::vector<uint64_t>* d) const {
+std::vector<float> H5File::read_f32(const std::string& n, const std::vector<int64_t>& e,
+                                    std::vector<uint64_t>* d) const {
   return read_any<float>(id_, path_, n, H5T_NATIVE_FLOAT, H5T_FLOAT, e, d, "float32");
 }
-std::vector<int32_t> H5File::read_i32(const std::string& n, const std::vector<int64_t>& e, std::vector<uint64_t>* d) const {
+std::vector<int32_t> H5File::read_i32(const std::string& n, const std::vector<int64_t>& e,
+                                      std::vector<uint64_t>* d) const {
   return read_any<int32_t>(id_, path_, n, H5T_NATIVE_INT32, H5T_INTEGER, e, d, "int32");
 }
 
@@ -182,7 +195,8 @@ void H5File::set_attr(const std::string& o, const std::string& a, double v) {
 void H5File::set_attr(const std::string& o, const std::string& a, int64_t v) {
   write_attr(id_, path_, o, a, H5T_NATIVE_INT64, &v, 1, true);
 }
-void H5File::set_attr(const std::string& o, const std::string& a, const std::vector<std::string>& v) {
+void H5File::set_attr(const std::string& o, const std::string& a,
+                      const std::vector<std::string>& v) {
   Hid t = vlen_string_type();
   std::vector<const char*> p;
   for (const auto& s : v) p.push_back(s.c_str());

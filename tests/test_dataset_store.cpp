@@ -13,7 +13,9 @@ namespace sirl {
 namespace {
 namespace fs = std::filesystem;
 
-fs::path temp(const std::string& name) { return fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()) + ".h5"); }
+fs::path temp(const std::string& name) {
+  return fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()) + ".h5");
+}
 
 QueryBundle small_bundle(const Dataset& d) {
   QueryBundleConfig c;
@@ -85,7 +87,9 @@ TEST(DatasetStore, WrongShapeIsAClearError) {
     read_dataset(f, "grid");
     FAIL() << "expected H5Error";
   } catch (const H5Error& e) {
-    EXPECT_NE(std::string(e.what()).find("/datasets/grid/features_raw has shape [10, 3], expected [1960, 4]"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find(
+                  "/datasets/grid/features_raw has shape [10, 3], expected [1960, 4]"),
+              std::string::npos)
         << e.what();
   }
   EXPECT_THROW(read_dataset(f, "jaco"), H5Error);
@@ -129,18 +133,24 @@ TEST(DatasetCli, WriteInspectAndRefuseCorruptFiles) {
   const std::string sirl = SIRL_BINARY;
   const auto path = temp("cli");
   std::string out;
-  ASSERT_EQ(run(sirl + " dataset --env grid --out " + path.string() + " --seed 3 --similarity 200", &out), 0) << out;
+  ASSERT_EQ(
+      run(sirl + " dataset --env grid --out " + path.string() + " --seed 3 --similarity 200", &out),
+      0)
+      << out;
   EXPECT_EQ(run(sirl + " inspect " + path.string(), &out), 0) << out;
   EXPECT_NE(out.find("similarity 200"), std::string::npos) << out;
   fs::resize_file(path, fs::file_size(path) / 3);
   const int rc = run(sirl + " inspect " + path.string(), &out);
   EXPECT_EQ(rc, 1) << out;
   EXPECT_NE(out.find("sirl: error: " + path.string()), std::string::npos) << out;
-  EXPECT_EQ(run(sirl + " dataset --env grid --out " + path.string() + " --laptop 9,9", &out), 2) << out;
+  EXPECT_EQ(run(sirl + " dataset --env grid --out " + path.string() + " --laptop 9,9", &out), 2)
+      << out;
   EXPECT_NE(out.find("outside the 5x5 grid"), std::string::npos) << out;
-  EXPECT_EQ(run(sirl + " dataset --env grid --out " + path.string() + " --mistake 2", &out), 2) << out;
+  EXPECT_EQ(run(sirl + " dataset --env grid --out " + path.string() + " --mistake 2", &out), 2)
+      << out;
   EXPECT_NE(out.find("--mistake"), std::string::npos) << out;
-  EXPECT_EQ(run(sirl + " dataset --env grid --out " + path.string() + " --features nope", &out), 2) << out;
+  EXPECT_EQ(run(sirl + " dataset --env grid --out " + path.string() + " --features nope", &out), 2)
+      << out;
   EXPECT_EQ(run(sirl + " frobnicate", &out), 2) << out;
   fs::remove(path);
   fs::remove(temp("cli_out"));

@@ -20,7 +20,8 @@ TEST(GridRobot, EnumerationCountIsCombinatorial) {
     const float* x = d.input(i);
     uniq.insert(std::vector<float>(x, x + 19));
     for (int s = 0; s < 8; ++s) {
-      const float dx = std::abs(x[2 * s + 2] - x[2 * s]) * 4, dy = std::abs(x[2 * s + 3] - x[2 * s + 1]) * 4;
+      const float dx = std::abs(x[2 * s + 2] - x[2 * s]) * 4,
+                  dy = std::abs(x[2 * s + 3] - x[2 * s + 1]) * 4;
       ASSERT_FLOAT_EQ(dx + dy, 1.f) << "trajectory " << i << " step " << s;
     }
     EXPECT_FLOAT_EQ(std::abs(x[16] - x[0]), 1.f);
@@ -33,7 +34,8 @@ TEST(GridRobot, EnumerationCountIsCombinatorial) {
 TEST(GridRobot, FeaturesOnHandWorkedPath) {
   GridConfig c;  // obstacles (1,3), (3,1), laptop (2,2)
   // Along the bottom edge then up the right edge: (0,0)…(4,0),(4,1)…(4,4).
-  std::array<std::array<int, 2>, kGridStates> cells{{{0, 0}, {1, 0}, {2, 0}, {3, 0}, {4, 0}, {4, 1}, {4, 2}, {4, 3}, {4, 4}}};
+  std::array<std::array<int, 2>, kGridStates> cells{
+      {{0, 0}, {1, 0}, {2, 0}, {3, 0}, {4, 0}, {4, 1}, {4, 2}, {4, 3}, {4, 4}}};
   const auto f = grid_features(c, cells, -60);
   // Distances to the laptop (2,2): √8, √5, 2, √5, √8, √5, 2, √5, √8.
   const double laptop = (3 * std::sqrt(8.0) + 4 * std::sqrt(5.0) + 2 * 2.0) / 9;
@@ -55,7 +57,10 @@ TEST(GridRobot, NormalisedFeaturesSpanUnitInterval) {
       lo = std::min(lo, d.feature(i)[f]);
       hi = std::max(hi, d.feature(i)[f]);
       // normalised = (raw − min)/(max − min)
-      ASSERT_NEAR(d.feature(i)[f], (d.features_raw[i * 4 + f] - d.feature_min[f]) / (d.feature_max[f] - d.feature_min[f]), 1e-6);
+      ASSERT_NEAR(
+          d.feature(i)[f],
+          (d.features_raw[i * 4 + f] - d.feature_min[f]) / (d.feature_max[f] - d.feature_min[f]),
+          1e-6);
     }
     EXPECT_FLOAT_EQ(lo, 0.f);
     EXPECT_FLOAT_EQ(hi, 1.f);

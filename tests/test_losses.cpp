@@ -31,7 +31,8 @@ TEST(TripletLoss, HandComputedCases) {
   EXPECT_DOUBLE_EQ(g[0], 0.0);
   EXPECT_DOUBLE_EQ(triplet_accuracy(emb.data(), 2, 1), 0.5);
   // Zero margin makes triplet 0's hinges still inactive and triplet 1's (4−1)·2 = 6.
-  EXPECT_DOUBLE_EQ(symmetric_triplet_loss(emb.data(), 2, 1, 0.0, static_cast<double*>(nullptr)), 3.0);
+  EXPECT_DOUBLE_EQ(symmetric_triplet_loss(emb.data(), 2, 1, 0.0, static_cast<double*>(nullptr)),
+                   3.0);
 }
 
 TEST(TripletLoss, GradientMatchesFiniteDifferences) {
@@ -81,7 +82,8 @@ TEST(BradleyTerry, GradientMatchesFiniteDifferences) {
 
 TEST(BradleyTerry, AccuracyCountsAgreement) {
   std::vector<float> r = {2, 0, 1, /*B:*/ 1, 1, 5}, l = {1, 1, 0};
-  // pair 0: 2 > 1, A preferred → right; pair 1: 0 < 1, A preferred → wrong; pair 2: 1 < 5, B → right
+  // pair 0: 2 > 1, A preferred → right; pair 1: 0 < 1, A preferred → wrong; pair 2: 1 < 5, B →
+  // right
   EXPECT_DOUBLE_EQ(preference_accuracy(r.data(), l.data(), 3), 2.0 / 3);
 }
 
@@ -97,13 +99,15 @@ TEST(Vae, GradientMatchesFiniteDifferences) {
   VaeWorkspace<double> ws;
   std::vector<double> g(params.size(), 0.0);
   VaeLossParts parts;
-  const double L = vae_loss_and_grad(s, params.data(), x.data(), B, eps.data(), 0.3, g.data(), ws, &parts);
+  const double L =
+      vae_loss_and_grad(s, params.data(), x.data(), B, eps.data(), 0.3, g.data(), ws, &parts);
   EXPECT_NEAR(L, parts.reconstruction + 0.3 * parts.kl, 1e-12);
   EXPECT_GE(parts.kl, 0.0);
   test::expect_gradient_matches(
       [&](const std::vector<double>& p) {
         VaeWorkspace<double> w;
-        return vae_loss_and_grad(s, p.data(), x.data(), B, eps.data(), 0.3, static_cast<double*>(nullptr), w);
+        return vae_loss_and_grad(s, p.data(), x.data(), B, eps.data(), 0.3,
+                                 static_cast<double*>(nullptr), w);
       },
       params, g);
 }
@@ -114,7 +118,8 @@ TEST(Vae, KlIsZeroForStandardNormalPosterior) {
   std::vector<double> p(s.param_count(), 0.0), x(2 * 4, 1.0), eps(2 * 2, 0.5);
   VaeWorkspace<double> ws;
   VaeLossParts parts;
-  vae_loss_and_grad(s, p.data(), x.data(), 2, eps.data(), 1.0, static_cast<double*>(nullptr), ws, &parts);
+  vae_loss_and_grad(s, p.data(), x.data(), 2, eps.data(), 1.0, static_cast<double*>(nullptr), ws,
+                    &parts);
   EXPECT_DOUBLE_EQ(parts.kl, 0.0);
   EXPECT_DOUBLE_EQ(parts.reconstruction, 1.0);  // decoder outputs 0, targets 1
 }

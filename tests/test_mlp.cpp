@@ -31,8 +31,10 @@ void check_mlp_gradients(const MlpShape& shape, int batch) {
   mlp_forward(shape, params.data(), x.data(), batch, tape);
   std::vector<double> dp(params.size(), 0.0), dx(x.size(), 0.0);
   mlp_backward(shape, params.data(), tape, c.data(), dp.data(), dx.data());
-  test::expect_gradient_matches([&](const std::vector<double>& p) { return loss(p, x); }, params, dp);
-  test::expect_gradient_matches([&](const std::vector<double>& xi) { return loss(params, xi); }, x, dx);
+  test::expect_gradient_matches([&](const std::vector<double>& p) { return loss(p, x); }, params,
+                                dp);
+  test::expect_gradient_matches([&](const std::vector<double>& xi) { return loss(params, xi); }, x,
+                                dx);
 }
 
 TEST(Mlp, ParamLayoutMatchesPyTorchOrder) {
@@ -56,9 +58,15 @@ TEST(Mlp, ForwardMatchesHandComputation) {
   EXPECT_FLOAT_EQ(t.output()[1], 0.25f);
 }
 
-TEST(Mlp, GradientsMatchFiniteDifferences) { check_mlp_gradients(MlpShape{{5, 7, 4, 3}}, 4); }
-TEST(Mlp, GradientsWithReluOutput) { check_mlp_gradients(MlpShape{{3, 6, 2}, true}, 5); }
-TEST(Mlp, SingleLayerGradients) { check_mlp_gradients(MlpShape{{4, 3}}, 3); }
+TEST(Mlp, GradientsMatchFiniteDifferences) {
+  check_mlp_gradients(MlpShape{{5, 7, 4, 3}}, 4);
+}
+TEST(Mlp, GradientsWithReluOutput) {
+  check_mlp_gradients(MlpShape{{3, 6, 2}, true}, 5);
+}
+TEST(Mlp, SingleLayerGradients) {
+  check_mlp_gradients(MlpShape{{4, 3}}, 3);
+}
 
 TEST(Mlp, ThreadedGemmIsBitIdentical) {
   MlpShape s{{70, 300, 130, 6}};

@@ -56,8 +56,8 @@ TEST(PreferenceOracle, SkipEqualAndMistake) {
   Teacher t;
   t.skip = 0.01;
   t.equal = 0.1;
-  EXPECT_FALSE(answer_preference(t, w, lo, lo, 1, rng));          // |ΔR| = 0 < skip
-  EXPECT_EQ(*answer_preference(t, w, lo, mid, 1, rng), 0.5f);     // 0.05 < equal
+  EXPECT_FALSE(answer_preference(t, w, lo, lo, 1, rng));       // |ΔR| = 0 < skip
+  EXPECT_EQ(*answer_preference(t, w, lo, mid, 1, rng), 0.5f);  // 0.05 < equal
   EXPECT_EQ(*answer_preference(t, w, hi, lo, 1, rng), 1.f);
   Teacher always_wrong;
   always_wrong.mistake = 1.0;
@@ -73,7 +73,8 @@ double agreement(const Dataset& d, double beta, bool similarity) {
   int agree = 0;
   const int n = 4000;
   for (int i = 0; i < n; ++i) {
-    const int a = int(rng.uniform_int(d.count)), b = int(rng.uniform_int(d.count)), c = int(rng.uniform_int(d.count));
+    const int a = int(rng.uniform_int(d.count)), b = int(rng.uniform_int(d.count)),
+              c = int(rng.uniform_int(d.count));
     if (similarity) {
       const auto p = answer_similarity(perfect, d.feature(a), d.feature(b), d.feature(c), 4, rng);
       const auto q = answer_similarity(noisy, d.feature(a), d.feature(b), d.feature(c), 4, rng);
@@ -90,8 +91,8 @@ double agreement(const Dataset& d, double beta, bool similarity) {
 TEST(BoltzmannTeacher, AgreementFallsAsBetaFalls) {
   const Dataset d = make_grid_dataset();
   for (bool sim : {true, false}) {
-    const double a100 = agreement(d, 100, sim), a10 = agreement(d, 10, sim), a1 = agreement(d, 1, sim),
-                 a001 = agreement(d, 0.01, sim);
+    const double a100 = agreement(d, 100, sim), a10 = agreement(d, 10, sim),
+                 a1 = agreement(d, 1, sim), a001 = agreement(d, 0.01, sim);
     // n = 4000 ⇒ standard error ≤ 0.008: gaps of 0.03 are > 3.5 σ.
     EXPECT_GT(a100, a10 + 0.03) << (sim ? "similarity" : "preference");
     EXPECT_GT(a10, a1 + 0.03) << (sim ? "similarity" : "preference");
@@ -131,7 +132,8 @@ TEST(Queries, MultiPrefSplitsEvenlyOverHumans) {
   // Labels agree with the reward of the human who answered.
   for (int i = 0; i < p.count; ++i) {
     const float* w = r.multipref50.weights.data() + 4 * p.human[i];
-    const double ra = reward(w, d.feature(p.pairs[2 * i]), 4), rb = reward(w, d.feature(p.pairs[2 * i + 1]), 4);
+    const double ra = reward(w, d.feature(p.pairs[2 * i]), 4),
+                 rb = reward(w, d.feature(p.pairs[2 * i + 1]), 4);
     if (ra != rb) EXPECT_EQ(p.label[i], ra > rb ? 1.f : 0.f);
   }
   const auto s = sample_similarity_queries(d, 50, Teacher{}, rng);

@@ -46,14 +46,15 @@ double relative_error(const std::vector<float>& a, const std::vector<float>& b, 
   return std::sqrt(num / den);
 }
 
-constexpr int kEvery = 5;        // single-step checkpoints every 5 steps
-constexpr int kExactSteps = 5;   // free-running curves must agree this long before drift
+constexpr int kEvery = 5;       // single-step checkpoints every 5 steps
+constexpr int kExactSteps = 5;  // free-running curves must agree this long before drift
 
 void run_parity_case(const std::string& name, std::vector<int> widths, int T) {
   const int steps = 200, B = 64;
   const float margin = 1.f;
   const AdamConfig cfg{0.004, 0.99999};  // the paper's SIRL optimiser
-  const fs::path dir = fs::temp_directory_path() / ("sirl_parity_" + name + "_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("sirl_parity_" + name + "_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   MlpShape shape{widths};
   Rng rng(seed_from_key("parity/" + name));
@@ -75,8 +76,10 @@ void run_parity_case(const std::string& name, std::vector<int> widths, int T) {
   for (size_t q = 0; q < trip.size() / 3; ++q) {
     int a = int(rng.uniform_int(T)), b = int(rng.uniform_int(T)), c = int(rng.uniform_int(T));
     const double ab = dist(a, b), ac = dist(a, c), bc = dist(b, c);
-    if (ac < ab && ac <= bc) std::swap(b, c);       // (a, c) closest → positives a, c
-    else if (bc < ab && bc < ac) std::swap(a, c);  // (b, c) closest → positives c, b
+    if (ac < ab && ac <= bc)
+      std::swap(b, c);  // (a, c) closest → positives a, c
+    else if (bc < ab && bc < ac)
+      std::swap(a, c);  // (b, c) closest → positives c, b
     trip[3 * q] = a, trip[3 * q + 1] = b, trip[3 * q + 2] = c;
   }
 
@@ -95,7 +98,8 @@ void run_parity_case(const std::string& name, std::vector<int> widths, int T) {
   for (int s = 0; s < steps; ++s)
     ours[s] = triplet_train_step(t, x.data(), trip.data() + size_t(s) * B * 3, B, margin);
 
-  const std::string cmd = "/usr/bin/python3 " SIRL_SOURCE_DIR "/tests/torch_parity.py " + dir.string();
+  const std::string cmd =
+      "/usr/bin/python3 " SIRL_SOURCE_DIR "/tests/torch_parity.py " + dir.string();
   const int rc = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 0)
       << cmd << " failed; install python3-torch with scripts/setup.sh";
@@ -126,10 +130,14 @@ void run_parity_case(const std::string& name, std::vector<int> widths, int T) {
     r.adam.v.assign(pre.begin() + 2 * P, pre.end());
     r.adam.step = s;
     const float loss = triplet_train_step(r, x.data(), trip.data() + size_t(s) * B * 3, B, margin);
-    const double l_err = std::abs(double(loss) - torch_losses[s]) / std::abs(double(torch_losses[s]));
-    std::vector<float> m_post(post.begin() + P, post.begin() + 2 * P), v_post(post.begin() + 2 * P, post.end());
-    const double p_err = relative_error(r.params, std::vector<float>(post.begin(), post.begin() + P), Pc);
-    const double m_err = relative_error(r.adam.m, m_post, Pc), v_err = relative_error(r.adam.v, v_post, Pc);
+    const double l_err =
+        std::abs(double(loss) - torch_losses[s]) / std::abs(double(torch_losses[s]));
+    std::vector<float> m_post(post.begin() + P, post.begin() + 2 * P),
+        v_post(post.begin() + 2 * P, post.end());
+    const double p_err =
+        relative_error(r.params, std::vector<float>(post.begin(), post.begin() + P), Pc);
+    const double m_err = relative_error(r.adam.m, m_post, Pc),
+                 v_err = relative_error(r.adam.v, v_post, Pc);
     EXPECT_LE(l_err, 1e-4) << "loss at step " << s;
     EXPECT_LE(p_err, 1e-4) << "weights after step " << s;
     EXPECT_LE(m_err, 1e-4) << "Adam m after step " << s;
@@ -144,21 +152,27 @@ void run_parity_case(const std::string& name, std::vector<int> widths, int T) {
   //    PyTorch float32 to stay within 2x PyTorch's own float32-vs-float64 drift (+1e-4).
   double early = 0;
   for (int s = 0; s < kExactSteps; ++s)
-    early = std::max(early, std::abs(double(ours[s]) - torch_losses[s]) / std::abs(double(torch_losses[s])));
+    early = std::max(
+        early, std::abs(double(ours[s]) - torch_losses[s]) / std::abs(double(torch_losses[s])));
   EXPECT_LE(early, 1e-4) << "loss curve over the first " << kExactSteps << " steps";
   const double w_err = relative_error(t.params, torch_params, Pc);
   const double torch_drift = relative_error(torch_params, torch64_params, Pc);
   EXPECT_LE(w_err, 2 * torch_drift + 1e-4);
-  std::printf("[parity %s] single steps: worst loss rel. err %.2e, worst state rel. err %.2e;\n"
-              "  free run: loss rel. err over first %d steps %.2e, final weights vs torch32 %.2e "
-              "(torch32 vs torch64 %.2e), final loss ours %.4f torch %.4f\n",
-              name.c_str(), worst_loss, worst_state, kExactSteps, early, w_err, torch_drift,
-              ours.back(), torch_losses.back());
+  std::printf(
+      "[parity %s] single steps: worst loss rel. err %.2e, worst state rel. err %.2e;\n"
+      "  free run: loss rel. err over first %d steps %.2e, final weights vs torch32 %.2e "
+      "(torch32 vs torch64 %.2e), final loss ours %.4f torch %.4f\n",
+      name.c_str(), worst_loss, worst_state, kExactSteps, early, w_err, torch_drift, ours.back(),
+      torch_losses.back());
   fs::remove_all(dir);
 }
 
-TEST(TorchParity, GridSizedSirlTraining) { run_parity_case("grid", {19, 128, 128, 6}, 300); }
-TEST(TorchParity, SmallJacoSizedSirlTraining) { run_parity_case("jaco", {2037, 64, 64, 6}, 300); }
+TEST(TorchParity, GridSizedSirlTraining) {
+  run_parity_case("grid", {19, 128, 128, 6}, 300);
+}
+TEST(TorchParity, SmallJacoSizedSirlTraining) {
+  run_parity_case("jaco", {2037, 64, 64, 6}, 300);
+}
 
 }  // namespace
 }  // namespace sirl
