@@ -17,19 +17,18 @@ Trainer::Trainer(MlpShape s, AdamConfig cfg, std::vector<float> initial_params)
   validate(shape);
 }
 
-void gather_rows(const float* X, int in, const int32_t* rows, int n, float* out) {
-  for (int i = 0; i < n; ++i)
-    std::memcpy(out + size_t(i) * in, X + size_t(rows[i]) * in, sizeof(float) * in);
+void gather_by_role(const float* X, int in, const int32_t* idx, int B, int roles, float* out) {
+  for (int role = 0; role < roles; ++role)
+    for (int i = 0; i < B; ++i)
+      std::memcpy(out + (size_t(role) * B + i) * in, X + size_t(idx[size_t(i) * roles + role]) * in,
+                  sizeof(float) * in);
 }
 
 float triplet_train_step(Trainer& t, const float* X, const int32_t* triplets, int B, float margin,
                          int threads) {
   const int in = t.shape.in(), d = t.shape.out();
   t.batch_x.resize(size_t(3) * B * in);
-  for (int role = 0; role < 3; ++role)
-    for (int i = 0; i < B; ++i)
-      std::memcpy(t.batch_x.data() + (size_t(role) * B + i) * in,
-                  X + size_t(triplets[3 * i + role]) * in, sizeof(float) * in);
+  gather_by_role(X, in, triplets, B, 3, t.batch_x.data());
   mlp_forward(t.shape, t.params.data(), t.batch_x.data(), 3 * B, t.tape, threads);
   t.d_out.resize(size_t(3) * B * d);
   const float loss = symmetric_triplet_loss(t.tape.output(), B, d, margin, t.d_out.data());
@@ -44,10 +43,7 @@ float preference_train_step(Trainer& t, const float* X, const int32_t* pairs, co
                             int B, float l2_weight, int threads) {
   const int in = t.shape.in();
   t.batch_x.resize(size_t(2) * B * in);
-  for (int role = 0; role < 2; ++role)
-    for (int i = 0; i < B; ++i)
-      std::memcpy(t.batch_x.data() + (size_t(role) * B + i) * in,
-                  X + size_t(pairs[2 * i + role]) * in, sizeof(float) * in);
+  gather_by_role(X, in, pairs, B, 2, t.batch_x.data());
   mlp_forward(t.shape, t.params.data(), t.batch_x.data(), 2 * B, t.tape, threads);
   t.d_out.resize(size_t(2) * B);
   const float loss = bradley_terry_loss(t.tape.output(), label, B, l2_weight, t.d_out.data());
@@ -75,10 +71,7 @@ float preference_train_step_batched(BatchedTrainer& t, const float* X, const int
   const size_t per_model = size_t(2) * B * in;
   t.batch_x.resize(M * per_model);
   for (int m = 0; m < M; ++m)
-    for (int role = 0; role < 2; ++role)
-      for (int i = 0; i < B; ++i)
-        std::memcpy(t.batch_x.data() + m * per_model + (size_t(role) * B + i) * in,
-                    X + size_t(pairs[(size_t(m) * B + i) * 2 + role]) * in, sizeof(float) * in);
+    gather_by_role(X, in, pairs + size_t(m) * B * 2, B, 2, t.batch_x.data() + m * per_model);
   mlp_forward_batched(t.shape, M, t.params.data(), t.batch_x.data(), 2 * B, t.tapes, threads);
   t.d_out.resize(size_t(M) * 2 * B);
   float total = 0;

@@ -21,8 +21,10 @@ struct Trainer {
   Trainer(MlpShape s, AdamConfig cfg, std::vector<float> initial_params);
 };
 
-// rows [n] indices into X [T, in] → out [n, in].
-void gather_rows(const float* X, int in, const int32_t* rows, int n, float* out);
+// Stacks query rows role by role: idx [B, roles] row indices into X [T, in] →
+// out [roles·B, in] with out[r·B + i] = X[idx[i·roles + r]] (P1 | P2 | N for triplets, A | B for
+// pairs).
+void gather_by_role(const float* X, int in, const int32_t* idx, int B, int roles, float* out);
 
 // Symmetric triplet step on B triplets given as row indices into X:
 //   triplets [B, 3] = (P1, P2, N); the network sees [3B, in] stacked P1 | P2 | N.

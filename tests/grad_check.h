@@ -9,7 +9,16 @@
 #include <functional>
 #include <vector>
 
+#include "kernels/rng.h"
+
 namespace sirl::test {
+
+// n draws of scale·N(0, 1).
+inline std::vector<double> random_vec(size_t n, Rng& rng, double scale = 1.0) {
+  std::vector<double> v(n);
+  for (auto& x : v) x = scale * rng.normal();
+  return v;
+}
 
 // f(x) is a scalar function of the vector x; `analytic` its claimed gradient at x.
 inline void expect_gradient_matches(const std::function<double(const std::vector<double>&)>& f,

@@ -10,12 +10,6 @@
 namespace sirl {
 namespace {
 
-std::vector<double> random_vec(size_t n, Rng& rng, double scale = 1.0) {
-  std::vector<double> v(n);
-  for (auto& x : v) x = scale * rng.normal();
-  return v;
-}
-
 TEST(TripletLoss, HandComputedCases) {
   // 1-d embeddings, rows P1 | P2 | N, margin 1.
   // Triplet 0: p1=0, p2=1, n=3: d12=1, d1n=9, d2n=4 → both hinges inactive → 0.
@@ -38,7 +32,7 @@ TEST(TripletLoss, HandComputedCases) {
 TEST(TripletLoss, GradientMatchesFiniteDifferences) {
   Rng rng(5);
   const int B = 7, d = 6;
-  auto emb = random_vec(3 * B * d, rng, 0.5);
+  auto emb = test::random_vec(3 * B * d, rng, 0.5);
   std::vector<double> g(emb.size());
   symmetric_triplet_loss(emb.data(), B, d, 1.0, g.data());
   test::expect_gradient_matches(
@@ -68,7 +62,7 @@ TEST(BradleyTerry, HandComputedCases) {
 TEST(BradleyTerry, GradientMatchesFiniteDifferences) {
   Rng rng(9);
   const int B = 8;
-  auto r = random_vec(2 * B, rng, 2.0);
+  auto r = test::random_vec(2 * B, rng, 2.0);
   std::vector<double> l(B);
   for (int i = 0; i < B; ++i) l[i] = i % 3 == 0 ? 0.5 : double(i % 2);
   std::vector<double> g(2 * B);
@@ -93,9 +87,9 @@ TEST(Vae, GradientMatchesFiniteDifferences) {
   EXPECT_EQ(s.decoder.widths, (std::vector<int>{3, 7, 8, 5}));
   Rng rng(21);
   const int B = 4;
-  auto params = random_vec(s.param_count(), rng, 0.4);
-  auto x = random_vec(B * 5, rng);
-  auto eps = random_vec(B * 3, rng);
+  auto params = test::random_vec(s.param_count(), rng, 0.4);
+  auto x = test::random_vec(B * 5, rng);
+  auto eps = test::random_vec(B * 3, rng);
   VaeWorkspace<double> ws;
   std::vector<double> g(params.size(), 0.0);
   VaeLossParts parts;

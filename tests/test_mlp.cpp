@@ -8,18 +8,12 @@
 namespace sirl {
 namespace {
 
-std::vector<double> random_vec(size_t n, Rng& rng, double scale = 1.0) {
-  std::vector<double> v(n);
-  for (auto& x : v) x = scale * rng.normal();
-  return v;
-}
-
 // L = Σ c ⊙ MLP(x): checks ∂L/∂params and ∂L/∂x against finite differences.
 void check_mlp_gradients(const MlpShape& shape, int batch) {
   Rng rng(42);
-  auto params = random_vec(shape.param_count(), rng, 0.7);
-  auto x = random_vec(size_t(batch) * shape.in(), rng);
-  auto c = random_vec(size_t(batch) * shape.out(), rng);
+  auto params = test::random_vec(shape.param_count(), rng, 0.7);
+  auto x = test::random_vec(size_t(batch) * shape.in(), rng);
+  auto c = test::random_vec(size_t(batch) * shape.out(), rng);
   auto loss = [&](const std::vector<double>& p, const std::vector<double>& xin) {
     MlpTape<double> tape;
     mlp_forward(shape, p.data(), xin.data(), batch, tape);
