@@ -8,18 +8,21 @@
 namespace sirl {
 
 struct Dataset {
-  std::string env;            // "grid" or "jaco"
-  int input_dim = 0;          // floats per trajectory (grid 19, jaco 2037)
-  int64_t count = 0;          // T, trajectories in Ξ
-  std::vector<float> inputs;  // [T, input_dim] what the networks see
+  std::string env;                // "grid" or "jaco"
+  int input_dim = 0;              // floats per trajectory (grid 19, jaco 2037)
+  int64_t count = 0;              // T, trajectories in Ξ
+  std::vector<float> inputs;      // [T, input_dim] what the networks see
+  std::string input_description;  // layout and scaling of one input row
   std::vector<std::string> feature_names;
+  std::vector<std::string> feature_units;       // [F] units of features_raw
   std::vector<float> features_raw;              // [T, F] φ* in physical units
   std::vector<float> features;                  // [T, F] φ* min-max normalised over Ξ to [0, 1]
   std::vector<float> feature_min, feature_max;  // [F] the normalisation
   std::vector<std::string> object_names;
   std::vector<float> object_positions;  // [objects, 2 or 3]
   int object_dim = 0;
-  uint64_t seed = 0;  // generator seed (0 for an exact enumeration)
+  std::string object_units;  // e.g. "cells" or "m"
+  uint64_t seed = 0;         // generator seed (0 for an exact enumeration)
 
   int feature_count() const { return int(feature_names.size()); }
   const float* input(int64_t i) const { return inputs.data() + i * input_dim; }

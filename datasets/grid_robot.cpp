@@ -37,7 +37,11 @@ Dataset make_grid_dataset(const GridConfig& c) {
   Dataset d;
   d.env = "grid";
   d.input_dim = kGridInputDim;
+  d.input_description =
+      "9 states x (x, y) in cells/(size-1) in [0,1], then end-effector angle/90 deg in [-1,1]";
   d.feature_names = {"obstacle1_distance", "obstacle2_distance", "laptop_distance", "abs_angle"};
+  d.feature_units = {"cells", "cells", "cells", "degrees"};
+  d.object_units = "cells";
   d.object_names = {"obstacle1", "obstacle2", "laptop"};
   d.object_dim = 2;
   for (const auto& o : {c.obstacle1, c.obstacle2, c.laptop}) {

@@ -17,7 +17,10 @@ RewardSet make_random_rewards(const std::string& name, int count, int dim, uint6
     std::vector<double> g(dim);
     do {
       norm = 0;
-      for (auto& v : g) norm += (v = rng.normal()) * v;
+      for (auto& v : g) {
+        v = rng.normal();
+        norm += v * v;
+      }
     } while (norm < 1e-12);
     for (int k = 0; k < dim; ++k) r.weights[size_t(i) * dim + k] = float(g[k] / std::sqrt(norm));
   }

@@ -56,6 +56,7 @@ T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const
       const size_t im = size_t(i) * 2 * d + k, il = im + d, iz = size_t(i) * d + k;
       const T mu = h[im], lv = h[il], sd = std::exp(T(0.5) * lv);
       kl += T(-0.5) * (1 + lv - mu * mu - sd * sd);
+      if (!dparams) continue;
       // through z = μ + σ·ε, plus the KL term's own gradient
       ws.d_enc_out[im] = ws.d_z[iz] + kl_weight * mu * inv_b;
       ws.d_enc_out[il] =

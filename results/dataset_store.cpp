@@ -81,17 +81,12 @@ void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q, const std:
   f.write(g + "/inputs", d.inputs.data(), {T, u64(d.input_dim)});
   f.set_attr(
       g + "/inputs", "description",
-      d.env == "grid"
-          ? "trajectory inputs [T,19] float32: 9 states x (x, y) in cells/(size-1) in [0,1], then "
-            "end-effector angle/90 deg in [-1,1]"
-          : "trajectory inputs [T,D] float32");
+      "trajectory inputs [T," + std::to_string(d.input_dim) + "] float32: " + d.input_description);
   f.write(g + "/features_raw", d.features_raw.data(), {T, F});
   f.set_attr(g + "/features_raw", "description",
              "true features phi* [T,F] in physical units (see @units)");
   f.set_attr(g + "/features_raw", "feature_names", d.feature_names);
-  f.set_attr(g + "/features_raw", "units",
-             d.env == "grid" ? std::vector<std::string>{"cells", "cells", "cells", "degrees"}
-                             : std::vector<std::string>{});
+  f.set_attr(g + "/features_raw", "units", d.feature_units);
   f.write(g + "/features", d.features.data(), {T, F});
   f.set_attr(g + "/features", "description",
              "normalised true features [T,F]: (raw - feature_min) / (feature_max - feature_min) "
@@ -103,7 +98,7 @@ void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q, const std:
           {u64(d.object_names.size()), u64(d.object_dim)});
   f.set_attr(g + "/objects", "names", d.object_names);
   f.set_attr(g + "/objects", "description",
-             d.env == "grid" ? "object cells (x, y) [O,2]" : "object centres [O,3] in m");
+             "object positions [O," + std::to_string(d.object_dim) + "] in " + d.object_units);
 
   write_rewards(f, g + "/rewards/test", q.rewards.test);
   write_rewards(f, g + "/rewards/multipref10", q.rewards.multipref10);
@@ -157,6 +152,7 @@ StoredDataset read_dataset(const H5File& f, const std::string& env) {
   d.feature_names = f.attr_strings(g + "/features", "feature_names");
   const int F = d.feature_count();
   d.features_raw = f.read_f32(g + "/features_raw", {d.count, F});
+  d.feature_units = f.attr_strings(g + "/features_raw", "units");
   d.features = f.read_f32(g + "/features", {d.count, F});
   d.feature_min = f.read_f32(g + "/feature_min", {F});
   d.feature_max = f.read_f32(g + "/feature_max", {F});

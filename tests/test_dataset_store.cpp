@@ -43,6 +43,7 @@ TEST(DatasetStore, RoundTripIsExact) {
   EXPECT_EQ(s.data.features, d.features);
   EXPECT_EQ(s.data.features_raw, d.features_raw);
   EXPECT_EQ(s.data.feature_names, d.feature_names);
+  EXPECT_EQ(s.data.feature_units, d.feature_units);
   EXPECT_EQ(s.data.feature_min, d.feature_min);
   EXPECT_EQ(s.data.object_positions, d.object_positions);
   EXPECT_EQ(s.data.object_names, d.object_names);

@@ -70,11 +70,18 @@ TEST(GridRobot, NormalisedFeaturesSpanUnitInterval) {
 }
 
 TEST(GridRobot, ObjectsAreConfigurableAndValidated) {
+  // Ξ is closed under the 180° rotation (x, y) → (4 − x, 4 − y), which swaps opposite corners,
+  // so the distances to (0,0) and to (4,4) take the same range over Ξ.
   GridConfig c;
   c.laptop = {0, 0};
+  c.obstacle1 = {4, 4};
   const Dataset d = make_grid_dataset(c);
   EXPECT_FLOAT_EQ(d.object_positions[4], 0.f);
-  EXPECT_FLOAT_EQ(d.feature_min[2], 0.f + d.feature_min[2]);  // built fine
+  EXPECT_FLOAT_EQ(d.object_positions[0], 4.f);
+  EXPECT_FLOAT_EQ(d.feature_min[2], d.feature_min[0]);
+  EXPECT_FLOAT_EQ(d.feature_max[2], d.feature_max[0]);
+  // A corner laptop is farther on average than the centre one (default config).
+  EXPECT_GT(d.feature_max[2], make_grid_dataset().feature_max[2]);
   c.laptop = {5, 0};
   EXPECT_THROW(make_grid_dataset(c), std::invalid_argument);
   c.laptop = {2, 2};

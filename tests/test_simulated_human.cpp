@@ -99,7 +99,6 @@ TEST(BoltzmannTeacher, AgreementFallsAsBetaFalls) {
     EXPECT_GT(a100, 0.85);
     // β → 0 is a coin among the options: 1/3 for triplets, 1/2 for pairs (±0.03).
     EXPECT_NEAR(a001, sim ? 1.0 / 3 : 0.5, 0.03);
-    (void)a1;
   }
 }
 
@@ -134,7 +133,9 @@ TEST(Queries, MultiPrefSplitsEvenlyOverHumans) {
     const float* w = r.multipref50.weights.data() + 4 * p.human[i];
     const double ra = reward(w, d.feature(p.pairs[2 * i]), 4),
                  rb = reward(w, d.feature(p.pairs[2 * i + 1]), 4);
-    if (ra != rb) EXPECT_EQ(p.label[i], ra > rb ? 1.f : 0.f);
+    if (ra != rb) {
+      EXPECT_EQ(p.label[i], ra > rb ? 1.f : 0.f);
+    }
   }
   const auto s = sample_similarity_queries(d, 50, Teacher{}, rng);
   ASSERT_EQ(s.idx.size(), 150u);
