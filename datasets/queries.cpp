@@ -122,6 +122,47 @@ PreferenceSet sample_preference_queries(const Dataset& d, int64_t N, const Rewar
   return s;
 }
 
+TripletSet first_triplets(const TripletSet& s, int64_t N) {
+  if (N < 0 || N > s.count)
+    throw std::invalid_argument("asked for " + std::to_string(N) +
+                                " similarity queries, the set has " + std::to_string(s.count));
+  TripletSet r;
+  r.idx.assign(s.idx.begin(), s.idx.begin() + 3 * N);
+  r.count = N;
+  return r;
+}
+
+PreferenceSet take_per_human(const PreferenceSet& s, int64_t N, int K) {
+  if (K < 1) throw std::invalid_argument("take_per_human: K must be >= 1");
+  if (N < 0) throw std::invalid_argument("take_per_human: negative query count");
+  std::vector<int64_t> have(K, 0);
+  for (int64_t i = 0; i < s.count; ++i) {
+    const int h = s.human[i];
+    if (h < 0 || h >= K)
+      throw std::invalid_argument("take_per_human: human " + std::to_string(h) + " outside [0, " +
+                                  std::to_string(K) + ")");
+    ++have[h];
+  }
+  PreferenceSet r;
+  std::vector<int64_t> taken(K, 0);
+  for (int64_t i = 0; i < s.count; ++i) {
+    const int h = s.human[i];
+    if (taken[h] >= N / K + (h < N % K ? 1 : 0)) continue;
+    ++taken[h];
+    r.pairs.push_back(s.pairs[2 * i]);
+    r.pairs.push_back(s.pairs[2 * i + 1]);
+    r.label.push_back(s.label[i]);
+    r.human.push_back(h);
+  }
+  for (int k = 0; k < K; ++k)
+    if (taken[k] != N / K + (k < N % K ? 1 : 0))
+      throw std::invalid_argument("asked for " + std::to_string(N) + " preference queries over " +
+                                  std::to_string(K) + " humans, human " + std::to_string(k) +
+                                  " has only " + std::to_string(have[k]));
+  r.count = int64_t(r.label.size());
+  return r;
+}
+
 TpaSet sample_tpa_set(const Dataset& d, int64_t total, const RewardSet& r, int row,
                       const Teacher& t, Rng& rng, double train_fraction) {
   check_sample_size(d, total, 2, "TPA pairs");

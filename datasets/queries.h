@@ -47,6 +47,13 @@ struct PreferenceSet {
 PreferenceSet sample_preference_queries(const Dataset& d, int64_t N, const RewardSet& rewards,
                                         const Teacher& t, Rng& rng);
 
+// The first N triplets of a set (a method trained with N queries uses these, so the query sets
+// of smaller N are nested in larger ones). Throws std::invalid_argument if N > s.count.
+TripletSet first_triplets(const TripletSet& s, int64_t N);
+// N queries of a set answered by K humans in blocks: human k keeps the first N/K of its block
+// (the first N mod K humans one more), so each human keeps its share. Throws if a block is short.
+PreferenceSet take_per_human(const PreferenceSet& s, int64_t N, int K);
+
 // One reward's labelled pairs for TPA: the first `train` rows train the head (M ≤ train), the
 // rest are held out (80/20 by default).
 struct TpaSet {

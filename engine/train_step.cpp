@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <stdexcept>
 
 #include "kernels/bradley_terry_loss.h"
 #include "kernels/triplet_loss.h"
@@ -15,6 +16,8 @@ Trainer::Trainer(MlpShape s, AdamConfig cfg, std::vector<float> initial_params)
       grad(params.size(), 0.f),
       adam(params.size()) {
   validate(shape);
+  if (params.size() < shape.param_count())
+    throw std::invalid_argument("Trainer: fewer parameters than the network has");
 }
 
 void gather_by_role(const float* X, int in, const int32_t* idx, int B, int roles, float* out) {
@@ -48,6 +51,44 @@ float preference_train_step(Trainer& t, const float* X, const int32_t* pairs, co
   t.d_out.resize(size_t(2) * B);
   const float loss = bradley_terry_loss(t.tape.output(), label, B, l2_weight, t.d_out.data());
   std::fill(t.grad.begin(), t.grad.end(), 0.f);
+  mlp_backward(t.shape, t.params.data(), t.tape, t.d_out.data(), t.grad.data(),
+               static_cast<float*>(nullptr), threads);
+  adam_step(t.adam_cfg, t.adam, t.params.data(), t.grad.data(), t.params.size());
+  return loss;
+}
+
+float multihead_preference_train_step(Trainer& t, int K, const float* X, const int32_t* pairs,
+                                      const float* label, const int32_t* human, int B,
+                                      float l2_weight, int threads) {
+  const int in = t.shape.in(), d = t.shape.out();
+  const size_t P = t.shape.param_count();
+  const float* heads = t.params.data() + P;  // [K, d + 1]
+  t.batch_x.resize(size_t(2) * B * in);
+  gather_by_role(X, in, pairs, B, 2, t.batch_x.data());
+  mlp_forward(t.shape, t.params.data(), t.batch_x.data(), 2 * B, t.tape, threads);
+  const float* emb = t.tape.output();  // [2B, d]: A rows then B rows
+  // r [2B]: each row scored by its pair's head.
+  std::vector<float> r(size_t(2) * B), dr(size_t(2) * B);
+  for (int j = 0; j < 2 * B; ++j) {
+    const float* w = heads + size_t(human[j % B]) * (d + 1);
+    float s = w[d];
+    for (int k = 0; k < d; ++k) s += w[k] * emb[size_t(j) * d + k];
+    r[j] = s;
+  }
+  const float loss = bradley_terry_loss(r.data(), label, B, l2_weight, dr.data());
+  std::fill(t.grad.begin(), t.grad.end(), 0.f);
+  float* dheads = t.grad.data() + P;
+  t.d_out.resize(size_t(2) * B * d);
+  for (int j = 0; j < 2 * B; ++j) {
+    const int h = human[j % B];
+    const float* w = heads + size_t(h) * (d + 1);
+    float* dw = dheads + size_t(h) * (d + 1);
+    for (int k = 0; k < d; ++k) {
+      t.d_out[size_t(j) * d + k] = dr[j] * w[k];  // ∂L/∂φ = dr · w
+      dw[k] += dr[j] * emb[size_t(j) * d + k];    // ∂L/∂w = dr · φ
+    }
+    dw[d] += dr[j];
+  }
   mlp_backward(t.shape, t.params.data(), t.tape, t.d_out.data(), t.grad.data(),
                static_cast<float*>(nullptr), threads);
   adam_step(t.adam_cfg, t.adam, t.params.data(), t.grad.data(), t.params.size());

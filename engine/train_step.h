@@ -13,7 +13,7 @@ namespace sirl {
 struct Trainer {
   MlpShape shape;
   AdamConfig adam_cfg;
-  std::vector<float> params, grad;  // [P]
+  std::vector<float> params, grad;  // [P] (+ any trailing parameters a step owns, e.g. heads)
   AdamState adam;
   MlpTape<float> tape;
   std::vector<float> batch_x, d_out;  // gathered inputs, ∂L/∂output
@@ -36,6 +36,14 @@ float triplet_train_step(Trainer& t, const float* X, const int32_t* triplets, in
 // label [B] (1 = A preferred). Returns the loss before the update.
 float preference_train_step(Trainer& t, const float* X, const int32_t* pairs, const float* label,
                             int B, float l2_weight, int threads = 1);
+
+// Multi-task preference step (MultiPref-K, SinglePref): a shared φ with K linear reward heads,
+// r_k(ξ) = w_k · φ(ξ) + c_k. t.params = [φ params (t.shape) | K × (w_k [d], c_k)].
+// pairs [B, 2] row indices into X, label [B], human [B] ∈ [0, K) picks each pair's head.
+// Returns the loss before the update.
+float multihead_preference_train_step(Trainer& t, int K, const float* X, const int32_t* pairs,
+                                      const float* label, const int32_t* human, int B,
+                                      float l2_weight, int threads = 1);
 
 // M reward heads of one shape trained side by side (the 20 TPA heads of a cell, or seeds),
 // each with its own weights, its own pairs and its own labels; one Adam over all M·P values.

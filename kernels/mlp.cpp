@@ -14,6 +14,15 @@ void validate(const MlpShape& shape) {
     throw std::invalid_argument("MLP needs at least an input and an output width");
   for (int w : shape.widths)
     if (w < 1) throw std::invalid_argument("MLP width must be >= 1, got " + std::to_string(w));
+  for (int l : shape.linear_layers)
+    if (l < 0 || l + 1 >= shape.layers())
+      throw std::invalid_argument("MLP linear_layers entry " + std::to_string(l) +
+                                  " is not a hidden layer");
+}
+
+bool MlpShape::relu_after(int layer) const {
+  if (layer + 1 == layers()) return relu_on_output;
+  return std::find(linear_layers.begin(), linear_layers.end(), layer) == linear_layers.end();
 }
 
 size_t MlpShape::weight_offset(int layer) const {
@@ -48,7 +57,7 @@ void mlp_forward(const MlpShape& s, const T* params, const T* x, int batch, MlpT
     const T* b = params + s.bias_offset(l);    // [no]
     // y [batch, no] = in [batch, ni] · Wᵀ
     matmul_nt(y.data(), in, W, batch, no, ni, false, threads);
-    const bool relu = l + 1 < L || s.relu_on_output;
+    const bool relu = s.relu_after(l);
     for (int r = 0; r < batch; ++r) {
       T* row = y.data() + size_t(r) * no;
       if (relu)
@@ -73,7 +82,7 @@ void mlp_backward(const MlpShape& s, const T* params, MlpTape<T>& tape,
   for (int l = L - 1; l >= 0; --l) {
     const int ni = s.widths[l], no = s.widths[l + 1];
     T* g = tape.grad.data();
-    const bool relu = l + 1 < L || s.relu_on_output;
+    const bool relu = s.relu_after(l);
     if (relu) {  // the ReLU mask: output > 0 ⇔ pre-activation > 0
       const T* y = tape.act[l].data();
       for (size_t i = 0; i < size_t(batch) * no; ++i)

@@ -16,6 +16,10 @@ namespace sirl {
 struct MlpShape {
   std::vector<int> widths;      // [in, hidden..., out], at least two entries
   bool relu_on_output = false;  // ReLU after the last Linear too (default: linear output)
+  // Hidden layers whose output skips the ReLU. Used when φ (linear output) and a reward head are
+  // stacked into one network for unfrozen training: the embedding layer stays linear.
+  std::vector<int> linear_layers;
+  bool relu_after(int layer) const;
 
   int layers() const { return static_cast<int>(widths.size()) - 1; }
   int in() const { return widths.front(); }

@@ -58,6 +58,21 @@ TEST(Mlp, GradientsMatchFiniteDifferences) {
 TEST(Mlp, GradientsWithReluOutput) {
   check_mlp_gradients(MlpShape{{3, 6, 2}, true}, 5);
 }
+TEST(Mlp, GradientsWithLinearHiddenLayer) {
+  // φ (5→7→3, linear output) stacked under a head (3→4→1): layer 1 skips its ReLU.
+  check_mlp_gradients(MlpShape{{5, 7, 3, 4, 1}, false, {1}}, 4);
+}
+TEST(Mlp, LinearHiddenLayerKeepsNegativeValues) {
+  // 1 → 1 → 1 with W0 = −1, b0 = 0, W1 = 2, b1 = 0: x = 1 gives h = −1 (no ReLU) → −2.
+  MlpShape s{{1, 1, 1}, false, {0}};
+  std::vector<float> p = {-1, 0, 2, 0}, x = {1};
+  MlpTape<float> t;
+  mlp_forward(s, p.data(), x.data(), 1, t);
+  EXPECT_FLOAT_EQ(t.output()[0], -2.f);
+  s.linear_layers.clear();  // with the ReLU: h = 0 → 0
+  mlp_forward(s, p.data(), x.data(), 1, t);
+  EXPECT_FLOAT_EQ(t.output()[0], 0.f);
+}
 TEST(Mlp, SingleLayerGradients) {
   check_mlp_gradients(MlpShape{{4, 3}}, 3);
 }
@@ -132,6 +147,7 @@ TEST(Mlp, InitFollowsPyTorchLinearBounds) {
 TEST(Mlp, RejectsBadShapes) {
   EXPECT_THROW(validate(MlpShape{{5}}), std::invalid_argument);
   EXPECT_THROW(validate(MlpShape{{5, 0, 2}}), std::invalid_argument);
+  EXPECT_THROW(validate(MlpShape{{5, 3, 2}, false, {1}}), std::invalid_argument);  // output layer
 }
 
 }  // namespace

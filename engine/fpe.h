@@ -1,0 +1,19 @@
+// Feature Prediction Error (paper §4.3): how linearly recoverable the true features are from φ.
+#pragma once
+#include "datasets/dataset.h"
+#include "datasets/queries.h"
+#include "engine/representation.h"
+
+namespace sirl {
+
+struct FpeResult {
+  double fpe = 0;        // test MSE over the 20 % split, mean over test rows × features
+  double train_mse = 0;  // the probe's fit on its own 80 %
+};
+
+// φ frozen; a linear probe (with bias) fitted from φ(ξ) to the normalised φ*(ξ) on split.train,
+// scored on split.test.
+FpeResult evaluate_fpe(const Representation& rep, const Dataset& d, const FpeSplit& split,
+                       int threads = 1);
+
+}  // namespace sirl

@@ -1,0 +1,160 @@
+#include "engine/hyperparams.h"
+
+#include <charconv>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace sirl {
+
+Hyper paper_hyper(const std::string& env) {
+  Hyper h;
+  if (env == "grid") return h;
+  if (env == "jaco" || env == "jaco2") {
+    h.phi_hidden = {1024, 1024};
+    h.pref_l2 = 1;
+    h.pref.adam.lr = 0.001;
+    h.tpa.epochs = 1000;
+    h.tpa_hidden = {1024, 1024};
+    h.tpa_l2 = 1;
+    return h;
+  }
+  throw std::invalid_argument("unknown environment '" + env + "' (expected grid or jaco)");
+}
+
+namespace {
+
+// Visits every field with its name; the one table both set_hyper and describe read.
+template <typename H, typename F>
+void for_each_field(H& h, F&& f) {
+  f("phi.hidden", h.phi_hidden);
+  f("phi.embedding_dim", h.embedding_dim);
+  f("phi.relu_output", h.phi_relu_output);
+  auto schedule = [&](const std::string& p, auto& s) {
+    f(p + ".epochs", s.epochs);
+    f(p + ".batch", s.batch);
+    f(p + ".lr", s.adam.lr);
+    f(p + ".lr_decay", s.adam.decay);
+  };
+  schedule("sirl", h.sirl);
+  f("sirl.margin", h.triplet_margin);
+  schedule("vae", h.vae);
+  f("vae.kl_weight", h.vae_kl_weight);
+  schedule("pref", h.pref);
+  f("pref.l2", h.pref_l2);
+  schedule("tpa", h.tpa);
+  f("tpa.hidden", h.tpa_hidden);
+  f("tpa.l2", h.tpa_l2);
+}
+
+[[noreturn]] void bad(const std::string& key, const std::string& value, const char* expected) {
+  throw std::invalid_argument("hyper-parameter " + key + ": '" + value + "' is not " + expected);
+}
+
+void parse(const std::string& key, const std::string& v, int& out) {
+  auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), out);
+  if (ec != std::errc() || p != v.data() + v.size()) bad(key, v, "an integer");
+}
+void parse(const std::string& key, const std::string& v, double& out) {
+  auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), out);
+  if (ec != std::errc() || p != v.data() + v.size() || !std::isfinite(out))
+    bad(key, v, "a finite number");
+}
+void parse(const std::string& key, const std::string& v, bool& out) {
+  if (v == "true" || v == "1")
+    out = true;
+  else if (v == "false" || v == "0")
+    out = false;
+  else
+    bad(key, v, "true or false");
+}
+void parse(const std::string& key, const std::string& v, std::vector<int>& out) {
+  std::vector<int> r;
+  std::stringstream ss(v);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    int x = 0;
+    parse(key, item, x);
+    r.push_back(x);
+  }
+  if (r.empty()) bad(key, v, "a comma-separated list of widths");
+  out = r;
+}
+
+std::string show(int v) {
+  return std::to_string(v);
+}
+std::string show(bool v) {
+  return v ? "true" : "false";
+}
+std::string show(double v) {
+  std::ostringstream o;
+  o.precision(17);
+  o << v;
+  return o.str();
+}
+std::string show(const std::vector<int>& v) {
+  std::string s;
+  for (size_t i = 0; i < v.size(); ++i) s += (i ? "," : "") + std::to_string(v[i]);
+  return s;
+}
+
+}  // namespace
+
+void set_hyper(Hyper& h, const std::string& key, const std::string& value) {
+  bool found = false;
+  for_each_field(h, [&](const std::string& name, auto& field) {
+    if (name != key) return;
+    found = true;
+    parse(key, value, field);
+  });
+  if (!found) {
+    std::string keys;
+    for (const auto& k : hyper_keys()) keys += (keys.empty() ? "" : ", ") + k;
+    throw std::invalid_argument("unknown hyper-parameter '" + key + "' (known: " + keys + ")");
+  }
+}
+
+std::vector<std::string> hyper_keys() {
+  Hyper h;
+  std::vector<std::string> keys;
+  for_each_field(h, [&](const std::string& name, auto&) { keys.push_back(name); });
+  return keys;
+}
+
+std::string describe(const Hyper& h) {
+  std::string s;
+  for_each_field(h, [&](const std::string& name, const auto& field) {
+    s += name + " = " + show(field) + "\n";
+  });
+  return s;
+}
+
+void validate(const Hyper& h) {
+  auto fail = [](const std::string& what) {
+    throw std::invalid_argument("hyper-parameter " + what);
+  };
+  auto widths = [&](const char* name, const std::vector<int>& w) {
+    for (int x : w)
+      if (x < 1) fail(std::string(name) + ": widths must be >= 1");
+  };
+  widths("phi.hidden", h.phi_hidden);
+  widths("tpa.hidden", h.tpa_hidden);
+  if (h.embedding_dim < 1) fail("phi.embedding_dim must be >= 1");
+  auto schedule = [&](const std::string& p, const TrainSchedule& s) {
+    if (s.epochs < 0) fail(p + ".epochs must be >= 0");
+    if (s.batch < 1) fail(p + ".batch must be >= 1");
+    if (!(s.adam.lr > 0)) fail(p + ".lr must be > 0");
+    if (!(s.adam.decay > 0 && s.adam.decay <= 1)) fail(p + ".lr_decay must be in (0, 1]");
+  };
+  schedule("sirl", h.sirl);
+  schedule("vae", h.vae);
+  schedule("pref", h.pref);
+  schedule("tpa", h.tpa);
+  if (h.triplet_margin < 0) fail("sirl.margin must be >= 0");
+  if (h.vae_kl_weight < 0) fail("vae.kl_weight must be >= 0");
+  if (h.pref_l2 < 0) fail("pref.l2 must be >= 0");
+  if (h.tpa_l2 < 0) fail("tpa.l2 must be >= 0");
+}
+
+}  // namespace sirl

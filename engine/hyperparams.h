@@ -1,0 +1,51 @@
+// The paper's training hyper-parameters (Appendix B–C; DESIGN.md §5), one set per environment.
+// Every value is overridable by name ("sirl.epochs", "tpa.lr", …) so profiles can change any of
+// them, and every run records the full set it used (describe()).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "kernels/adam.h"
+
+namespace sirl {
+
+struct TrainSchedule {
+  int epochs = 1;
+  int batch = 32;
+  AdamConfig adam;
+};
+
+struct Hyper {
+  // φ: input → hidden… → embedding_dim. The paper: ReLU after every hidden layer; its lineage
+  // code leaves the embedding layer linear (our default), switchable with phi_relu_output.
+  std::vector<int> phi_hidden{128, 128};
+  int embedding_dim = 6;
+  bool phi_relu_output = false;
+  TrainSchedule sirl{3000, 64, {0.004, 0.99999}};
+  double triplet_margin = 1.0;  // the paper does not state α; PyTorch's TripletMarginLoss default
+  TrainSchedule vae{2000, 32, {0.01, 0.99999}};
+  double vae_kl_weight = 0.01;
+  TrainSchedule pref{5000, 32, {0.01, 1.0}};  // MultiPref-K and SinglePref
+  double pref_l2 = 10;
+  TrainSchedule tpa{500, 64, {0.001, 1.0}};  // the TPA reward heads
+  std::vector<int> tpa_hidden{128, 128};
+  double tpa_l2 = 10;
+};
+
+// "grid" or "jaco" (throws std::invalid_argument otherwise).
+Hyper paper_hyper(const std::string& env);
+
+// Sets one value by its dotted name from text ("3000", "0.004", "128,128", "true").
+// Throws std::invalid_argument naming the key and what was expected.
+void set_hyper(Hyper& h, const std::string& key, const std::string& value);
+
+// Every key, in a fixed order (what set_hyper accepts).
+std::vector<std::string> hyper_keys();
+
+// "key = value" lines, one per key, in hyper_keys() order: what a run records.
+std::string describe(const Hyper& h);
+
+// Throws std::invalid_argument on epochs/batch < 1, lr ≤ 0, decay ∉ (0,1], widths < 1, …
+void validate(const Hyper& h);
+
+}  // namespace sirl

@@ -1,0 +1,75 @@
+#include "engine/representation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace sirl {
+
+namespace {
+constexpr Method kAll[] = {Method::sirl,        Method::vae,        Method::multipref10,
+                           Method::multipref50, Method::singlepref, Method::random};
+}
+
+const char* method_name(Method m) {
+  switch (m) {
+    case Method::sirl:
+      return "sirl";
+    case Method::vae:
+      return "vae";
+    case Method::multipref10:
+      return "multipref10";
+    case Method::multipref50:
+      return "multipref50";
+    case Method::singlepref:
+      return "singlepref";
+    case Method::random:
+      return "random";
+  }
+  return "?";
+}
+
+Method parse_method(const std::string& name) {
+  for (Method m : kAll)
+    if (name == method_name(m)) return m;
+  std::string known;
+  for (Method m : kAll) known += (known.empty() ? "" : ", ") + std::string(method_name(m));
+  throw std::invalid_argument("unknown method '" + name + "' (expected one of " + known + ")");
+}
+
+bool uses_queries(Method m) {
+  return m != Method::vae && m != Method::random;
+}
+bool accepts_vae_pretrain(Method m) {
+  return uses_queries(m);
+}
+
+MlpShape phi_shape(int in, const Hyper& h) {
+  MlpShape s;
+  s.widths.push_back(in);
+  for (int w : h.phi_hidden) s.widths.push_back(w);
+  s.widths.push_back(h.embedding_dim);
+  s.relu_on_output = h.phi_relu_output;
+  validate(s);
+  return s;
+}
+
+void embed(const Representation& rep, const float* X, int64_t n, float* out, int threads) {
+  constexpr int64_t kChunk = 1024;
+  MlpTape<float> tape;
+  const int in = rep.shape.in(), d = rep.dim();
+  for (int64_t i0 = 0; i0 < n; i0 += kChunk) {
+    const int b = int(std::min(kChunk, n - i0));
+    mlp_forward(rep.shape, rep.params.data(), X + i0 * in, b, tape, threads);
+    std::copy(tape.output(), tape.output() + size_t(b) * d, out + i0 * d);
+  }
+}
+
+void require_finite(const std::vector<float>& v, const std::string& what) {
+  for (size_t i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v[i]))
+      throw std::runtime_error(what + ": non-finite value " + std::to_string(v[i]) + " at index " +
+                               std::to_string(i) + " (training diverged; lower the learning rate)");
+}
+
+}  // namespace sirl

@@ -1,0 +1,43 @@
+// A learned embedding φ: trajectory → R^d, and the methods that produce one (paper §4.3).
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/hyperparams.h"
+#include "kernels/mlp.h"
+
+namespace sirl {
+
+enum class Method { sirl, vae, multipref10, multipref50, singlepref, random };
+
+// "sirl", "vae", "multipref10", "multipref50", "singlepref", "random".
+const char* method_name(Method m);
+// Inverse of method_name; throws std::invalid_argument listing the valid names.
+Method parse_method(const std::string& name);
+// Methods whose φ is trained on human queries (N matters).
+bool uses_queries(Method m);
+// Methods that accept VAE pre-training as a switch (SIRL+VAE, MultiPref+VAE, SinglePref+VAE).
+bool accepts_vae_pretrain(Method m);
+
+struct Representation {
+  MlpShape shape;             // input → hidden… → d
+  std::vector<float> params;  // [P] flat, layer by layer (kernels/mlp.h)
+  Method method = Method::random;
+  bool vae_pretrain = false;
+  int64_t queries = 0;            // N used for training (0 for VAE and Random)
+  std::vector<float> loss_curve;  // mean training loss per epoch (empty for Random)
+  double train_flops = 0;         // multiply-adds ×2 spent training (excluding VAE pre-training)
+  int dim() const { return shape.out(); }
+};
+
+// φ's shape for an input width: in → phi_hidden… → embedding_dim.
+MlpShape phi_shape(int in, const Hyper& h);
+
+// out [n, d] = φ(X [n, in]), in chunks so memory stays bounded for any n.
+void embed(const Representation& rep, const float* X, int64_t n, float* out, int threads = 1);
+
+// Throws std::runtime_error naming `what` if any value is NaN or ±Inf.
+void require_finite(const std::vector<float>& v, const std::string& what);
+
+}  // namespace sirl

@@ -1,0 +1,159 @@
+#include "engine/tpa.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "engine/epochs.h"
+#include "engine/train_step.h"
+#include "kernels/bradley_terry_loss.h"
+#include "kernels/rng.h"
+
+namespace sirl {
+
+namespace {
+
+// The network each head trains: frozen → head alone on φ(ξ); unfrozen → φ and head stacked,
+// φ's embedding layer kept linear as in φ itself.
+MlpShape head_network(const Representation& rep, const Hyper& h, bool frozen) {
+  MlpShape s;
+  if (frozen) {
+    s.widths = {rep.dim()};
+  } else {
+    s.widths = rep.shape.widths;
+    if (!rep.shape.relu_on_output) s.linear_layers = {rep.shape.layers() - 1};
+    s.linear_layers.insert(s.linear_layers.end(), rep.shape.linear_layers.begin(),
+                           rep.shape.linear_layers.end());
+  }
+  for (int w : h.tpa_hidden) s.widths.push_back(w);
+  s.widths.push_back(1);
+  validate(s);
+  return s;
+}
+
+}  // namespace
+
+TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::vector<TpaSet>& sets,
+                       const TpaConfig& cfg, uint64_t seed) {
+  validate(cfg.hyper);
+  const int R = int(sets.size());
+  const int64_t M = cfg.M;
+  if (R < 1) throw std::invalid_argument("TPA needs at least one test reward");
+  for (int r = 0; r < R; ++r) {
+    const TpaSet& s = sets[r];
+    if (M < 1 || M > s.train)
+      throw std::invalid_argument("TPA M=" + std::to_string(M) + " outside [1, " +
+                                  std::to_string(s.train) + "] for test reward " +
+                                  std::to_string(r));
+    if (s.pairs.count <= s.train)
+      throw std::invalid_argument("TPA test reward " + std::to_string(r) +
+                                  " has no held-out pairs");
+  }
+
+  // The rows of Ξ the cell touches, compacted: X [U, w] holds raw inputs (unfrozen) or φ(ξ)
+  // (frozen), and every pair index is remapped into it.
+  std::vector<int32_t> compact(d.count, -1), used;
+  auto remap = [&](int32_t row) {
+    if (compact[row] < 0) {
+      compact[row] = int32_t(used.size());
+      used.push_back(row);
+    }
+    return compact[row];
+  };
+  std::vector<std::vector<int32_t>> train_pairs(R), test_pairs(R);
+  for (int r = 0; r < R; ++r) {
+    const auto& p = sets[r].pairs.pairs;
+    for (int64_t i = 0; i < 2 * M; ++i) train_pairs[r].push_back(remap(p[i]));
+    for (int64_t i = 2 * sets[r].train; i < 2 * sets[r].pairs.count; ++i)
+      test_pairs[r].push_back(remap(p[i]));
+  }
+  const int64_t U = int64_t(used.size());
+  std::vector<float> raw(size_t(U) * d.input_dim);
+  for (int64_t u = 0; u < U; ++u)
+    std::copy(d.input(used[u]), d.input(used[u]) + d.input_dim, raw.begin() + u * d.input_dim);
+  std::vector<float> X;
+  if (cfg.frozen) {
+    X.resize(size_t(U) * rep.dim());
+    embed(rep, raw.data(), U, X.data(), cfg.threads);
+    require_finite(X, "TPA: φ(ξ)");
+  } else {
+    X = std::move(raw);
+  }
+
+  const Hyper& h = cfg.hyper;
+  const MlpShape net = head_network(rep, h, cfg.frozen);
+  const size_t P = net.param_count(), P_phi = cfg.frozen ? 0 : rep.params.size();
+  const MlpShape head_only = head_network(rep, h, true);
+  std::vector<float> init(size_t(R) * P);
+  for (int r = 0; r < R; ++r) {
+    float* p = init.data() + size_t(r) * P;
+    if (!cfg.frozen) std::copy(rep.params.begin(), rep.params.end(), p);
+    Rng rng(seed_from_key("tpa_head/" + std::to_string(r), seed));
+    mlp_init(head_only, p + P_phi, rng);  // the head's layers follow φ's in the flat layout
+  }
+  BatchedTrainer t(net, R, h.tpa.adam, std::move(init));
+
+  std::vector<Rng> order_rng;
+  for (int r = 0; r < R; ++r)
+    order_rng.emplace_back(seed_from_key("tpa_order/" + std::to_string(r), seed));
+  TpaResult res;
+  res.epochs = h.tpa.epochs;
+  res.loss_curves.assign(size_t(R) * res.epochs, 0.f);
+  const int B = h.tpa.batch;
+  std::vector<std::vector<int32_t>> order(R);
+  std::vector<int32_t> pairs;
+  std::vector<float> label;
+  std::vector<double> epoch_loss(R);
+  for (int e = 0; e < res.epochs; ++e) {
+    for (int r = 0; r < R; ++r) shuffle_order(M, order_rng[r], order[r]);
+    std::fill(epoch_loss.begin(), epoch_loss.end(), 0.0);
+    for (int64_t i0 = 0; i0 < M; i0 += B) {
+      const int b = int(std::min<int64_t>(B, M - i0));
+      pairs.resize(size_t(R) * b * 2);
+      label.resize(size_t(R) * b);
+      for (int r = 0; r < R; ++r)
+        for (int i = 0; i < b; ++i) {
+          const int64_t j = order[r][i0 + i];
+          pairs[(size_t(r) * b + i) * 2] = train_pairs[r][2 * j];
+          pairs[(size_t(r) * b + i) * 2 + 1] = train_pairs[r][2 * j + 1];
+          label[size_t(r) * b + i] = sets[r].pairs.label[j];
+        }
+      preference_train_step_batched(t, X.data(), pairs.data(), label.data(), b, float(h.tpa_l2),
+                                    cfg.threads);
+      for (int r = 0; r < R; ++r) epoch_loss[r] += double(t.losses[r]) * b;
+      res.train_flops += 3 * R * net.forward_flops(2 * b);
+    }
+    for (int r = 0; r < R; ++r)
+      res.loss_curves[size_t(r) * res.epochs + e] = float(epoch_loss[r] / M);
+  }
+  require_finite(res.loss_curves, "TPA loss (frozen=" + std::to_string(cfg.frozen) + ")");
+  require_finite(t.params, "TPA head weights");
+
+  // Held-out accuracy of each head.
+  MlpTape<float> tape;
+  std::vector<float> xb;
+  res.accuracy.resize(R);
+  res.phi_drift.assign(R, 0.f);
+  for (int r = 0; r < R; ++r) {
+    const int nt = int(test_pairs[r].size() / 2);
+    const int w = net.in();
+    xb.resize(size_t(2) * nt * w);
+    gather_by_role(X.data(), w, test_pairs[r].data(), nt, 2, xb.data());
+    const float* p = t.params.data() + size_t(r) * P;
+    mlp_forward(net, p, xb.data(), 2 * nt, tape, cfg.threads);
+    res.accuracy[r] =
+        preference_accuracy(tape.output(), sets[r].pairs.label.data() + sets[r].train, nt);
+    for (size_t i = 0; i < P_phi; ++i)
+      res.phi_drift[r] = std::max(res.phi_drift[r], std::abs(p[i] - rep.params[i]));
+  }
+  double sum = 0;
+  for (double a : res.accuracy) sum += a;
+  res.mean = sum / R;
+  double ss = 0;
+  for (double a : res.accuracy) ss += (a - res.mean) * (a - res.mean);
+  res.stddev = R > 1 ? std::sqrt(ss / (R - 1)) : 0.0;
+  return res;
+}
+
+}  // namespace sirl

@@ -1,0 +1,40 @@
+// Test Preference Accuracy (paper §4.3): how well φ supports learning new rewards from M
+// preference pairs. One reward head per test reward; the heads of a cell train side by side
+// through the batched MLP kernel.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "datasets/dataset.h"
+#include "datasets/queries.h"
+#include "engine/hyperparams.h"
+#include "engine/representation.h"
+
+namespace sirl {
+
+struct TpaConfig {
+  int64_t M = 10;      // training pairs per test reward (the first M of its 80 % split)
+  bool frozen = true;  // frozen: φ fixed, the head learns on φ(ξ); unfrozen: each head fine-tunes
+                       // its own copy of φ (φ + head trained as one network)
+  Hyper hyper;  // tpa.* (epochs, batch, Adam, hidden widths, L2)
+  int threads = 1;
+};
+
+struct TpaResult {
+  std::vector<double> accuracy;  // [R] held-out accuracy per test reward
+  double mean = 0, stddev = 0;   // TPA = mean over rewards; stddev over rewards (n − 1)
+  int epochs = 0;
+  std::vector<float> loss_curves;  // [R, epochs] mean training loss per epoch, per head
+  std::vector<float> phi_drift;    // [R] max |Δ| of the head's copy of φ (0 when frozen)
+  double train_flops = 0;
+};
+
+// sets[r] holds reward r's labelled pairs: rows [0, train) for training (the first M are
+// used), rows [train, count) held out. Head initialisation and batch order come from streams
+// of `seed` per reward, so frozen and unfrozen cells of one seed start from the same heads.
+// Throws std::invalid_argument if M is outside [1, train] or a held-out split is empty, and
+// std::runtime_error if training diverges.
+TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::vector<TpaSet>& sets,
+                       const TpaConfig& cfg, uint64_t seed);
+
+}  // namespace sirl
