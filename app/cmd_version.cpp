@@ -7,6 +7,13 @@
 
 namespace sirl::app {
 
+const char* engine_version() {
+  return SIRL_VERSION;
+}
+const char* git_commit() {
+  return SIRL_GIT_COMMIT;
+}
+
 void register_version(CLI::App& app, Runner& run) {
   app.add_subcommand("version", "Print the version, git commit, compiler and flags of this build");
   run = [] {

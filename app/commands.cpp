@@ -17,6 +17,10 @@ void register_all(CLI::App& app) {
   register_reproduce(app, runners()["reproduce"]);
   register_dataset(app, runners()["dataset"]);
   register_inspect(app, runners()["inspect"]);
+  register_plan(app, runners()["plan"]);
+  register_run(app, runners()["run"]);
+  register_export(app, runners()["export"]);
+  register_merge(app, runners()["merge"]);
 }
 
 int run_selected(CLI::App& app) {

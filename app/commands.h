@@ -3,6 +3,7 @@
 #pragma once
 #include <functional>
 #include <stdexcept>
+#include <string>
 
 namespace CLI {
 class App;
@@ -21,6 +22,18 @@ void register_version(CLI::App& app, Runner& run);
 void register_reproduce(CLI::App& app, Runner& run);
 void register_dataset(CLI::App& app, Runner& run);
 void register_inspect(CLI::App& app, Runner& run);
+void register_run(CLI::App& app, Runner& run);
+void register_plan(CLI::App& app, Runner& run);
+void register_export(CLI::App& app, Runner& run);
+void register_merge(CLI::App& app, Runner& run);
+
+// This build's version and git commit (recorded in every results file).
+const char* engine_version();
+const char* git_commit();
+
+// `sirl run` proper, shared with `sirl reproduce`.
+int run_command(const std::string& profile, const std::string& out, int threads, bool force,
+                const std::string& shard, bool quiet);
 
 void register_all(CLI::App& app);
 int run_selected(CLI::App& app);

@@ -2,6 +2,7 @@
 
 #include <hdf5.h>
 
+#include <algorithm>
 #include <cstring>
 
 namespace sirl {
@@ -12,7 +13,7 @@ struct QuietHdf5 {
   QuietHdf5() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
 };
 void quiet() {
-  static QuietHdf5 q;
+  thread_local QuietHdf5 q;  // HDF5's error-printing switch is per thread (thread-safe build)
 }
 
 [[noreturn]] void fail(const std::string& file, const std::string& what) {
@@ -24,6 +25,8 @@ struct Hid {
   hid_t id;
   herr_t (*close)(hid_t);
   Hid(hid_t i, herr_t (*c)(hid_t)) : id(i), close(c) {}
+  Hid(const Hid&) = delete;
+  Hid(Hid&& o) noexcept : id(o.id), close(o.close) { o.id = -1; }
   ~Hid() {
     if (id >= 0) close(id);
   }
@@ -68,8 +71,10 @@ std::vector<T> read_any(hid_t file, const std::string& path, const std::string& 
       s += (i ? ", " : "") + (int64_t(v[i]) < 0 ? std::string("*") : std::to_string(v[i]));
     return s + "]";
   };
-  bool ok = size_t(rank) == expect.size();
-  for (size_t i = 0; ok && i < d.size(); ++i) ok = expect[i] < 0 || hsize_t(expect[i]) == d[i];
+  const bool any_shape = expect.size() == 1 && expect[0] == kAnyShape[0];
+  bool ok = any_shape || size_t(rank) == expect.size();
+  for (size_t i = 0; ok && !any_shape && i < d.size(); ++i)
+    ok = expect[i] < 0 || hsize_t(expect[i]) == d[i];
   if (!ok) fail(path, name + " has shape " + shape_str(d) + ", expected " + shape_str(expect));
   size_t n = 1;
   for (auto x : d) n *= x;
@@ -101,7 +106,8 @@ void write_attr(hid_t file, const std::string& path, const std::string& object,
   if (H5Aexists(o, attr.c_str()) > 0) H5Adelete(o, attr.c_str());
   Hid space(scalar ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &n, nullptr), H5Sclose);
   Hid a(H5Acreate2(o, attr.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-  if (a < 0 || H5Awrite(a, type, data) < 0)
+  const char* empty[1] = {""};  // HDF5 rejects a null buffer even for zero elements
+  if (a < 0 || H5Awrite(a, type, n == 0 ? static_cast<const void*>(empty) : data) < 0)
     fail(path, "cannot write attribute " + object + "@" + attr);
 }
 
@@ -172,9 +178,95 @@ std::vector<float> H5File::read_f32(const std::string& n, const std::vector<int6
                                     std::vector<uint64_t>* d) const {
   return read_any<float>(id_, path_, n, H5T_NATIVE_FLOAT, H5T_FLOAT, e, d, "float32");
 }
+std::vector<double> H5File::read_f64(const std::string& n, const std::vector<int64_t>& e,
+                                     std::vector<uint64_t>* d) const {
+  return read_any<double>(id_, path_, n, H5T_NATIVE_DOUBLE, H5T_FLOAT, e, d, "float64");
+}
 std::vector<int32_t> H5File::read_i32(const std::string& n, const std::vector<int64_t>& e,
                                       std::vector<uint64_t>* d) const {
   return read_any<int32_t>(id_, path_, n, H5T_NATIVE_INT32, H5T_INTEGER, e, d, "int32");
+}
+
+size_t H5Table::rows() const {
+  if (columns.empty()) return 0;
+  const Column& c = columns.front();
+  return c.type == Column::Int      ? c.ints.size()
+         : c.type == Column::Double ? c.doubles.size()
+                                    : c.strings.size();
+}
+
+void H5File::write_strings(const std::string& name, const std::vector<std::string>& v) {
+  Hid t = vlen_string_type();
+  std::vector<const char*> p;
+  for (const auto& x : v) p.push_back(x.c_str());
+  write_any(id_, path_, name, t, p.data(), {uint64_t(v.size())});
+}
+
+std::vector<std::string> H5File::read_strings(const std::string& name) const {
+  if (!exists(name)) fail(path_, "missing dataset " + name);
+  Hid ds(H5Dopen2(id_, name.c_str(), H5P_DEFAULT), H5Dclose);
+  Hid ftype(H5Dget_type(ds), H5Tclose);
+  if (H5Tget_class(ftype) != H5T_STRING || H5Tis_variable_str(ftype) <= 0)
+    fail(path_, name + " is not a string dataset");
+  Hid space(H5Dget_space(ds), H5Sclose);
+  const hssize_t n = H5Sget_simple_extent_npoints(space);
+  std::vector<char*> raw(n);
+  Hid t = vlen_string_type();
+  if (n && H5Dread(ds, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, raw.data()) < 0)
+    fail(path_, "cannot read " + name);
+  std::vector<std::string> out;
+  for (char* c : raw) out.emplace_back(c ? c : "");
+  if (n) H5Dvlen_reclaim(t, space, H5P_DEFAULT, raw.data());
+  return out;
+}
+
+void H5File::write_table(const std::string& name, const H5Table& table) {
+  using C = H5Table::Column;
+  const size_t rows = table.rows();
+  std::vector<size_t> offset, width;
+  size_t row_bytes = 0;
+  for (const C& c : table.columns) {
+    const size_t n = c.type == C::Int      ? c.ints.size()
+                     : c.type == C::Double ? c.doubles.size()
+                                           : c.strings.size();
+    if (n != rows) fail(path_, "table " + name + ": column " + c.name + " has a different length");
+    size_t w = 8;
+    if (c.type == C::String) {
+      w = 1;
+      for (const auto& x : c.strings) w = std::max(w, x.size());
+    }
+    offset.push_back(row_bytes);
+    width.push_back(w);
+    row_bytes += w;
+  }
+  Hid type(H5Tcreate(H5T_COMPOUND, std::max<size_t>(row_bytes, 1)), H5Tclose);
+  std::vector<Hid> str_types;
+  str_types.reserve(table.columns.size());
+  for (size_t k = 0; k < table.columns.size(); ++k) {
+    const C& c = table.columns[k];
+    hid_t member = c.type == C::Int ? H5T_NATIVE_INT64 : H5T_NATIVE_DOUBLE;
+    if (c.type == C::String) {
+      str_types.emplace_back(H5Tcopy(H5T_C_S1), H5Tclose);
+      H5Tset_size(str_types.back(), width[k]);
+      H5Tset_strpad(str_types.back(), H5T_STR_NULLPAD);
+      member = str_types.back();
+    }
+    if (H5Tinsert(type, c.name.c_str(), offset[k], member) < 0)
+      fail(path_, "table " + name + ": bad column " + c.name);
+  }
+  std::vector<char> buf(rows * row_bytes, 0);
+  for (size_t r = 0; r < rows; ++r)
+    for (size_t k = 0; k < table.columns.size(); ++k) {
+      const C& c = table.columns[k];
+      char* dst = buf.data() + r * row_bytes + offset[k];
+      if (c.type == C::Int)
+        std::memcpy(dst, &c.ints[r], 8);
+      else if (c.type == C::Double)
+        std::memcpy(dst, &c.doubles[r], 8);
+      else
+        std::memcpy(dst, c.strings[r].data(), c.strings[r].size());
+    }
+  write_any(id_, path_, name, type, buf.data(), {uint64_t(rows)});
 }
 
 void H5File::group(const std::string& name) {
@@ -216,6 +308,7 @@ std::vector<std::string> H5File::attr_strings(const std::string& o, const std::s
     fail(path_, "attribute " + o + "@" + a + " is not a string");
   Hid space(H5Aget_space(attr), H5Sclose);
   const hssize_t n = H5Sget_simple_extent_npoints(space);
+  if (n == 0) return {};
   std::vector<char*> raw(n);
   Hid t = vlen_string_type();
   if (H5Aread(attr, t, raw.data()) < 0) fail(path_, "cannot read attribute " + o + "@" + a);

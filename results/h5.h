@@ -3,6 +3,7 @@
 // on stderr or a crash.
 #pragma once
 #include <cstdint>
+#include <deque>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -11,6 +12,26 @@ namespace sirl {
 
 struct H5Error : std::runtime_error {
   using std::runtime_error::runtime_error;
+};
+
+// Pass as `expect` to accept an array of any rank and shape.
+inline const std::vector<int64_t> kAnyShape{INT64_MIN};
+
+// Columns of equal length; each column holds one of ints, doubles or strings.
+struct H5Table {
+  struct Column {
+    std::string name;
+    enum Type { Int, Double, String } type = Double;
+    std::vector<int64_t> ints;
+    std::vector<double> doubles;
+    std::vector<std::string> strings;
+  };
+  std::deque<Column> columns;  // a deque: add() keeps references to earlier columns valid
+  Column& add(const std::string& name, Column::Type t) {
+    columns.push_back(Column{name, t, {}, {}, {}});
+    return columns.back();
+  }
+  size_t rows() const;
 };
 
 class H5File {
@@ -30,9 +51,17 @@ class H5File {
   void write(const std::string& name, const float* data, const std::vector<uint64_t>& dims);
   void write(const std::string& name, const int32_t* data, const std::vector<uint64_t>& dims);
   void write(const std::string& name, const double* data, const std::vector<uint64_t>& dims);
+  // A 1-D dataset of variable-length UTF-8 strings (h5py reads it as bytes objects).
+  void write_strings(const std::string& name, const std::vector<std::string>& values);
+  std::vector<std::string> read_strings(const std::string& name) const;
+  // A "long" table as a 1-D compound dataset, one field per column (strings fixed-length, so
+  // pandas.DataFrame(h5py.File(f)[name][:]) reads it directly).
+  void write_table(const std::string& name, const struct H5Table& table);
   // Reads and checks the element type and shape; a dim of -1 in `expect` matches any extent.
   std::vector<float> read_f32(const std::string& name, const std::vector<int64_t>& expect,
                               std::vector<uint64_t>* dims = nullptr) const;
+  std::vector<double> read_f64(const std::string& name, const std::vector<int64_t>& expect,
+                               std::vector<uint64_t>* dims = nullptr) const;
   std::vector<int32_t> read_i32(const std::string& name, const std::vector<int64_t>& expect,
                                 std::vector<uint64_t>* dims = nullptr) const;
   // Attributes on a group or dataset (created if missing).

@@ -14,7 +14,8 @@ packages=(
   # MPI scale-out
   libopenmpi-dev openmpi-bin
   # plots and the PyTorch reference (Debian's /usr/bin/python3 only)
-  python3 python3-h5py python3-matplotlib python3-numpy python3-torch libopenblas0-pthread
+  python3 python3-h5py python3-matplotlib python3-numpy python3-pandas python3-scipy python3-torch
+  libopenblas0-pthread
 )
 
 missing=()

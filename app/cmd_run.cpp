@@ -1,0 +1,201 @@
+// `sirl plan`, `sirl run`, `sirl export`, `sirl merge`: the batch engine's commands.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <thread>
+
+#include "app/commands.h"
+#include "jobs/estimate.h"
+#include "jobs/plan.h"
+#include "jobs/profile.h"
+#include "jobs/progress.h"
+#include "jobs/run.h"
+#include "jobs/task_runner.h"
+#include "results/results_file.h"
+
+namespace sirl::app {
+
+namespace {
+
+Profile load_or_usage(const std::string& name) {
+  try {
+    return load_profile(name);
+  } catch (const ProfileError& e) {
+    throw UsageError(e.what());
+  }
+}
+
+int default_threads() {
+  return std::max(1, int(std::thread::hardware_concurrency()));
+}
+
+}  // namespace
+
+int run_command(const std::string& profile_name, const std::string& out, int threads, bool force,
+                const std::string& shard, bool quiet) {
+  const Profile p = load_or_usage(profile_name);
+  RunOptions o;
+  o.out = out;
+  o.threads = threads;
+  o.force = force;
+  o.quiet = quiet;
+  o.engine_version = engine_version();
+  o.git_commit = git_commit();
+  if (!shard.empty()) {
+    try {
+      parse_shard(shard, o.shard_index, o.shard_count);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(e.what());
+    }
+  }
+  const std::filesystem::path parent = std::filesystem::path(out).parent_path();
+  if (!parent.empty()) std::filesystem::create_directories(parent);
+  RunSummary s;
+  try {
+    s = run_profile(p, o);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  std::printf("sirl run: %d tasks (%d reused, %d computed) in %s → %s\n", s.tasks, s.reused, s.ran,
+              format_duration(s.seconds).c_str(), out.c_str());
+  return 0;
+}
+
+void register_run(CLI::App& app, Runner& run) {
+  auto* cmd = app.add_subcommand(
+      "run",
+      "Run a profile's experiment grid into an HDF5 results file.\n"
+      "Finished tasks are committed one by one (to OUT.tasks/ until the run ends): rerunning the\n"
+      "same command after a crash or kill skips every finished task. A file written under a\n"
+      "different profile or engine version is refused unless --force.");
+  static std::string profile, out, shard;
+  static int threads = 0;
+  static bool force = false, quiet = false;
+  cmd->add_option("profile", profile,
+                  "Profile: a name in configs/ (smoke, quick, paper) or a .toml path")
+      ->required();
+  cmd->add_option("--out", out, "Results file (HDF5)")->required();
+  cmd->add_option("--threads", threads, "Worker threads (default: every core)")
+      ->check(CLI::Range(1, 4096));
+  cmd->add_option("--shard", shard,
+                  "Run only shard i of n (i/n, 0-based), e.g. one Slurm array task; combine the "
+                  "shard files with `sirl merge`");
+  cmd->add_flag("--force", force, "Overwrite results from another profile or engine version");
+  cmd->add_flag("--quiet", quiet, "No progress output");
+  run = [] { return run_command(profile, out, threads, force, shard, quiet); };
+}
+
+void register_plan(CLI::App& app, Runner& run) {
+  auto* cmd = app.add_subcommand(
+      "plan",
+      "Show what a profile will run — tasks per kind, FLOPs, memory and an ETA for this machine\n"
+      "(from a ~1 s calibration of the real training code) — without running it.");
+  static std::string profile;
+  static int threads = 0;
+  cmd->add_option("profile", profile, "Profile: a name in configs/ or a .toml path")->required();
+  cmd->add_option("--threads", threads, "Worker threads to plan for (default: every core)")
+      ->check(CLI::Range(1, 4096));
+  run = [] {
+    const Profile p = load_or_usage(profile);
+    const Plan plan = make_plan(p);
+    const int th = threads > 0 ? threads : default_threads();
+    std::printf("profile %s (%s): %s\n", p.name.c_str(), p.path.c_str(), p.description.c_str());
+    std::printf("envs:");
+    for (const auto& e : p.envs) std::printf(" %s", e.c_str());
+    std::printf("   seeds: %zu   N (FPE): %zu values   N (TPA): %zu   M: %zu\n", p.seeds.size(),
+                p.fpe_N.size(), p.tpa.N.size(), p.tpa.M.size());
+    std::printf("\n%-6s %8s %14s\n", "kind", "tasks", "GFLOP");
+    for (TaskKind k : {TaskKind::vae, TaskKind::rep, TaskKind::fpe, TaskKind::tpa})
+      std::printf("%-6s %8d %14.1f\n", kind_name(k), plan.count(k), plan.flops(k) * 1e-9);
+    double total = 0;
+    for (const auto& t : plan.tasks) total += t.flops;
+    std::printf("%-6s %8zu %14.1f\n", "total", plan.tasks.size(), total * 1e-9);
+    std::fflush(stdout);
+    std::fprintf(stderr, "calibrating on this machine...\n");
+    const PlanEstimate e = estimate_plan(plan, p, th);
+    std::printf("\nmeasured single-thread rates:");
+    for (const auto& [k, r] : e.gflops_per_s) std::printf("  %s %.1f GFLOP/s", k.c_str(), r);
+    std::printf("\nmemory estimate: %.1f MiB\n", e.peak_bytes / (1024.0 * 1024.0));
+    std::printf("ETA: %s on %d thread(s) (%s on one)\n", format_duration(e.seconds).c_str(), th,
+                format_duration(e.seconds_one_thread).c_str());
+    return 0;
+  };
+}
+
+void register_export(CLI::App& app, Runner& run) {
+  auto* cmd = app.add_subcommand(
+      "export", "Write a results file's tables (fpe, tpa, timings) as CSV files into a directory.");
+  static std::string file, dir;
+  cmd->add_option("file", file, "Results file (HDF5)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--csv", dir, "Directory for fpe.csv, tpa.csv, timings.csv")->required();
+  run = [] {
+    const auto records = read_results_records(file);
+    export_csv(build_tables(records), dir);
+    std::printf("wrote %s/{fpe,tpa,timings}.csv from %zu task records\n", dir.c_str(),
+                records.size());
+    return 0;
+  };
+}
+
+void register_merge(CLI::App& app, Runner& run) {
+  auto* cmd = app.add_subcommand(
+      "merge",
+      "Combine shard files (`sirl run --shard i/n`) of one profile into one results file.\n"
+      "Refuses files from different profiles or engine versions, and conflicting results.");
+  static std::string out;
+  static std::vector<std::string> inputs;
+  cmd->add_option("out", out, "Merged results file")->required();
+  cmd->add_option("inputs", inputs, "Shard files")->required()->check(CLI::ExistingFile);
+  run = [] {
+    RunInfo first = read_run_info(inputs.front());
+    std::map<std::string, TaskRecord> all;
+    double wall = 0;
+    for (const auto& in : inputs) {
+      const RunInfo info = read_run_info(in);
+      if (info.profile_text != first.profile_text)
+        throw UsageError(in + " was run under profile '" + info.profile_name + "', " +
+                         inputs.front() + " under '" + first.profile_name +
+                         "' (or its text differs)");
+      if (info.engine_version != first.engine_version)
+        throw UsageError(in + " comes from engine " + info.engine_version + ", " + inputs.front() +
+                         " from " + first.engine_version);
+      wall = std::max(wall, info.wall_seconds);
+      for (auto& r : read_results_records(in)) {
+        auto it = all.find(r.key);
+        if (it != all.end()) {
+          TaskRecord a = it->second, b = r;
+          a.num.erase("seconds");
+          b.num.erase("seconds");
+          if (!(a == b)) throw UsageError("task " + r.key + " has different results in two inputs");
+          continue;
+        }
+        all[r.key] = std::move(r);
+      }
+    }
+    const Profile p = parse_profile(first.profile_text, inputs.front() + "@profile_text");
+    const Plan plan = make_plan(p);
+    std::vector<TaskRecord> records;
+    for (const auto& t : plan.tasks)
+      if (auto it = all.find(t.key); it != all.end()) records.push_back(it->second);
+    RunInfo info = first;
+    info.shard = "";
+    info.tasks_total = int64_t(plan.tasks.size());
+    info.tasks_done = int64_t(records.size());
+    info.complete = records.size() == plan.tasks.size();
+    info.wall_seconds = wall;
+    RunContext ctx(p, [](const std::string& k) -> TaskRecord {
+      throw std::runtime_error("merge needs no task inputs (" + k + ")");
+    });
+    std::vector<RunDataset> ds;
+    for (const auto& env : p.envs)
+      ds.push_back({&ctx.dataset(env), &ctx.bundle(env, p.seeds.front())});
+    write_results_file(out, info, ds, records);
+    std::printf("merged %zu files: %zu of %zu tasks%s → %s\n", inputs.size(), records.size(),
+                plan.tasks.size(), info.complete ? " (complete)" : " (INCOMPLETE)", out.c_str());
+    return 0;
+  };
+}
+
+}  // namespace sirl::app

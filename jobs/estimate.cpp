@@ -1,0 +1,92 @@
+#include "jobs/estimate.h"
+
+#include <algorithm>
+#include <chrono>
+#include <functional>
+
+#include "datasets/grid_robot.h"
+#include "engine/methods.h"
+#include "engine/tpa.h"
+#include "jobs/scheduler.h"
+
+namespace sirl {
+
+namespace {
+
+double seconds_of(const std::function<double()>& f, double* flops) {
+  const auto t0 = std::chrono::steady_clock::now();
+  *flops = f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
+  PlanEstimate e;
+  for (const auto& env : p.envs) {
+    const Dataset d = make_grid_dataset();
+    QueryBundleConfig qc = p.queries;
+    qc.similarity = qc.preference = 200;
+    const QueryBundle b = make_query_bundle(d, qc, 1);
+    Hyper h = p.hyper.at(env);
+    h.sirl.epochs = 20;
+    h.pref.epochs = 10;
+    h.vae.epochs = 1;
+    h.tpa.epochs = 10;
+    auto rate = [&](const std::string& kind, const std::function<double()>& f) {
+      double flops = 0;
+      const double s = seconds_of(f, &flops);
+      e.gflops_per_s[env + "/" + kind] = s > 0 ? flops / s * 1e-9 : 1;
+    };
+    Representation phi;
+    rate("rep_sirl", [&] {
+      phi = train_representation(d, b, MethodConfig{Method::sirl, 200, false, h}, 1);
+      return phi.train_flops;
+    });
+    rate("rep_pref", [&] {
+      return train_representation(d, b, MethodConfig{Method::multipref10, 200, false, h}, 1)
+          .train_flops;
+    });
+    rate("vae", [&] { return train_vae(d, h, 1).train_flops; });
+    rate("tpa_frozen", [&] {
+      return evaluate_tpa(phi, d, b.tpa, TpaConfig{std::min<int64_t>(100, b.tpa[0].train), true, h},
+                          1)
+          .train_flops;
+    });
+    rate("tpa_unfrozen", [&] {
+      return evaluate_tpa(phi, d, b.tpa,
+                          TpaConfig{std::min<int64_t>(100, b.tpa[0].train), false, h}, 1)
+          .train_flops;
+    });
+    e.peak_bytes += 4.0 * double(d.inputs.size() + d.features.size() * 2);
+  }
+  std::vector<double> secs(plan.tasks.size(), 0);
+  std::vector<double> sizes;
+  for (size_t i = 0; i < plan.tasks.size(); ++i) {
+    const Task& t = plan.tasks[i];
+    std::string kind = kind_name(t.kind);
+    if (t.kind == TaskKind::rep) kind = t.variant.method == Method::sirl ? "rep_sirl" : "rep_pref";
+    if (t.kind == TaskKind::tpa) kind = t.frozen ? "tpa_frozen" : "tpa_unfrozen";
+    double r = 1e9;
+    if (auto it = e.gflops_per_s.find(t.env + "/" + kind); it != e.gflops_per_s.end())
+      r = std::max(it->second, 1e-3) * 1e9;
+    secs[i] = t.flops / r + 0.002;  // + a per-task overhead (commit, data gathering)
+    e.seconds_one_thread += secs[i];
+    sizes.push_back(t.bytes);
+  }
+  // Parallel time: at best total/threads, at worst the longest dependency chain.
+  double chain = 0;
+  std::vector<double> finish(plan.tasks.size(), 0);
+  for (size_t i = 0; i < plan.tasks.size(); ++i) {
+    double start = 0;
+    for (int d : plan.tasks[i].deps) start = std::max(start, finish[d]);
+    finish[i] = start + secs[i];
+    chain = std::max(chain, finish[i]);
+  }
+  e.seconds = std::max(e.seconds_one_thread / std::max(1, threads), chain);
+  std::sort(sizes.rbegin(), sizes.rend());
+  for (int k = 0; k < threads && k < int(sizes.size()); ++k) e.peak_bytes += sizes[k];
+  return e;
+}
+
+}  // namespace sirl

@@ -1,0 +1,175 @@
+#include "jobs/plan.h"
+
+#include <stdexcept>
+
+#include "engine/representation.h"
+
+namespace sirl {
+
+const char* kind_name(TaskKind k) {
+  switch (k) {
+    case TaskKind::vae:
+      return "vae";
+    case TaskKind::rep:
+      return "rep";
+    case TaskKind::fpe:
+      return "fpe";
+    case TaskKind::tpa:
+      return "tpa";
+  }
+  return "?";
+}
+
+int Plan::count(TaskKind k) const {
+  int n = 0;
+  for (const auto& t : tasks) n += t.kind == k;
+  return n;
+}
+double Plan::flops(TaskKind k) const {
+  double f = 0;
+  for (const auto& t : tasks)
+    if (t.kind == k) f += t.flops;
+  return f;
+}
+
+std::string vae_key(const std::string& env, int64_t seed) {
+  return env + "/s" + std::to_string(seed) + "/vae";
+}
+
+std::string rep_key(const std::string& env, int64_t seed, const Variant& v, int64_t N) {
+  std::string k = env + "/s" + std::to_string(seed) + "/" + v.name();
+  if (uses_queries(v.method)) k += "/N" + std::to_string(N);
+  return k + "/rep";
+}
+
+namespace {
+
+// Trajectory-space size and input width per environment (what the cost model needs).
+struct EnvSize {
+  int input_dim;
+  int64_t trajectories;
+};
+EnvSize env_size(const std::string& env) {
+  if (env == "grid") return {19, 1960};
+  throw std::invalid_argument("no cost model for environment " + env);
+}
+
+MlpShape head_net(const Hyper& h, int in, bool frozen) {
+  MlpShape s{{frozen ? h.embedding_dim : in}};
+  if (!frozen)
+    for (int w : h.phi_hidden) s.widths.push_back(w);
+  if (!frozen) s.widths.push_back(h.embedding_dim);
+  for (int w : h.tpa_hidden) s.widths.push_back(w);
+  s.widths.push_back(1);
+  return s;
+}
+
+// Forward+backward ≈ 3× the forward multiply-adds (DESIGN.md §9).
+double train_flops(const MlpShape& s, int64_t rows_per_epoch, int epochs) {
+  return 3.0 * s.forward_flops(1) * double(rows_per_epoch) * epochs;
+}
+
+double working_set(const MlpShape& s, int batch_rows) {
+  // params, grad, Adam m and v; activations of one batch.
+  double act = 0;
+  for (int w : s.widths) act += double(w) * batch_rows;
+  return 4.0 * (4.0 * double(s.param_count()) + 2 * act);
+}
+
+}  // namespace
+
+Plan make_plan(const Profile& p) {
+  Plan plan;
+  auto add = [&](Task t) -> int {
+    auto it = plan.index.find(t.key);
+    if (it != plan.index.end()) return it->second;
+    const int i = int(plan.tasks.size());
+    plan.index[t.key] = i;
+    plan.tasks.push_back(std::move(t));
+    return i;
+  };
+  for (const auto& env : p.envs) {
+    const Hyper& h = p.hyper.at(env);
+    const EnvSize es = env_size(env);
+    const MlpShape phi = phi_shape(es.input_dim, h);
+    for (int64_t seed : p.seeds) {
+      const std::string s = env + "/s" + std::to_string(seed);
+      auto vae = [&]() {
+        Task t;
+        t.key = vae_key(env, seed);
+        t.kind = TaskKind::vae;
+        t.env = env;
+        t.seed = seed;
+        MlpShape full{{es.input_dim}};
+        for (int w : h.phi_hidden) full.widths.push_back(w);
+        full.widths.push_back(2 * h.embedding_dim);
+        for (auto it = h.phi_hidden.rbegin(); it != h.phi_hidden.rend(); ++it)
+          full.widths.push_back(*it);
+        full.widths.push_back(es.input_dim);
+        t.flops = train_flops(full, es.trajectories, h.vae.epochs);
+        t.bytes = working_set(full, h.vae.batch);
+        return add(std::move(t));
+      };
+      auto rep = [&](const Variant& v, int64_t N) {
+        Task t;
+        t.kind = TaskKind::rep;
+        t.env = env;
+        t.seed = seed;
+        t.variant = v;
+        t.N = uses_queries(v.method) ? N : 0;
+        t.key = rep_key(env, seed, v, N);
+        if (v.vae || v.method == Method::vae) t.deps.push_back(vae());
+        if (v.method == Method::sirl) {
+          t.flops = train_flops(phi, 3 * t.N, h.sirl.epochs);
+          t.bytes = working_set(phi, 3 * h.sirl.batch);
+        } else if (uses_queries(v.method)) {
+          t.flops = train_flops(phi, 2 * t.N, h.pref.epochs);
+          t.bytes = working_set(phi, 2 * h.pref.batch);
+        }
+        return add(std::move(t));
+      };
+      auto fpe = [&](const Variant& v, int64_t N) {
+        const int r = rep(v, N);
+        Task t = plan.tasks[r];
+        t.key = t.key.substr(0, t.key.size() - 3) + "fpe";
+        t.kind = TaskKind::fpe;
+        t.deps = {r};
+        t.flops = phi.forward_flops(int(p.queries.fpe_trajectories));
+        t.bytes = 4.0 * double(p.queries.fpe_trajectories) * (es.input_dim + 16);
+        add(std::move(t));
+      };
+      auto tpa = [&](const Variant& v, int64_t N, int64_t M, bool frozen) {
+        const int r = rep(v, N);
+        Task t = plan.tasks[r];
+        t.key = t.key.substr(0, t.key.size() - 3) + "tpa/M" + std::to_string(M) +
+                (frozen ? "/frozen" : "/unfrozen");
+        t.kind = TaskKind::tpa;
+        t.M = M;
+        t.frozen = frozen;
+        t.deps = {r};
+        const MlpShape net = head_net(h, es.input_dim, frozen);
+        t.flops = 20 * train_flops(net, 2 * M, h.tpa.epochs);
+        t.bytes = 20 * working_set(net, 2 * h.tpa.batch);
+        add(std::move(t));
+      };
+      (void)s;
+      for (const auto& v : p.fpe_methods)
+        for (int64_t N : p.fpe_N) fpe(v, N);
+      for (const auto& v : p.tpa.methods)
+        for (int64_t N : p.tpa.N)
+          for (int64_t M : p.tpa.M)
+            for (bool fr : frozen_settings(p.tpa, v)) tpa(v, N, M, fr);
+      for (Method m : p.ablation_methods)
+        for (bool with_vae : {false, true}) {
+          if (with_vae && !accepts_vae_pretrain(m)) continue;
+          const Variant v{m, with_vae};
+          for (int64_t N : p.ablation_N)
+            for (int64_t M : p.ablation_M)
+              for (bool fr : {true, false}) tpa(v, N, M, fr);
+        }
+    }
+  }
+  return plan;
+}
+
+}  // namespace sirl

@@ -1,0 +1,45 @@
+// The profile's grid expanded into a DAG of tasks. Shared inputs appear once: one VAE per
+// (env, seed), one representation per (env, seed, variant, N) feeding every FPE and TPA cell
+// that needs it. Task keys are stable strings; each task's RNG seed derives from its key.
+#pragma once
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "jobs/profile.h"
+
+namespace sirl {
+
+enum class TaskKind { vae, rep, fpe, tpa };
+const char* kind_name(TaskKind k);
+
+struct Task {
+  std::string key;  // "grid/s0/vae", "grid/s0/sirl+vae/N100/rep", ".../fpe", ".../tpa/M50/frozen"
+  TaskKind kind = TaskKind::rep;
+  std::string env;
+  int64_t seed = 0;
+  Variant variant;  // rep, fpe, tpa
+  int64_t N = 0;    // 0 for methods that use no queries (vae, random)
+  int64_t M = 0;    // tpa
+  bool frozen = true;
+  std::vector<int> deps;  // indices into Plan::tasks
+  double flops = 0;       // estimated floating-point operations
+  double bytes = 0;       // estimated peak working set
+};
+
+struct Plan {
+  std::vector<Task> tasks;
+  std::map<std::string, int> index;  // key → position
+  int count(TaskKind k) const;
+  double flops(TaskKind k) const;
+};
+
+// Throws std::invalid_argument for an inconsistent profile (e.g. a TPA variant with no rep).
+Plan make_plan(const Profile& p);
+
+// The task key of a representation (used by FPE/TPA tasks to find their input).
+std::string rep_key(const std::string& env, int64_t seed, const Variant& v, int64_t N);
+std::string vae_key(const std::string& env, int64_t seed);
+
+}  // namespace sirl

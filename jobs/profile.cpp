@@ -1,0 +1,363 @@
+#include "jobs/profile.h"
+
+#include <toml++/toml.h>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+namespace sirl {
+
+std::string Variant::name() const {
+  return std::string(method_name(method)) + (vae ? "+vae" : "");
+}
+
+Variant parse_variant(const std::string& name) {
+  Variant v;
+  std::string base = name;
+  const std::string suffix = "+vae";
+  if (base.size() > suffix.size() &&
+      base.compare(base.size() - suffix.size(), suffix.size(), suffix) == 0) {
+    v.vae = true;
+    base.resize(base.size() - suffix.size());
+  }
+  v.method = parse_method(base);
+  if (v.vae && !accepts_vae_pretrain(v.method))
+    throw std::invalid_argument("'" + name +
+                                "': VAE pre-training applies only to sirl, multipref10, "
+                                "multipref50 and singlepref");
+  return v;
+}
+
+std::vector<bool> frozen_settings(const TpaGrid& grid, const Variant& v) {
+  if (!grid.frozen.empty()) return grid.frozen;
+  return {v.method == Method::sirl};
+}
+
+namespace {
+
+// Reads a parsed TOML document, checking every key; errors carry "file:line: ".
+class Reader {
+ public:
+  Reader(const toml::table& root, std::string path) : root_(root), path_(std::move(path)) {}
+
+  [[noreturn]] void fail(const toml::node* n, const std::string& what) const {
+    std::string where = path_;
+    if (n && n->source().begin.line > 0) where += ":" + std::to_string(n->source().begin.line);
+    throw ProfileError(where + ": " + what);
+  }
+
+  void only_keys(const toml::table& t, const std::string& table,
+                 const std::set<std::string>& allowed) const {
+    for (auto&& [k, v] : t)
+      if (!allowed.count(std::string(k.str()))) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        fail(&v, "unknown key '" + std::string(k.str()) + "' in " + table +
+                     " (expected one of: " + list + ")");
+      }
+  }
+
+  const toml::table* table(const toml::table& t, const char* key, bool required) const {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) fail(&t, std::string("missing table [") + key + "]");
+      return nullptr;
+    }
+    if (!n->is_table()) fail(n, std::string(key) + " must be a table");
+    return n->as_table();
+  }
+
+  std::string string(const toml::table& t, const char* key, const std::string& def,
+                     bool required = false) const {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) fail(&t, std::string("missing key '") + key + "'");
+      return def;
+    }
+    if (!n->is_string()) fail(n, std::string(key) + " must be a string");
+    return std::string(*n->value<std::string>());
+  }
+
+  int64_t integer(const toml::table& t, const char* key, int64_t def, int64_t lo,
+                  int64_t hi) const {
+    const toml::node* n = t.get(key);
+    if (!n) return def;
+    if (!n->is_integer()) fail(n, std::string(key) + " must be an integer");
+    const int64_t v = *n->value<int64_t>();
+    if (v < lo || v > hi)
+      fail(n, std::string(key) + " = " + std::to_string(v) + " is outside [" + std::to_string(lo) +
+                  ", " + std::to_string(hi) + "]");
+    return v;
+  }
+
+  double number(const toml::table& t, const char* key, double def, double lo, double hi) const {
+    const toml::node* n = t.get(key);
+    if (!n) return def;
+    double v = 0;
+    if (n->is_integer())
+      v = double(*n->value<int64_t>());
+    else if (n->is_floating_point())
+      v = *n->value<double>();
+    else if (n->is_string() && (*n->value<std::string>() == "inf"))
+      v = std::numeric_limits<double>::infinity();
+    else
+      fail(n, std::string(key) + " must be a number");
+    if (!(v >= lo && v <= hi))
+      fail(n, std::string(key) + " = " + std::to_string(v) + " is outside [" + std::to_string(lo) +
+                  ", " + std::to_string(hi) + "]");
+    return v;
+  }
+
+  std::vector<int64_t> int_list(const toml::table& t, const char* key, int64_t lo, int64_t hi,
+                                bool required) const {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) fail(&t, std::string("missing key '") + key + "'");
+      return {};
+    }
+    if (!n->is_array()) fail(n, std::string(key) + " must be an array of integers");
+    std::vector<int64_t> out;
+    for (auto&& e : *n->as_array()) {
+      if (!e.is_integer()) fail(n, std::string(key) + " must contain only integers");
+      const int64_t v = *e.value<int64_t>();
+      if (v < lo || v > hi)
+        fail(n, std::string(key) + ": " + std::to_string(v) + " is outside [" + std::to_string(lo) +
+                    ", " + std::to_string(hi) + "]");
+      if (std::find(out.begin(), out.end(), v) != out.end())
+        fail(n, std::string(key) + ": " + std::to_string(v) + " is listed twice");
+      out.push_back(v);
+    }
+    if (required && out.empty()) fail(n, std::string(key) + " must not be empty");
+    return out;
+  }
+
+  std::vector<std::string> string_list(const toml::table& t, const char* key, bool required) const {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) fail(&t, std::string("missing key '") + key + "'");
+      return {};
+    }
+    if (!n->is_array()) fail(n, std::string(key) + " must be an array of strings");
+    std::vector<std::string> out;
+    for (auto&& e : *n->as_array()) {
+      if (!e.is_string()) fail(n, std::string(key) + " must contain only strings");
+      out.push_back(std::string(*e.value<std::string>()));
+    }
+    if (required && out.empty()) fail(n, std::string(key) + " must not be empty");
+    return out;
+  }
+
+  std::vector<Variant> variants(const toml::table& t, const char* key) const {
+    std::vector<Variant> out;
+    for (const auto& s : string_list(t, key, true)) {
+      try {
+        out.push_back(parse_variant(s));
+      } catch (const std::invalid_argument& e) {
+        fail(t.get(key), std::string(key) + ": " + e.what());
+      }
+    }
+    return out;
+  }
+
+  const toml::table& root() const { return root_; }
+
+ private:
+  const toml::table& root_;
+  std::string path_;
+};
+
+// A TOML scalar or array as the text set_hyper parses.
+std::string hyper_text(const Reader& r, const toml::node& n, const std::string& key) {
+  if (auto v = n.value<int64_t>(); v && n.is_integer()) return std::to_string(*v);
+  if (n.is_floating_point()) {
+    std::ostringstream o;
+    o.precision(17);
+    o << *n.value<double>();
+    return o.str();
+  }
+  if (n.is_boolean()) return *n.value<bool>() ? "true" : "false";
+  if (n.is_array()) {
+    std::string s;
+    for (auto&& e : *n.as_array()) {
+      if (!e.is_integer()) r.fail(&n, key + " must be an array of integers");
+      s += (s.empty() ? "" : ",") + std::to_string(*e.value<int64_t>());
+    }
+    return s;
+  }
+  r.fail(&n, key + " must be a number, a boolean or an array of integers");
+}
+
+}  // namespace
+
+Profile parse_profile(const std::string& text, const std::string& path) {
+  toml::table root;
+  try {
+    root = toml::parse(text, path);
+  } catch (const toml::parse_error& e) {
+    throw ProfileError(path + ":" + std::to_string(e.source().begin.line) + ": " +
+                       std::string(e.description()));
+  }
+  Reader r(root, path);
+  r.only_keys(root, "the profile",
+              {"name", "description", "envs", "seeds", "queries", "teacher", "fpe", "tpa",
+               "ablation", "hyper"});
+  Profile p;
+  p.path = path;
+  p.text = text;
+  p.name = r.string(root, "name", "", true);
+  p.description = r.string(root, "description", "");
+  p.envs = r.string_list(root, "envs", true);
+  for (const auto& e : p.envs) {
+    if (e == "jaco")
+      r.fail(root.get("envs"), "JacoRobot is not available yet (issue #4); use envs = [\"grid\"]");
+    if (e != "grid") r.fail(root.get("envs"), "unknown environment '" + e + "' (expected grid)");
+  }
+  p.seeds = r.int_list(root, "seeds", 0, 1'000'000'000, true);
+
+  if (const auto* q = r.table(root, "queries", false)) {
+    r.only_keys(*q, "[queries]", {"similarity", "preference", "tpa_pairs", "fpe_trajectories"});
+    p.queries.similarity = r.integer(*q, "similarity", 1000, 1, 10'000'000);
+    p.queries.preference = r.integer(*q, "preference", 1000, 1, 10'000'000);
+    p.queries.tpa_pairs = r.integer(*q, "tpa_pairs", 250, 2, 10'000'000);
+    p.queries.fpe_trajectories = r.integer(*q, "fpe_trajectories", 1000, 2, 10'000'000);
+  }
+  if (const auto* t = r.table(root, "teacher", false)) {
+    r.only_keys(*t, "[teacher]", {"beta", "mistake", "skip", "equal"});
+    const double inf = std::numeric_limits<double>::infinity();
+    p.queries.teacher.beta = r.number(*t, "beta", inf, 0, inf);
+    p.queries.teacher.mistake = r.number(*t, "mistake", 0, 0, 1);
+    p.queries.teacher.skip = r.number(*t, "skip", 0, 0, inf);
+    p.queries.teacher.equal = r.number(*t, "equal", 0, 0, inf);
+  }
+
+  const auto* fpe = r.table(root, "fpe", true);
+  r.only_keys(*fpe, "[fpe]", {"methods", "N"});
+  p.fpe_methods = r.variants(*fpe, "methods");
+  p.fpe_N = r.int_list(*fpe, "N", 1, 10'000'000, true);
+
+  const auto* tpa = r.table(root, "tpa", true);
+  r.only_keys(*tpa, "[tpa]", {"methods", "N", "M", "frozen"});
+  p.tpa.methods = r.variants(*tpa, "methods");
+  p.tpa.N = r.int_list(*tpa, "N", 1, 10'000'000, true);
+  p.tpa.M = r.int_list(*tpa, "M", 1, 10'000'000, true);
+  if (const toml::node* f = tpa->get("frozen")) {
+    if (f->is_string()) {
+      if (*f->value<std::string>() != "best")
+        r.fail(f, "frozen must be \"best\" or an array of booleans");
+    } else if (f->is_array()) {
+      for (auto&& e : *f->as_array()) {
+        if (!e.is_boolean()) r.fail(f, "frozen must be \"best\" or an array of booleans");
+        p.tpa.frozen.push_back(*e.value<bool>());
+      }
+      if (p.tpa.frozen.empty()) r.fail(f, "frozen must not be empty");
+    } else {
+      r.fail(f, "frozen must be \"best\" or an array of booleans");
+    }
+  }
+
+  if (const auto* ab = r.table(root, "ablation", false)) {
+    r.only_keys(*ab, "[ablation]", {"methods", "N", "M"});
+    for (const auto& s : r.string_list(*ab, "methods", true)) {
+      try {
+        p.ablation_methods.push_back(parse_method(s));
+      } catch (const std::invalid_argument& e) {
+        r.fail(ab->get("methods"), std::string("methods: ") + e.what());
+      }
+    }
+    p.ablation_N = r.int_list(*ab, "N", 1, 10'000'000, true);
+    p.ablation_M = r.int_list(*ab, "M", 1, 10'000'000, true);
+  }
+
+  for (const auto& env : p.envs) p.hyper[env] = paper_hyper(env);
+  if (const auto* hy = r.table(root, "hyper", false)) {
+    std::set<std::string> allowed{"all"};
+    for (const auto& e : p.envs) allowed.insert(e);
+    r.only_keys(*hy, "[hyper] (one sub-table per environment, or 'all')", allowed);
+    for (const char* scope : {"all", "grid", "jaco"}) {
+      const auto* t = r.table(*hy, scope, false);
+      if (!t) continue;
+      for (auto&& [k, v] : *t) {
+        const std::string key(k.str());
+        for (auto& [env, h] : p.hyper) {
+          if (std::string(scope) != "all" && env != scope) continue;
+          try {
+            set_hyper(h, key, hyper_text(r, v, key));
+          } catch (const std::invalid_argument& e) {
+            r.fail(&v, e.what());
+          }
+        }
+      }
+    }
+    for (auto& [env, h] : p.hyper) {
+      try {
+        validate(h);
+      } catch (const std::invalid_argument& e) {
+        r.fail(hy, std::string("[hyper.") + env + "]: " + e.what());
+      }
+    }
+  }
+
+  // Cross-checks: budgets must cover the grid.
+  auto check_n = [&](const std::vector<int64_t>& Ns, const char* table, bool has_mp50) {
+    for (int64_t N : Ns) {
+      if (N > p.queries.similarity || N > p.queries.preference)
+        r.fail(root.get(table), std::string("[") + table + "] N = " + std::to_string(N) +
+                                    " exceeds the query budget ([queries] similarity = " +
+                                    std::to_string(p.queries.similarity) +
+                                    ", preference = " + std::to_string(p.queries.preference) + ")");
+      if (has_mp50 && N < 50)
+        r.fail(root.get(table),
+               std::string("[") + table + "] N = " + std::to_string(N) +
+                   " is below 50, the MultiPref-50 minimum of one query per human");
+    }
+  };
+  auto has_mp50 = [](const std::vector<Variant>& vs) {
+    for (const auto& v : vs)
+      if (v.method == Method::multipref50) return true;
+    return false;
+  };
+  check_n(p.fpe_N, "fpe", has_mp50(p.fpe_methods));
+  check_n(p.tpa.N, "tpa", has_mp50(p.tpa.methods));
+  check_n(p.ablation_N, "ablation",
+          std::find(p.ablation_methods.begin(), p.ablation_methods.end(), Method::multipref50) !=
+              p.ablation_methods.end());
+  const int64_t tpa_train = std::llround(0.8 * double(p.queries.tpa_pairs));
+  for (const auto* Ms : {&p.tpa.M, &p.ablation_M})
+    for (int64_t M : *Ms)
+      if (M > tpa_train)
+        r.fail(root.get(Ms == &p.tpa.M ? "tpa" : "ablation"),
+               "M = " + std::to_string(M) + " exceeds the " + std::to_string(tpa_train) +
+                   " training pairs per test reward (80 % of [queries] tpa_pairs = " +
+                   std::to_string(p.queries.tpa_pairs) + ")");
+  return p;
+}
+
+Profile load_profile(const std::string& path_or_name) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> candidates{path_or_name};
+  if (fs::path(path_or_name).extension() != ".toml") {
+    candidates.push_back(fs::path("configs") / (path_or_name + ".toml"));
+    candidates.push_back(fs::path(SIRL_CONFIG_DIR) / (path_or_name + ".toml"));
+  }
+  for (const auto& c : candidates) {
+    std::error_code ec;
+    if (!fs::is_regular_file(c, ec)) continue;
+    std::ifstream in(c);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    if (!in && !in.eof()) throw ProfileError(c.string() + ": cannot read");
+    return parse_profile(ss.str(), c.string());
+  }
+  throw ProfileError(
+      "profile '" + path_or_name + "' not found (looked for " + candidates.front().string() +
+      (candidates.size() > 1 ? ", configs/" + path_or_name + ".toml and " +
+                                   std::string(SIRL_CONFIG_DIR) + "/" + path_or_name + ".toml"
+                             : std::string()) +
+      ")");
+}
+
+}  // namespace sirl

@@ -1,0 +1,63 @@
+// A run profile (configs/*.toml): the experiment grid — environments × methods × N × M × seeds ×
+// frozen × VAE pre-training — plus the query budgets, the teacher and hyper-parameter overrides.
+// Parsed and fully validated before any work starts: every error names the file, the line and
+// what was expected.
+#pragma once
+#include <cstdint>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "datasets/query_bundle.h"
+#include "engine/hyperparams.h"
+#include "engine/representation.h"
+
+namespace sirl {
+
+struct ProfileError : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
+
+// A method with its VAE pre-training switch: "sirl", "sirl+vae", "multipref10+vae", …
+struct Variant {
+  Method method = Method::sirl;
+  bool vae = false;
+  std::string name() const;
+  bool operator==(const Variant&) const = default;
+};
+// Throws std::invalid_argument for unknown names or "+vae" on vae/random.
+Variant parse_variant(const std::string& name);
+
+struct TpaGrid {
+  std::vector<Variant> methods;
+  std::vector<int64_t> N, M;
+  // Per variant: which of frozen (true) / unfrozen (false) to run. "best" in the file means the
+  // paper's best configuration: SIRL (with or without VAE) frozen, every other method unfrozen.
+  std::vector<bool> frozen;  // empty = "best"
+};
+
+struct Profile {
+  std::string path, text;  // where it came from, and its exact text (recorded in results)
+  std::string name, description;
+  std::vector<std::string> envs;
+  std::vector<int64_t> seeds;
+  QueryBundleConfig queries;
+  std::vector<Variant> fpe_methods;
+  std::vector<int64_t> fpe_N;
+  TpaGrid tpa;
+  // Fig. 7: every listed method × {frozen, unfrozen} × {no VAE, VAE} (where VAE applies).
+  std::vector<Method> ablation_methods;
+  std::vector<int64_t> ablation_N, ablation_M;
+  std::map<std::string, Hyper> hyper;  // per env: the paper's values with this profile's overrides
+};
+
+Profile parse_profile(const std::string& text, const std::string& path = "<profile>");
+// Reads the file; a bare name ("quick") resolves to configs/<name>.toml beside the binary's
+// source tree or the working directory. Throws ProfileError.
+Profile load_profile(const std::string& path_or_name);
+
+// The frozen settings a TPA cell of this variant runs with under `grid`.
+std::vector<bool> frozen_settings(const TpaGrid& grid, const Variant& v);
+
+}  // namespace sirl

@@ -1,0 +1,209 @@
+#include "jobs/run.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <ctime>
+#include <filesystem>
+#include <map>
+#include <stdexcept>
+#include <thread>
+
+#include "jobs/progress.h"
+#include "jobs/scheduler.h"
+#include "jobs/task_runner.h"
+#include "kernels/rng.h"
+#include "results/results_file.h"
+#include "results/task_store.h"
+
+namespace sirl {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string now_iso() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string hostname() {
+  char buf[256] = {};
+  gethostname(buf, sizeof buf - 1);
+  return buf;
+}
+
+// The key of the representation a task belongs to (itself for a rep; "" for a VAE).
+std::string group_of(const Task& t) {
+  if (t.kind == TaskKind::vae) return "";
+  return rep_key(t.env, t.seed, t.variant, t.N);
+}
+
+}  // namespace
+
+void parse_shard(const std::string& text, int& index, int& count) {
+  const auto slash = text.find('/');
+  try {
+    if (slash == std::string::npos) throw std::invalid_argument("");
+    size_t p1 = 0, p2 = 0;
+    index = std::stoi(text.substr(0, slash), &p1);
+    count = std::stoi(text.substr(slash + 1), &p2);
+    if (p1 != slash || p2 != text.size() - slash - 1) throw std::invalid_argument("");
+  } catch (const std::exception&) {
+    throw std::invalid_argument("--shard must look like i/n (e.g. 0/4), got '" + text + "'");
+  }
+  if (count < 1 || index < 0 || index >= count)
+    throw std::invalid_argument("--shard " + text + ": need 0 <= i < n");
+}
+
+std::vector<char> shard_tasks(const Plan& plan, int index, int count) {
+  const int n = int(plan.tasks.size());
+  std::vector<char> in(n, count == 1);
+  if (count == 1) return in;
+  for (int i = 0; i < n; ++i) {
+    const std::string g = group_of(plan.tasks[i]);
+    if (!g.empty()) in[i] = seed_from_key(g) % uint64_t(count) == uint64_t(index);
+  }
+  // Pull in dependencies (the VAEs), last task first so chains close.
+  for (int i = n - 1; i >= 0; --i)
+    if (in[i])
+      for (int d : plan.tasks[i].deps) in[d] = 1;
+  return in;
+}
+
+RunSummary run_profile(const Profile& p, const RunOptions& o) {
+  if (o.out.empty()) throw std::invalid_argument("--out is required");
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::string started = now_iso();
+  const Plan plan = make_plan(p);
+  const int n = int(plan.tasks.size());
+  const std::vector<char> mine = shard_tasks(plan, o.shard_index, o.shard_count);
+  const int threads =
+      o.threads > 0 ? o.threads : std::max(1, int(std::thread::hardware_concurrency()));
+
+  // Earlier results: the results file itself, and the staging directory of an interrupted run.
+  auto refuse = [&](const std::string& where, const std::string& what) {
+    throw std::invalid_argument(where + " was written " + what +
+                                "; rerun with --force to discard it, or choose another --out");
+  };
+  std::map<std::string, TaskRecord> prior;
+  if (fs::exists(o.out)) {
+    const RunInfo info = read_run_info(o.out);
+    if (!o.force) {
+      if (info.profile_text != p.text)
+        refuse(o.out, "under a different profile ('" + info.profile_name + "')");
+      if (info.engine_version != o.engine_version)
+        refuse(o.out, "by engine " + info.engine_version + " (this is " + o.engine_version + ")");
+    }
+    if (info.profile_text == p.text && info.engine_version == o.engine_version)
+      for (auto& r : read_results_records(o.out)) prior[r.key] = std::move(r);
+  }
+  const fs::path staging = o.out + ".tasks";
+  if (fs::exists(staging)) {
+    TaskStore probe(staging);
+    const std::string prof = probe.read_manifest("profile.toml"),
+                      eng = probe.read_manifest("engine_version");
+    if (prof != p.text || eng != o.engine_version) {
+      if (!o.force) refuse(staging.string(), "by another profile or engine (an interrupted run)");
+      fs::remove_all(staging);
+    }
+  }
+  TaskStore store(staging);
+  store.write_manifest("profile.toml", p.text);
+  store.write_manifest("engine_version", o.engine_version);
+
+  std::vector<char> pending(n, 0);
+  int total = 0, reused = 0;
+  double pending_flops = 0;
+  for (int i = 0; i < n; ++i) {
+    if (!mine[i]) continue;
+    ++total;
+    const std::string& k = plan.tasks[i].key;
+    if (prior.count(k) || store.has(k)) {
+      ++reused;
+      continue;
+    }
+    pending[i] = 1;
+    pending_flops += plan.tasks[i].flops;
+  }
+
+  RunContext ctx(p, [&](const std::string& key) -> TaskRecord {
+    if (store.has(key)) return store.load(key);
+    auto it = prior.find(key);
+    if (it == prior.end()) throw std::runtime_error("missing result of task " + key);
+    return it->second;
+  });
+
+  // Cached outputs are released when their last pending dependent finishes.
+  std::vector<int> users(n, 0);
+  for (int i = 0; i < n; ++i)
+    if (pending[i])
+      for (int d : plan.tasks[i].deps) ++users[d];
+  std::mutex users_mu;
+
+  const int to_run = total - reused;
+  if (!o.quiet)
+    std::fprintf(stderr, "sirl run: profile %s, %d tasks (%d already done), %d threads → %s\n",
+                 p.name.c_str(), total, reused, threads, o.out.c_str());
+  Progress progress(to_run, pending_flops, o.quiet);
+  std::exception_ptr failure;
+  try {
+    run_dag(plan, pending, threads, [&](int i) {
+      const Task& t = plan.tasks[i];
+      const TaskRecord rec = run_task(t, ctx);
+      store.commit(rec);
+      progress.task_done(t.key, t.flops, rec.num.at("seconds"));
+      std::lock_guard lock(users_mu);
+      for (int d : t.deps)
+        if (--users[d] == 0) ctx.release(plan.tasks[d].key);
+    });
+  } catch (...) {
+    failure = std::current_exception();
+  }
+  progress.finish();
+
+  // Assemble whatever is finished (a partial file plots with gaps; a rerun completes it).
+  std::map<std::string, TaskRecord> all = std::move(prior);
+  for (const auto& k : store.keys()) all[k] = store.load(k);
+  std::vector<TaskRecord> records;
+  int done_mine = 0;
+  for (int i = 0; i < n; ++i) {
+    auto it = all.find(plan.tasks[i].key);
+    if (it == all.end() || !mine[i]) continue;
+    records.push_back(it->second);
+    ++done_mine;
+  }
+  RunInfo info;
+  info.profile_name = p.name;
+  info.profile_text = p.text;
+  info.engine_version = o.engine_version;
+  info.git_commit = o.git_commit;
+  info.host = hostname();
+  info.started = started;
+  info.finished = now_iso();
+  info.shard =
+      o.shard_count > 1 ? std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count) : "";
+  info.threads = threads;
+  info.tasks_total = total;
+  info.tasks_done = done_mine;
+  info.complete = done_mine == total;
+  info.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::vector<RunDataset> datasets;
+  for (const auto& env : p.envs)
+    datasets.push_back({&ctx.dataset(env), &ctx.bundle(env, p.seeds.front())});
+  write_results_file(o.out, info, datasets, records);
+  if (failure) std::rethrow_exception(failure);
+  fs::remove_all(staging);  // everything is in the results file now
+  RunSummary s;
+  s.tasks = total;
+  s.reused = reused;
+  s.ran = to_run;
+  s.seconds = info.wall_seconds;
+  return s;
+}
+
+}  // namespace sirl

@@ -1,0 +1,34 @@
+// `sirl run`: plan → resume check → parallel execution with per-task commits → results file.
+#pragma once
+#include <string>
+
+#include "jobs/plan.h"
+#include "jobs/profile.h"
+
+namespace sirl {
+
+struct RunOptions {
+  std::string out;                       // results file (HDF5)
+  int threads = 0;                       // 0 = every core
+  bool force = false;                    // accept an existing file from another profile/engine
+  int shard_index = 0, shard_count = 1;  // run only shard i of n (Slurm job arrays)
+  bool quiet = false;
+  std::string engine_version, git_commit;  // recorded in the file
+};
+
+struct RunSummary {
+  int tasks = 0, reused = 0, ran = 0;
+  double seconds = 0;
+};
+
+RunSummary run_profile(const Profile& p, const RunOptions& o);
+
+// Which of the plan's tasks belong to shard i of n: tasks are grouped by the representation
+// they evaluate (a rep with its FPE/TPA cells stays together), groups are dealt by a hash of the
+// rep key, and each shard adds the VAE tasks its groups depend on.
+std::vector<char> shard_tasks(const Plan& plan, int index, int count);
+
+// Parses "i/n" (0 ≤ i < n). Throws std::invalid_argument.
+void parse_shard(const std::string& text, int& index, int& count);
+
+}  // namespace sirl

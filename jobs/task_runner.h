@@ -1,0 +1,56 @@
+// Runs one task of the plan: a pure function of the task (its key) and its inputs.
+// RunContext holds what tasks share — the environment's dataset, each seed's query bundle, the
+// VAEs and representations other tasks need — built lazily and safely from many threads, and
+// reloaded from committed records when a resumed run needs the output of an earlier one.
+#pragma once
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "datasets/dataset.h"
+#include "datasets/query_bundle.h"
+#include "engine/representation.h"
+#include "engine/train_vae.h"
+#include "jobs/plan.h"
+#include "jobs/profile.h"
+#include "results/task_record.h"
+
+namespace sirl {
+
+class RunContext {
+ public:
+  // `load` fetches a committed record by key (for resumed runs); may throw if absent.
+  RunContext(const Profile& p, std::function<TaskRecord(const std::string&)> load);
+  const Profile& profile() const { return profile_; }
+  const Dataset& dataset(const std::string& env);
+  const QueryBundle& bundle(const std::string& env, int64_t seed);
+  std::shared_ptr<const Representation> representation(const std::string& key, const Task& t);
+  std::shared_ptr<const VaeModel> vae(const std::string& env, int64_t seed);
+  void keep(const std::string& key, std::shared_ptr<const Representation> r);
+  void keep(const std::string& key, std::shared_ptr<const VaeModel> v);
+  // Drops a cached output once no pending task needs it (bounded memory on long runs).
+  void release(const std::string& key);
+
+ private:
+  const Profile& profile_;
+  std::function<TaskRecord(const std::string&)> load_;
+  std::mutex mu_;
+  std::map<std::string, std::shared_ptr<const Dataset>> datasets_;
+  std::map<std::string, std::shared_ptr<const QueryBundle>> bundles_;
+  std::map<std::string, std::shared_ptr<const Representation>> reps_;
+  std::map<std::string, std::shared_ptr<const VaeModel>> vaes_;
+  std::map<std::string, std::unique_ptr<std::once_flag>> once_;
+  std::once_flag& once(const std::string& key);
+};
+
+// Computes the task, returning its record (timing included). Throws std::runtime_error naming
+// the task on any failure (divergence, bad inputs).
+TaskRecord run_task(const Task& t, RunContext& ctx);
+
+// The seed every task of (env, seed) derives its streams from: all methods of one seed start
+// from the same φ initialisation and the same TPA heads (common random numbers).
+uint64_t task_seed(const std::string& env, int64_t seed, const char* stream);
+
+}  // namespace sirl

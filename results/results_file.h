@@ -1,0 +1,47 @@
+// The run's results file (DESIGN.md §8): root attributes describing the run, the datasets, every
+// task's record under /runs/<task key>, and long tables that pandas reads directly:
+//   /tables/fpe      env, method, variant, vae, N, seed, fpe, train_mse
+//   /tables/tpa      env, method, variant, vae, frozen, N, M, seed, tpa, tpa_std
+//   /tables/timings  kind, key, seconds, flops, gflops
+// Written atomically (a .partial file renamed into place), so the file on disk is always whole.
+#pragma once
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "datasets/dataset.h"
+#include "datasets/query_bundle.h"
+#include "results/h5.h"
+#include "results/task_record.h"
+
+namespace sirl {
+
+struct RunInfo {
+  std::string profile_name, profile_text, engine_version, git_commit, host;
+  std::string started, finished;  // ISO 8601 UTC
+  std::string shard;              // "i/n" for a shard file, "" for a whole run
+  int64_t threads = 0, tasks_total = 0, tasks_done = 0;
+  double wall_seconds = 0;
+  bool complete = false;
+};
+
+struct ResultTables {
+  H5Table fpe, tpa, timings;
+};
+ResultTables build_tables(const std::vector<TaskRecord>& records);
+
+struct RunDataset {
+  const Dataset* dataset;
+  const QueryBundle* bundle;  // the queries of the run's first seed (the figures draw from them)
+};
+
+void write_results_file(const std::string& path, const RunInfo& info,
+                        const std::vector<RunDataset>& datasets,
+                        const std::vector<TaskRecord>& records);
+RunInfo read_run_info(const std::string& path);
+std::vector<TaskRecord> read_results_records(const std::string& path);
+
+// One CSV per table (fpe.csv, tpa.csv, timings.csv) in dir (created).
+void export_csv(const ResultTables& t, const std::string& dir);
+
+}  // namespace sirl

@@ -1,0 +1,33 @@
+// One finished task's results, the unit that is committed, resumed, sharded and merged.
+// Schema-light on purpose: named numbers, texts and float arrays, so every task kind (VAE,
+// representation, FPE, TPA) shares one commit path.
+#pragma once
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace sirl {
+
+class H5File;
+
+struct TaskRecord {
+  struct Array {
+    std::vector<uint64_t> dims;
+    std::vector<float> data;
+    bool operator==(const Array&) const = default;
+  };
+  std::string key;   // e.g. "grid/s0/sirl/N100/rep"
+  std::string kind;  // "vae", "rep", "fpe", "tpa"
+  std::map<std::string, std::string> text;
+  std::map<std::string, double> num;
+  std::map<std::string, Array> arrays;
+  bool operator==(const TaskRecord&) const = default;
+};
+
+// The record as the group `group` (created): attrs for key, kind, text and numbers, one dataset
+// per array, and index attributes listing the names so it reads back exactly.
+void write_record(H5File& f, const std::string& group, const TaskRecord& r);
+TaskRecord read_record(const H5File& f, const std::string& group);
+
+}  // namespace sirl

@@ -1,0 +1,114 @@
+#include "results/task_store.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "kernels/rng.h"
+#include "results/h5.h"
+
+namespace sirl {
+
+namespace fs = std::filesystem;
+
+namespace {
+// Forces a file's (or directory's) data to disk so a rename after it cannot expose a torn file.
+void fsync_path(const fs::path& p) {
+  const int fd = ::open(p.c_str(), O_RDONLY);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
+}
+}  // namespace
+
+TaskStore::TaskStore(fs::path dir) : dir_(std::move(dir)) {
+  std::error_code ec;
+  fs::create_directories(dir_, ec);
+  if (ec) throw H5Error(dir_.string() + ": cannot create the task directory: " + ec.message());
+  for (const auto& e : fs::directory_iterator(dir_)) {
+    const auto name = e.path().filename().string();
+    if (name.ends_with(".tmp")) {
+      fs::remove(e.path(), ec);
+      continue;
+    }
+    if (!name.ends_with(".h5")) continue;
+    try {
+      H5File f = H5File::open_read(e.path().string());
+      index_[f.attr_string("/r", "task_key")] = e.path();
+    } catch (const H5Error&) {
+      fs::remove(e.path(), ec);  // cannot happen with rename commits; never trust a bad file
+    }
+  }
+}
+
+fs::path TaskStore::file_for(const std::string& key) const {
+  char name[32];
+  std::snprintf(name, sizeof name, "%016llx.h5",
+                static_cast<unsigned long long>(seed_from_key(key, 0)));
+  return dir_ / name;
+}
+
+bool TaskStore::has(const std::string& key) const {
+  std::lock_guard lock(mu_);
+  return index_.count(key) > 0;
+}
+
+std::vector<std::string> TaskStore::keys() const {
+  std::lock_guard lock(mu_);
+  std::vector<std::string> k;
+  for (const auto& [key, p] : index_) k.push_back(key);
+  return k;
+}
+
+void TaskStore::commit(const TaskRecord& r) {
+  const fs::path final = file_for(r.key);
+  const fs::path tmp = final.string() + ".tmp";
+  {
+    H5File f = H5File::create(tmp.string());
+    write_record(f, "/r", r);
+  }  // closed: every byte handed to the OS
+  fsync_path(tmp);
+  std::error_code ec;
+  fs::rename(tmp, final, ec);
+  if (ec) throw H5Error(final.string() + ": cannot commit task " + r.key + ": " + ec.message());
+  fsync_path(dir_);
+  std::lock_guard lock(mu_);
+  index_[r.key] = final;
+}
+
+TaskRecord TaskStore::load(const std::string& key) const {
+  fs::path p;
+  {
+    std::lock_guard lock(mu_);
+    auto it = index_.find(key);
+    if (it == index_.end()) throw H5Error(dir_.string() + ": no committed task " + key);
+    p = it->second;
+  }
+  H5File f = H5File::open_read(p.string());
+  return read_record(f, "/r");
+}
+
+void TaskStore::write_manifest(const std::string& name, const std::string& text) {
+  const fs::path final = dir_ / name, tmp = dir_ / (name + ".tmp");
+  {
+    std::ofstream out(tmp);
+    out << text;
+    if (!out) throw H5Error(tmp.string() + ": cannot write");
+  }
+  fsync_path(tmp);
+  fs::rename(tmp, final);
+}
+
+std::string TaskStore::read_manifest(const std::string& name) const {
+  std::ifstream in(dir_ / name);
+  if (!in) return "";
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace sirl

@@ -1,0 +1,37 @@
+// Crash-safe per-task commits: every finished task becomes its own small HDF5 file in a staging
+// directory, written to a temporary name, fsync'ed and renamed into place. A kill -9 at any
+// moment leaves each file either complete or absent, so a rerun trusts whatever it finds.
+#pragma once
+#include <filesystem>
+#include <map>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "results/task_record.h"
+
+namespace sirl {
+
+class TaskStore {
+ public:
+  // Opens (creating if needed) the directory and indexes the records already committed there.
+  // Leftover temporary files of an interrupted commit are removed.
+  explicit TaskStore(std::filesystem::path dir);
+  const std::filesystem::path& dir() const { return dir_; }
+  bool has(const std::string& key) const;
+  std::vector<std::string> keys() const;
+  // Atomic and durable; thread-safe. Overwrites a record of the same key.
+  void commit(const TaskRecord& r);
+  TaskRecord load(const std::string& key) const;
+  // A small text file beside the records (e.g. the profile the run started with).
+  void write_manifest(const std::string& name, const std::string& text);
+  std::string read_manifest(const std::string& name) const;  // "" when absent
+
+ private:
+  std::filesystem::path file_for(const std::string& key) const;
+  std::filesystem::path dir_;
+  mutable std::mutex mu_;
+  std::map<std::string, std::filesystem::path> index_;
+};
+
+}  // namespace sirl
