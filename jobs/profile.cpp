@@ -106,9 +106,14 @@ class Reader {
       v = std::numeric_limits<double>::infinity();
     else
       fail(n, std::string(key) + " must be a number");
-    if (!(v >= lo && v <= hi))
-      fail(n, std::string(key) + " = " + std::to_string(v) + " is outside [" + std::to_string(lo) +
-                  ", " + std::to_string(hi) + "]");
+    if (!(v >= lo && v <= hi)) {
+      auto g = [](double x) {
+        std::ostringstream o;
+        o << x;
+        return o.str();
+      };
+      fail(n, std::string(key) + " = " + g(v) + " is outside [" + g(lo) + ", " + g(hi) + "]");
+    }
     return v;
   }
 

@@ -1,0 +1,441 @@
+#!/usr/bin/python3
+"""Draws the paper's figures and a report from a sirl-bench results file (HDF5 only).
+
+    /usr/bin/python3 results/plot_figures.py RESULTS.h5 --out FIGURE_DIR
+
+Writes fig3_grid_similar.{png,pdf}, fig4_fpe.{png,pdf}, fig5_tpa.{png,pdf},
+fig7_ablation.{png,pdf} and report.md (+ report.html). Reads only the file: /tables/fpe,
+/tables/tpa, /tables/timings, /runs/... and /datasets/... (DESIGN.md §8). A partial file (an
+interrupted run) plots with gaps and notes, never zeros.
+"""
+import argparse
+import html
+import math
+import os
+import sys
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from scipy import stats  # noqa: E402
+
+# One colour and one label per method variant, shared by every figure.
+STYLE = {
+    "sirl": ("#d62728", "SIRL"),
+    "sirl+vae": ("#ff9896", "SIRL+VAE"),
+    "vae": ("#2ca02c", "VAE"),
+    "multipref10": ("#1f77b4", "MultiPref-10"),
+    "multipref50": ("#17becf", "MultiPref-50"),
+    "singlepref": ("#9467bd", "SinglePref"),
+    "random": ("#7f7f7f", "Random"),
+}
+ORDER = list(STYLE)
+ENV_TITLE = {"grid": "GridRobot", "jaco": "JacoRobot"}
+ALPHA = 0.05
+
+
+def decode(df):
+    for c in df.columns:
+        if df[c].dtype == object:
+            df[c] = df[c].str.decode("utf-8")
+    return df
+
+
+def load(path):
+    f = h5py.File(path, "r")
+    t = {k: decode(pd.DataFrame(f["tables/" + k][:])) for k in ("fpe", "tpa", "timings")}
+    return f, t
+
+
+def mean_ci(values):
+    """Mean and the half-width of its 95 % t confidence interval (nan for one value)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if len(v) == 0:
+        return np.nan, np.nan
+    if len(v) == 1:
+        return v[0], np.nan
+    return v.mean(), stats.t.ppf(0.975, len(v) - 1) * v.std(ddof=1) / math.sqrt(len(v))
+
+
+def save(fig, out, name):
+    for ext in ("png", "pdf"):
+        fig.savefig(os.path.join(out, f"{name}.{ext}"), dpi=150, bbox_inches="tight")
+    plt.close(fig)
+
+
+def main_tpa(tpa):
+    """Fig. 5's cells: each method in the paper's best mode (SIRL frozen, the others unfrozen)."""
+    best_frozen = tpa["variant"].isin(["sirl", "sirl+vae"]).astype(int)
+    return tpa[tpa["frozen"] == best_frozen]
+
+
+def plot_fig4(fpe, envs, out, notes):
+    fig, axes = plt.subplots(1, len(envs), figsize=(5.2 * len(envs), 3.8), squeeze=False)
+    for ax, env in zip(axes[0], envs):
+        d = fpe[fpe.env == env]
+        Ns = sorted(n for n in d.N.unique() if n > 0)
+        for v in ORDER:
+            dv = d[d.variant == v]
+            if dv.empty:
+                continue
+            colour, label = STYLE[v]
+            if (dv.N == 0).all():  # VAE and Random use no queries: one value per seed
+                m, ci = mean_ci(dv.fpe)
+                ax.axhline(m, color=colour, ls="--", lw=1.5, label=label)
+                if np.isfinite(ci) and Ns:
+                    ax.axhspan(m - ci, m + ci, color=colour, alpha=0.12)
+                continue
+            xs, ms, cis = [], [], []
+            for n in Ns:
+                m, ci = mean_ci(dv[dv.N == n].fpe)
+                xs.append(n)
+                ms.append(m)  # nan for a missing cell: matplotlib leaves a gap
+                cis.append(ci)
+            ms, cis = np.array(ms), np.array(cis)
+            if np.isnan(ms).any():
+                notes.append(f"Fig. 4 {ENV_TITLE.get(env, env)}: {label} missing at N = "
+                             f"{[x for x, m in zip(xs, ms) if np.isnan(m)]} (drawn as gaps)")
+            ax.plot(xs, ms, "o-", color=colour, label=label, ms=4)
+            ok = np.isfinite(cis)
+            ax.fill_between(np.array(xs)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour, alpha=0.15)
+        ax.set_title(ENV_TITLE.get(env, env))
+        ax.set_xlabel("representation queries N")
+        ax.set_ylabel("FPE (test MSE, normalised features)")
+        ax.grid(alpha=0.3)
+    axes[0][-1].legend(fontsize=8, loc="upper right")
+    fig.suptitle("Fig. 4: feature prediction error (mean ± 95 % CI over seeds)", fontsize=11)
+    save(fig, out, "fig4_fpe")
+
+
+def plot_fig5(tpa, envs, out, notes):
+    t = main_tpa(tpa)
+    Ns = sorted(n for n in t.N.unique() if n > 0)
+    if not Ns:
+        Ns = [0]
+    fig, axes = plt.subplots(len(envs), len(Ns), figsize=(4.2 * len(Ns), 3.4 * len(envs)),
+                             squeeze=False, sharey=True)
+    for r, env in enumerate(envs):
+        for c, n in enumerate(Ns):
+            ax = axes[r][c]
+            d = t[(t.env == env) & ((t.N == n) | (t.N == 0))]
+            Ms = sorted(d.M.unique())
+            for v in ORDER:
+                dv = d[d.variant == v]
+                if dv.empty:
+                    continue
+                colour, label = STYLE[v]
+                stats_ = [mean_ci(dv[dv.M == m].tpa) for m in Ms]
+                ms = np.array([s[0] for s in stats_])
+                cis = np.array([s[1] for s in stats_])
+                if np.isnan(ms).any():
+                    notes.append(f"Fig. 5 {ENV_TITLE.get(env, env)} N={n}: {label} missing at M = "
+                                 f"{[m for m, x in zip(Ms, ms) if np.isnan(x)]} (gaps)")
+                ax.plot(Ms, ms, "o-", color=colour, label=label, ms=4)
+                ok = np.isfinite(cis)
+                ax.fill_between(np.array(Ms)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour,
+                                alpha=0.15)
+            ax.set_title(f"{ENV_TITLE.get(env, env)}, N = {n}")
+            ax.set_xlabel("preference queries per test reward M")
+            if c == 0:
+                ax.set_ylabel("TPA (held-out accuracy)")
+            ax.grid(alpha=0.3)
+    axes[0][-1].legend(fontsize=8, loc="lower right")
+    fig.suptitle("Fig. 5: test preference accuracy (SIRL frozen, others unfrozen; mean ± 95 % CI)",
+                 fontsize=11, y=1.02)
+    save(fig, out, "fig5_tpa")
+
+
+def ablation_cells(tpa, f):
+    """The ablation's (N, M) from the profile text when present, else the largest N."""
+    prof = f.attrs.get("profile_text", "")
+    if isinstance(prof, bytes):
+        prof = prof.decode()
+    try:
+        import tomllib  # Python ≥ 3.11
+        ab = tomllib.loads(prof).get("ablation", {})
+        return ab.get("N", []), ab.get("M", [])
+    except Exception:
+        return [tpa.N.max()], sorted(tpa.M.unique())
+
+
+def plot_fig7(tpa, envs, f, out, notes):
+    Nab, Mab = ablation_cells(tpa, f)
+    fig, axes = plt.subplots(1, len(envs), figsize=(7 * len(envs), 3.8), squeeze=False)
+    bases = [b for b in ["sirl", "vae", "multipref10", "multipref50", "singlepref", "random"]
+             if b in set(tpa.method)]
+    configs = [(1, 0, "frozen"), (0, 0, "unfrozen"), (1, 1, "frozen + VAE"), (0, 1, "unfrozen + VAE")]
+    hatches = ["", "//", "..", "xx"]
+    for ax, env in zip(axes[0], envs):
+        d = tpa[(tpa.env == env) & (tpa.M.isin(Mab)) & ((tpa.N.isin(Nab)) | (tpa.N == 0))]
+        width = 0.2
+        for k, (fr, vae, name) in enumerate(configs):
+            ms, cis = [], []
+            for b in bases:
+                cell = d[(d.method == b) & (d.frozen == fr) & (d.vae == vae)]
+                # mean over M per seed, then over seeds
+                per_seed = cell.groupby("seed").tpa.mean()
+                m, ci = mean_ci(per_seed)
+                ms.append(m)
+                cis.append(ci)
+            x = np.arange(len(bases)) + (k - 1.5) * width
+            colours = [STYLE[b][0] for b in bases]
+            ax.bar(x, np.nan_to_num(ms, nan=0.0) * np.isfinite(ms), width, yerr=np.nan_to_num(cis),
+                   color=colours, edgecolor="black", hatch=hatches[k], alpha=0.85,
+                   label=name if True else None)
+            for xi, m in zip(x, ms):
+                if np.isnan(m):
+                    ax.text(xi, 0.41, "n/a", rotation=90, ha="center", va="bottom", fontsize=7)
+        ax.set_xticks(np.arange(len(bases)))
+        ax.set_xticklabels([STYLE[b][1] for b in bases], fontsize=8)
+        ax.set_ylim(0.4, 1.0)
+        ax.set_ylabel("TPA (mean over M)")
+        ax.set_title(f"{ENV_TITLE.get(env, env)}, N = {Nab}, M = {Mab}")
+        ax.grid(alpha=0.3, axis="y")
+        handles = [matplotlib.patches.Patch(facecolor="white", edgecolor="black", hatch=h, label=c[2])
+                   for h, c in zip(hatches, configs)]
+        ax.legend(handles=handles, fontsize=8, loc="upper right")
+    fig.suptitle("Fig. 7: ablation — frozen/unfrozen φ × VAE pre-training (n/a: not applicable "
+                 "or not run)", fontsize=11)
+    save(fig, out, "fig7_ablation")
+
+
+def mlp_forward(x, params, widths, relu_output=False):
+    off, h = 0, x
+    layers = len(widths) - 1
+    for l in range(layers):
+        ni, no = widths[l], widths[l + 1]
+        W = params[off:off + ni * no].reshape(no, ni)
+        off += ni * no
+        b = params[off:off + no]
+        off += no
+        h = h @ W.T + b
+        if l + 1 < layers or relu_output:
+            h = np.maximum(h, 0)
+    return h
+
+
+def plot_fig3(f, out, notes):
+    if "datasets/grid" not in f:
+        notes.append("Fig. 3: no GridRobot data in this file")
+        return None
+    g = f["datasets/grid"]
+    X = g["inputs"][:]
+    reps = [k.decode() for k in f["runs_index"][:] if k.decode().startswith("grid/s")
+            and "/sirl/N" in k.decode() and k.decode().endswith("/rep")]
+    if not reps:
+        notes.append("Fig. 3: no SIRL representation in this file")
+        return None
+    key = max(reps, key=lambda k: (int(k.split("/N")[1].split("/")[0]), -int(k.split("/s")[1].split("/")[0])))
+    r = f["runs/" + key]
+    widths = [int(w) for w in r.attrs["widths"].split(",")]
+    E = mlp_forward(X, r["params"][:], widths)
+    q = 0  # the query trajectory: the first of Ξ
+    dist = ((E - E[q]) ** 2).sum(1)
+    dist[q] = np.inf
+    nearest = np.argsort(dist)[:3]
+    dist[q] = -np.inf
+    farthest = np.argsort(dist)[-3:][::-1]
+    objects = g["objects"][:]
+    names = [n.decode() if isinstance(n, bytes) else n for n in g["objects"].attrs["names"]]
+    size = 5
+    scale = size - 1
+
+    def draw(ax, idx, title, colour):
+        ax.set_xlim(-0.5, size - 0.5)
+        ax.set_ylim(-0.5, size - 0.5)
+        ax.set_aspect("equal")
+        ax.set_xticks(range(size))
+        ax.set_yticks(range(size))
+        ax.grid(alpha=0.3)
+        for (ox, oy), n in zip(objects, names):
+            marker, c = ("s", "black") if n.startswith("obstacle") else ("D", "tab:orange")
+            ax.scatter([ox], [oy], marker=marker, s=260, c=c, zorder=3)
+        for i in idx:
+            pts = X[i, :18].reshape(9, 2) * scale
+            ax.plot(pts[:, 0], pts[:, 1], "-o", color=colour, ms=3, lw=2, alpha=0.8)
+            ang = X[i, 18] * 90
+            ax.annotate(f"{ang:+.0f}°", pts[-1], fontsize=7, color=colour)
+        ax.set_title(title, fontsize=9)
+
+    fig, axes = plt.subplots(1, 3, figsize=(10, 3.6))
+    draw(axes[0], [q], f"query ξ{q}", "black")
+    draw(axes[1], nearest, "most similar (SIRL φ)", "tab:green")
+    draw(axes[2], farthest, "least similar (SIRL φ)", "tab:red")
+    fig.suptitle(f"Fig. 3: GridRobot trajectories under the learned embedding ({key}); "
+                 "■ obstacles, ◆ laptop, end angle in degrees", fontsize=10)
+    save(fig, out, "fig3_grid_similar")
+    return key
+
+
+def paired(a, b):
+    """Paired t-test over the seeds both have; returns (mean a − b, p, n)."""
+    j = pd.concat([a.rename("a"), b.rename("b")], axis=1).dropna()
+    if len(j) < 2:
+        return (j.a - j.b).mean() if len(j) else np.nan, np.nan, len(j)
+    diff = j.a - j.b
+    if np.allclose(diff, diff.iloc[0]):
+        return diff.mean(), 0.0 if diff.iloc[0] != 0 else 1.0, len(j)
+    return diff.mean(), stats.ttest_rel(j.a, j.b).pvalue, len(j)
+
+
+def verdict(lines, claim, comparisons, better):
+    """comparisons: (name, mean diff, p, n) with diff = claimed-better − other; `better` is the
+    sign a holding claim has ("<" lower is better, ">" higher is better)."""
+    if not comparisons:
+        lines.append(f"- **{claim}**: not evaluated (no data)")
+        return
+    good = [c for c in comparisons if (c[1] < 0 if better == "<" else c[1] > 0) and c[2] < ALPHA]
+    bad = [c for c in comparisons if (c[1] > 0 if better == "<" else c[1] < 0) and c[2] < ALPHA]
+    if len(good) == len(comparisons):
+        v = "held"
+    elif bad:
+        v = "not held"
+    else:
+        v = "inconclusive"
+    detail = "; ".join(f"{'vs ' if n in STYLE else ''}{STYLE.get(n, (0, n))[1]}: Δ = {d:+.4f}, p = {p:.3g} (n = {k})"
+                       for n, d, p, k in comparisons)
+    lines.append(f"- **{claim}: {v}** (paired t-test over seeds, α = {ALPHA}). {detail}")
+
+
+def report(f, t, envs, out, notes, fig3_key):
+    fpe, tpa, tim = t["fpe"], t["tpa"], t["timings"]
+    a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+    L = [f"# sirl-bench report: profile `{a.get('profile_name')}`", ""]
+    L.append(f"- engine {a.get('engine_version')} (commit {a.get('git_commit')}), host "
+             f"{a.get('host')}, {a.get('threads')} threads")
+    L.append(f"- started {a.get('started')}, finished {a.get('finished')}, wall time "
+             f"{float(a.get('wall_seconds', 0)):.0f} s")
+    L.append(f"- tasks: {a.get('tasks_done')} of {a.get('tasks_total')} done"
+             + ("" if a.get("complete") else " — **PARTIAL RUN**: figures show gaps"))
+    if len(tim):
+        by = tim.groupby("kind").agg(tasks=("key", "count"), seconds=("seconds", "sum"),
+                                     gflop=("flops", lambda x: x.sum() / 1e9))
+        by["GFLOP/s"] = by.gflop / by.seconds.where(by.seconds > 0)
+        L += ["", "## Compute by task kind (task-seconds, summed over threads)", "",
+              "| kind | tasks | seconds | GFLOP | GFLOP/s |", "|---|---:|---:|---:|---:|"]
+        for k, r in by.iterrows():
+            L.append(f"| {k} | {int(r.tasks)} | {r.seconds:.1f} | {r.gflop:.1f} | {r['GFLOP/s']:.1f} |")
+    L += ["", "## Figures", ""]
+    for name, cap in [("fig3_grid_similar", "Fig. 3"), ("fig4_fpe", "Fig. 4"),
+                      ("fig5_tpa", "Fig. 5"), ("fig7_ablation", "Fig. 7")]:
+        if os.path.exists(os.path.join(out, name + ".png")):
+            L.append(f"![{cap}]({name}.png)")
+    L += ["", "## The paper's claims, checked", ""]
+    for env in envs:
+        L.append(f"### {ENV_TITLE.get(env, env)}")
+        d = fpe[fpe.env == env]
+        if not d.empty:
+            nmax = d.N.max()
+
+            def fpe_at(v):
+                x = d[(d.variant == v) & ((d.N == nmax) | (d.N == 0))]
+                return x.set_index("seed").fpe
+
+            comps = [(v, *paired(fpe_at("sirl"), fpe_at(v))) for v in
+                     ["vae", "multipref10", "multipref50", "singlepref", "random"]
+                     if (d.variant == v).any()]
+            verdict(L, f"H1 — SIRL's FPE is lower than every baseline's at N = {nmax}", comps, "<")
+        m = main_tpa(tpa[tpa.env == env])
+        if not m.empty:
+            nmax = m.N.max()
+
+            def tpa_at(v):
+                x = m[(m.variant == v) & ((m.N == nmax) | (m.N == 0))]
+                return x.groupby("seed").tpa.mean()
+
+            comps = [(v, *paired(tpa_at("sirl"), tpa_at(v))) for v in
+                     ["vae", "multipref10", "multipref50", "singlepref", "random"]
+                     if (m.variant == v).any()]
+            verdict(L, f"H2 — SIRL's TPA (frozen, mean over M) is higher than every baseline's "
+                       f"(unfrozen) at N = {nmax}", comps, ">")
+            comps = [(v, *paired(tpa_at("random"), tpa_at(v))) for v in
+                     ["multipref10", "multipref50", "singlepref"] if (m.variant == v).any()]
+            verdict(L, "Secondary — Random beats preference pre-training (TPA)", comps, ">")
+        ab = tpa[(tpa.env == env) & (tpa.vae == 0)]
+        for meth, claim in [("sirl", "SIRL is better frozen"),
+                            ("multipref10", "MultiPref-10 is better unfrozen"),
+                            ("multipref50", "MultiPref-50 is better unfrozen"),
+                            ("singlepref", "SinglePref is better unfrozen")]:
+            x = ab[ab.method == meth]
+            if x.frozen.nunique() < 2:
+                continue
+            keys = ["N", "M"]
+            cells = x.groupby(keys).frozen.nunique()
+            cells = cells[cells == 2].index
+            x = x.set_index(keys).loc[cells].reset_index()
+            fr = x[x.frozen == 1].groupby("seed").tpa.mean()
+            un = x[x.frozen == 0].groupby("seed").tpa.mean()
+            sign = ">" if meth == "sirl" else "<"
+            verdict(L, f"Secondary — {claim} (ablation cells, mean over N, M)",
+                    [("frozen − unfrozen", *paired(fr, un))], sign)
+        if env == "jaco":
+            x = fpe[(fpe.env == env)]
+            if not x.empty:
+                nmax = x.N.max()
+                v = x[(x.variant == "vae")].set_index("seed").fpe
+                s = x[(x.variant == "sirl") & (x.N == nmax)].set_index("seed").fpe
+                verdict(L, "Secondary — VAE is weak on JacoRobot (FPE above SIRL's)",
+                        [("vae", *paired(v, s))], ">")
+        L.append("")
+    if "jaco" not in envs:
+        L.append("- *VAE weak on JacoRobot*: not evaluated — this run has no JacoRobot cells.")
+    if fig3_key:
+        L.append(f"- Fig. 3 uses the representation `{fig3_key}`.")
+    if notes:
+        L += ["", "## Notes", ""] + [f"- {n}" for n in notes]
+    L += ["", "Verdicts: *held* = the claimed direction for every comparison with p < 0.05; "
+          "*not held* = at least one significant difference the other way; *inconclusive* "
+          "otherwise. Few seeds give little power: read the Δ's, not only the verdict.", ""]
+    text = "\n".join(L)
+    with open(os.path.join(out, "report.md"), "w") as fh:
+        fh.write(text)
+    body = []
+    for line in L:
+        if line.startswith("!["):
+            src = line.split("(")[1].rstrip(")")
+            body.append(f'<p><img src="{html.escape(src)}" style="max-width:100%"></p>')
+        elif line.startswith("#"):
+            lvl = len(line) - len(line.lstrip("#"))
+            body.append(f"<h{lvl}>{html.escape(line.lstrip('# '))}</h{lvl}>")
+        elif line:
+            body.append(f"<p>{html.escape(line)}</p>")
+    with open(os.path.join(out, "report.html"), "w") as fh:
+        fh.write("<!doctype html><meta charset='utf-8'><title>sirl-bench report</title>"
+                 + "\n".join(body))
+    return text
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("results", help="HDF5 results file written by `sirl run`")
+    ap.add_argument("--out", required=True, help="directory for the figures and the report")
+    a = ap.parse_args()
+    if not os.path.exists(a.results):
+        sys.exit(f"plot_figures: {a.results}: no such file")
+    os.makedirs(a.out, exist_ok=True)
+    f, t = load(a.results)
+    envs = sorted(set(t["fpe"].env) | set(t["tpa"].env)) or ["grid"]
+    notes = []
+    if not f.attrs.get("complete", 1):
+        notes.append(f"partial run: {f.attrs.get('tasks_done')} of {f.attrs.get('tasks_total')} "
+                     "tasks; missing cells are gaps, not zeros")
+    shard = f.attrs.get("shard", b"")
+    shard = shard.decode() if isinstance(shard, bytes) else shard
+    if shard:
+        notes.append(f"this file is shard {shard} of a run: missing cells are in the other shards "
+                     "(combine them with `sirl merge`)")
+    fig3_key = plot_fig3(f, a.out, notes)
+    plot_fig4(t["fpe"], envs, a.out, notes)
+    plot_fig5(t["tpa"], envs, a.out, notes)
+    plot_fig7(t["tpa"], envs, f, a.out, notes)
+    report(f, t, envs, a.out, notes, fig3_key)
+    print(f"plot_figures: wrote figures and report.md to {a.out}/")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,215 @@
+// Profiles, plans, the scheduler and the task store (the batch engine's parts, without a run).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <set>
+
+#include "jobs/plan.h"
+#include "jobs/profile.h"
+#include "jobs/run.h"
+#include "jobs/scheduler.h"
+#include "results/task_store.h"
+
+namespace sirl {
+namespace {
+
+const char* kProfile = R"(
+name = "t"
+envs = ["grid"]
+seeds = [0, 1, 2]
+[queries]
+similarity = 300
+preference = 300
+tpa_pairs = 100
+[fpe]
+methods = ["sirl", "sirl+vae", "vae", "random"]
+N = [100, 200, 300]
+[tpa]
+methods = ["sirl", "multipref10", "random"]
+N = [100, 300]
+M = [10, 80]
+[ablation]
+methods = ["sirl", "random"]
+N = [300]
+M = [80]
+[hyper.grid]
+"sirl.epochs" = 7
+"tpa.hidden" = [32, 16]
+)";
+
+TEST(Profile, ParsesTheGridAndOverrides) {
+  const Profile p = parse_profile(kProfile, "t.toml");
+  EXPECT_EQ(p.name, "t");
+  EXPECT_EQ(p.seeds, (std::vector<int64_t>{0, 1, 2}));
+  ASSERT_EQ(p.fpe_methods.size(), 4u);
+  EXPECT_TRUE(p.fpe_methods[1].vae);
+  EXPECT_EQ(p.fpe_methods[1].method, Method::sirl);
+  EXPECT_EQ(p.hyper.at("grid").sirl.epochs, 7);
+  EXPECT_EQ(p.hyper.at("grid").tpa_hidden, (std::vector<int>{32, 16}));
+  EXPECT_EQ(p.hyper.at("grid").pref.epochs, 5000);  // untouched: the paper's value
+  EXPECT_EQ(p.queries.similarity, 300);
+}
+
+TEST(Plan, TaskCountsMatchTheGrid) {
+  const Profile p = parse_profile(kProfile, "t.toml");
+  const Plan plan = make_plan(p);
+  const int S = 3;
+  // VAE: one per seed (sirl+vae and vae need it).
+  EXPECT_EQ(plan.count(TaskKind::vae), S);
+  // FPE: sirl, sirl+vae × 3 N; vae and random once each (no N).
+  EXPECT_EQ(plan.count(TaskKind::fpe), S * (2 * 3 + 2));
+  // TPA main: sirl (frozen) and multipref10 (unfrozen) × 2 N × 2 M; random (unfrozen) × 2 M.
+  // Ablation: sirl, sirl+vae × 2 frozen × 1 M; random × 2 frozen. Cells shared with the main
+  // grid (sirl N300 M80 frozen; random M80 unfrozen) are counted once.
+  const int main_cells = 2 * 2 * 2 + 2;
+  const int ablation_new = 2 * 2 + 2 - 2;
+  EXPECT_EQ(plan.count(TaskKind::tpa), S * (main_cells + ablation_new));
+  // Representations: sirl N100/200/300, sirl+vae N100/200/300, vae, random, multipref10 N100/300.
+  EXPECT_EQ(plan.count(TaskKind::rep), S * (3 + 3 + 1 + 1 + 2));
+  // Every dependency precedes its dependent, and every FPE/TPA task depends on one rep.
+  for (size_t i = 0; i < plan.tasks.size(); ++i) {
+    for (int d : plan.tasks[i].deps) EXPECT_LT(size_t(d), i);
+    if (plan.tasks[i].kind == TaskKind::fpe || plan.tasks[i].kind == TaskKind::tpa) {
+      ASSERT_EQ(plan.tasks[i].deps.size(), 1u);
+      EXPECT_EQ(plan.tasks[plan.tasks[i].deps[0]].kind, TaskKind::rep);
+    }
+  }
+  std::set<std::string> keys;
+  for (const auto& t : plan.tasks) EXPECT_TRUE(keys.insert(t.key).second) << t.key;
+}
+
+TEST(Plan, ShardsPartitionTheWorkAndKeepDependencies) {
+  const Plan plan = make_plan(parse_profile(kProfile, "t.toml"));
+  std::vector<int> owners(plan.tasks.size(), 0);
+  for (int s = 0; s < 3; ++s) {
+    const auto in = shard_tasks(plan, s, 3);
+    for (size_t i = 0; i < in.size(); ++i) {
+      if (!in[i]) continue;
+      if (plan.tasks[i].kind != TaskKind::vae) ++owners[i];
+      for (int d : plan.tasks[i].deps) EXPECT_TRUE(in[d]) << plan.tasks[i].key;
+    }
+  }
+  for (size_t i = 0; i < plan.tasks.size(); ++i)
+    if (plan.tasks[i].kind != TaskKind::vae) EXPECT_EQ(owners[i], 1) << plan.tasks[i].key;
+}
+
+// The message of the ProfileError thrown for `text`.
+std::string error_of(const std::string& text) {
+  try {
+    parse_profile(text, "bad.toml");
+  } catch (const ProfileError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
+  const std::string base = "name = \"x\"\nenvs = [\"grid\"]\nseeds = [0]\n";
+  const std::string grid =
+      "[fpe]\nmethods = [\"sirl\"]\nN = [100]\n[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n";
+  EXPECT_EQ(error_of(base + grid), "no error");
+  // An unknown key, on line 4.
+  EXPECT_EQ(error_of(base + "sedes = [1]\n" + grid).rfind("bad.toml:4: unknown key 'sedes'", 0), 0u)
+      << error_of(base + "sedes = [1]\n" + grid);
+  // A wrong type.
+  EXPECT_NE(error_of("name = \"x\"\nenvs = \"grid\"\nseeds = [0]\n" + grid)
+                .find("bad.toml:2: envs must be an array of strings"),
+            std::string::npos);
+  // An unknown method, with the list of valid ones.
+  auto m = error_of(base + "[fpe]\nmethods = [\"sirl\", \"pca\"]\nN = [100]\n" +
+                    "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n");
+  EXPECT_NE(m.find("bad.toml:5"), std::string::npos) << m;
+  EXPECT_NE(m.find("unknown method 'pca'"), std::string::npos) << m;
+  EXPECT_NE(m.find("multipref10"), std::string::npos) << m;
+  // M beyond the TPA training split.
+  m = error_of(base + grid + "[queries]\ntpa_pairs = 10\n");
+  EXPECT_NE(m.find("M = 10 exceeds the 8 training pairs"), std::string::npos) << m;
+  m = error_of(base + "[fpe]\nmethods = [\"sirl\"]\nN = [5000]\n" +
+               "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n");
+  EXPECT_NE(m.find("exceeds the query budget"), std::string::npos) << m;
+  // A bad hyper-parameter, named.
+  m = error_of(base + grid + "[hyper.grid]\n\"sirl.epoch\" = 3\n");
+  EXPECT_NE(m.find("bad.toml:12"), std::string::npos) << m;
+  EXPECT_NE(m.find("unknown hyper-parameter 'sirl.epoch'"), std::string::npos) << m;
+  m = error_of(base + grid + "[hyper.grid]\n\"sirl.lr\" = -1\n");
+  EXPECT_NE(m.find("sirl.lr must be > 0"), std::string::npos) << m;
+  // "+vae" only where it applies; a missing table; TOML syntax errors keep their line.
+  EXPECT_NE(error_of(base + "[fpe]\nmethods = [\"random+vae\"]\nN = [100]\n" +
+                     "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n")
+                .find("VAE pre-training applies only"),
+            std::string::npos);
+  EXPECT_NE(error_of(base).find("missing table [fpe]"), std::string::npos);
+  EXPECT_EQ(error_of(base + "[fpe\n").rfind("bad.toml:4:", 0), 0u) << error_of(base + "[fpe\n");
+  EXPECT_NE(error_of(base + grid + "[teacher]\nmistake = 2\n").find("outside [0, 1]"),
+            std::string::npos);
+}
+
+TEST(Profile, ShippedProfilesAreValid) {
+  for (const char* name : {"smoke", "quick", "paper"}) {
+    const Profile p = load_profile(name);
+    EXPECT_EQ(p.name, name);
+    EXPECT_GT(make_plan(p).tasks.size(), 0u);
+  }
+  EXPECT_THROW(load_profile("no-such-profile"), ProfileError);
+}
+
+TEST(Scheduler, RunsEveryPendingTaskAfterItsDependencies) {
+  const Plan plan = make_plan(parse_profile(kProfile, "t.toml"));
+  const int n = int(plan.tasks.size());
+  std::vector<char> pending(n, 1);
+  pending[0] = 0;  // already done: its dependents must still run
+  std::mutex mu;
+  std::vector<int> order_of(n, -1);
+  int next = 0;
+  run_dag(plan, pending, 2, [&](int i) {
+    std::lock_guard lock(mu);
+    for (int d : plan.tasks[i].deps)
+      if (pending[d]) EXPECT_GE(order_of[d], 0) << plan.tasks[i].key << " before its input";
+    order_of[i] = next++;
+  });
+  EXPECT_EQ(next, n - 1);
+  EXPECT_EQ(order_of[0], -1);
+}
+
+TEST(Scheduler, StopsAtTheFirstErrorAndRethrowsIt) {
+  const Plan plan = make_plan(parse_profile(kProfile, "t.toml"));
+  std::atomic<int> ran{0};
+  std::vector<char> pending(plan.tasks.size(), 1);
+  EXPECT_THROW(run_dag(plan, pending, 2,
+                       [&](int i) {
+                         ++ran;
+                         if (plan.tasks[i].kind == TaskKind::vae) throw std::runtime_error("boom");
+                       }),
+               std::runtime_error);
+  EXPECT_LT(ran.load(), int(plan.tasks.size()));
+}
+
+TEST(TaskStore, CommitsAreDurableAndRoundTrip) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "sirl_task_store_test";
+  fs::remove_all(dir);
+  TaskRecord r;
+  r.key = "grid/s0/sirl/N100/tpa/M10/frozen";
+  r.kind = "tpa";
+  r.text["env"] = "grid";
+  r.num["tpa"] = 0.8125;
+  r.arrays["loss_curves"] = {{2, 3}, {1, 2, 3, 4, 5, 6}};
+  r.arrays["empty"] = {{0}, {}};
+  {
+    TaskStore s(dir);
+    s.commit(r);
+    EXPECT_TRUE(s.has(r.key));
+  }
+  std::ofstream(dir / "0123456789abcdef.h5.tmp") << "torn";  // an interrupted commit
+  TaskStore again(dir);
+  EXPECT_EQ(again.keys(), std::vector<std::string>{r.key});
+  EXPECT_EQ(again.load(r.key), r);
+  EXPECT_FALSE(fs::exists(dir / "0123456789abcdef.h5.tmp"));
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace sirl
