@@ -5,6 +5,7 @@
 #include <string>
 
 #include "app/commands.h"
+#include "jobs/mpi_run.h"
 
 namespace sirl::app {
 
@@ -38,7 +39,7 @@ void register_reproduce(CLI::App& app, Runner& run) {
     if (out.empty()) out = "results/" + stem + ".h5";
     if (figures.empty()) figures = "results/" + stem + "-figures";
     const int rc = run_command(profile, out, threads, force, "", false);
-    if (rc != 0) return rc;
+    if (rc != 0 || mpi_rank_from_env() > 0) return rc;  // MPI workers do not plot
     const std::string script = std::string(SIRL_SOURCE_DIR) + "/results/plot_figures.py";
     if (!std::filesystem::exists(script))
       throw std::runtime_error("plotting script not found: " + script);

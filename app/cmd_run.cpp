@@ -58,6 +58,7 @@ int run_command(const std::string& profile_name, const std::string& out, int thr
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
+  if (s.worker) return 0;
   std::printf("sirl run: %d tasks (%d reused, %d computed) in %s → %s\n", s.tasks, s.reused, s.ran,
               format_duration(s.seconds).c_str(), out.c_str());
   return 0;

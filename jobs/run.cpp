@@ -9,10 +9,12 @@
 #include <stdexcept>
 #include <thread>
 
+#include "jobs/mpi_run.h"
 #include "jobs/progress.h"
 #include "jobs/scheduler.h"
 #include "jobs/task_runner.h"
 #include "kernels/rng.h"
+#include "results/h5.h"
 #include "results/results_file.h"
 #include "results/task_store.h"
 
@@ -75,15 +77,55 @@ std::vector<char> shard_tasks(const Plan& plan, int index, int count) {
   return in;
 }
 
+namespace {
+RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size);
+}
+
 RunSummary run_profile(const Profile& p, const RunOptions& o) {
   if (o.out.empty()) throw std::invalid_argument("--out is required");
+  if (!launched_under_mpi()) return run_rank0(p, o, 1);
+  const auto [rank, size] = mpi_start();
+  if (rank > 0) {
+    // A worker: inputs of its tasks come from rank 0's commits (shared file system) or from the
+    // results file of an earlier run.
+    const Plan plan = make_plan(p);
+    const fs::path staging = o.out + ".tasks";
+    RunContext ctx(p, [&](const std::string& key) -> TaskRecord {
+      try {
+        return TaskStore::load_from(staging, key);
+      } catch (const H5Error&) {
+        H5File f = H5File::open_read(o.out);
+        return read_record(f, "/runs/" + key);
+      }
+    });
+    mpi_work(plan, ctx);
+    mpi_stop();
+    RunSummary s;
+    s.worker = true;
+    return s;
+  }
+  try {
+    RunSummary s = run_rank0(p, o, size);
+    mpi_stop();
+    return s;
+  } catch (...) {
+    mpi_release_workers();  // workers waiting for a task exit instead of hanging
+    mpi_stop();
+    throw;
+  }
+}
+
+namespace {
+
+RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::string started = now_iso();
   const Plan plan = make_plan(p);
   const int n = int(plan.tasks.size());
   const std::vector<char> mine = shard_tasks(plan, o.shard_index, o.shard_count);
-  const int threads =
-      o.threads > 0 ? o.threads : std::max(1, int(std::thread::hardware_concurrency()));
+  const int threads = mpi_size > 1    ? mpi_size - 1
+                      : o.threads > 0 ? o.threads
+                                      : std::max(1, int(std::thread::hardware_concurrency()));
 
   // Earlier results: the results file itself, and the staging directory of an interrupted run.
   auto refuse = [&](const std::string& where, const std::string& what) {
@@ -147,20 +189,28 @@ RunSummary run_profile(const Profile& p, const RunOptions& o) {
 
   const int to_run = total - reused;
   if (!o.quiet)
-    std::fprintf(stderr, "sirl run: profile %s, %d tasks (%d already done), %d threads → %s\n",
-                 p.name.c_str(), total, reused, threads, o.out.c_str());
+    std::fprintf(stderr, "sirl run: profile %s, %d tasks (%d already done), %d %s → %s\n",
+                 p.name.c_str(), total, reused, threads, mpi_size > 1 ? "MPI workers" : "threads",
+                 o.out.c_str());
   Progress progress(to_run, pending_flops, o.quiet);
   std::exception_ptr failure;
   try {
-    run_dag(plan, pending, threads, [&](int i) {
-      const Task& t = plan.tasks[i];
-      const TaskRecord rec = run_task(t, ctx);
-      store.commit(rec);
-      progress.task_done(t.key, t.flops, rec.num.at("seconds"));
-      std::lock_guard lock(users_mu);
-      for (int d : t.deps)
-        if (--users[d] == 0) ctx.release(plan.tasks[d].key);
-    });
+    if (mpi_size > 1) {
+      mpi_dispatch(plan, pending, [&](int i, const TaskRecord& rec) {
+        store.commit(rec);
+        progress.task_done(rec.key, plan.tasks[i].flops, rec.num.at("seconds"));
+      });
+    } else {
+      run_dag(plan, pending, threads, [&](int i) {
+        const Task& t = plan.tasks[i];
+        const TaskRecord rec = run_task(t, ctx);
+        store.commit(rec);
+        progress.task_done(t.key, t.flops, rec.num.at("seconds"));
+        std::lock_guard lock(users_mu);
+        for (int d : t.deps)
+          if (--users[d] == 0) ctx.release(plan.tasks[d].key);
+      });
+    }
   } catch (...) {
     failure = std::current_exception();
   }
@@ -205,5 +255,7 @@ RunSummary run_profile(const Profile& p, const RunOptions& o) {
   s.seconds = info.wall_seconds;
   return s;
 }
+
+}  // namespace
 
 }  // namespace sirl

@@ -19,6 +19,7 @@ struct RunOptions {
 struct RunSummary {
   int tasks = 0, reused = 0, ran = 0;
   double seconds = 0;
+  bool worker = false;  // an MPI worker rank (rank 0 reports for the run)
 };
 
 RunSummary run_profile(const Profile& p, const RunOptions& o);

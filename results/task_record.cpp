@@ -1,8 +1,95 @@
 #include "results/task_record.h"
 
+#include <cstring>
+#include <stdexcept>
+
 #include "results/h5.h"
 
 namespace sirl {
+
+namespace {
+void put_u64(std::string& out, uint64_t v) {
+  out.append(reinterpret_cast<const char*>(&v), 8);
+}
+void put_str(std::string& out, const std::string& s) {
+  put_u64(out, s.size());
+  out += s;
+}
+struct Cursor {
+  const std::string& s;
+  size_t pos = 0;
+  const char* take(size_t n) {
+    if (n > s.size() - pos) throw std::runtime_error("task record message is truncated");
+    const char* p = s.data() + pos;
+    pos += n;
+    return p;
+  }
+  uint64_t u64() {
+    uint64_t v;
+    std::memcpy(&v, take(8), 8);
+    return v;
+  }
+  std::string str() {
+    const uint64_t n = u64();
+    return std::string(take(n), n);
+  }
+};
+}  // namespace
+
+std::string serialize(const TaskRecord& r) {
+  std::string out;
+  put_str(out, r.key);
+  put_str(out, r.kind);
+  put_u64(out, r.text.size());
+  for (const auto& [k, v] : r.text) {
+    put_str(out, k);
+    put_str(out, v);
+  }
+  put_u64(out, r.num.size());
+  for (const auto& [k, v] : r.num) {
+    put_str(out, k);
+    out.append(reinterpret_cast<const char*>(&v), 8);
+  }
+  put_u64(out, r.arrays.size());
+  for (const auto& [k, a] : r.arrays) {
+    put_str(out, k);
+    put_u64(out, a.dims.size());
+    for (uint64_t d : a.dims) put_u64(out, d);
+    put_u64(out, a.data.size());
+    out.append(reinterpret_cast<const char*>(a.data.data()), a.data.size() * sizeof(float));
+  }
+  return out;
+}
+
+TaskRecord deserialize(const std::string& bytes) {
+  Cursor c{bytes};
+  TaskRecord r;
+  r.key = c.str();
+  r.kind = c.str();
+  for (uint64_t n = c.u64(); n > 0; --n) {
+    std::string k = c.str();
+    r.text[k] = c.str();
+  }
+  for (uint64_t n = c.u64(); n > 0; --n) {
+    std::string k = c.str();
+    double v;
+    std::memcpy(&v, c.take(8), 8);
+    r.num[k] = v;
+  }
+  for (uint64_t n = c.u64(); n > 0; --n) {
+    std::string k = c.str();
+    TaskRecord::Array a;
+    a.dims.resize(c.u64());
+    for (auto& d : a.dims) d = c.u64();
+    const uint64_t count = c.u64();
+    if (count > bytes.size()) throw std::runtime_error("task record message is malformed");
+    a.data.resize(count);
+    std::memcpy(a.data.data(), c.take(count * sizeof(float)), count * sizeof(float));
+    r.arrays[k] = std::move(a);
+  }
+  if (c.pos != bytes.size()) throw std::runtime_error("task record message has trailing bytes");
+  return r;
+}
 
 void write_record(H5File& f, const std::string& g, const TaskRecord& r) {
   f.group(g);

@@ -27,6 +27,10 @@ struct TaskRecord {
 
 // The record as the group `group` (created): attrs for key, kind, text and numbers, one dataset
 // per array, and index attributes listing the names so it reads back exactly.
+// A byte string for messages between processes (MPI); deserialize(serialize(r)) == r.
+std::string serialize(const TaskRecord& r);
+TaskRecord deserialize(const std::string& bytes);  // throws std::runtime_error if malformed
+
 void write_record(H5File& f, const std::string& group, const TaskRecord& r);
 TaskRecord read_record(const H5File& f, const std::string& group);
 

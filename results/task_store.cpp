@@ -45,11 +45,20 @@ TaskStore::TaskStore(fs::path dir) : dir_(std::move(dir)) {
   }
 }
 
-fs::path TaskStore::file_for(const std::string& key) const {
+fs::path TaskStore::file_for(const fs::path& dir, const std::string& key) {
   char name[32];
   std::snprintf(name, sizeof name, "%016llx.h5",
                 static_cast<unsigned long long>(seed_from_key(key, 0)));
-  return dir_ / name;
+  return dir / name;
+}
+
+TaskRecord TaskStore::load_from(const fs::path& dir, const std::string& key) {
+  const fs::path p = file_for(dir, key);
+  if (!fs::exists(p)) throw H5Error(dir.string() + ": no committed task " + key);
+  H5File f = H5File::open_read(p.string());
+  TaskRecord r = read_record(f, "/r");
+  if (r.key != key) throw H5Error(p.string() + ": holds task " + r.key + ", not " + key);
+  return r;
 }
 
 bool TaskStore::has(const std::string& key) const {
@@ -65,7 +74,7 @@ std::vector<std::string> TaskStore::keys() const {
 }
 
 void TaskStore::commit(const TaskRecord& r) {
-  const fs::path final = file_for(r.key);
+  const fs::path final = file_for(dir_, r.key);
   const fs::path tmp = final.string() + ".tmp";
   {
     H5File f = H5File::create(tmp.string());

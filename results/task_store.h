@@ -23,12 +23,14 @@ class TaskStore {
   // Atomic and durable; thread-safe. Overwrites a record of the same key.
   void commit(const TaskRecord& r);
   TaskRecord load(const std::string& key) const;
+  // Reads a record committed (possibly by another process) into `dir`; throws H5Error if absent.
+  static TaskRecord load_from(const std::filesystem::path& dir, const std::string& key);
   // A small text file beside the records (e.g. the profile the run started with).
   void write_manifest(const std::string& name, const std::string& text);
   std::string read_manifest(const std::string& name) const;  // "" when absent
 
  private:
-  std::filesystem::path file_for(const std::string& key) const;
+  static std::filesystem::path file_for(const std::filesystem::path& dir, const std::string& key);
   std::filesystem::path dir_;
   mutable std::mutex mu_;
   std::map<std::string, std::filesystem::path> index_;
