@@ -1,6 +1,7 @@
 // `sirl dataset`: build an environment's trajectory space, answer every query set with a
 // simulated teacher, and store it all in HDF5. `sirl inspect`: read one back and summarise it.
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -10,6 +11,7 @@
 #include "app/commands.h"
 #include "build_info.h"
 #include "datasets/grid_robot.h"
+#include "datasets/jaco_robot.h"
 #include "results/dataset_store.h"
 #include "results/h5.h"
 
@@ -23,6 +25,9 @@ struct DatasetArgs {
   double beta = std::numeric_limits<double>::infinity(), mistake = 0, skip = 0, equal = 0;
   std::vector<std::string> features;
   std::vector<int> obstacle1{1, 3}, obstacle2{3, 1}, laptop{2, 2};
+  int64_t trajectories = 10000;
+  std::vector<double> jaco_laptop{0.0, -0.8, 0.0}, jaco_human{-0.2, -0.5, 0.6};
+  int threads = 0;
 };
 
 Teacher make_teacher(const DatasetArgs& a, const Dataset& d) {
@@ -49,18 +54,29 @@ Teacher make_teacher(const DatasetArgs& a, const Dataset& d) {
 }
 
 int run_dataset(const DatasetArgs& a) {
-  if (a.env == "jaco")
-    throw UsageError("--env jaco: the JacoRobot environment has not landed yet; use --env grid");
-  GridConfig g;
-  g.obstacle1 = {a.obstacle1[0], a.obstacle1[1]};
-  g.obstacle2 = {a.obstacle2[0], a.obstacle2[1]};
-  g.laptop = {a.laptop[0], a.laptop[1]};
   Dataset d;
+  const auto t0 = std::chrono::steady_clock::now();
   try {
-    d = make_grid_dataset(g);
+    if (a.env == "grid") {
+      GridConfig g;
+      g.obstacle1 = {a.obstacle1[0], a.obstacle1[1]};
+      g.obstacle2 = {a.obstacle2[0], a.obstacle2[1]};
+      g.laptop = {a.laptop[0], a.laptop[1]};
+      d = make_grid_dataset(g);
+    } else {
+      JacoConfig j;
+      j.trajectories = a.trajectories;
+      j.seed = a.seed;
+      j.threads = a.threads;
+      j.with_human = a.env == "jaco";
+      for (int k = 0; k < 3; ++k) j.laptop[k] = a.jaco_laptop[k], j.human[k] = a.jaco_human[k];
+      d = make_jaco_dataset(j);
+    }
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
+  const double build_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   QueryBundleConfig qc;
   qc.similarity = a.similarity;
   qc.preference = a.preference;
@@ -78,10 +94,10 @@ int run_dataset(const DatasetArgs& a) {
   }
   std::filesystem::rename(tmp, a.out);
   std::printf(
-      "wrote %s: /datasets/%s with %lld trajectories x %d inputs, %d features; %lld similarity "
-      "triplets "
-      "(%lld skipped), 3 x %lld preference pairs, %d test rewards x %lld TPA pairs, FPE %zu/%zu\n",
-      a.out.c_str(), d.env.c_str(), (long long)d.count, d.input_dim, d.feature_count(),
+      "wrote %s: /datasets/%s with %lld trajectories x %d inputs (built in %.2f s), %d features; "
+      "%lld similarity triplets (%lld skipped), 3 x %lld preference pairs, %d test rewards x %lld "
+      "TPA pairs, FPE %zu/%zu\n",
+      a.out.c_str(), d.env.c_str(), (long long)d.count, d.input_dim, build_s, d.feature_count(),
       (long long)q.similarity.count, (long long)q.similarity.skipped, (long long)qc.preference,
       q.rewards.test.count, (long long)qc.tpa_pairs, q.fpe.train.size(), q.fpe.test.size());
   return 0;
@@ -116,9 +132,25 @@ void register_dataset(CLI::App& app, Runner& run) {
       "Build an environment's trajectory space and query sets (answered by a simulated "
       "teacher) and write them to HDF5 under /datasets/<env>/");
   cmd->add_option("--env", a.env, "Environment")
-      ->check(CLI::IsMember({"grid", "jaco"}))
+      ->check(CLI::IsMember({"grid", "jaco", "jaco2"}))
       ->capture_default_str();
   cmd->add_option("--out", a.out, "Output HDF5 file (written atomically)")->required();
+  cmd->add_option("--trajectories", a.trajectories,
+                  "JacoRobot: start-goal pairs (one deformed trajectory each)")
+      ->check(CLI::Range(int64_t(10), int64_t(10000000)))
+      ->capture_default_str();
+  cmd->add_option("--jaco-laptop", a.jaco_laptop, "JacoRobot laptop position x,y,z (m, base frame)")
+      ->delimiter(',')
+      ->expected(3)
+      ->capture_default_str();
+  cmd->add_option("--jaco-human", a.jaco_human, "JacoRobot human position x,y,z (m, base frame)")
+      ->delimiter(',')
+      ->expected(3)
+      ->capture_default_str();
+  cmd->add_option("--threads", a.threads,
+                  "Threads for JacoRobot generation (default: all cores; "
+                  "the result does not depend on it)")
+      ->check(CLI::Range(1, 4096));
   cmd->add_option("--seed", a.seed, "Seed of the rewards and query sets")->capture_default_str();
   cmd->add_option("--similarity", a.similarity, "Similarity triplets N")
       ->check(CLI::Range(int64_t(1), int64_t(10000000)))
@@ -173,7 +205,7 @@ void register_inspect(CLI::App& app, Runner& run) {
       "inspect", "Read a dataset file back (checking every shape and type) and summarise it");
   cmd->add_option("file", file, "HDF5 file written by `sirl dataset`")->required();
   cmd->add_option("--env", env, "Environment group to read")
-      ->check(CLI::IsMember({"grid", "jaco"}))
+      ->check(CLI::IsMember({"grid", "jaco", "jaco2"}))
       ->capture_default_str();
   run = [] { return run_inspect(file, env); };
 }

@@ -23,6 +23,11 @@ struct Dataset {
   int object_dim = 0;
   std::string object_units;  // e.g. "cells" or "m"
   uint64_t seed = 0;         // generator seed (0 for an exact enumeration)
+  // Sampled environments keep the configuration-space paths behind the inputs (JacoRobot:
+  // paths [T, path_len, path_dofs] joint angles in rad) and the model they came from.
+  std::vector<float> paths;
+  int path_len = 0, path_dofs = 0;
+  std::string model_text;
 
   int feature_count() const { return int(feature_names.size()); }
   const float* input(int64_t i) const { return inputs.data() + i * input_dim; }

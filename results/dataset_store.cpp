@@ -100,6 +100,14 @@ void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q, const std:
   f.set_attr(g + "/objects", "description",
              "object positions [O," + std::to_string(d.object_dim) + "] in " + d.object_units);
 
+  if (!d.paths.empty()) {
+    f.write(g + "/paths", d.paths.data(), {T, u64(d.path_len), u64(d.path_dofs)});
+    f.set_attr(
+        g + "/paths", "description",
+        "configuration-space paths behind the inputs [T,waypoints,dofs] (joint angles, rad)");
+  }
+  if (!d.model_text.empty()) f.set_attr(g, "model_mjcf", d.model_text);
+
   write_rewards(f, g + "/rewards/test", q.rewards.test);
   write_rewards(f, g + "/rewards/multipref10", q.rewards.multipref10);
   write_rewards(f, g + "/rewards/multipref50", q.rewards.multipref50);
@@ -159,6 +167,12 @@ StoredDataset read_dataset(const H5File& f, const std::string& env) {
   d.object_names = f.attr_strings(g + "/objects", "names");
   d.object_positions = f.read_f32(g + "/objects", {int64_t(d.object_names.size()), -1}, &dims);
   d.object_dim = int(dims[1]);
+  if (f.exists(g + "/paths")) {
+    d.paths = f.read_f32(g + "/paths", {d.count, -1, -1}, &dims);
+    d.path_len = int(dims[1]);
+    d.path_dofs = int(dims[2]);
+    d.model_text = f.attr_string(g, "model_mjcf");
+  }
 
   QueryBundle& q = s.queries;
   q.seed = uint64_t(f.attr_int(g, "query_seed"));
