@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <sstream>
@@ -197,6 +198,34 @@ void register_dataset(CLI::App& app, Runner& run) {
       ->expected(2)
       ->capture_default_str();
   run = [] { return run_dataset(a); };
+}
+
+void register_render(CLI::App& app, Runner& run) {
+  auto* cmd = app.add_subcommand(
+      "render",
+      "Draw a few JacoRobot end-effector paths over the table, laptop and human (PNG), from a\n"
+      "dataset or results file (results/render_jaco.py, Debian's /usr/bin/python3).");
+  static std::string env = "jaco", file, out, ids = "0,1,2,3,4,5";
+  cmd->add_option("--env", env, "Environment group")
+      ->check(CLI::IsMember({"jaco", "jaco2"}))
+      ->capture_default_str();
+  cmd->add_option("file", file, "HDF5 file with /datasets/<env>")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out", out, "PNG to write")->required();
+  cmd->add_option("--ids", ids, "Trajectory rows, comma-separated")->capture_default_str();
+  run = [] {
+    auto q = [](const std::string& s) {
+      std::string r = "'";
+      for (char c : s) r += c == '\'' ? std::string("'\\''") : std::string(1, c);
+      return r + "'";
+    };
+    const std::string cmdline =
+        "/usr/bin/python3 " + q(std::string(SIRL_SOURCE_DIR) + "/results/render_jaco.py") + " " +
+        q(file) + " --out " + q(out) + " --ids " + q(ids) + " --env " + q(env);
+    const int rc = std::system(cmdline.c_str());
+    return rc == 0 ? 0 : 1;
+  };
 }
 
 void register_inspect(CLI::App& app, Runner& run) {

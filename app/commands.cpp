@@ -17,6 +17,7 @@ void register_all(CLI::App& app) {
   register_reproduce(app, runners()["reproduce"]);
   register_dataset(app, runners()["dataset"]);
   register_inspect(app, runners()["inspect"]);
+  register_render(app, runners()["render"]);
   register_plan(app, runners()["plan"]);
   register_run(app, runners()["run"]);
   register_export(app, runners()["export"]);

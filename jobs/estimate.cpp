@@ -5,6 +5,7 @@
 #include <functional>
 
 #include "datasets/grid_robot.h"
+#include "datasets/jaco_robot.h"
 #include "engine/methods.h"
 #include "engine/tpa.h"
 #include "jobs/scheduler.h"
@@ -24,15 +25,20 @@ double seconds_of(const std::function<double()>& f, double* flops) {
 PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
   PlanEstimate e;
   for (const auto& env : p.envs) {
-    const Dataset d = make_grid_dataset();
+    JacoConfig small = p.jaco;
+    small.trajectories = 300;  // enough to time the training code; generation is not timed here
+    small.threads = 0;
+    const Dataset d = env == "jaco" ? make_jaco_dataset(small) : make_grid_dataset();
     QueryBundleConfig qc = p.queries;
     qc.similarity = qc.preference = 200;
+    qc.fpe_trajectories = std::min<int64_t>(qc.fpe_trajectories, d.count);
     const QueryBundle b = make_query_bundle(d, qc, 1);
     Hyper h = p.hyper.at(env);
-    h.sirl.epochs = 20;
-    h.pref.epochs = 10;
+    const bool big = env == "jaco";  // a few steps suffice for GEMM-bound networks
+    h.sirl.epochs = big ? 1 : 20;
+    h.pref.epochs = big ? 1 : 10;
     h.vae.epochs = 1;
-    h.tpa.epochs = 10;
+    h.tpa.epochs = big ? 1 : 10;
     auto rate = [&](const std::string& kind, const std::function<double()>& f) {
       double flops = 0;
       const double s = seconds_of(f, &flops);

@@ -49,8 +49,9 @@ struct EnvSize {
   int input_dim;
   int64_t trajectories;
 };
-EnvSize env_size(const std::string& env) {
+EnvSize env_size(const std::string& env, const Profile& p) {
   if (env == "grid") return {19, 1960};
+  if (env == "jaco") return {p.jaco.waypoints * kJacoStateDim, p.jaco.trajectories};
   throw std::invalid_argument("no cost model for environment " + env);
 }
 
@@ -90,9 +91,10 @@ Plan make_plan(const Profile& p) {
   };
   for (const auto& env : p.envs) {
     const Hyper& h = p.hyper.at(env);
-    const EnvSize es = env_size(env);
+    const EnvSize es = env_size(env, p);
     const MlpShape phi = phi_shape(es.input_dim, h);
-    for (int64_t seed : p.seeds) {
+    const EnvGrid& grid = p.grid.at(env);
+    for (int64_t seed : grid.seeds) {
       const std::string s = env + "/s" + std::to_string(seed);
       auto vae = [&]() {
         Task t;
@@ -154,17 +156,17 @@ Plan make_plan(const Profile& p) {
       };
       (void)s;
       for (const auto& v : p.fpe_methods)
-        for (int64_t N : p.fpe_N) fpe(v, N);
+        for (int64_t N : grid.fpe_N) fpe(v, N);
       for (const auto& v : p.tpa.methods)
-        for (int64_t N : p.tpa.N)
-          for (int64_t M : p.tpa.M)
+        for (int64_t N : grid.tpa_N)
+          for (int64_t M : grid.tpa_M)
             for (bool fr : frozen_settings(p.tpa, v)) tpa(v, N, M, fr);
       for (Method m : p.ablation_methods)
         for (bool with_vae : {false, true}) {
           if (with_vae && !accepts_vae_pretrain(m)) continue;
           const Variant v{m, with_vae};
-          for (int64_t N : p.ablation_N)
-            for (int64_t M : p.ablation_M)
+          for (int64_t N : grid.ablation_N)
+            for (int64_t M : grid.ablation_M)
               for (bool fr : {true, false}) tpa(v, N, M, fr);
         }
     }

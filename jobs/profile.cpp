@@ -209,18 +209,28 @@ Profile parse_profile(const std::string& text, const std::string& path) {
   Reader r(root, path);
   r.only_keys(root, "the profile",
               {"name", "description", "envs", "seeds", "queries", "teacher", "fpe", "tpa",
-               "ablation", "hyper"});
+               "ablation", "hyper", "jaco", "grid"});
   Profile p;
   p.path = path;
   p.text = text;
   p.name = r.string(root, "name", "", true);
   p.description = r.string(root, "description", "");
   p.envs = r.string_list(root, "envs", true);
-  for (const auto& e : p.envs) {
-    if (e == "jaco")
-      r.fail(root.get("envs"), "JacoRobot is not available yet (issue #4); use envs = [\"grid\"]");
-    if (e != "grid") r.fail(root.get("envs"), "unknown environment '" + e + "' (expected grid)");
+  for (const auto& e : p.envs)
+    if (e != "grid" && e != "jaco")
+      r.fail(root.get("envs"), "unknown environment '" + e + "' (expected grid or jaco)");
+  const std::set<std::string> axis_keys{"seeds", "fpe_N",      "tpa_N",
+                                        "tpa_M", "ablation_N", "ablation_M"};
+  if (const auto* g = r.table(root, "grid", false)) r.only_keys(*g, "[grid]", axis_keys);
+  if (const auto* j = r.table(root, "jaco", false)) {
+    std::set<std::string> keys = axis_keys;
+    keys.insert({"trajectories", "data_seed", "max_deformation"});
+    r.only_keys(*j, "[jaco]", keys);
+    p.jaco.trajectories = r.integer(*j, "trajectories", 10000, 100, 10'000'000);
+    p.jaco.seed = uint64_t(r.integer(*j, "data_seed", 0, 0, 1'000'000'000));
+    p.jaco.max_deformation = r.number(*j, "max_deformation", 0.5, 0, 3.14159);
   }
+  p.jaco.threads = 1;  // generated inside one task; the data never depends on it
   p.seeds = r.int_list(root, "seeds", 0, 1'000'000'000, true);
 
   if (const auto* q = r.table(root, "queries", false)) {
@@ -277,6 +287,21 @@ Profile parse_profile(const std::string& text, const std::string& path) {
     p.ablation_M = r.int_list(*ab, "M", 1, 10'000'000, true);
   }
 
+  for (const auto& env : p.envs) {
+    EnvGrid g{p.seeds, p.fpe_N, p.tpa.N, p.tpa.M, p.ablation_N, p.ablation_M};
+    if (const auto* t = r.table(root, env.c_str(), false)) {
+      auto axis = [&](const char* key, std::vector<int64_t>& out, int64_t lo, int64_t hi) {
+        if (t->get(key)) out = r.int_list(*t, key, lo, hi, true);
+      };
+      axis("seeds", g.seeds, 0, 1'000'000'000);
+      axis("fpe_N", g.fpe_N, 1, 10'000'000);
+      axis("tpa_N", g.tpa_N, 1, 10'000'000);
+      axis("tpa_M", g.tpa_M, 1, 10'000'000);
+      axis("ablation_N", g.ablation_N, 1, 10'000'000);
+      axis("ablation_M", g.ablation_M, 1, 10'000'000);
+    }
+    p.grid[env] = g;
+  }
   for (const auto& env : p.envs) p.hyper[env] = paper_hyper(env);
   if (const auto* hy = r.table(root, "hyper", false)) {
     std::set<std::string> allowed{"all"};
@@ -325,19 +350,21 @@ Profile parse_profile(const std::string& text, const std::string& path) {
       if (v.method == Method::multipref50) return true;
     return false;
   };
-  check_n(p.fpe_N, "fpe", has_mp50(p.fpe_methods));
-  check_n(p.tpa.N, "tpa", has_mp50(p.tpa.methods));
-  check_n(p.ablation_N, "ablation",
-          std::find(p.ablation_methods.begin(), p.ablation_methods.end(), Method::multipref50) !=
-              p.ablation_methods.end());
   const int64_t tpa_train = std::llround(0.8 * double(p.queries.tpa_pairs));
-  for (const auto* Ms : {&p.tpa.M, &p.ablation_M})
-    for (int64_t M : *Ms)
-      if (M > tpa_train)
-        r.fail(root.get(Ms == &p.tpa.M ? "tpa" : "ablation"),
-               "M = " + std::to_string(M) + " exceeds the " + std::to_string(tpa_train) +
-                   " training pairs per test reward (80 % of [queries] tpa_pairs = " +
-                   std::to_string(p.queries.tpa_pairs) + ")");
+  for (const auto& [env, g] : p.grid) {
+    check_n(g.fpe_N, "fpe", has_mp50(p.fpe_methods));
+    check_n(g.tpa_N, "tpa", has_mp50(p.tpa.methods));
+    check_n(g.ablation_N, "ablation",
+            std::find(p.ablation_methods.begin(), p.ablation_methods.end(), Method::multipref50) !=
+                p.ablation_methods.end());
+    for (const auto* Ms : {&g.tpa_M, &g.ablation_M})
+      for (int64_t M : *Ms)
+        if (M > tpa_train)
+          r.fail(root.get(Ms == &g.tpa_M ? "tpa" : "ablation"),
+                 "M = " + std::to_string(M) + " exceeds the " + std::to_string(tpa_train) +
+                     " training pairs per test reward (80 % of [queries] tpa_pairs = " +
+                     std::to_string(p.queries.tpa_pairs) + ")");
+  }
   return p;
 }
 

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "datasets/jaco_robot.h"
 #include "datasets/query_bundle.h"
 #include "engine/hyperparams.h"
 #include "engine/representation.h"
@@ -37,6 +38,12 @@ struct TpaGrid {
   std::vector<bool> frozen;  // empty = "best"
 };
 
+// The numeric axes of the grid for one environment (a profile may scale an expensive
+// environment down: e.g. JacoRobot with fewer seeds or M points in `quick`).
+struct EnvGrid {
+  std::vector<int64_t> seeds, fpe_N, tpa_N, tpa_M, ablation_N, ablation_M;
+};
+
 struct Profile {
   std::string path, text;  // where it came from, and its exact text (recorded in results)
   std::string name, description;
@@ -50,6 +57,9 @@ struct Profile {
   std::vector<Method> ablation_methods;
   std::vector<int64_t> ablation_N, ablation_M;
   std::map<std::string, Hyper> hyper;  // per env: the paper's values with this profile's overrides
+  JacoConfig jaco;                     // [jaco]: trajectories, data_seed (JacoRobot's Ξ)
+  // Per env: the top-level seeds/N/M unless its [grid] or [jaco] table overrides them.
+  std::map<std::string, EnvGrid> grid;
 };
 
 Profile parse_profile(const std::string& text, const std::string& path = "<profile>");

@@ -244,7 +244,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   info.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::vector<RunDataset> datasets;
   for (const auto& env : p.envs)
-    datasets.push_back({&ctx.dataset(env), &ctx.bundle(env, p.seeds.front())});
+    datasets.push_back({&ctx.dataset(env), &ctx.bundle(env, p.grid.at(env).seeds.front())});
   write_results_file(o.out, info, datasets, records);
   if (failure) std::rethrow_exception(failure);
   fs::remove_all(staging);  // everything is in the results file now

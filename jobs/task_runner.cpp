@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "datasets/grid_robot.h"
+#include "datasets/jaco_robot.h"
 #include "engine/fpe.h"
 #include "engine/methods.h"
 #include "engine/tpa.h"
@@ -27,8 +28,13 @@ std::once_flag& RunContext::once(const std::string& key) {
 
 const Dataset& RunContext::dataset(const std::string& env) {
   std::call_once(once("dataset/" + env), [&] {
-    if (env != "grid") throw std::invalid_argument("environment " + env + " is not available");
-    auto d = std::make_shared<const Dataset>(make_grid_dataset());
+    std::shared_ptr<const Dataset> d;
+    if (env == "grid")
+      d = std::make_shared<const Dataset>(make_grid_dataset());
+    else if (env == "jaco")
+      d = std::make_shared<const Dataset>(make_jaco_dataset(profile_.jaco));
+    else
+      throw std::invalid_argument("environment " + env + " is not available");
     std::lock_guard lock(mu_);
     datasets_[env] = std::move(d);
   });

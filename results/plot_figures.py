@@ -75,7 +75,8 @@ def main_tpa(tpa):
 
 
 def plot_fig4(fpe, envs, out, notes):
-    fig, axes = plt.subplots(1, len(envs), figsize=(5.2 * len(envs), 3.8), squeeze=False)
+    fig, axes = plt.subplots(1, len(envs), figsize=(5.2 * len(envs), 3.8), squeeze=False,
+                             constrained_layout=True)
     for ax, env in zip(axes[0], envs):
         d = fpe[fpe.env == env]
         Ns = sorted(n for n in d.N.unique() if n > 0)
@@ -118,7 +119,7 @@ def plot_fig5(tpa, envs, out, notes):
     if not Ns:
         Ns = [0]
     fig, axes = plt.subplots(len(envs), len(Ns), figsize=(4.2 * len(Ns), 3.4 * len(envs)),
-                             squeeze=False, sharey=True)
+                             squeeze=False, sharey=True, constrained_layout=True)
     for r, env in enumerate(envs):
         for c, n in enumerate(Ns):
             ax = axes[r][c]
@@ -140,13 +141,14 @@ def plot_fig5(tpa, envs, out, notes):
                 ax.fill_between(np.array(Ms)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour,
                                 alpha=0.15)
             ax.set_title(f"{ENV_TITLE.get(env, env)}, N = {n}")
+            ax.set_ylim(0.35, 1.0)
             ax.set_xlabel("preference queries per test reward M")
             if c == 0:
                 ax.set_ylabel("TPA (held-out accuracy)")
             ax.grid(alpha=0.3)
     axes[0][-1].legend(fontsize=8, loc="lower right")
     fig.suptitle("Fig. 5: test preference accuracy (SIRL frozen, others unfrozen; mean ± 95 % CI)",
-                 fontsize=11, y=1.02)
+                 fontsize=11)
     save(fig, out, "fig5_tpa")
 
 
@@ -165,7 +167,8 @@ def ablation_cells(tpa, f):
 
 def plot_fig7(tpa, envs, f, out, notes):
     Nab, Mab = ablation_cells(tpa, f)
-    fig, axes = plt.subplots(1, len(envs), figsize=(7 * len(envs), 3.8), squeeze=False)
+    fig, axes = plt.subplots(1, len(envs), figsize=(7 * len(envs), 3.8), squeeze=False,
+                             constrained_layout=True)
     bases = [b for b in ["sirl", "vae", "multipref10", "multipref50", "singlepref", "random"]
              if b in set(tpa.method)]
     configs = [(1, 0, "frozen"), (0, 0, "unfrozen"), (1, 1, "frozen + VAE"), (0, 1, "unfrozen + VAE")]
