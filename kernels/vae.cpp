@@ -1,8 +1,19 @@
 #include "kernels/vae.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace sirl {
+
+namespace {
+// log σ² is clamped to [−30, 20] before use: σ = exp(½ log σ²) overflows float (and the loss
+// turns NaN) when a large learning rate meets large inputs (JacoRobot's raw 2037-d states at the
+// paper's lr 0.01). Inside the range the loss and gradient are exactly the textbook ones.
+template <typename T>
+T clamp_logvar(T lv) {
+  return std::min(std::max(lv, T(-30)), T(20));
+}
+}  // namespace
 
 VaeShape make_vae_shape(int in, const std::vector<int>& hidden, int latent) {
   VaeShape s;
@@ -31,7 +42,7 @@ T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const
   ws.z.resize(size_t(B) * d);
   for (int i = 0; i < B; ++i)
     for (int k = 0; k < d; ++k) {
-      const T mu = h[size_t(i) * 2 * d + k], lv = h[size_t(i) * 2 * d + d + k];
+      const T mu = h[size_t(i) * 2 * d + k], lv = clamp_logvar(h[size_t(i) * 2 * d + d + k]);
       ws.z[size_t(i) * d + k] = mu + std::exp(T(0.5) * lv) * eps[size_t(i) * d + k];
     }
   // Decode: x̂ [B, in].
@@ -54,13 +65,15 @@ T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const
   for (int i = 0; i < B; ++i)
     for (int k = 0; k < d; ++k) {
       const size_t im = size_t(i) * 2 * d + k, il = im + d, iz = size_t(i) * d + k;
-      const T mu = h[im], lv = h[il], sd = std::exp(T(0.5) * lv);
+      const T mu = h[im], lv = clamp_logvar(h[il]), sd = std::exp(T(0.5) * lv);
       kl += T(-0.5) * (1 + lv - mu * mu - sd * sd);
       if (!dparams) continue;
       // through z = μ + σ·ε, plus the KL term's own gradient
       ws.d_enc_out[im] = ws.d_z[iz] + kl_weight * mu * inv_b;
       ws.d_enc_out[il] =
-          ws.d_z[iz] * eps[iz] * T(0.5) * sd + kl_weight * T(0.5) * (sd * sd - 1) * inv_b;
+          lv == h[il]  // clamped: no gradient, as torch.clamp
+              ? ws.d_z[iz] * eps[iz] * T(0.5) * sd + kl_weight * T(0.5) * (sd * sd - 1) * inv_b
+              : T(0);
     }
   kl *= inv_b;
   if (dparams)

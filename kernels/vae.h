@@ -31,7 +31,8 @@ struct VaeWorkspace {
 };
 
 // params = [encoder params | decoder params]; x [B, in]; eps [B, latent] standard-normal noise
-// (drawn by the caller so the step is a pure function). z = μ + exp(½ log σ²)·eps.
+// (drawn by the caller so the step is a pure function). z = μ + exp(½ log σ²)·eps, with log σ²
+// clamped to [−30, 20] (zero gradient outside, as torch.clamp) so σ cannot overflow.
 //   L = (1/(B·in)) Σ (x̂ − x)²  +  λ · (1/B) Σ_i −½ Σ_k (1 + log σ² − μ² − σ²)
 // Adds ∂L/∂params into dparams (zero it first). Returns L.
 template <typename T>
