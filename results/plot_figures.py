@@ -105,6 +105,7 @@ def plot_fig4(fpe, envs, out, notes):
             ok = np.isfinite(cis)
             ax.fill_between(np.array(xs)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour, alpha=0.15)
         ax.set_title(ENV_TITLE.get(env, env))
+        ax.set_ylim(bottom=0)  # an MSE: CI bands of few seeds may dip below 0
         ax.set_xlabel("representation queries N")
         ax.set_ylabel("FPE (test MSE, normalised features)")
         ax.grid(alpha=0.3)
@@ -323,6 +324,10 @@ def report(f, t, envs, out, notes, fig3_key):
               "| kind | tasks | seconds | GFLOP | GFLOP/s |", "|---|---:|---:|---:|---:|"]
         for k, r in by.iterrows():
             L.append(f"| {k} | {int(r.tasks)} | {r.seconds:.1f} | {r.gflop:.1f} | {r['GFLOP/s']:.1f} |")
+    prof = a.get("profile_text", "")
+    if prof:
+        L += ["", "## Configuration (the profile this file was run with)", "", "```toml",
+              prof.strip(), "```"]
     L += ["", "## Figures", ""]
     for name, cap in [("fig3_grid_similar", "Fig. 3"), ("fig4_fpe", "Fig. 4"),
                       ("fig5_tpa", "Fig. 5"), ("fig7_ablation", "Fig. 7")]:
@@ -398,8 +403,14 @@ def report(f, t, envs, out, notes, fig3_key):
     with open(os.path.join(out, "report.md"), "w") as fh:
         fh.write(text)
     body = []
+    in_code = False
     for line in L:
-        if line.startswith("!["):
+        if line.startswith("```"):
+            body.append("</pre>" if in_code else "<pre>")
+            in_code = not in_code
+        elif in_code:
+            body.append(html.escape(line))
+        elif line.startswith("!["):
             src = line.split("(")[1].rstrip(")")
             body.append(f'<p><img src="{html.escape(src)}" style="max-width:100%"></p>')
         elif line.startswith("#"):
