@@ -3,9 +3,11 @@
 //   sirl_bench_kernels --benchmark_format=json > kernels.json
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <vector>
 
 #include "engine/train_step.h"
+#include "kernels/vae.h"
 #include "kernels/rng.h"
 
 namespace {
@@ -75,6 +77,65 @@ BENCHMARK(BM_TpaHeadsStep)
     ->ArgNames({"hidden", "threads"})
     ->Args({128, 1})
     ->Args({128, 2})
+    ->Args({1024, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// φ forward + backward alone (no loss, no optimizer) on `batch` rows, one thread.
+// Args: {input width, hidden width, batch}.
+void BM_MlpForwardBackward(benchmark::State& state) {
+  const int in = int(state.range(0)), hidden = int(state.range(1)), B = int(state.range(2));
+  MlpShape s{{in, hidden, hidden, 6}};
+  Rng rng(3);
+  auto X = random_inputs(B, in, rng);
+  auto p = init_params(s, 1, rng);
+  auto dout = random_inputs(B, 6, rng);
+  std::vector<float> g(p.size());
+  MlpTape<float> tape;
+  for (auto _ : state) {
+    mlp_forward(s, p.data(), X.data(), B, tape);
+    mlp_backward(s, p.data(), tape, dout.data(), g.data(), static_cast<float*>(nullptr));
+    benchmark::DoNotOptimize(g.data());
+  }
+  state.counters["GFLOP/s"] = benchmark::Counter(3 * s.forward_flops(B) * 1e-9,
+                                                 benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_MlpForwardBackward)
+    ->ArgNames({"in", "hidden", "batch"})
+    ->Args({19, 128, 64})
+    ->Args({19, 128, 192})
+    ->Args({2037, 1024, 64})
+    ->Args({2037, 1024, 192})
+    ->UseRealTime();
+
+// One VAE step (ELBO forward + backward + Adam), the paper's batch of 32, one thread.
+// Args: {input width, hidden width}.
+void BM_VaeStep(benchmark::State& state) {
+  const int in = int(state.range(0)), hidden = int(state.range(1)), B = 32, L = 6;
+  const VaeShape s = make_vae_shape(in, {hidden, hidden}, L);
+  Rng rng(4);
+  auto X = random_inputs(B, in, rng);
+  auto eps = random_inputs(B, L, rng);
+  std::vector<float> p(s.param_count()), g(s.param_count());
+  mlp_init(s.encoder, p.data(), rng);
+  mlp_init(s.decoder, p.data() + s.encoder.param_count(), rng);
+  AdamConfig cfg{0.01, 0.99999};
+  AdamState adam(p.size());
+  VaeWorkspace<float> ws;
+  for (auto _ : state) {
+    std::fill(g.begin(), g.end(), 0.f);
+    benchmark::DoNotOptimize(
+        vae_loss_and_grad(s, p.data(), X.data(), B, eps.data(), 0.01f, g.data(), ws));
+    adam_step(cfg, adam, p.data(), g.data(), p.size());
+  }
+  const double flops = 3 * (s.encoder.forward_flops(B) + s.decoder.forward_flops(B));
+  state.counters["GFLOP/s"] =
+      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_VaeStep)
+    ->ArgNames({"in", "hidden"})
+    ->Args({19, 128})
+    ->Args({2037, 1024})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -65,6 +65,59 @@ def tpa_heads_case(hidden, M=20, B=64, T=1000):
     return step, flops(widths, 2 * B) * M
 
 
+def sirl_run_case(widths, N, epochs, T, B=64):
+    """A whole SIRL training run as people write it: shuffled mini-batches, Adam + ExponentialLR."""
+    x = torch.randn(T, widths[0])
+    trip = torch.randint(0, T, (N, 3))
+
+    def run():
+        net = mlp(widths)
+        opt = torch.optim.Adam(net.parameters(), lr=0.004)
+        sched = torch.optim.lr_scheduler.ExponentialLR(opt, gamma=0.99999)
+        for _ in range(epochs):
+            perm = torch.randperm(N)
+            for i in range(0, N, B):
+                t = trip[perm[i:i + B]]
+                e1, e2, en = net(x[t[:, 0]]), net(x[t[:, 1]]), net(x[t[:, 2]])
+                d12 = ((e1 - e2) ** 2).sum(1)
+                loss = (torch.relu(d12 - ((e1 - en) ** 2).sum(1) + 1)
+                        + torch.relu(d12 - ((e2 - en) ** 2).sum(1) + 1)).mean()
+                opt.zero_grad()
+                loss.backward()
+                opt.step()
+                sched.step()
+    return run, flops(widths, 3 * N * epochs)
+
+
+def tpa_cell_case(phi_widths, hidden, epochs, T, M=100, R=20, B=64, l2=10.0):
+    """One TPA cell as people write it: φ frozen (embeddings under no_grad), then for each of R
+    test rewards its own head and optimizer, trained on M pairs, shuffled mini-batches."""
+    x = torch.randn(T, phi_widths[0])
+    phi = mlp(phi_widths)
+    pairs = torch.randint(0, T, (R, M, 2))
+    labels = torch.randint(0, 2, (R, M)).float()
+    widths = [phi_widths[-1], hidden, hidden, 1]
+
+    def run():
+        with torch.no_grad():
+            emb = phi(x)
+        for r in range(R):
+            head = mlp(widths)
+            opt = torch.optim.Adam(head.parameters(), lr=0.001)
+            for _ in range(epochs):
+                perm = torch.randperm(M)
+                for i in range(0, M, B):
+                    idx = perm[i:i + B]
+                    ra = head(emb[pairs[r, idx, 0]]).squeeze(1)
+                    rb = head(emb[pairs[r, idx, 1]]).squeeze(1)
+                    loss = (torch.nn.functional.binary_cross_entropy_with_logits(ra - rb, labels[r, idx])
+                            + l2 * (ra ** 2 + rb ** 2).mean())
+                    opt.zero_grad()
+                    loss.backward()
+                    opt.step()
+    return run, flops(widths, 2 * M * epochs) * R
+
+
 def time_case(step, min_time=1.0, repeats=5):
     for _ in range(3):
         step()
@@ -78,11 +131,23 @@ def time_case(step, min_time=1.0, repeats=5):
     return statistics.median(samples)
 
 
+def time_run(run, repeats):
+    run()  # warm-up
+    return statistics.median(_timed(run) for _ in range(repeats))
+
+
+def _timed(f):
+    t0 = time.perf_counter()
+    f()
+    return time.perf_counter() - t0
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--min-time", type=float, default=2.0, help="seconds per case")
+    ap.add_argument("--runs", action="store_true", help="also time whole training runs and TPA cells")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     torch.manual_seed(0)
@@ -91,9 +156,17 @@ def main():
         "sirl_step_jaco": sirl_step_case([2037, 1024, 1024, 6]),
         "tpa_heads_grid": tpa_heads_case(128),
     }
+    if args.runs:  # the same units as bench_pipeline.cpp
+        cases.update({
+            "sirl_run_grid": sirl_run_case([19, 128, 128, 6], N=1000, epochs=10, T=1960),
+            "sirl_run_jaco": sirl_run_case([2037, 1024, 1024, 6], N=200, epochs=2, T=2000),
+            "tpa_cell_grid": tpa_cell_case([19, 128, 128, 6], 128, epochs=20, T=1960),
+            "tpa_cell_jaco": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=2, T=2000, l2=1.0),
+        })
     out = {"torch": torch.__version__, "threads": args.threads}
     for name, (step, fl) in cases.items():
-        s = time_case(step, args.min_time, args.repeats)
+        s = time_case(step, args.min_time, args.repeats) if not name.startswith(("sirl_run", "tpa_cell")) \
+            else time_run(step, args.repeats)
         out[name] = {"ms": s * 1e3, "gflops": fl / s * 1e-9, "steps_per_s": 1 / s}
     print(json.dumps(out))
 

@@ -1,0 +1,95 @@
+// Whole units of work, the same ones bench/torch_reference.py does in PyTorch: a SIRL training
+// run (N triplets, E epochs) and a TPA cell (20 reward heads, M pairs, E epochs, frozen φ), at
+// Grid and Jaco sizes; and the latency of committing one task's results to HDF5.
+#include <benchmark/benchmark.h>
+
+#include <filesystem>
+
+#include "datasets/grid_robot.h"
+#include "datasets/jaco_robot.h"
+#include "datasets/query_bundle.h"
+#include "engine/methods.h"
+#include "engine/tpa.h"
+#include "results/task_store.h"
+
+namespace {
+using namespace sirl;
+
+struct World {
+  Dataset d;
+  QueryBundle b;
+};
+const World& world(bool jaco) {
+  static World grid, jac;
+  World& w = jaco ? jac : grid;
+  if (w.d.count == 0) {
+    if (jaco) {
+      JacoConfig c;
+      c.trajectories = 2000;
+      w.d = make_jaco_dataset(c);
+    } else {
+      w.d = make_grid_dataset();
+    }
+    QueryBundleConfig qc;
+    w.b = make_query_bundle(w.d, qc, 1);
+  }
+  return w;
+}
+
+// Grid: N = 1000 triplets × 10 epochs (160 steps). Jaco: N = 200 × 2 epochs (8 steps).
+void BM_SirlTrainingRun(benchmark::State& state) {
+  const bool jaco = state.range(0) == 1;
+  const World& w = world(jaco);
+  Hyper h = paper_hyper(jaco ? "jaco" : "grid");
+  h.sirl.epochs = jaco ? 2 : 10;
+  const MethodConfig c{Method::sirl, jaco ? 200 : 1000, false, h, 1};
+  double flops = 0;
+  for (auto _ : state) flops = train_representation(w.d, w.b, c, 7).train_flops;
+  state.counters["GFLOP/s"] =
+      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_SirlTrainingRun)->ArgName("jaco")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// 20 heads, M = 100 pairs each, frozen φ. Grid: 20 epochs. Jaco: 2 epochs.
+void BM_TpaCell(benchmark::State& state) {
+  const bool jaco = state.range(0) == 1;
+  const World& w = world(jaco);
+  Hyper h = paper_hyper(jaco ? "jaco" : "grid");
+  h.tpa.epochs = jaco ? 2 : 20;
+  Representation phi;
+  phi.shape = phi_shape(w.d.input_dim, h);
+  phi.params.resize(phi.shape.param_count());
+  Rng rng(3);
+  mlp_init(phi.shape, phi.params.data(), rng);
+  double flops = 0;
+  for (auto _ : state) flops = evaluate_tpa(phi, w.d, w.b.tpa, TpaConfig{100, true, h, 1}, 5).train_flops;
+  state.counters["GFLOP/s"] =
+      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_TpaCell)->ArgName("jaco")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Committing one representation's record (weights + loss curve): Grid φ (18k floats) and
+// Jaco φ (3.1 M floats), atomically (temporary file, fsync, rename).
+void BM_TaskCommit(benchmark::State& state) {
+  const bool jaco = state.range(0) == 1;
+  const auto dir = std::filesystem::temp_directory_path() / "sirl_bench_commit";
+  std::filesystem::remove_all(dir);
+  TaskStore store(dir);
+  TaskRecord r;
+  r.key = "bench/rep";
+  r.kind = "rep";
+  const MlpShape s = phi_shape(jaco ? 2037 : 19, paper_hyper(jaco ? "jaco" : "grid"));
+  r.arrays["params"] = {{s.param_count()}, std::vector<float>(s.param_count(), 0.5f)};
+  r.arrays["loss_curve"] = {{3000}, std::vector<float>(3000, 1.f)};
+  r.num["seconds"] = 1;
+  for (auto _ : state) store.commit(r);
+  state.counters["commits/s"] = benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["MB/s"] = benchmark::Counter(4e-6 * double(s.param_count()),
+                                              benchmark::Counter::kIsIterationInvariantRate);
+  std::filesystem::remove_all(dir);
+}
+BENCHMARK(BM_TaskCommit)->ArgName("jaco")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,63 @@
+#!/usr/bin/python3
+"""bench/nightly catches regressions (ctest): a quick night as the baseline; an unchanged rerun
+passes; a copy of the baseline with an injected slowdown and a changed metric fails, naming both."""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+SRC = os.environ["SIRL_SOURCE_DIR"]
+BUILD = os.environ["SIRL_BUILD_DIR"]
+NIGHTLY = os.path.join(SRC, "bench", "nightly")
+
+
+def nightly(*args):
+    return subprocess.run(["/usr/bin/python3", NIGHTLY, *args], capture_output=True, text=True,
+                          stdin=subprocess.DEVNULL)
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    a, b = os.path.join(tmp, "a"), os.path.join(tmp, "b")
+    p = nightly("--quick", "--out", a, "--date", "base", "--repetitions", "3", "--build", BUILD)
+    if p.returncode != 0:
+        sys.exit(f"FAIL: baseline night exited {p.returncode}\n{p.stdout}\n{p.stderr}")
+    base_json = os.path.join(a, "nightly-base.json")
+    night = json.load(open(base_json))
+    assert night["micro"] and night["pipeline"]["smoke"]["digests"], night
+    print("ok: a quick night writes", base_json)
+
+    # An unchanged rerun passes (a wide speed floor: ctest runs other work beside it).
+    p = nightly("--quick", "--out", b, "--date", "rerun", "--repetitions", "3", "--build", BUILD,
+                "--baseline", a, "--speed-floor", "0.6")
+    if p.returncode != 0:
+        sys.exit(f"FAIL: an unchanged rerun was flagged (exit {p.returncode})\n{p.stdout}\n{p.stderr}")
+    assert "No regression" in p.stdout and "identical" in p.stdout, p.stdout
+    print("ok: an unchanged rerun passes")
+
+    # Inject a 3x slowdown and a drifted metric into a copy of the baseline.
+    bad = json.loads(json.dumps(night))
+    slow = sorted(bad["micro"])[0]
+    bad["micro"][slow]["seconds"] *= 3
+    metric = sorted(bad["pipeline"]["smoke"]["metrics"])[0]
+    bad["pipeline"]["smoke"]["metrics"][metric] += 0.1
+    bad_json = os.path.join(tmp, "bad.json")
+    json.dump(bad, open(bad_json, "w"))
+    p = nightly("compare", base_json, bad_json)
+    assert p.returncode == 1, f"expected exit 1, got {p.returncode}\n{p.stdout}"
+    line = [l for l in p.stdout.splitlines() if l.startswith(f"| {slow} |")]
+    assert line and "SLOWER" in line[0] and "+200.0%" in line[0], p.stdout
+    assert "metrics drifted" in p.stdout and metric in p.stdout, p.stdout
+    assert "REGRESSION: 2 finding(s)" in p.stdout, p.stdout
+    print(f"ok: injected slowdown ({slow}) and drift ({metric}) both caught, exit 1")
+
+    # A changed deterministic table is caught too; bad input is a usage error.
+    bad2 = json.loads(json.dumps(night))
+    bad2["pipeline"]["smoke"]["digests"]["tpa"] = "0" * 16
+    json.dump(bad2, open(bad_json, "w"))
+    p = nightly("compare", base_json, bad_json)
+    assert p.returncode == 1 and "/tables/tpa changed" in p.stdout, p.stdout
+    p = nightly("compare", base_json, os.path.join(tmp, "missing.json"))
+    assert p.returncode == 2 and "cannot read" in p.stderr, p.stderr
+    print("ok: changed table caught; a missing file is a usage error (exit 2)")
+print("PASS")
