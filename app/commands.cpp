@@ -18,6 +18,7 @@ void register_all(CLI::App& app) {
   register_dataset(app, runners()["dataset"]);
   register_inspect(app, runners()["inspect"]);
   register_render(app, runners()["render"]);
+  register_study(app, runners()["study"]);
   register_plan(app, runners()["plan"]);
   register_run(app, runners()["run"]);
   register_export(app, runners()["export"]);

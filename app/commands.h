@@ -23,6 +23,7 @@ void register_reproduce(CLI::App& app, Runner& run);
 void register_dataset(CLI::App& app, Runner& run);
 void register_inspect(CLI::App& app, Runner& run);
 void register_render(CLI::App& app, Runner& run);
+void register_study(CLI::App& app, Runner& run);
 void register_run(CLI::App& app, Runner& run);
 void register_plan(CLI::App& app, Runner& run);
 void register_export(CLI::App& app, Runner& run);

@@ -47,7 +47,9 @@ void write_any(hid_t file, const std::string& path, const std::string& name, hid
   Hid lcpl(lcpl_intermediate(), H5Pclose);
   Hid ds(H5Dcreate2(file, name.c_str(), type, space, lcpl, H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
   if (ds < 0) fail(path, "cannot create dataset " + name);
-  if (H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
+  size_t total = 1;
+  for (auto x : d) total *= size_t(x);
+  if (total > 0 && H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
     fail(path, "cannot write dataset " + name);
 }
 

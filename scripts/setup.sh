@@ -16,6 +16,8 @@ packages=(
   # plots and the PyTorch reference (Debian's /usr/bin/python3 only)
   python3 python3-h5py python3-matplotlib python3-numpy python3-pandas python3-scipy python3-torch
   libopenblas0-pthread
+  # the user study: web server, browser-side packages from npm, the browser for its e2e test
+  libcpp-httplib-dev nodejs chromium
 )
 
 missing=()
@@ -25,8 +27,27 @@ for p in "${packages[@]}"; do
   fi
 done
 
+# three.js (the study page's 3-D views) and playwright-core (its browser test) from the npm
+# registry, pinned by app/study_web/package-lock.json; reinstalled only when the lock changes.
+npm_install() {
+  local web
+  web="$(cd "$(dirname "$0")/.." && pwd)/app/study_web"
+  if [ ! -f "$web/node_modules/.package-lock.json" ] ||
+     ! cmp -s "$web/package-lock.json" "$web/node_modules/.sirl-lock"; then
+    echo "setup: npm ci in app/study_web"
+    (cd "$web" && npm ci --no-audit --no-fund --loglevel=error && cp package-lock.json node_modules/.sirl-lock)
+  fi
+}
+
+# Debian's nodejs needs the separate npm package; NodeSource's nodejs bundles npm and conflicts
+# with it. Ask for the package only when no npm command exists.
+if ! command -v npm >/dev/null 2>&1 && [[ ! " ${missing[*]} " =~ " npm " ]]; then
+  missing+=(npm)
+fi
+
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#packages[@]} packages present"
+  npm_install
   exit 0
 fi
 
@@ -39,4 +60,5 @@ fi
 export DEBIAN_FRONTEND=noninteractive
 $sudo apt-get update -qq
 $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+npm_install
 echo "setup: done"

@@ -1,0 +1,239 @@
+// `sirl study simulate | analyze | import | serve`: the user study (paper §5).
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+
+#include "app/commands.h"
+#include "app/study_server.h"
+#include "datasets/study.h"
+#include "engine/study_analysis.h"
+#include "results/h5.h"
+#include "results/study_store.h"
+
+namespace sirl::app {
+
+namespace {
+
+std::string sh_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// A scenario sentence for a reward over the features ("more table, less laptop").
+std::string scenario_text(const Dataset& d, const std::vector<float>& w,
+                          std::vector<std::string>* involved) {
+  std::string s = "You want the robot to have";
+  bool first = true;
+  for (int k = 0; k < d.feature_count(); ++k) {
+    if (std::abs(w[k]) < 1e-6f) continue;
+    involved->push_back(d.feature_names[k]);
+    s += std::string(first ? " " : " and ") + (w[k] > 0 ? "more " : "less ") + d.feature_names[k];
+    first = false;
+  }
+  return s + ".";
+}
+
+}  // namespace
+
+int study_simulate(const std::string& env, int64_t trajectories, int users, int64_t n_sim,
+                   int64_t n_pref, double beta, double mistake, uint64_t seed,
+                   const std::string& out) {
+  Study s;
+  s.env = env;
+  s.trajectories = trajectories;
+  s.data_seed = seed;
+  Dataset d;
+  try {
+    d = study_dataset(s);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  Teacher t;
+  t.beta = beta;
+  t.mistake = mistake;
+  try {
+    validate(t, d.feature_count());
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  Rng rng(seed_from_key("study_simulate", seed));
+  for (int u = 0; u < users; ++u) {
+    char id[32];
+    std::snprintf(id, sizeof id, "sim%02d", u + 1);
+    StudyParticipant p = plan_participant(d, id, n_sim, n_pref, seed);
+    // 3 in 5 simulated users care about every feature, the others about one (as in the paper,
+    // where 6 of 10 participants had preferences pertaining to both features).
+    p.reward.assign(d.feature_count(), 0.f);
+    const bool both = u % 5 < 3;
+    const int only = int(rng.uniform_int(uint64_t(d.feature_count())));
+    double norm = 0;
+    for (int k = 0; k < d.feature_count(); ++k) {
+      if (!both && k != only) continue;
+      p.reward[k] = float((rng.uniform() < 0.5 ? -1 : 1) * rng.uniform(0.3, 1.0));
+      norm += double(p.reward[k]) * p.reward[k];
+    }
+    for (float& w : p.reward) w = float(w / std::sqrt(norm));
+    p.scenario = scenario_text(d, p.reward, &p.scenario_features);
+    simulate_answers(d, p, t, rng);
+    s.participants.push_back(std::move(p));
+  }
+  const auto parent = std::filesystem::path(out).parent_path();
+  if (!parent.empty()) std::filesystem::create_directories(parent);
+  write_study(out, s);
+  std::printf(
+      "wrote %s: %d simulated participants on %s (%lld trajectories), %lld similarity + "
+      "%lld preference answers each (beta %g, mistakes %g)\n",
+      out.c_str(), users, env.c_str(), (long long)d.count, (long long)n_sim, (long long)n_pref,
+      beta, mistake);
+  return 0;
+}
+
+int study_analyze(const std::string& file, const std::string& out, int seeds, int splits,
+                  int epochs, int tpa_epochs, int threads) {
+  const Study s = read_study(file);
+  const Dataset d = study_dataset(s);
+  StudyAnalysisConfig c;
+  c.hyper = paper_hyper(s.env == "grid" ? "grid" : "jaco");
+  if (epochs > 0) c.hyper.sirl.epochs = epochs;
+  if (tpa_epochs > 0) c.hyper.tpa.epochs = tpa_epochs;
+  c.seeds = seeds;
+  c.cv_splits = splits;
+  c.threads = threads;
+  const auto t0 = std::chrono::steady_clock::now();
+  StudyAnalysis a;
+  try {
+    a = analyze_study(s, d, c);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(file + ": " + e.what());
+  }
+  std::filesystem::create_directories(out);
+  const std::string h5 = out + "/study_analysis.h5";
+  {
+    H5File f = H5File::create(h5 + ".partial");
+    auto w = [&](const char* name, const std::vector<double>& v) {
+      f.write(std::string("/study_analysis/") + name, v.data(), {uint64_t(v.size())});
+    };
+    f.group("/study_analysis");
+    f.set_attr("/study_analysis", "study_file", file);
+    f.set_attr("/study_analysis", "env", s.env);
+    f.set_attr("/study_analysis", "triplets", int64_t(a.triplets));
+    f.set_attr("/study_analysis", "seeds", int64_t(seeds));
+    f.set_attr("/study_analysis", "cv_splits", int64_t(splits));
+    f.set_attr("/study_analysis", "sirl_epochs", int64_t(c.hyper.sirl.epochs));
+    f.set_attr("/study_analysis", "tpa_epochs", int64_t(c.hyper.tpa.epochs));
+    f.set_attr("/study_analysis", "hyper", describe(c.hyper));
+    w("fpe_sirl", a.fpe_sirl);
+    w("fpe_random", a.fpe_random);
+    w("real_sirl", a.real_sirl);
+    w("real_random", a.real_random);
+    w("heldout_sirl", a.heldout_sirl);
+    w("heldout_random", a.heldout_random);
+    w("simulated_sirl", a.simulated_sirl);
+    w("simulated_random", a.simulated_random);
+    std::vector<int32_t> both(a.both_features.begin(), a.both_features.end());
+    f.write("/study_analysis/both_features", both.data(), {uint64_t(both.size())});
+    f.write_strings("/study_analysis/participants", a.participants);
+  }
+  std::filesystem::rename(h5 + ".partial", h5);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::fprintf(stderr, "sirl study analyze: %lld pooled triplets, %zu participants, %.1f s\n",
+               (long long)a.triplets, a.participants.size(), secs);
+  const std::string cmd = "/usr/bin/python3 " +
+                          sh_quote(std::string(SIRL_SOURCE_DIR) + "/results/plot_study.py") + " " +
+                          sh_quote(h5) + " --out " + sh_quote(out);
+  if (std::system(cmd.c_str()) != 0) throw std::runtime_error("plotting failed: " + cmd);
+  return 0;
+}
+
+void register_study(CLI::App& app, Runner& run) {
+  auto* study = app.add_subcommand(
+      "study",
+      "The user study (paper §5): collect answers in a browser (serve), import answers collected\n"
+      "elsewhere (import), simulate a cohort (simulate), and analyse a study file (analyze).");
+  study->require_subcommand(1);
+
+  // simulate
+  static std::string s_env = "jaco2", s_out;
+  static int64_t s_traj = 1000, s_sim = 100, s_pref = 100;
+  static int s_users = 10;
+  static double s_beta = 20, s_mistake = 0.05;
+  static uint64_t s_seed = 0;
+  auto* sim = study->add_subcommand(
+      "simulate",
+      "Write a study file answered by simulated novices: noisy teachers (Boltzmann beta on the\n"
+      "normalised features, mistakes), each with its own preference scenario (3 in 5 care\n"
+      "about every feature).");
+  sim->add_option("--env", s_env, "jaco2 (the paper's study: table + laptop) or grid")
+      ->check(CLI::IsMember({"jaco2", "grid"}))
+      ->capture_default_str();
+  sim->add_option("--trajectories", s_traj, "JacoRobot trajectory space size")
+      ->check(CLI::Range(int64_t(10), int64_t(1000000)))
+      ->capture_default_str();
+  sim->add_option("--users", s_users, "Participants")
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  sim->add_option("--similarity", s_sim, "Similarity queries each")
+      ->check(CLI::Range(int64_t(0), int64_t(100000)))
+      ->capture_default_str();
+  sim->add_option("--preference", s_pref, "Preference queries each")
+      ->check(CLI::Range(int64_t(0), int64_t(100000)))
+      ->capture_default_str();
+  sim->add_option("--beta", s_beta, "Boltzmann rationality (inf = perfect)")->capture_default_str();
+  sim->add_option("--mistake", s_mistake, "Probability of a flipped answer")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  sim->add_option("--seed", s_seed, "Seed of the data, queries and answers")->capture_default_str();
+  sim->add_option("--out", s_out, "Study file to write")->required();
+  sim->callback([] {});
+
+  // analyze
+  static std::string a_file, a_out;
+  static int a_seeds = 5, a_splits = 50, a_epochs = 0, a_tpa_epochs = 0, a_threads = 1;
+  auto* ana = study->add_subcommand(
+      "analyze",
+      "SIRL on the pooled similarity answers vs Random, as in the paper's §5: FPE (two-sided\n"
+      "t-test over training seeds), TPA Real (70/30, cross-validated), Held-out (SIRL without\n"
+      "that participant) and Simulated, each with a one-way ANOVA (method as the factor), also\n"
+      "for the participants whose preference involves every feature. Writes Fig. 6 and\n"
+      "study_report.md (H3, H4) into --out.");
+  ana->add_option("file", a_file, "Study file")->required()->check(CLI::ExistingFile);
+  ana->add_option("--out", a_out, "Output directory (default: <file>-analysis)");
+  ana->add_option("--seeds", a_seeds, "Training seeds for FPE")
+      ->check(CLI::Range(2, 100))
+      ->capture_default_str();
+  ana->add_option("--splits", a_splits, "Cross-validation splits per participant")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  ana->add_option("--epochs", a_epochs, "SIRL epochs (default: the paper's 3000)")
+      ->check(CLI::Range(1, 100000));
+  ana->add_option("--tpa-epochs", a_tpa_epochs, "Reward-head epochs (default: the paper's)")
+      ->check(CLI::Range(1, 100000));
+  ana->add_option("--threads", a_threads, "Threads inside each training (GEMM)")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
+  ana->callback([] {});
+
+  register_study_serve(*study);
+  register_study_import(*study);
+
+  run = [sim, ana] {
+    if (sim->parsed())
+      return study_simulate(s_env, s_traj, s_users, s_sim, s_pref, s_beta, s_mistake, s_seed,
+                            s_out);
+    if (ana->parsed()) {
+      const std::string out = a_out.empty() ? a_file + "-analysis" : a_out;
+      return study_analyze(a_file, out, a_seeds, a_splits, a_epochs, a_tpa_epochs, a_threads);
+    }
+    return run_study_serve_or_import();
+  };
+}
+
+}  // namespace sirl::app

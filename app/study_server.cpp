@@ -1,0 +1,531 @@
+// The study's web server (cpp-httplib): one page running the paper's protocol, a small JSON API,
+// every answer committed to the study file before the reply.
+//
+//   GET  /                       the page (app/study_web/index.html)
+//   GET  /static/<file>          the page's scripts; /vendor/three/… three.js from npm
+//   GET  /api/state?p=ID&t=TOK   stage, progress, the next query, practice queries, scenario
+//   GET  /api/trajectory?p&t&id  what to draw for one trajectory (EE path / grid cells, objects)
+//   POST /api/answer             form fields p, t, kind (similarity|preference), index, answer,
+//                                response_ms → 200, or 400/403 with a message and nothing written
+#include "app/study_server.h"
+
+#include <httplib.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+
+#include "app/commands.h"
+#include "datasets/study.h"
+#include "results/h5.h"
+#include "results/study_store.h"
+
+namespace sirl::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ServeArgs {
+  std::string env = "jaco2", participant, scenario, out, host = "127.0.0.1";
+  std::vector<std::string> scenario_features;
+  int64_t similarity = 100, preference = 100, trajectories = 1000;
+  int port = 8080, practice = 3;
+  uint64_t seed = 0;
+} g_serve;
+
+struct ImportArgs {
+  std::string file, out, env = "jaco2";
+  int64_t trajectories = 1000;
+  uint64_t seed = 0;
+} g_import;
+
+CLI::App* g_serve_cmd = nullptr;
+CLI::App* g_import_cmd = nullptr;
+
+std::string json_str(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\')
+      o += '\\', o += c;
+    else if (c == '\n')
+      o += "\\n";
+    else if (static_cast<unsigned char>(c) < 0x20)
+      o += ' ';
+    else
+      o += c;
+  }
+  return o + "\"";
+}
+
+std::string ids_json(const int32_t* v, int n) {
+  std::string s = "[";
+  for (int i = 0; i < n; ++i) s += (i ? "," : "") + std::to_string(v[i]);
+  return s + "]";
+}
+
+double now_unix() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+// The study being served: one participant's answers are appended under a mutex and the file is
+// rewritten atomically before the HTTP reply, so an acknowledged answer is never lost.
+class StudyService {
+ public:
+  StudyService(Study s, std::string path, std::string participant, int practice)
+      : study_(std::move(s)), path_(std::move(path)), id_(std::move(participant)) {
+    data_ = study_dataset(study_);
+    practice_ = plan_participant(data_, "practice", practice, practice, 12345);
+  }
+
+  StudyParticipant& me() { return *study_.find(id_); }
+
+  bool authorised(const httplib::Request& r, httplib::Response& res) {
+    const std::string p = r.get_param_value("p"), t = r.get_param_value("t");
+    const StudyParticipant* who = study_.find(p);
+    if (!who || who->token != t) {
+      error(res, 403, "unknown participant or wrong token");
+      return false;
+    }
+    if (p != id_) {
+      error(res, 403, "this server records participant " + id_ + " only");
+      return false;
+    }
+    return true;
+  }
+
+  static void error(httplib::Response& res, int status, const std::string& msg) {
+    res.status = status;
+    res.set_content("{\"error\":" + json_str(msg) + "}", "application/json");
+  }
+
+  std::string state_json() {
+    std::lock_guard lock(mu_);
+    const StudyParticipant& p = me();
+    std::ostringstream o;
+    const bool sim_left = p.similarity_done() < p.similarity_count();
+    const bool pref_left = p.preference_done() < p.preference_count();
+    o << "{\"participant\":" << json_str(p.id) << ",\"env\":" << json_str(study_.env)
+      << ",\"features\":[";
+    for (int k = 0; k < data_.feature_count(); ++k)
+      o << (k ? "," : "") << json_str(data_.feature_names[k]);
+    o << "],\"scenario\":" << json_str(p.scenario) << ",\"stage\":"
+      << json_str(sim_left    ? "similarity"
+                  : pref_left ? "preference"
+                              : "done")
+      << ",\"similarity\":{\"done\":" << p.similarity_done()
+      << ",\"total\":" << p.similarity_count()
+      << "},\"preference\":{\"done\":" << p.preference_done()
+      << ",\"total\":" << p.preference_count() << "},\"next\":";
+    if (sim_left)
+      o << "{\"kind\":\"similarity\",\"index\":" << p.similarity_done()
+        << ",\"trajectories\":" << ids_json(p.similarity.data() + 3 * p.similarity_done(), 3)
+        << "}";
+    else if (pref_left)
+      o << "{\"kind\":\"preference\",\"index\":" << p.preference_done()
+        << ",\"trajectories\":" << ids_json(p.preference.data() + 2 * p.preference_done(), 2)
+        << "}";
+    else
+      o << "null";
+    o << ",\"practice\":{\"similarity\":[";
+    for (int64_t i = 0; i < practice_.similarity_count(); ++i)
+      o << (i ? "," : "") << ids_json(practice_.similarity.data() + 3 * i, 3);
+    o << "],\"preference\":[";
+    for (int64_t i = 0; i < practice_.preference_count(); ++i)
+      o << (i ? "," : "") << ids_json(practice_.preference.data() + 2 * i, 2);
+    o << "]}}";
+    return o.str();
+  }
+
+  // What the page draws: Jaco: the end-effector path [21, 3] (m) and the objects; Grid: the 9
+  // cells and the end angle.
+  std::string trajectory_json(int64_t id) const {
+    std::ostringstream o;
+    o << "{\"id\":" << id << ",\"objects\":[";
+    for (size_t k = 0; k < data_.object_names.size(); ++k) {
+      o << (k ? "," : "") << "{\"name\":" << json_str(data_.object_names[k]) << ",\"pos\":[";
+      for (int j = 0; j < data_.object_dim; ++j)
+        o << (j ? "," : "") << data_.object_positions[k * data_.object_dim + j];
+      o << "]}";
+    }
+    o << "],\"points\":[";
+    const float* x = data_.input(id);
+    if (study_.env == "grid") {
+      for (int s = 0; s < 9; ++s)
+        o << (s ? "," : "") << "[" << x[2 * s] * 4 << "," << x[2 * s + 1] * 4 << "]";
+      o << "],\"angle\":" << x[18] * 90;
+    } else {
+      for (int t = 0; t < data_.input_dim / 97; ++t) {
+        const float* ee = x + t * 97 + 88;
+        o << (t ? "," : "") << "[" << ee[0] << "," << ee[1] << "," << ee[2] << "]";
+      }
+      o << "]";
+    }
+    o << "}";
+    return o.str();
+  }
+
+  int64_t trajectory_count() const { return data_.count; }
+
+  // Validates and commits one answer; returns an HTTP status and a message.
+  std::pair<int, std::string> answer(const httplib::Request& r) {
+    for (const char* f : {"kind", "index", "answer", "response_ms"})
+      if (!r.has_param(f)) return {400, std::string("missing field '") + f + "'"};
+    const std::string kind = r.get_param_value("kind");
+    if (kind != "similarity" && kind != "preference")
+      return {400, "kind must be similarity or preference, got '" + kind + "'"};
+    int64_t index = 0;
+    double value = 0, ms = 0;
+    try {
+      size_t used = 0;
+      const std::string is = r.get_param_value("index"), as = r.get_param_value("answer"),
+                        ts = r.get_param_value("response_ms");
+      index = std::stoll(is, &used);
+      if (used != is.size()) throw std::invalid_argument("");
+      value = std::stod(as, &used);
+      if (used != as.size()) throw std::invalid_argument("");
+      ms = std::stod(ts, &used);
+      if (used != ts.size()) throw std::invalid_argument("");
+    } catch (const std::exception&) {
+      return {400, "index, answer and response_ms must be numbers"};
+    }
+    if (!std::isfinite(ms) || ms < 0 || ms > 3.6e6)
+      return {400, "response_ms must be a time in [0, 3600000] ms"};
+    std::lock_guard lock(mu_);
+    StudyParticipant& p = me();
+    const bool sim = kind == "similarity";
+    const int64_t done = sim ? p.similarity_done() : p.preference_done();
+    const int64_t total = sim ? p.similarity_count() : p.preference_count();
+    if (!sim && p.similarity_done() < p.similarity_count())
+      return {400, "preference queries come after the similarity queries"};
+    if (index < done)
+      return {400, kind + " query " + std::to_string(index) + " is already answered"};
+    if (index >= total) return {400, kind + " query " + std::to_string(index) + " does not exist"};
+    if (index > done)
+      return {400, "out of order: the next " + kind + " query is " + std::to_string(done)};
+    if (sim && !(value == 0 || value == 1 || value == 2))
+      return {400, "a similarity answer is the position (0, 1 or 2) of the odd one out"};
+    if (!sim && !(value == 0 || value == 0.5 || value == 1))
+      return {400, "a preference answer is 1 (first), 0 (second) or 0.5 (equal)"};
+    const StudyParticipant before = p;
+    if (sim) {
+      p.similarity_answer.push_back(int32_t(value));
+      p.similarity_ms.push_back(float(ms));
+      p.similarity_time.push_back(now_unix());
+    } else {
+      p.preference_answer.push_back(float(value));
+      p.preference_ms.push_back(float(ms));
+      p.preference_time.push_back(now_unix());
+    }
+    try {
+      write_study(path_, study_);
+    } catch (const std::exception& e) {
+      p = before;  // not durable: not accepted
+      return {500, std::string("could not save the answer: ") + e.what()};
+    }
+    return {200, "saved"};
+  }
+
+ private:
+  Study study_;
+  std::string path_, id_;
+  Dataset data_;
+  StudyParticipant practice_;
+  std::mutex mu_;
+};
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+int run_serve() {
+  const ServeArgs& a = g_serve;
+  validate_participant_id(a.participant);
+  Study s;
+  if (fs::exists(a.out)) {
+    s = read_study(a.out);
+    if (s.env != a.env || (a.env != "grid" && s.trajectories != a.trajectories))
+      throw UsageError(a.out + " is a " + s.env + " study over " + std::to_string(s.trajectories) +
+                       " trajectories; --env/--trajectories differ");
+  } else {
+    s.env = a.env;
+    s.trajectories = a.trajectories;
+    s.data_seed = a.seed;
+  }
+  if (!s.find(a.participant)) {
+    const Dataset d = study_dataset(s);
+    StudyParticipant p = plan_participant(d, a.participant, a.similarity, a.preference, a.seed);
+    p.scenario = a.scenario;
+    p.scenario_features = a.scenario_features;
+    for (const auto& f : p.scenario_features)
+      if (std::find(d.feature_names.begin(), d.feature_names.end(), f) == d.feature_names.end())
+        throw UsageError("--scenario-features: unknown feature '" + f + "'");
+    s.participants.push_back(std::move(p));
+    write_study(a.out, s);
+  }
+  const std::string token = s.find(a.participant)->token;
+  StudyService service(s, a.out, a.participant, a.practice);
+  const fs::path web = fs::path(SIRL_SOURCE_DIR) / "app" / "study_web";
+  const fs::path three = web / "node_modules" / "three";
+
+  httplib::Server srv;
+  srv.Get("/", [&](const httplib::Request&, httplib::Response& res) {
+    res.set_content(read_file(web / "index.html"), "text/html; charset=utf-8");
+  });
+  srv.Get(R"(/static/([A-Za-z0-9_.-]+))", [&](const httplib::Request& r, httplib::Response& res) {
+    const fs::path f = web / r.matches[1].str();
+    if (!fs::is_regular_file(f)) return StudyService::error(res, 404, "no such file");
+    res.set_content(read_file(f), f.extension() == ".js" ? "text/javascript" : "text/css");
+  });
+  srv.Get(R"(/vendor/three/((build|examples/jsm/controls)/[A-Za-z0-9_.]+\.js))",
+          [&](const httplib::Request& r, httplib::Response& res) {
+            const fs::path f = three / r.matches[1].str();
+            if (!fs::is_regular_file(f))
+              return StudyService::error(res, 404, "three.js is not installed (scripts/setup.sh)");
+            res.set_content(read_file(f), "text/javascript");
+          });
+  srv.Get("/api/state", [&](const httplib::Request& r, httplib::Response& res) {
+    if (service.authorised(r, res)) res.set_content(service.state_json(), "application/json");
+  });
+  srv.Get("/api/trajectory", [&](const httplib::Request& r, httplib::Response& res) {
+    if (!service.authorised(r, res)) return;
+    int64_t id = -1;
+    try {
+      id = std::stoll(r.get_param_value("id"));
+    } catch (const std::exception&) {
+    }
+    if (id < 0 || id >= service.trajectory_count())
+      return StudyService::error(
+          res, 400,
+          "id must be a trajectory row in [0, " + std::to_string(service.trajectory_count()) + ")");
+    res.set_content(service.trajectory_json(id), "application/json");
+  });
+  srv.Post("/api/answer", [&](const httplib::Request& r, httplib::Response& res) {
+    if (!service.authorised(r, res)) return;
+    const auto [status, msg] = service.answer(r);
+    if (status != 200) return StudyService::error(res, status, msg);
+    res.set_content(service.state_json(), "application/json");
+  });
+  if (!srv.bind_to_port(a.host, a.port))
+    throw UsageError("cannot listen on " + a.host + ":" + std::to_string(a.port) +
+                     " (in use? try --port)");
+  std::printf(
+      "sirl study serve: participant %s on %s; answers go to %s\n"
+      "open: http://%s:%d/?p=%s&t=%s\n",
+      a.participant.c_str(), s.env.c_str(), a.out.c_str(),
+      a.host == "0.0.0.0" ? "127.0.0.1" : a.host.c_str(), a.port, a.participant.c_str(),
+      token.c_str());
+  std::fflush(stdout);
+  srv.listen_after_bind();
+  return 0;
+}
+
+// CSV import, one row per answered query, in answer order per participant:
+//   participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features
+// kind: similarity (t1..t3 rows of Ξ; answer = position 0-2 of the odd one out) or preference
+// (t1, t2; t3 empty; answer 1 = first, 0 = second, 0.5 = equal). scenario and scenario_features
+// (';'-separated feature names) are read from a participant's first row.
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cur;
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"')
+        cur += '"', ++i;
+      else if (c == '"')
+        quoted = false;
+      else
+        cur += c;
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      out.push_back(cur);
+      cur.clear();
+    } else if (c != '\r') {
+      cur += c;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+int run_import() {
+  const ImportArgs& a = g_import;
+  Study s;
+  s.env = a.env;
+  s.trajectories = a.trajectories;
+  s.data_seed = a.seed;
+  const Dataset d = study_dataset(s);
+  std::ifstream in(a.file);
+  if (!in) throw UsageError(a.file + ": cannot read");
+  std::string line;
+  std::getline(in, line);
+  const std::string header =
+      "participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features";
+  if (line.rfind(header, 0) != 0) throw UsageError(a.file + ":1: the header must be: " + header);
+  int64_t row = 1, n_sim = 0, n_pref = 0;
+  while (std::getline(in, line)) {
+    ++row;
+    if (line.empty()) continue;
+    const auto f = split_csv(line);
+    auto bad = [&](const std::string& what) -> UsageError {
+      return UsageError(a.file + ":" + std::to_string(row) + ": " + what);
+    };
+    if (f.size() != 10) throw bad("expected 10 fields, got " + std::to_string(f.size()));
+    try {
+      validate_participant_id(f[0]);
+    } catch (const std::invalid_argument& e) {
+      throw bad(e.what());
+    }
+    auto num = [&](const std::string& v, const char* what) {
+      try {
+        size_t used = 0;
+        const double x = std::stod(v, &used);
+        if (used != v.size()) throw std::invalid_argument("");
+        return x;
+      } catch (const std::exception&) {
+        throw bad(std::string(what) + " '" + v + "' is not a number");
+      }
+    };
+    auto traj = [&](const std::string& v) {
+      const double x = num(v, "trajectory");
+      if (x != std::floor(x) || x < 0 || x >= double(d.count))
+        throw bad("trajectory " + v + " is not a row of the " + std::to_string(d.count) +
+                  "-trajectory space");
+      return int32_t(x);
+    };
+    StudyParticipant* p = s.find(f[0]);
+    if (!p) {
+      StudyParticipant np;
+      np.id = f[0];
+      np.token = "imported";
+      np.scenario = f[8];
+      std::stringstream ss(f[9]);
+      std::string feat;
+      while (std::getline(ss, feat, ';'))
+        if (!feat.empty()) {
+          if (std::find(d.feature_names.begin(), d.feature_names.end(), feat) ==
+              d.feature_names.end())
+            throw bad("unknown feature '" + feat + "'");
+          np.scenario_features.push_back(feat);
+        }
+      s.participants.push_back(np);
+      p = &s.participants.back();
+    }
+    const double answer = num(f[5], "answer"), ms = num(f[6], "response_ms"),
+                 ts = num(f[7], "timestamp");
+    if (!(ms >= 0)) throw bad("response_ms must be >= 0");
+    if (f[1] == "similarity") {
+      const int32_t t[3] = {traj(f[2]), traj(f[3]), traj(f[4])};
+      if (t[0] == t[1] || t[0] == t[2] || t[1] == t[2])
+        throw bad("a triplet needs 3 different trajectories");
+      if (!(answer == 0 || answer == 1 || answer == 2))
+        throw bad("similarity answer must be 0, 1 or 2");
+      p->similarity.insert(p->similarity.end(), t, t + 3);
+      p->similarity_answer.push_back(int32_t(answer));
+      p->similarity_ms.push_back(float(ms));
+      p->similarity_time.push_back(ts);
+      ++n_sim;
+    } else if (f[1] == "preference") {
+      if (!f[4].empty()) throw bad("a preference row leaves t3 empty");
+      const int32_t t[2] = {traj(f[2]), traj(f[3])};
+      if (t[0] == t[1]) throw bad("a pair needs 2 different trajectories");
+      if (!(answer == 0 || answer == 0.5 || answer == 1))
+        throw bad("preference answer must be 1, 0 or 0.5");
+      p->preference.insert(p->preference.end(), t, t + 2);
+      p->preference_answer.push_back(float(answer));
+      p->preference_ms.push_back(float(ms));
+      p->preference_time.push_back(ts);
+      ++n_pref;
+    } else {
+      throw bad("kind must be similarity or preference, got '" + f[1] + "'");
+    }
+  }
+  if (s.participants.empty()) throw UsageError(a.file + ": no answers");
+  write_study(a.out, s);
+  std::printf("imported %lld similarity and %lld preference answers of %zu participants into %s\n",
+              (long long)n_sim, (long long)n_pref, s.participants.size(), a.out.c_str());
+  return 0;
+}
+
+}  // namespace
+
+void register_study_serve(CLI::App& study) {
+  auto* c = study.add_subcommand(
+      "serve",
+      "Serve the study page for one participant (local web server) and record every answer in\n"
+      "the study file the moment it arrives. Restarting resumes at the next unanswered query.");
+  ServeArgs& a = g_serve;
+  c->add_option("--env", a.env, "jaco2 (the paper's study: table + laptop) or grid")
+      ->check(CLI::IsMember({"jaco2", "grid"}))
+      ->capture_default_str();
+  c->add_option("--participant", a.participant, "Participant id (A-Z a-z 0-9 _ -)")->required();
+  c->add_option("--similarity", a.similarity, "Recorded similarity queries")
+      ->check(CLI::Range(int64_t(1), int64_t(10000)))
+      ->capture_default_str();
+  c->add_option("--preference", a.preference, "Recorded preference queries")
+      ->check(CLI::Range(int64_t(1), int64_t(10000)))
+      ->capture_default_str();
+  c->add_option("--scenario", a.scenario, "The preference scenario shown before phase 2")
+      ->required();
+  c->add_option("--scenario-features", a.scenario_features,
+                "Features the scenario's preference involves (e.g. table,laptop)")
+      ->delimiter(',');
+  c->add_option("--out", a.out, "Study file (created, or resumed)")->required();
+  c->add_option("--port", a.port, "TCP port")->check(CLI::Range(1, 65535))->capture_default_str();
+  c->add_option("--host", a.host, "Address to listen on (127.0.0.1: this machine only)")
+      ->capture_default_str();
+  c->add_option("--trajectories", a.trajectories, "JacoRobot trajectory space size")
+      ->check(CLI::Range(int64_t(10), int64_t(1000000)))
+      ->capture_default_str();
+  c->add_option("--practice", a.practice, "Unrecorded practice queries of each kind")
+      ->check(CLI::Range(0, 20))
+      ->capture_default_str();
+  c->add_option("--seed", a.seed, "Seed of the data and the queries")->capture_default_str();
+  c->callback([] {});
+  g_serve_cmd = c;
+}
+
+void register_study_import(CLI::App& study) {
+  auto* c = study.add_subcommand(
+      "import",
+      "Import answers collected elsewhere from CSV into a study file. Header:\n"
+      "participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features\n"
+      "kind similarity: t1-t3 rows of the trajectory space, answer = position (0-2) of the odd\n"
+      "one out; kind preference: t1, t2 (t3 empty), answer 1 = first, 0 = second, 0.5 = equal.\n"
+      "scenario and scenario_features (';'-separated) are read from a participant's first row.");
+  ImportArgs& a = g_import;
+  c->add_option("file", a.file, "CSV file")->required()->check(CLI::ExistingFile);
+  c->add_option("--out", a.out, "Study file to write")->required();
+  c->add_option("--env", a.env, "jaco2 or grid")
+      ->check(CLI::IsMember({"jaco2", "grid"}))
+      ->capture_default_str();
+  c->add_option("--trajectories", a.trajectories, "JacoRobot trajectory space size")
+      ->check(CLI::Range(int64_t(10), int64_t(1000000)))
+      ->capture_default_str();
+  c->add_option("--seed", a.seed, "Data seed of the trajectory space")->capture_default_str();
+  c->callback([] {});
+  g_import_cmd = c;
+}
+
+int run_study_serve_or_import() {
+  try {
+    if (g_serve_cmd && g_serve_cmd->parsed()) return run_serve();
+    if (g_import_cmd && g_import_cmd->parsed()) return run_import();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  return 2;
+}
+
+}  // namespace sirl::app

@@ -1,0 +1,113 @@
+#include "datasets/study.h"
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "datasets/grid_robot.h"
+#include "datasets/jaco_robot.h"
+
+namespace sirl {
+
+const StudyParticipant* Study::find(const std::string& id) const {
+  for (const auto& p : participants)
+    if (p.id == id) return &p;
+  return nullptr;
+}
+StudyParticipant* Study::find(const std::string& id) {
+  for (auto& p : participants)
+    if (p.id == id) return &p;
+  return nullptr;
+}
+
+Dataset study_dataset(const Study& s) {
+  if (s.env == "grid") return make_grid_dataset();
+  if (s.env == "jaco2" || s.env == "jaco") {
+    JacoConfig c;
+    c.trajectories = s.trajectories;
+    c.seed = s.data_seed;
+    c.with_human = s.env == "jaco";
+    return make_jaco_dataset(c);
+  }
+  throw std::invalid_argument("study environment must be jaco2, jaco or grid, got '" + s.env + "'");
+}
+
+void validate_participant_id(const std::string& id) {
+  bool ok = !id.empty() && id.size() <= 64;
+  for (char c : id)
+    ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-');
+  if (!ok)
+    throw std::invalid_argument("participant id '" + id +
+                                "' must be 1-64 characters of A-Z, a-z, 0-9, _ or -");
+}
+
+StudyParticipant plan_participant(const Dataset& d, const std::string& id, int64_t n_sim,
+                                  int64_t n_pref, uint64_t seed) {
+  validate_participant_id(id);
+  if (n_sim < 0 || n_pref < 0) throw std::invalid_argument("query counts must be >= 0");
+  if (d.count < 3) throw std::invalid_argument("the study needs at least 3 trajectories");
+  StudyParticipant p;
+  p.id = id;
+  Rng rng(seed_from_key("study/" + id, seed));
+  auto distinct = [&](int k, int32_t* out) {
+    for (int i = 0; i < k; ++i) {
+      bool again;
+      do {
+        out[i] = int32_t(rng.uniform_int(uint64_t(d.count)));
+        again = false;
+        for (int j = 0; j < i; ++j) again |= out[j] == out[i];
+      } while (again);
+    }
+  };
+  p.similarity.resize(size_t(3 * n_sim));
+  for (int64_t i = 0; i < n_sim; ++i) distinct(3, p.similarity.data() + 3 * i);
+  p.preference.resize(size_t(2 * n_pref));
+  for (int64_t i = 0; i < n_pref; ++i) distinct(2, p.preference.data() + 2 * i);
+  // The token is a capability, not a key: 128 bits from the OS, not from the study seed.
+  std::random_device rd;
+  static const char* hex = "0123456789abcdef";
+  for (int i = 0; i < 32; ++i) p.token += hex[rd() % 16];
+  return p;
+}
+
+void simulate_answers(const Dataset& d, StudyParticipant& p, const Teacher& t, Rng& rng) {
+  const int F = d.feature_count();
+  if (int(p.reward.size()) != F)
+    throw std::invalid_argument("simulated participant " + p.id + " has no reward over the " +
+                                std::to_string(F) + " features");
+  auto ms = [&] { return float(4000.0 * std::exp(0.5 * rng.normal())); };
+  for (int64_t i = p.similarity_done(); i < p.similarity_count(); ++i) {
+    const int32_t* q = p.similarity.data() + 3 * i;
+    std::optional<TripletAnswer> a;
+    while (!(a = answer_similarity(t, d.feature(q[0]), d.feature(q[1]), d.feature(q[2]), F, rng)))
+      ;  // a simulated participant in a study must answer: re-ask until the teacher does
+    p.similarity_answer.push_back(a->neg);
+    p.similarity_ms.push_back(ms());
+    p.similarity_time.push_back(0);
+  }
+  Teacher answering = t;
+  answering.skip = 0;  // same reason
+  for (int64_t i = p.preference_done(); i < p.preference_count(); ++i) {
+    const int32_t* q = p.preference.data() + 2 * i;
+    p.preference_answer.push_back(
+        *answer_preference(answering, p.reward.data(), d.feature(q[0]), d.feature(q[1]), F, rng));
+    p.preference_ms.push_back(ms());
+    p.preference_time.push_back(0);
+  }
+}
+
+std::vector<int32_t> answered_triplets(const std::vector<const StudyParticipant*>& ps) {
+  std::vector<int32_t> out;
+  for (const auto* p : ps)
+    for (int64_t i = 0; i < p->similarity_done(); ++i) {
+      const int32_t* q = p->similarity.data() + 3 * i;
+      const int neg = p->similarity_answer[i];
+      if (neg < 0 || neg > 2) continue;
+      out.push_back(q[(neg + 1) % 3]);
+      out.push_back(q[(neg + 2) % 3]);
+      out.push_back(q[neg]);
+    }
+  return out;
+}
+
+}  // namespace sirl

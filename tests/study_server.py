@@ -1,0 +1,178 @@
+#!/usr/bin/python3
+"""`sirl study serve` over HTTP (ctest): answers are committed at once; every bad request (wrong
+token, another participant, malformed, duplicate, out of order) gets 400/403 and changes
+nothing; after kill -9 and a restart the study resumes at the next unanswered query.
+With STUDY_BROWSER=1 it also drives the real page in Debian's chromium (playwright-core)."""
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.error
+import urllib.parse
+import urllib.request
+
+import h5py
+
+SIRL = os.environ["SIRL"]
+SRC = os.environ["SIRL_SOURCE_DIR"]
+
+
+def free_port():
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    p = s.getsockname()[1]
+    s.close()
+    return p
+
+
+def serve(study, participant, port, n_sim=3, n_pref=2):
+    p = subprocess.Popen([SIRL, "study", "serve", "--env", "grid", "--participant", participant,
+                          "--similarity", str(n_sim), "--preference", str(n_pref), "--practice", "1",
+                          "--scenario", "Keep away from the laptop.", "--scenario-features",
+                          "laptop_distance", "--out", study, "--port", str(port)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         stdin=subprocess.DEVNULL)
+    url = None
+    for _ in range(2):
+        line = p.stdout.readline()
+        if line.startswith("open: "):
+            url = line.split("open: ")[1].strip()
+    if not url:
+        p.kill()
+        sys.exit(f"FAIL: server did not start: {p.stderr.read()}")
+    for _ in range(100):  # wait until it accepts connections
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=0.1).close()
+            break
+        except OSError:
+            time.sleep(0.05)
+    qs = urllib.parse.parse_qs(urllib.parse.urlparse(url).query)
+    return p, url, qs["t"][0]
+
+
+def http(method, url, data=None):
+    body = urllib.parse.urlencode(data).encode() if data is not None else None
+    try:
+        with urllib.request.urlopen(urllib.request.Request(url, data=body, method=method), timeout=10) as r:
+            return r.status, r.read().decode()
+    except urllib.error.HTTPError as e:
+        return e.code, e.read().decode()
+
+
+def answers(study, who):
+    with h5py.File(study, "r") as f:
+        g = f[f"study/participants/{who}"]
+        return (list(g["similarity_answer"][:]), list(g["preference_answer"][:]),
+                list(g["similarity_ms"][:]), list(g["similarity_time"][:]))
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    study = os.path.join(tmp, "study.h5")
+    port = free_port()
+    srv, url, token = serve(study, "alice", port)
+    base = f"http://127.0.0.1:{port}"
+    assert url.startswith(f"http://127.0.0.1:{port}/?p=alice&t="), url
+    st, body = http("GET", f"{base}/api/state?p=alice&t={token}")
+    assert st == 200 and '"stage":"similarity"' in body and '"index":0' in body, body
+    st, page = http("GET", base + "/")
+    assert st == 200 and "study.js" in page
+    print("ok: the page and the state API answer")
+
+    def post(**kw):
+        d = dict(p="alice", t=token, kind="similarity", index=0, answer=2, response_ms=1234)
+        d.update(kw)
+        d = {k: v for k, v in d.items() if v is not None}
+        return http("POST", f"{base}/api/answer", d)
+
+    bad = [
+        (dict(t="wrong"), 403, "token"),
+        (dict(kind="opinion"), 400, "kind"),
+        (dict(answer=7), 400, "odd one out"),
+        (dict(answer="two"), 400, "numbers"),
+        (dict(index=None), 400, "missing field 'index'"),
+        (dict(index=1), 400, "out of order"),
+        (dict(index=99), 400, "does not exist"),
+        (dict(response_ms=-5), 400, "response_ms"),
+        (dict(kind="preference", answer=1), 400, "after the similarity"),
+    ]
+    for kw, code, words in bad:
+        st, body = post(**kw)
+        assert st == code and words in body, (kw, st, body)
+        assert answers(study, "alice")[0] == [], f"{kw} wrote something"
+    print(f"ok: {len(bad)} bad requests refused with 400/403, nothing written")
+
+    st, body = post()
+    assert st == 200 and '"index":1' in body, body
+    st, body = post()
+    assert st == 400 and "already answered" in body, body
+    st, _ = post(index=1, answer=0, response_ms=800)
+    assert st == 200
+    sim, pref, ms, when = answers(study, "alice")
+    assert sim == [2, 0] and ms == [1234.0, 800.0] and all(t > 1.6e9 for t in when), (sim, ms, when)
+    print("ok: answers committed at once with response time and timestamp; duplicates refused")
+
+    # A second participant in the same file cannot write through alice's server.
+    port_b = free_port()
+    srv_b, _, token_b = serve(study + ".bob", "bob", port_b)
+    srv_b.kill()
+
+    # kill -9, restart: resumes at similarity query 2.
+    srv.send_signal(signal.SIGKILL)
+    srv.wait()
+    srv, url, token2 = serve(study, "alice", port)
+    assert token2 == token, "the participant keeps their token (and URL) across restarts"
+    st, body = http("GET", f"{base}/api/state?p=alice&t={token}")
+    assert st == 200 and '"kind":"similarity","index":2' in body, body
+    assert answers(study, "alice")[0] == [2, 0]
+    print("ok: after kill -9 and restart the study resumes at the next unanswered query")
+
+    st, body = http("POST", f"{base}/api/answer",
+                    dict(p="bob", t=token_b, kind="similarity", index=2, answer=1, response_ms=1))
+    assert st == 403, body
+    st, body = http("GET", f"{base}/api/trajectory?p=alice&t={token}&id=5")
+    assert st == 200 and '"points"' in body, body
+    st, body = http("GET", f"{base}/api/trajectory?p=alice&t={token}&id=999999")
+    assert st == 400, body
+    print("ok: another participant's token is refused; trajectory API checks its id")
+
+    if os.environ.get("STUDY_BROWSER") == "1":
+        web = os.path.join(SRC, "app", "study_web")
+        p = subprocess.run(["node", os.path.join(SRC, "tests", "study_browser.mjs"), url],
+                           cwd=web, capture_output=True, text=True, timeout=300)
+        if p.returncode != 0:
+            sys.exit(f"FAIL: browser test\n{p.stdout}\n{p.stderr}")
+        print(p.stdout.strip())
+        sim, pref, ms, _ = answers(study, "alice")
+        assert sim[:2] == [2, 0] and len(sim) == 3 and len(pref) == 2, (sim, pref)
+        assert all(m > 0 for m in ms[2:]), ms
+        print("ok: chromium answered the rest through the page; the file holds every answer")
+        # The JacoRobot page (three.js 3-D views, replay buttons) runs in chromium as well.
+        jaco = os.path.join(tmp, "jaco.h5")
+        port_j = free_port()
+        pj = subprocess.Popen([SIRL, "study", "serve", "--env", "jaco2", "--trajectories", "200",
+                               "--participant", "carol", "--similarity", "2", "--preference", "1",
+                               "--practice", "1", "--scenario", "Stay high above the table.",
+                               "--out", jaco, "--port", str(port_j)],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              stdin=subprocess.DEVNULL)
+        line = ""
+        while not line.startswith("open: "):
+            line = pj.stdout.readline()
+            if not line:
+                sys.exit(f"FAIL: jaco2 server did not start: {pj.stderr.read()}")
+        time.sleep(0.3)
+        p = subprocess.run(["node", os.path.join(SRC, "tests", "study_browser.mjs"),
+                            line.split("open: ")[1].strip()], cwd=web, capture_output=True,
+                           text=True, timeout=300)
+        pj.kill()
+        if p.returncode != 0:
+            sys.exit(f"FAIL: jaco2 browser test\n{p.stdout}\n{p.stderr}")
+        with h5py.File(jaco, "r") as f:
+            g = f["study/participants/carol"]
+            assert len(g["similarity_answer"]) == 2 and len(g["preference_answer"]) == 1
+        print("ok: the JacoRobot page (3-D views) ran to the end in chromium")
+    srv.kill()
+print("PASS")
