@@ -3,9 +3,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <thread>
 
 #include "app/commands.h"
 #include "jobs/mpi_run.h"
+#include "jobs/profile.h"
 
 namespace sirl::app {
 
@@ -26,7 +28,7 @@ void register_reproduce(CLI::App& app, Runner& run) {
       "/usr/bin/python3 with h5py + matplotlib). Resumable: rerun after an interruption.");
   static std::string profile = "quick", out, figures;
   static int threads = 0;
-  static bool force = false;
+  static bool force = false, no_study = false;
   cmd->add_option("--profile", profile, "Profile: smoke, quick, paper, or a .toml path")
       ->capture_default_str();
   cmd->add_option("--out", out, "Results file (default: results/<profile>.h5)");
@@ -34,6 +36,7 @@ void register_reproduce(CLI::App& app, Runner& run) {
   cmd->add_option("--threads", threads, "Worker threads (default: every core)")
       ->check(CLI::Range(1, 4096));
   cmd->add_flag("--force", force, "Overwrite results from another profile or engine version");
+  cmd->add_flag("--no-study", no_study, "Skip the simulated user study (Fig. 6)");
   run = [] {
     const std::string stem = std::filesystem::path(profile).stem().string();
     if (out.empty()) out = "results/" + stem + ".h5";
@@ -48,8 +51,23 @@ void register_reproduce(CLI::App& app, Runner& run) {
     std::fprintf(stderr, "sirl reproduce: drawing figures: %s\n", command.c_str());
     const int status = std::system(command.c_str());
     if (status != 0) throw std::runtime_error("the plotting script failed (" + command + ")");
-    std::printf("results: %s\nfigures: %s/\nreport:  %s/report.md\n", out.c_str(), figures.c_str(),
-                figures.c_str());
+    // The user-study pipeline on a simulated cohort (Fig. 6), when the profile asks for it.
+    const Profile p = load_profile(profile);
+    std::string study_line;
+    if (p.study.enabled && !no_study) {
+      const StudyPlan& sp = p.study;
+      const std::string dir = figures + "/study", file = dir + "/simulated_study.h5";
+      std::filesystem::create_directories(dir);
+      std::fprintf(stderr, "sirl reproduce: simulated user study (%d users, %s)\n", sp.users,
+                   sp.env.c_str());
+      study_simulate(sp.env, sp.trajectories, sp.users, sp.similarity, sp.preference, sp.beta,
+                     sp.mistake, 0, file);
+      study_analyze(file, dir, sp.seeds, sp.splits, sp.epochs, sp.tpa_epochs,
+                    std::max(1, int(std::thread::hardware_concurrency())));
+      study_line = "study:   " + dir + "/study_report.md (Fig. 6: " + dir + "/fig6_study.png)\n";
+    }
+    std::printf("results: %s\nfigures: %s/\nreport:  %s/report.md\n%s", out.c_str(),
+                figures.c_str(), figures.c_str(), study_line.c_str());
     return 0;
   };
 }

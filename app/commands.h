@@ -3,6 +3,7 @@
 #pragma once
 #include <functional>
 #include <stdexcept>
+#include <cstdint>
 #include <string>
 
 namespace CLI {
@@ -32,6 +33,13 @@ void register_merge(CLI::App& app, Runner& run);
 // This build's version and git commit (recorded in every results file).
 const char* engine_version();
 const char* git_commit();
+
+// `sirl study simulate` and `sirl study analyze` proper, shared with `sirl reproduce`.
+int study_simulate(const std::string& env, int64_t trajectories, int users, int64_t n_sim,
+                   int64_t n_pref, double beta, double mistake, uint64_t seed,
+                   const std::string& out);
+int study_analyze(const std::string& file, const std::string& out, int seeds, int splits,
+                  int epochs, int tpa_epochs, int threads);
 
 // `sirl run` proper, shared with `sirl reproduce`.
 int run_command(const std::string& profile, const std::string& out, int threads, bool force,

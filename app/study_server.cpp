@@ -22,6 +22,7 @@
 
 #include "app/commands.h"
 #include "datasets/study.h"
+#include "datasets/study_import.h"
 #include "results/h5.h"
 #include "results/study_store.h"
 
@@ -40,7 +41,7 @@ struct ServeArgs {
 } g_serve;
 
 struct ImportArgs {
-  std::string file, out, env = "jaco2";
+  std::string file, out, env = "jaco2", format = "auto";
   int64_t trajectories = 1000;
   uint64_t seed = 0;
 } g_import;
@@ -328,133 +329,38 @@ int run_serve() {
   return 0;
 }
 
-// CSV import, one row per answered query, in answer order per participant:
-//   participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features
-// kind: similarity (t1..t3 rows of Ξ; answer = position 0-2 of the odd one out) or preference
-// (t1, t2; t3 empty; answer 1 = first, 0 = second, 0.5 = equal). scenario and scenario_features
-// (';'-separated feature names) are read from a participant's first row.
-std::vector<std::string> split_csv(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cur;
-  bool quoted = false;
-  for (size_t i = 0; i < line.size(); ++i) {
-    const char c = line[i];
-    if (quoted) {
-      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"')
-        cur += '"', ++i;
-      else if (c == '"')
-        quoted = false;
-      else
-        cur += c;
-    } else if (c == '"') {
-      quoted = true;
-    } else if (c == ',') {
-      out.push_back(cur);
-      cur.clear();
-    } else if (c != '\r') {
-      cur += c;
-    }
-  }
-  out.push_back(cur);
-  return out;
-}
-
 int run_import() {
   const ImportArgs& a = g_import;
   Study s;
-  s.env = a.env;
-  s.trajectories = a.trajectories;
-  s.data_seed = a.seed;
-  const Dataset d = study_dataset(s);
-  std::ifstream in(a.file);
-  if (!in) throw UsageError(a.file + ": cannot read");
-  std::string line;
-  std::getline(in, line);
-  const std::string header =
-      "participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features";
-  if (line.rfind(header, 0) != 0) throw UsageError(a.file + ":1: the header must be: " + header);
-  int64_t row = 1, n_sim = 0, n_pref = 0;
-  while (std::getline(in, line)) {
-    ++row;
-    if (line.empty()) continue;
-    const auto f = split_csv(line);
-    auto bad = [&](const std::string& what) -> UsageError {
-      return UsageError(a.file + ":" + std::to_string(row) + ": " + what);
-    };
-    if (f.size() != 10) throw bad("expected 10 fields, got " + std::to_string(f.size()));
-    try {
-      validate_participant_id(f[0]);
-    } catch (const std::invalid_argument& e) {
-      throw bad(e.what());
-    }
-    auto num = [&](const std::string& v, const char* what) {
-      try {
-        size_t used = 0;
-        const double x = std::stod(v, &used);
-        if (used != v.size()) throw std::invalid_argument("");
-        return x;
-      } catch (const std::exception&) {
-        throw bad(std::string(what) + " '" + v + "' is not a number");
-      }
-    };
-    auto traj = [&](const std::string& v) {
-      const double x = num(v, "trajectory");
-      if (x != std::floor(x) || x < 0 || x >= double(d.count))
-        throw bad("trajectory " + v + " is not a row of the " + std::to_string(d.count) +
-                  "-trajectory space");
-      return int32_t(x);
-    };
-    StudyParticipant* p = s.find(f[0]);
-    if (!p) {
-      StudyParticipant np;
-      np.id = f[0];
-      np.token = "imported";
-      np.scenario = f[8];
-      std::stringstream ss(f[9]);
-      std::string feat;
-      while (std::getline(ss, feat, ';'))
-        if (!feat.empty()) {
-          if (std::find(d.feature_names.begin(), d.feature_names.end(), feat) ==
-              d.feature_names.end())
-            throw bad("unknown feature '" + feat + "'");
-          np.scenario_features.push_back(feat);
-        }
-      s.participants.push_back(np);
-      p = &s.participants.back();
-    }
-    const double answer = num(f[5], "answer"), ms = num(f[6], "response_ms"),
-                 ts = num(f[7], "timestamp");
-    if (!(ms >= 0)) throw bad("response_ms must be >= 0");
-    if (f[1] == "similarity") {
-      const int32_t t[3] = {traj(f[2]), traj(f[3]), traj(f[4])};
-      if (t[0] == t[1] || t[0] == t[2] || t[1] == t[2])
-        throw bad("a triplet needs 3 different trajectories");
-      if (!(answer == 0 || answer == 1 || answer == 2))
-        throw bad("similarity answer must be 0, 1 or 2");
-      p->similarity.insert(p->similarity.end(), t, t + 3);
-      p->similarity_answer.push_back(int32_t(answer));
-      p->similarity_ms.push_back(float(ms));
-      p->similarity_time.push_back(ts);
-      ++n_sim;
-    } else if (f[1] == "preference") {
-      if (!f[4].empty()) throw bad("a preference row leaves t3 empty");
-      const int32_t t[2] = {traj(f[2]), traj(f[3])};
-      if (t[0] == t[1]) throw bad("a pair needs 2 different trajectories");
-      if (!(answer == 0 || answer == 0.5 || answer == 1))
-        throw bad("preference answer must be 1, 0 or 0.5");
-      p->preference.insert(p->preference.end(), t, t + 2);
-      p->preference_answer.push_back(float(answer));
-      p->preference_ms.push_back(float(ms));
-      p->preference_time.push_back(ts);
-      ++n_pref;
-    } else {
-      throw bad("kind must be similarity or preference, got '" + f[1] + "'");
-    }
+  if (std::filesystem::exists(a.out)) {
+    s = read_study(a.out);  // add to an existing study (its env and trajectory space)
+    if (s.env != a.env) throw UsageError(a.out + " is a " + s.env + " study; --env says " + a.env);
+  } else {
+    s.env = a.env;
+    s.trajectories = a.trajectories;
+    s.data_seed = a.seed;
   }
-  if (s.participants.empty()) throw UsageError(a.file + ": no answers");
+  const Dataset d = study_dataset(s);
+  const size_t before = s.participants.size();
+  int64_t n_sim = 0, n_pref = 0;
+  for (const auto& p : s.participants) n_sim -= p.similarity_done(), n_pref -= p.preference_done();
+  const std::string fmt = a.format != "auto"                        ? a.format
+                          : fs::path(a.file).extension() == ".json" ? "json"
+                                                                    : "csv";
+  try {
+    if (fmt == "json")
+      import_study_json(a.file, d, s);
+    else
+      import_study_csv(a.file, d, s);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  for (const auto& p : s.participants) n_sim += p.similarity_done(), n_pref += p.preference_done();
+  if (n_sim + n_pref == 0) throw UsageError(a.file + ": no answers");
   write_study(a.out, s);
-  std::printf("imported %lld similarity and %lld preference answers of %zu participants into %s\n",
-              (long long)n_sim, (long long)n_pref, s.participants.size(), a.out.c_str());
+  std::printf(
+      "imported %lld similarity and %lld preference answers (%zu new participants) into %s\n",
+      (long long)n_sim, (long long)n_pref, s.participants.size() - before, a.out.c_str());
   return 0;
 }
 
@@ -499,13 +405,20 @@ void register_study_serve(CLI::App& study) {
 void register_study_import(CLI::App& study) {
   auto* c = study.add_subcommand(
       "import",
-      "Import answers collected elsewhere from CSV into a study file. Header:\n"
+      "Import answers collected elsewhere (CSV or JSON) into a study file; appends to an\n"
+      "existing one. CSV header:\n"
       "participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features\n"
-      "kind similarity: t1-t3 rows of the trajectory space, answer = position (0-2) of the odd\n"
-      "one out; kind preference: t1, t2 (t3 empty), answer 1 = first, 0 = second, 0.5 = equal.\n"
-      "scenario and scenario_features (';'-separated) are read from a participant's first row.");
+      "JSON: {\"answers\": [{\"participant\", \"kind\", \"trajectories\": [...], \"answer\",\n"
+      "\"response_ms\", \"timestamp\", \"scenario\", \"scenario_features\": [...]}, ...]}\n"
+      "kind similarity: 3 rows of the trajectory space, answer = position (0-2) of the odd\n"
+      "one out; kind preference: 2 rows, answer 1 = first, 0 = second, 0.5 = equal.\n"
+      "scenario and scenario_features (CSV: ';'-separated) come from a participant's first "
+      "record.");
   ImportArgs& a = g_import;
-  c->add_option("file", a.file, "CSV file")->required()->check(CLI::ExistingFile);
+  c->add_option("file", a.file, "CSV or JSON file")->required()->check(CLI::ExistingFile);
+  c->add_option("--format", a.format, "csv, json, or auto (by extension)")
+      ->check(CLI::IsMember({"auto", "csv", "json"}))
+      ->capture_default_str();
   c->add_option("--out", a.out, "Study file to write")->required();
   c->add_option("--env", a.env, "jaco2 or grid")
       ->check(CLI::IsMember({"jaco2", "grid"}))

@@ -209,7 +209,7 @@ Profile parse_profile(const std::string& text, const std::string& path) {
   Reader r(root, path);
   r.only_keys(root, "the profile",
               {"name", "description", "envs", "seeds", "queries", "teacher", "fpe", "tpa",
-               "ablation", "hyper", "jaco", "grid"});
+               "ablation", "hyper", "jaco", "grid", "study"});
   Profile p;
   p.path = path;
   p.text = text;
@@ -301,6 +301,26 @@ Profile parse_profile(const std::string& text, const std::string& path) {
       axis("ablation_M", g.ablation_M, 1, 10'000'000);
     }
     p.grid[env] = g;
+  }
+  if (const auto* st = r.table(root, "study", false)) {
+    r.only_keys(*st, "[study]",
+                {"env", "trajectories", "users", "similarity", "preference", "beta", "mistake",
+                 "epochs", "tpa_epochs", "seeds", "splits"});
+    StudyPlan& sp = p.study;
+    sp.enabled = true;
+    sp.env = r.string(*st, "env", "jaco2");
+    if (sp.env != "jaco2" && sp.env != "grid")
+      r.fail(st->get("env"), "[study] env must be jaco2 or grid");
+    sp.trajectories = r.integer(*st, "trajectories", 1000, 10, 1'000'000);
+    sp.users = int(r.integer(*st, "users", 10, 2, 10'000));
+    sp.similarity = r.integer(*st, "similarity", 100, 1, 100'000);
+    sp.preference = r.integer(*st, "preference", 100, 4, 100'000);
+    sp.beta = r.number(*st, "beta", 20, 1e-9, std::numeric_limits<double>::infinity());
+    sp.mistake = r.number(*st, "mistake", 0.05, 0, 1);
+    sp.epochs = int(r.integer(*st, "epochs", 3000, 1, 1'000'000));
+    sp.tpa_epochs = int(r.integer(*st, "tpa_epochs", 1000, 1, 1'000'000));
+    sp.seeds = int(r.integer(*st, "seeds", 5, 2, 100));
+    sp.splits = int(r.integer(*st, "splits", 50, 1, 1000));
   }
   for (const auto& env : p.envs) p.hyper[env] = paper_hyper(env);
   if (const auto* hy = r.table(root, "hyper", false)) {

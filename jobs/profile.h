@@ -44,6 +44,15 @@ struct EnvGrid {
   std::vector<int64_t> seeds, fpe_N, tpa_N, tpa_M, ablation_N, ablation_M;
 };
 
+// [study]: the simulated cohort `sirl reproduce` runs through the user-study pipeline (Fig. 6).
+struct StudyPlan {
+  bool enabled = false;
+  std::string env = "jaco2";
+  int64_t trajectories = 1000, similarity = 100, preference = 100;
+  int users = 10, epochs = 3000, tpa_epochs = 1000, seeds = 5, splits = 50;
+  double beta = 20, mistake = 0.05;
+};
+
 struct Profile {
   std::string path, text;  // where it came from, and its exact text (recorded in results)
   std::string name, description;
@@ -60,6 +69,7 @@ struct Profile {
   JacoConfig jaco;                     // [jaco]: trajectories, data_seed (JacoRobot's Ξ)
   // Per env: the top-level seeds/N/M unless its [grid] or [jaco] table overrides them.
   std::map<std::string, EnvGrid> grid;
+  StudyPlan study;
 };
 
 Profile parse_profile(const std::string& text, const std::string& path = "<profile>");

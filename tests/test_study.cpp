@@ -1,0 +1,242 @@
+// The user study's data, file and analysis (issue #9).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "datasets/study.h"
+#include "datasets/study_import.h"
+#include "engine/study_analysis.h"
+#include "results/h5.h"
+#include "results/study_store.h"
+
+namespace sirl {
+namespace {
+
+Study simulated_cohort(int users, double beta, double mistake) {
+  Study s;
+  s.env = "grid";
+  const Dataset d = study_dataset(s);
+  Teacher t;
+  t.beta = beta;
+  t.mistake = mistake;
+  Rng rng(3);
+  for (int u = 0; u < users; ++u) {
+    StudyParticipant p = plan_participant(d, "u" + std::to_string(u), 100, 60, 1);
+    p.reward.assign(d.feature_count(), 0.f);
+    p.reward[u % d.feature_count()] = 1.f;
+    p.scenario_features = {d.feature_names[u % d.feature_count()]};
+    simulate_answers(d, p, t, rng);
+    s.participants.push_back(std::move(p));
+  }
+  return s;
+}
+
+TEST(Study, SimulatedCohortOfMildlyNoisyNovicesFindsSirlFpeBelowRandom) {
+  const Study s = simulated_cohort(6, 50.0, 0.02);
+  const Dataset d = study_dataset(s);
+  StudyAnalysisConfig c;
+  c.hyper = paper_hyper("grid");
+  c.hyper.sirl.epochs = 100;
+  c.hyper.tpa.epochs = 20;
+  c.seeds = 2;
+  c.cv_splits = 3;
+  const StudyAnalysis a = analyze_study(s, d, c);
+  EXPECT_EQ(a.triplets, 600);
+  ASSERT_EQ(a.fpe_sirl.size(), 2u);
+  for (int k = 0; k < 2; ++k) EXPECT_LT(a.fpe_sirl[k], a.fpe_random[k]) << "seed " << k;
+  ASSERT_EQ(a.participants.size(), 6u);
+  for (double v : a.real_sirl) EXPECT_TRUE(v >= 0 && v <= 1);
+  for (double v : a.heldout_sirl) EXPECT_TRUE(v >= 0 && v <= 1);
+  EXPECT_EQ(a.simulated_sirl.size(), 10u);
+}
+
+TEST(Study, AnsweredTripletsPutTheOddOneOutLast) {
+  StudyParticipant p;
+  p.similarity = {10, 11, 12, 20, 21, 22};
+  p.similarity_answer = {0, 2};  // odd one out: 10, then 22
+  const auto t = answered_triplets({&p});
+  EXPECT_EQ(t, (std::vector<int32_t>{11, 12, 10, 20, 21, 22}));
+}
+
+TEST(Study, SimulatedAnswersFollowTheTeacher) {
+  Study s;
+  s.env = "grid";
+  const Dataset d = study_dataset(s);
+  StudyParticipant p = plan_participant(d, "perfect", 50, 50, 2);
+  p.reward.assign(d.feature_count(), 0.f);
+  p.reward[0] = 1.f;
+  Rng rng(1);
+  simulate_answers(d, p, Teacher{}, rng);
+  ASSERT_EQ(p.preference_done(), 50);
+  for (int64_t i = 0; i < 50; ++i) {
+    const double ra = reward(p.reward.data(), d.feature(p.preference[2 * i]), d.feature_count());
+    const double rb =
+        reward(p.reward.data(), d.feature(p.preference[2 * i + 1]), d.feature_count());
+    if (ra != rb) EXPECT_EQ(p.preference_answer[i], ra > rb ? 1.f : 0.f);
+  }
+  for (int64_t i = 0; i < 50; ++i) {  // the odd one out is the farthest from the closest pair
+    const int32_t* q = p.similarity.data() + 3 * i;
+    auto dist = [&](int a, int b) {
+      double s2 = 0;
+      for (int k = 0; k < d.feature_count(); ++k)
+        s2 += std::pow(d.feature(q[a])[k] - d.feature(q[b])[k], 2);
+      return s2;
+    };
+    const int neg = p.similarity_answer[i];
+    EXPECT_LE(dist((neg + 1) % 3, (neg + 2) % 3),
+              std::min(dist(neg, (neg + 1) % 3), dist(neg, (neg + 2) % 3)));
+  }
+}
+
+TEST(Study, FileRoundTripsAndRejectsForeignFiles) {
+  namespace fs = std::filesystem;
+  const std::string path = (fs::temp_directory_path() / "sirl_study_roundtrip.h5").string();
+  Study s = simulated_cohort(3, 20.0, 0.05);
+  s.participants[1].preference_answer.resize(7);  // a participant halfway through phase 2
+  s.participants[1].preference_ms.resize(7);
+  s.participants[1].preference_time.resize(7);
+  s.participants[2].scenario = "Stay \"far\" from the laptop.";
+  write_study(path, s);
+  const Study r = read_study(path);
+  ASSERT_EQ(r.participants.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    const auto &a = s.participants[i], &b = r.participants[i];
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(a.token, b.token);
+    EXPECT_EQ(a.scenario, b.scenario);
+    EXPECT_EQ(a.scenario_features, b.scenario_features);
+    EXPECT_EQ(a.similarity, b.similarity);
+    EXPECT_EQ(a.preference, b.preference);
+    EXPECT_EQ(a.similarity_answer, b.similarity_answer);
+    EXPECT_EQ(a.preference_answer, b.preference_answer);
+    EXPECT_EQ(a.similarity_ms, b.similarity_ms);
+    EXPECT_EQ(a.reward, b.reward);
+  }
+  EXPECT_FALSE(fs::exists(path + ".tmp"));
+  {
+    H5File f = H5File::create(path);
+    f.group("/other");
+  }
+  EXPECT_THROW(read_study(path), H5Error);
+  fs::remove(path);
+}
+
+TEST(Study, ParticipantIdsAreChecked) {
+  EXPECT_NO_THROW(validate_participant_id("P-07_a"));
+  EXPECT_THROW(validate_participant_id(""), std::invalid_argument);
+  EXPECT_THROW(validate_participant_id("../etc"), std::invalid_argument);
+  EXPECT_THROW(validate_participant_id(std::string(65, 'a')), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sirl
+
+namespace sirl {
+namespace {
+
+std::string write_temp(const std::string& name, const std::string& text) {
+  const auto p = std::filesystem::temp_directory_path() / name;
+  std::ofstream(p) << text;
+  return p.string();
+}
+
+std::string import_error(bool json, const std::string& text, const Dataset& d) {
+  Study s;
+  s.env = "grid";
+  try {
+    const std::string p = write_temp(json ? "sirl_bad.json" : "sirl_bad.csv", text);
+    json ? import_study_json(p, d, s) : import_study_csv(p, d, s);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(StudyImport, CsvAndJsonGiveTheSameStudy) {
+  Study base;
+  base.env = "grid";
+  const Dataset d = study_dataset(base);
+  const std::string csv = write_temp(
+      "sirl_import.csv",
+      "participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features\n"
+      "ann,similarity,1,2,3,2,1500,1700000000.5,\"Stay away, please\",laptop_distance;abs_angle\n"
+      "ann,similarity,4,5,6,0,900,1700000001,,\n"
+      "ann,preference,7,8,,1,700,1700000002,,\n"
+      "ben,preference,9,10,,0.5,1100,1700000003,Anything,\n");
+  const std::string json = write_temp("sirl_import.json",
+                                      R"({"answers": [
+        {"participant": "ann", "kind": "similarity", "trajectories": [1, 2, 3], "answer": 2,
+         "response_ms": 1500, "timestamp": 1700000000.5, "scenario": "Stay away, please",
+         "scenario_features": ["laptop_distance", "abs_angle"]},
+        {"participant": "ann", "kind": "similarity", "trajectories": [4, 5, 6], "answer": 0,
+         "response_ms": 900, "timestamp": 1700000001},
+        {"participant": "ann", "kind": "preference", "trajectories": [7, 8], "answer": 1,
+         "response_ms": 700, "timestamp": 1700000002},
+        {"participant": "ben", "kind": "preference", "trajectories": [9, 10], "answer": 0.5,
+         "response_ms": 1100, "timestamp": 1700000003, "scenario": "Anything"}]})");
+  Study a = base, b = base;
+  import_study_csv(csv, d, a);
+  import_study_json(json, d, b);
+  ASSERT_EQ(a.participants.size(), 2u);
+  ASSERT_EQ(b.participants.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const auto &x = a.participants[i], &y = b.participants[i];
+    EXPECT_EQ(x.id, y.id);
+    EXPECT_EQ(x.scenario, y.scenario);
+    EXPECT_EQ(x.scenario_features, y.scenario_features);
+    EXPECT_EQ(x.similarity, y.similarity);
+    EXPECT_EQ(x.similarity_answer, y.similarity_answer);
+    EXPECT_EQ(x.preference, y.preference);
+    EXPECT_EQ(x.preference_answer, y.preference_answer);
+    EXPECT_EQ(x.similarity_ms, y.similarity_ms);
+    EXPECT_EQ(x.preference_time, y.preference_time);
+  }
+  const auto& ann = a.participants[0];
+  EXPECT_EQ(ann.scenario, "Stay away, please");
+  EXPECT_EQ(ann.similarity, (std::vector<int32_t>{1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(ann.similarity_answer, (std::vector<int32_t>{2, 0}));
+  EXPECT_EQ(ann.preference_answer, (std::vector<float>{1.f}));
+  EXPECT_EQ(a.participants[1].preference_answer, (std::vector<float>{0.5f}));
+  EXPECT_DOUBLE_EQ(ann.similarity_time[0], 1700000000.5);
+}
+
+TEST(StudyImport, BadRecordsNameTheLineAndTheProblem) {
+  Study base;
+  base.env = "grid";
+  const Dataset d = study_dataset(base);
+  const std::string h =
+      "participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features\n";
+  auto has = [](const std::string& msg, const std::string& part) {
+    return msg.find(part) != std::string::npos;
+  };
+  std::string m = import_error(false, "who,what\n", d);
+  EXPECT_TRUE(has(m, ":1: the header must be")) << m;
+  m = import_error(false, h + "ann,similarity,1,2,3,2,10,0,,\nann,similarity,1,2,99999,2,10,0,,\n",
+                   d);
+  EXPECT_TRUE(has(m, "sirl_bad.csv:3: trajectory")) << m;
+  m = import_error(false, h + "ann,similarity,1,2,3,5,10,0,,\n", d);
+  EXPECT_TRUE(has(m, ":2: a similarity answer")) << m;
+  m = import_error(false, h + "ann,preference,1,1,,1,10,0,,\n", d);
+  EXPECT_TRUE(has(m, "same trajectory twice")) << m;
+  m = import_error(false, h + "a b,preference,1,2,,1,10,0,,\n", d);
+  EXPECT_TRUE(has(m, "participant id")) << m;
+  m = import_error(false, h + "ann,preference,1,2,,1,fast,0,,\n", d);
+  EXPECT_TRUE(has(m, "response_ms 'fast' is not a number")) << m;
+  m = import_error(false, h + "ann,opinion,1,2,,1,10,0,,\n", d);
+  EXPECT_TRUE(has(m, "kind must be similarity or preference")) << m;
+  m = import_error(false, h + "ann,preference,1,2,,1,10,0,,colour\n", d);
+  EXPECT_TRUE(has(m, "unknown feature 'colour'")) << m;
+  m = import_error(true, R"({"answers": [{"participant": "ann", "kind": "preference",
+      "trajectories": [1, 2], "answer": 1}]})",
+                   d);
+  EXPECT_TRUE(has(m, "record 0: missing \"response_ms\"")) << m;
+  m = import_error(true, R"({"answers": [{"participant": "ann", )", d);
+  EXPECT_TRUE(has(m, "byte")) << m;
+  m = import_error(true, R"([{"participant": 7}])", d);
+  EXPECT_TRUE(has(m, "\"participant\" has the wrong type")) << m;
+}
+
+}  // namespace
+}  // namespace sirl
