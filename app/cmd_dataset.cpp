@@ -215,11 +215,7 @@ void register_render(CLI::App& app, Runner& run) {
   cmd->add_option("--out", out, "PNG to write")->required();
   cmd->add_option("--ids", ids, "Trajectory rows, comma-separated")->capture_default_str();
   run = [] {
-    auto q = [](const std::string& s) {
-      std::string r = "'";
-      for (char c : s) r += c == '\'' ? std::string("'\\''") : std::string(1, c);
-      return r + "'";
-    };
+    const auto q = sh_quote;
     const std::string cmdline =
         "/usr/bin/python3 " + q(std::string(SIRL_SOURCE_DIR) + "/results/render_jaco.py") + " " +
         q(file) + " --out " + q(out) + " --ids " + q(ids) + " --env " + q(env);

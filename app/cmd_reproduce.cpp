@@ -11,15 +11,6 @@
 
 namespace sirl::app {
 
-namespace {
-// Single-quotes a path for /bin/sh.
-std::string sh_quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-}  // namespace
-
 void register_reproduce(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "reproduce",

@@ -21,12 +21,6 @@ namespace sirl::app {
 
 namespace {
 
-std::string sh_quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
 // A scenario sentence for a reward over the features ("more table, less laptop").
 std::string scenario_text(const Dataset& d, const std::vector<float>& w,
                           std::vector<std::string>* involved) {

@@ -33,4 +33,10 @@ int run_selected(CLI::App& app) {
   return 2;
 }
 
+std::string sh_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
 }  // namespace sirl::app

@@ -1,9 +1,9 @@
 // Registry of the `sirl` subcommands. Each cmd_*.cpp defines one `register_*` function that
 // adds its CLI11 subcommand and sets `callback` (run after a successful parse).
 #pragma once
+#include <cstdint>
 #include <functional>
 #include <stdexcept>
-#include <cstdint>
 #include <string>
 
 namespace CLI {
@@ -29,6 +29,9 @@ void register_run(CLI::App& app, Runner& run);
 void register_plan(CLI::App& app, Runner& run);
 void register_export(CLI::App& app, Runner& run);
 void register_merge(CLI::App& app, Runner& run);
+
+// Single-quotes a string for /bin/sh (the plotting scripts are run through std::system).
+std::string sh_quote(const std::string& s);
 
 // This build's version and git commit (recorded in every results file).
 const char* engine_version();

@@ -7,11 +7,10 @@
 
 #include <cstdlib>
 #include <deque>
-#include <queue>
 #include <stdexcept>
 #include <string>
 
-#include "jobs/scheduler.h"
+#include "jobs/ready_queue.h"
 
 namespace sirl {
 
@@ -77,39 +76,20 @@ void mpi_dispatch(const Plan& plan, const std::vector<char>& pending,
                   const std::function<void(int, const TaskRecord&)>& on_result) {
   int size = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
-  const int n = int(plan.tasks.size());
-  const std::vector<double> rank = upward_rank(plan);
-  std::vector<int> waiting(n, 0);
-  std::vector<std::vector<int>> dependents(n);
-  int remaining = 0;
-  for (int i = 0; i < n; ++i) {
-    if (!pending[i]) continue;
-    ++remaining;
-    for (int d : plan.tasks[i].deps)
-      if (pending[d]) {
-        ++waiting[i];
-        dependents[d].push_back(i);
-      }
-  }
-  auto cmp = [&](int a, int b) { return rank[a] < rank[b] || (rank[a] == rank[b] && a > b); };
-  std::priority_queue<int, std::vector<int>, decltype(cmp)> ready(cmp);
-  for (int i = 0; i < n; ++i)
-    if (pending[i] && waiting[i] == 0) ready.push(i);
-
+  ReadyQueue queue(plan, pending);
   std::deque<int> idle;
   std::vector<int> running(size, -1);
   int busy = 0;
   std::string error;
   while (true) {
-    while (error.empty() && !idle.empty() && !ready.empty()) {
-      const int w = idle.front(), i = ready.top();
+    while (error.empty() && !idle.empty() && !queue.empty()) {
+      const int w = idle.front(), i = queue.pop();
       idle.pop_front();
-      ready.pop();
       MPI_Send(&i, 1, MPI_INT, w, kTask, MPI_COMM_WORLD);
       running[w] = i;
       ++busy;
     }
-    if (busy == 0 && (remaining == 0 || !error.empty())) break;
+    if (busy == 0 && (queue.remaining() == 0 || !error.empty())) break;
     MPI_Status st;
     MPI_Probe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &st);
     const std::string msg = recv_bytes(st);
@@ -125,14 +105,12 @@ void mpi_dispatch(const Plan& plan, const std::vector<char>& pending,
         if (error.empty()) error = "rank " + std::to_string(w) + ": " + msg;
         continue;
       }
-      --remaining;
       const TaskRecord rec = deserialize(msg);
       if (rec.key != plan.tasks[i].key)
         throw std::runtime_error("rank " + std::to_string(w) + " returned " + rec.key +
                                  " for task " + plan.tasks[i].key);
       on_result(i, rec);
-      for (int j : dependents[i])
-        if (--waiting[j] == 0) ready.push(j);
+      queue.finish(i);
     }
   }
   mpi_release_workers();

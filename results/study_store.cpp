@@ -1,23 +1,14 @@
 #include "results/study_store.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <filesystem>
 
+#include "results/durable.h"
 #include "results/h5.h"
 
 namespace sirl {
 
 namespace {
 using u64 = uint64_t;
-void fsync_file(const std::string& p) {
-  const int fd = ::open(p.c_str(), O_RDONLY);
-  if (fd >= 0) {
-    ::fsync(fd);
-    ::close(fd);
-  }
-}
 }  // namespace
 
 void write_study(const std::string& path, const Study& s) {
@@ -49,11 +40,11 @@ void write_study(const std::string& path, const Study& s) {
     }
     f.write_strings("/study/participant_ids", ids);
   }
-  fsync_file(tmp);
+  fsync_path(tmp);
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);
   if (ec) throw H5Error(path + ": cannot move the study file into place: " + ec.message());
-  fsync_file(std::filesystem::absolute(path).parent_path().string());
+  fsync_path(std::filesystem::absolute(path).parent_path().string());
 }
 
 Study read_study(const std::string& path) {

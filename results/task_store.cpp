@@ -1,29 +1,16 @@
 #include "results/task_store.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 
 #include "kernels/rng.h"
+#include "results/durable.h"
 #include "results/h5.h"
 
 namespace sirl {
 
 namespace fs = std::filesystem;
-
-namespace {
-// Forces a file's (or directory's) data to disk so a rename after it cannot expose a torn file.
-void fsync_path(const fs::path& p) {
-  const int fd = ::open(p.c_str(), O_RDONLY);
-  if (fd >= 0) {
-    ::fsync(fd);
-    ::close(fd);
-  }
-}
-}  // namespace
 
 TaskStore::TaskStore(fs::path dir) : dir_(std::move(dir)) {
   std::error_code ec;
@@ -80,11 +67,11 @@ void TaskStore::commit(const TaskRecord& r) {
     H5File f = H5File::create(tmp.string());
     write_record(f, "/r", r);
   }  // closed: every byte handed to the OS
-  fsync_path(tmp);
+  fsync_path(tmp.string());
   std::error_code ec;
   fs::rename(tmp, final, ec);
   if (ec) throw H5Error(final.string() + ": cannot commit task " + r.key + ": " + ec.message());
-  fsync_path(dir_);
+  fsync_path(dir_.string());
   std::lock_guard lock(mu_);
   index_[r.key] = final;
 }
@@ -108,7 +95,7 @@ void TaskStore::write_manifest(const std::string& name, const std::string& text)
     out << text;
     if (!out) throw H5Error(tmp.string() + ": cannot write");
   }
-  fsync_path(tmp);
+  fsync_path(tmp.string());
   fs::rename(tmp, final);
 }
 

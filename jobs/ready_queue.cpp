@@ -1,0 +1,43 @@
+#include "jobs/ready_queue.h"
+
+#include "jobs/scheduler.h"
+
+namespace sirl {
+
+ReadyQueue::ReadyQueue(const Plan& plan, const std::vector<char>& pending)
+    : rank_(upward_rank(plan)),
+      waiting_(plan.tasks.size(), 0),
+      dependents_(plan.tasks.size()),
+      ready_(ByRank{&rank_}) {
+  const int n = int(plan.tasks.size());
+  for (int i = 0; i < n; ++i) {
+    if (!pending[i]) continue;
+    ++remaining_;
+    for (int d : plan.tasks[i].deps)
+      if (pending[d]) {
+        ++waiting_[i];
+        dependents_[d].push_back(i);
+      }
+  }
+  for (int i = 0; i < n; ++i)
+    if (pending[i] && waiting_[i] == 0) ready_.push(i);
+}
+
+int ReadyQueue::pop() {
+  const int i = ready_.top();
+  ready_.pop();
+  return i;
+}
+
+int ReadyQueue::finish(int i) {
+  --remaining_;
+  int n = 0;
+  for (int j : dependents_[i])
+    if (--waiting_[j] == 0) {
+      ready_.push(j);
+      ++n;
+    }
+  return n;
+}
+
+}  // namespace sirl

@@ -1,0 +1,37 @@
+// The dependency bookkeeping shared by the thread scheduler and the MPI dispatcher: which
+// pending tasks are ready, in order of upward rank (costliest chains first), and which become
+// ready when one finishes. Not thread-safe: callers hold their own lock.
+#pragma once
+#include <queue>
+#include <vector>
+
+#include "jobs/plan.h"
+
+namespace sirl {
+
+class ReadyQueue {
+ public:
+  // pending[i]: task i still has to run; a dependency that is not pending counts as done.
+  ReadyQueue(const Plan& plan, const std::vector<char>& pending);
+  bool empty() const { return ready_.empty(); }
+  size_t size() const { return ready_.size(); }
+  int remaining() const { return remaining_; }  // pending tasks not yet finished
+  int pop();                                    // the ready task of highest rank
+  // Task i finished: returns how many tasks became ready.
+  int finish(int i);
+
+ private:
+  std::vector<double> rank_;
+  std::vector<int> waiting_;
+  std::vector<std::vector<int>> dependents_;
+  struct ByRank {
+    const std::vector<double>* rank;
+    bool operator()(int a, int b) const {
+      return (*rank)[a] < (*rank)[b] || ((*rank)[a] == (*rank)[b] && a > b);
+    }
+  };
+  std::priority_queue<int, std::vector<int>, ByRank> ready_;
+  int remaining_ = 0;
+};
+
+}  // namespace sirl
