@@ -18,8 +18,22 @@ inline void shuffle_order(int64_t n, Rng& rng, std::vector<int32_t>& order) {
   for (int64_t i = n - 1; i > 0; --i) std::swap(order[i], order[rng.uniform_int(uint64_t(i + 1))]);
 }
 
-inline int64_t batches_per_epoch(int64_t n, int batch) {
-  return (n + batch - 1) / batch;
+// `epochs` passes over n examples in shuffled mini-batches. step(rows, b) trains on the b example
+// indices rows[0..b) and returns that batch's mean loss. Returns each epoch's mean loss.
+template <typename Step>
+std::vector<float> run_epochs(int64_t n, int epochs, int batch, Rng& rng, Step&& step) {
+  std::vector<float> curve;
+  std::vector<int32_t> order;
+  for (int e = 0; e < epochs && n > 0; ++e) {
+    shuffle_order(n, rng, order);
+    double sum = 0;
+    for (int64_t i0 = 0; i0 < n; i0 += batch) {
+      const int b = int(n - i0 < batch ? n - i0 : batch);
+      sum += double(step(order.data() + i0, b)) * b;
+    }
+    curve.push_back(float(sum / double(n)));
+  }
+  return curve;
 }
 
 }  // namespace sirl

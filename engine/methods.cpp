@@ -33,23 +33,16 @@ void train_sirl(const Dataset& d, const QueryBundle& bundle, const MethodConfig&
   const TrainSchedule& s = cfg.hyper.sirl;
   Trainer t(rep.shape, s.adam, rep.params);
   Rng order_rng(seed_from_key("sirl_order", seed));
-  std::vector<int32_t> order, batch;
-  const int64_t n = q.count;
-  for (int e = 0; e < s.epochs && n > 0; ++e) {
-    shuffle_order(n, order_rng, order);
-    double sum = 0;
-    for (int64_t i0 = 0; i0 < n; i0 += s.batch) {
-      const int b = int(std::min<int64_t>(s.batch, n - i0));
-      batch.resize(size_t(3) * b);
-      for (int i = 0; i < b; ++i)
-        std::copy_n(q.idx.begin() + 3 * order[i0 + i], 3, batch.begin() + 3 * i);
-      sum += double(triplet_train_step(t, d.inputs.data(), batch.data(), b,
-                                       float(cfg.hyper.triplet_margin), cfg.threads)) *
-             b;
-      rep.train_flops += 3 * t.shape.forward_flops(3 * b);
-    }
-    rep.loss_curve.push_back(float(sum / double(n)));
-  }
+  std::vector<int32_t> batch;
+  rep.loss_curve =
+      run_epochs(q.count, s.epochs, s.batch, order_rng, [&](const int32_t* rows, int b) {
+        batch.resize(size_t(3) * b);
+        for (int i = 0; i < b; ++i)
+          std::copy_n(q.idx.begin() + 3 * rows[i], 3, batch.begin() + 3 * i);
+        rep.train_flops += 3 * t.shape.forward_flops(3 * b);
+        return triplet_train_step(t, d.inputs.data(), batch.data(), b,
+                                  float(cfg.hyper.triplet_margin), cfg.threads);
+      });
   rep.params = std::move(t.params);
 }
 
@@ -80,32 +73,25 @@ void train_preference(const Dataset& d, const QueryBundle& bundle, const MethodC
   for (int k = 0; k < K; ++k) mlp_init(head, params.data() + P + size_t(k) * (dim + 1), head_rng);
   Trainer t(rep.shape, s.adam, std::move(params));
   Rng order_rng(seed_from_key("pref_order", seed));
-  std::vector<int32_t> order, pairs, human;
+  std::vector<int32_t> pairs, human;
   std::vector<float> label;
-  const int64_t n = q.count;
-  for (int e = 0; e < s.epochs && n > 0; ++e) {
-    shuffle_order(n, order_rng, order);
-    double sum = 0;
-    for (int64_t i0 = 0; i0 < n; i0 += s.batch) {
-      const int b = int(std::min<int64_t>(s.batch, n - i0));
-      pairs.resize(size_t(2) * b);
-      label.resize(b);
-      human.resize(b);
-      for (int i = 0; i < b; ++i) {
-        const int64_t j = order[i0 + i];
-        pairs[2 * i] = q.pairs[2 * j];
-        pairs[2 * i + 1] = q.pairs[2 * j + 1];
-        label[i] = q.label[j];
-        human[i] = q.human[j];
-      }
-      sum += double(multihead_preference_train_step(t, K, d.inputs.data(), pairs.data(),
-                                                    label.data(), human.data(), b,
-                                                    float(cfg.hyper.pref_l2), cfg.threads)) *
-             b;
-      rep.train_flops += 3 * t.shape.forward_flops(2 * b);
-    }
-    rep.loss_curve.push_back(float(sum / double(n)));
-  }
+  rep.loss_curve =
+      run_epochs(q.count, s.epochs, s.batch, order_rng, [&](const int32_t* rows, int b) {
+        pairs.resize(size_t(2) * b);
+        label.resize(b);
+        human.resize(b);
+        for (int i = 0; i < b; ++i) {
+          const int64_t j = rows[i];
+          pairs[2 * i] = q.pairs[2 * j];
+          pairs[2 * i + 1] = q.pairs[2 * j + 1];
+          label[i] = q.label[j];
+          human[i] = q.human[j];
+        }
+        rep.train_flops += 3 * t.shape.forward_flops(2 * b);
+        return multihead_preference_train_step(t, K, d.inputs.data(), pairs.data(), label.data(),
+                                               human.data(), b, float(cfg.hyper.pref_l2),
+                                               cfg.threads);
+      });
   rep.params.assign(t.params.begin(), t.params.begin() + P);  // φ only; the heads are dropped
 }
 

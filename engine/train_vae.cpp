@@ -21,27 +21,19 @@ VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads)
   const int B = h.vae.batch, in = d.input_dim, L = h.embedding_dim;
   const int64_t T = d.count;
   std::vector<float> grad(m.params.size()), x(size_t(B) * in), eps(size_t(B) * L);
-  std::vector<int32_t> order;
   AdamState adam(m.params.size());
   VaeWorkspace<float> ws;
-  for (int e = 0; e < h.vae.epochs; ++e) {
-    shuffle_order(T, order_rng, order);
-    double sum = 0;
-    for (int64_t i0 = 0; i0 < T; i0 += B) {
-      const int b = int(std::min<int64_t>(B, T - i0));
-      for (int i = 0; i < b; ++i)
-        std::copy(d.input(order[i0 + i]), d.input(order[i0 + i]) + in, x.begin() + size_t(i) * in);
-      for (int i = 0; i < b * L; ++i) eps[i] = float(noise.normal());
-      std::fill(grad.begin(), grad.end(), 0.f);
-      const float loss =
-          vae_loss_and_grad(m.shape, m.params.data(), x.data(), b, eps.data(),
-                            float(h.vae_kl_weight), grad.data(), ws, nullptr, threads);
-      adam_step(h.vae.adam, adam, m.params.data(), grad.data(), m.params.size());
-      sum += double(loss) * b;
-      m.train_flops += 3 * (m.shape.encoder.forward_flops(b) + m.shape.decoder.forward_flops(b));
-    }
-    m.loss_curve.push_back(float(sum / double(T)));
-  }
+  m.loss_curve = run_epochs(T, h.vae.epochs, B, order_rng, [&](const int32_t* rows, int b) {
+    for (int i = 0; i < b; ++i)
+      std::copy(d.input(rows[i]), d.input(rows[i]) + in, x.begin() + size_t(i) * in);
+    for (int i = 0; i < b * L; ++i) eps[i] = float(noise.normal());
+    std::fill(grad.begin(), grad.end(), 0.f);
+    const float loss = vae_loss_and_grad(m.shape, m.params.data(), x.data(), b, eps.data(),
+                                         float(h.vae_kl_weight), grad.data(), ws, nullptr, threads);
+    adam_step(h.vae.adam, adam, m.params.data(), grad.data(), m.params.size());
+    m.train_flops += 3 * (m.shape.encoder.forward_flops(b) + m.shape.decoder.forward_flops(b));
+    return loss;
+  });
   require_finite(m.loss_curve, "VAE loss");
   require_finite(m.params, "VAE weights");
   return m;
