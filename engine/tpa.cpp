@@ -12,27 +12,21 @@
 
 namespace sirl {
 
-namespace {
-
-// The network each head trains: frozen → head alone on φ(ξ); unfrozen → φ and head stacked,
-// φ's embedding layer kept linear as in φ itself.
-MlpShape head_network(const Representation& rep, const Hyper& h, bool frozen) {
+MlpShape tpa_network(const MlpShape& phi, const Hyper& h, bool frozen) {
   MlpShape s;
   if (frozen) {
-    s.widths = {rep.dim()};
+    s.widths = {phi.out()};
   } else {
-    s.widths = rep.shape.widths;
-    if (!rep.shape.relu_on_output) s.linear_layers = {rep.shape.layers() - 1};
-    s.linear_layers.insert(s.linear_layers.end(), rep.shape.linear_layers.begin(),
-                           rep.shape.linear_layers.end());
+    s.widths = phi.widths;
+    if (!phi.relu_on_output) s.linear_layers = {phi.layers() - 1};
+    s.linear_layers.insert(s.linear_layers.end(), phi.linear_layers.begin(),
+                           phi.linear_layers.end());
   }
   for (int w : h.tpa_hidden) s.widths.push_back(w);
   s.widths.push_back(1);
   validate(s);
   return s;
 }
-
-}  // namespace
 
 TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::vector<TpaSet>& sets,
                        const TpaConfig& cfg, uint64_t seed) {
@@ -82,9 +76,9 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   }
 
   const Hyper& h = cfg.hyper;
-  const MlpShape net = head_network(rep, h, cfg.frozen);
+  const MlpShape net = tpa_network(rep.shape, h, cfg.frozen);
   const size_t P = net.param_count(), P_phi = cfg.frozen ? 0 : rep.params.size();
-  const MlpShape head_only = head_network(rep, h, true);
+  const MlpShape head_only = tpa_network(rep.shape, h, true);
   std::vector<float> init(size_t(R) * P);
   for (int r = 0; r < R; ++r) {
     float* p = init.data() + size_t(r) * P;

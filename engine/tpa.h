@@ -29,6 +29,10 @@ struct TpaResult {
   double train_flops = 0;
 };
 
+// The network each head trains: frozen → the head alone on φ(ξ) (embedding → tpa_hidden… → 1);
+// unfrozen → φ and the head stacked, φ's embedding layer kept linear as in φ itself.
+MlpShape tpa_network(const MlpShape& phi, const Hyper& h, bool frozen);
+
 // sets[r] holds reward r's labelled pairs: rows [0, train) for training (the first M are
 // used), rows [train, count) held out. Head initialisation and batch order come from streams
 // of `seed` per reward, so frozen and unfrozen cells of one seed start from the same heads.

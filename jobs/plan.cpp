@@ -3,6 +3,8 @@
 #include <stdexcept>
 
 #include "engine/representation.h"
+#include "engine/tpa.h"
+#include "kernels/vae.h"
 
 namespace sirl {
 
@@ -55,16 +57,6 @@ EnvSize env_size(const std::string& env, const Profile& p) {
   throw std::invalid_argument("no cost model for environment " + env);
 }
 
-MlpShape head_net(const Hyper& h, int in, bool frozen) {
-  MlpShape s{{frozen ? h.embedding_dim : in}};
-  if (!frozen)
-    for (int w : h.phi_hidden) s.widths.push_back(w);
-  if (!frozen) s.widths.push_back(h.embedding_dim);
-  for (int w : h.tpa_hidden) s.widths.push_back(w);
-  s.widths.push_back(1);
-  return s;
-}
-
 // Forward+backward ≈ 3× the forward multiply-adds (DESIGN.md §9).
 double train_flops(const MlpShape& s, int64_t rows_per_epoch, int epochs) {
   return 3.0 * s.forward_flops(1) * double(rows_per_epoch) * epochs;
@@ -95,21 +87,16 @@ Plan make_plan(const Profile& p) {
     const MlpShape phi = phi_shape(es.input_dim, h);
     const EnvGrid& grid = p.grid.at(env);
     for (int64_t seed : grid.seeds) {
-      const std::string s = env + "/s" + std::to_string(seed);
       auto vae = [&]() {
         Task t;
         t.key = vae_key(env, seed);
         t.kind = TaskKind::vae;
         t.env = env;
         t.seed = seed;
-        MlpShape full{{es.input_dim}};
-        for (int w : h.phi_hidden) full.widths.push_back(w);
-        full.widths.push_back(2 * h.embedding_dim);
-        for (auto it = h.phi_hidden.rbegin(); it != h.phi_hidden.rend(); ++it)
-          full.widths.push_back(*it);
-        full.widths.push_back(es.input_dim);
-        t.flops = train_flops(full, es.trajectories, h.vae.epochs);
-        t.bytes = working_set(full, h.vae.batch);
+        const VaeShape vs = make_vae_shape(es.input_dim, h.phi_hidden, h.embedding_dim);
+        t.flops = train_flops(vs.encoder, es.trajectories, h.vae.epochs) +
+                  train_flops(vs.decoder, es.trajectories, h.vae.epochs);
+        t.bytes = working_set(vs.encoder, h.vae.batch) + working_set(vs.decoder, h.vae.batch);
         return add(std::move(t));
       };
       auto rep = [&](const Variant& v, int64_t N) {
@@ -149,12 +136,11 @@ Plan make_plan(const Profile& p) {
         t.M = M;
         t.frozen = frozen;
         t.deps = {r};
-        const MlpShape net = head_net(h, es.input_dim, frozen);
+        const MlpShape net = tpa_network(phi, h, frozen);
         t.flops = 20 * train_flops(net, 2 * M, h.tpa.epochs);
         t.bytes = 20 * working_set(net, 2 * h.tpa.batch);
         add(std::move(t));
       };
-      (void)s;
       for (const auto& v : p.fpe_methods)
         for (int64_t N : grid.fpe_N) fpe(v, N);
       for (const auto& v : p.tpa.methods)
