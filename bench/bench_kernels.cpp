@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "engine/train_step.h"
-#include "kernels/vae.h"
 #include "kernels/rng.h"
+#include "kernels/vae.h"
 
 namespace {
 using namespace sirl;
@@ -124,8 +124,8 @@ void BM_VaeStep(benchmark::State& state) {
   VaeWorkspace<float> ws;
   for (auto _ : state) {
     std::fill(g.begin(), g.end(), 0.f);
-    benchmark::DoNotOptimize(
-        vae_loss_and_grad(s, p.data(), X.data(), B, eps.data(), 0.01f, g.data(), ws));
+    benchmark::DoNotOptimize(vae_loss_and_grad(s, p.data(), X.data(), B, eps.data(), 0.01f,
+                                               VaeElbo::sum_over_inputs, g.data(), ws));
     adam_step(cfg, adam, p.data(), g.data(), p.size());
   }
   const double flops = 3 * (s.encoder.forward_flops(B) + s.decoder.forward_flops(B));

@@ -82,4 +82,24 @@ Dataset make_grid_dataset(const GridConfig& c) {
   return d;
 }
 
+Dataset make_grid2_dataset(const GridConfig& c) {
+  Dataset g = make_grid_dataset(c);
+  Dataset d = g;
+  d.env = "grid2";
+  constexpr int kKeep[] = {2, 3};  // laptop_distance, abs_angle of the full GridRobot's four
+  d.feature_names.clear();
+  d.feature_units.clear();
+  d.features_raw.clear();
+  for (int f : kKeep) {
+    d.feature_names.push_back(g.feature_names[f]);
+    d.feature_units.push_back(g.feature_units[f]);
+  }
+  for (int64_t i = 0; i < g.count; ++i)
+    for (int f : kKeep) d.features_raw.push_back(g.features_raw[size_t(i) * 4 + f]);
+  d.object_names = {"laptop"};
+  d.object_positions = {float(c.laptop[0]), float(c.laptop[1])};
+  normalise_features(d);
+  return d;
+}
+
 }  // namespace sirl

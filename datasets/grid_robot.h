@@ -10,6 +10,7 @@
 // obstacle 1, obstacle 2 and the laptop, and |angle| in degrees; normalised min-max over Ξ.
 #pragma once
 #include <array>
+#include <cstdint>
 
 #include "datasets/dataset.h"
 
@@ -27,12 +28,17 @@ struct GridConfig {
 inline constexpr int kGridStates = 9;
 inline constexpr int kGridInputDim = 2 * kGridStates + 1;
 inline constexpr std::array<int, 7> kGridAngles{-90, -60, -30, 0, 30, 60, 90};
+inline constexpr int64_t kGridTrajectories = 4 * 70 * 7;
 
 // Throws std::invalid_argument for a size other than 5 (the path length is fixed at 9 states)
 // or an object outside the grid.
 void validate(const GridConfig& cfg);
 
 Dataset make_grid_dataset(const GridConfig& cfg = {});
+
+// "grid2", the paper's simplified GridRobot (its Fig. 3: "only the laptop and the joint angle"):
+// the same Ξ and inputs, no obstacles, and two features, laptop_distance and abs_angle.
+Dataset make_grid2_dataset(const GridConfig& cfg = {});
 
 // The 4 raw features of one trajectory given its 9 cells and angle (exposed for tests).
 std::array<float, 4> grid_features(const GridConfig& cfg,

@@ -10,8 +10,12 @@
 namespace sirl {
 
 RewardSet make_random_rewards(const std::string& name, int count, int dim, uint64_t seed) {
+  Rng rng(seed_from_key("rewards/" + name, seed));
+  return make_random_rewards(name, count, dim, rng);
+}
+
+RewardSet make_random_rewards(const std::string& name, int count, int dim, Rng& rng) {
   RewardSet r{name, count, dim, std::vector<float>(size_t(count) * dim)};
-  Rng rng(seed_from_key(name, seed));
   for (int i = 0; i < count; ++i) {
     double norm = 0;
     std::vector<double> g(dim);
@@ -28,9 +32,17 @@ RewardSet make_random_rewards(const std::string& name, int count, int dim, uint6
 }
 
 RewardSets make_reward_sets(int dim, uint64_t seed) {
+  StreamSet streams(seed);
+  return make_reward_sets(dim, streams);
+}
+
+RewardSets make_reward_sets(int dim, StreamSet& streams) {
+  auto random = [&](const char* name, int count) {
+    Rng rng = streams.open(std::string("rewards/") + name);
+    return make_random_rewards(name, count, dim, rng);
+  };
   RewardSets s{
-      make_random_rewards("test", 20, dim, seed), make_random_rewards("multipref10", 10, dim, seed),
-      make_random_rewards("multipref50", 50, dim, seed),
+      random("test", 20), random("multipref10", 10), random("multipref50", 50),
       RewardSet{"singlepref", 1, dim, std::vector<float>(dim, float(1 / std::sqrt(double(dim))))}};
   std::set<std::vector<float>> seen;
   for (const RewardSet* r : {&s.test, &s.multipref10, &s.multipref50, &s.singlepref})

@@ -7,6 +7,7 @@
 
 #include "datasets/dataset.h"
 #include "datasets/simulated_human.h"
+#include "datasets/streams.h"
 
 namespace sirl {
 
@@ -17,15 +18,19 @@ struct RewardSet {
 };
 
 // Unit-norm directions w = g/‖g‖, g ~ N(0, I) (weights of either sign: a human may want a
-// feature high or low), from the stream seed_from_key(name, seed).
+// feature high or low), drawn from `rng`.
+RewardSet make_random_rewards(const std::string& name, int count, int dim, Rng& rng);
+// The same from the stream seed_from_key("rewards/" + name, seed).
 RewardSet make_random_rewards(const std::string& name, int count, int dim, uint64_t seed);
 
-// The paper's reward sets from one named seed: 20 test rewards, 10 and 50 MultiPref training
-// humans, and SinglePref's equal weights 1/√dim. Each from its own stream; the sets are checked
-// disjoint (no weight vector appears twice).
+// The paper's reward sets: 20 test rewards, 10 and 50 MultiPref training humans, and
+// SinglePref's equal weights 1/√dim. Each random set from its own stream "rewards/<name>" of
+// `streams` (never a stream the queries use); the sets are checked disjoint (no weight vector
+// appears twice).
 struct RewardSets {
   RewardSet test, multipref10, multipref50, singlepref;
 };
+RewardSets make_reward_sets(int dim, StreamSet& streams);
 RewardSets make_reward_sets(int dim, uint64_t seed);
 
 // N similarity triplets [N, 3] as (positive 1, positive 2, negative) row indices of Ξ.

@@ -9,8 +9,9 @@ QueryBundle make_query_bundle(const Dataset& d, const QueryBundleConfig& cfg, ui
   QueryBundle b;
   b.config = cfg;
   b.seed = seed;
-  b.rewards = make_reward_sets(d.feature_count(), seed);
-  auto stream = [&](const std::string& name) { return Rng(seed_from_key(name, seed)); };
+  StreamSet streams(seed);
+  b.rewards = make_reward_sets(d.feature_count(), streams);
+  auto stream = [&](const std::string& name) { return streams.open("queries/" + name); };
   Rng sim = stream("similarity");
   b.similarity = sample_similarity_queries(d, cfg.similarity, cfg.teacher, sim);
   Rng sp = stream("singlepref"), m10 = stream("multipref10"), m50 = stream("multipref50");
@@ -26,6 +27,7 @@ QueryBundle make_query_bundle(const Dataset& d, const QueryBundleConfig& cfg, ui
   }
   Rng fr = stream("fpe");
   b.fpe = sample_fpe_split(d, std::min<int64_t>(cfg.fpe_trajectories, d.count), fr);
+  b.streams = streams.opened();
   return b;
 }
 

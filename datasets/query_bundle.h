@@ -2,6 +2,7 @@
 // reward sets and every query set, answered by one teacher. `sirl dataset` stores it whole.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "datasets/queries.h"
@@ -24,10 +25,12 @@ struct QueryBundle {
   PreferenceSet singlepref, multipref10, multipref50;
   std::vector<TpaSet> tpa;  // one per test reward
   FpeSplit fpe;
+  std::vector<std::string> streams;  // every random stream the bundle drew from, in order
 };
 
-// Each query set draws from its own stream seed_from_key(<set name>, seed), so adding a set
-// never changes the others.
+// Each reward set and each query set draws from its own named stream of `seed` ("rewards/test",
+// "queries/similarity", "queries/tpa/3", …; listed in `streams`), so adding a set never changes
+// the others and no two sets share draws.
 QueryBundle make_query_bundle(const Dataset& d, const QueryBundleConfig& cfg, uint64_t seed);
 
 }  // namespace sirl

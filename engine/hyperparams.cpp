@@ -9,7 +9,7 @@ namespace sirl {
 
 Hyper paper_hyper(const std::string& env) {
   Hyper h;
-  if (env == "grid") return h;
+  if (env == "grid" || env == "grid2") return h;
   if (env == "jaco" || env == "jaco2") {
     h.phi_hidden = {1024, 1024};
     h.pref_l2 = 1;
@@ -19,7 +19,8 @@ Hyper paper_hyper(const std::string& env) {
     h.tpa_l2 = 1;
     return h;
   }
-  throw std::invalid_argument("unknown environment '" + env + "' (expected grid or jaco)");
+  throw std::invalid_argument("unknown environment '" + env +
+                              "' (expected grid, grid2, jaco or jaco2)");
 }
 
 namespace {
@@ -40,6 +41,7 @@ void for_each_field(H& h, F&& f) {
   f("sirl.margin", h.triplet_margin);
   schedule("vae", h.vae);
   f("vae.kl_weight", h.vae_kl_weight);
+  f("vae.elbo", h.vae_elbo);
   schedule("pref", h.pref);
   f("pref.l2", h.pref_l2);
   schedule("tpa", h.tpa);
@@ -81,6 +83,13 @@ void parse(const std::string& key, const std::string& v, std::vector<int>& out) 
   out = r;
 }
 
+void parse(const std::string&, const std::string& v, std::string& out) {
+  out = v;  // checked by validate()
+}
+
+std::string show(const std::string& v) {
+  return v;
+}
 std::string show(int v) {
   return std::to_string(v);
 }
@@ -153,6 +162,11 @@ void validate(const Hyper& h) {
   schedule("tpa", h.tpa);
   if (h.triplet_margin < 0) fail("sirl.margin must be >= 0");
   if (h.vae_kl_weight < 0) fail("vae.kl_weight must be >= 0");
+  if (h.vae_elbo != "sum" && h.vae_elbo != "mean")
+    fail(
+        "vae.elbo must be \"sum\" (the standard ELBO) or \"mean\" (reconstruction averaged "
+        "over inputs), got \"" +
+        h.vae_elbo + "\"");
   if (h.pref_l2 < 0) fail("pref.l2 must be >= 0");
   if (h.tpa_l2 < 0) fail("tpa.l2 must be >= 0");
 }

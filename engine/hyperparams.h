@@ -25,6 +25,11 @@ struct Hyper {
   double triplet_margin = 1.0;  // the paper does not state α; PyTorch's TripletMarginLoss default
   TrainSchedule vae{2000, 32, {0.01, 0.99999}};
   double vae_kl_weight = 0.01;
+  // The ELBO's form (the paper says only "a standard variational reconstruction loss", λ = 0.01):
+  // "sum" (default, Kingma & Welling): squared error summed over the input's dimensions and KL
+  // summed over the latent dimensions, both averaged over the batch. "mean": the squared error
+  // averaged over batch × inputs (a KL weight in effect `inputs` times larger; collapses φ).
+  std::string vae_elbo = "sum";
   TrainSchedule pref{5000, 32, {0.01, 1.0}};  // MultiPref-K and SinglePref
   double pref_l2 = 10;
   TrainSchedule tpa{500, 64, {0.001, 1.0}};  // the TPA reward heads
@@ -32,7 +37,7 @@ struct Hyper {
   double tpa_l2 = 10;
 };
 
-// "grid" or "jaco" (throws std::invalid_argument otherwise).
+// The paper's values for "grid"/"grid2" or "jaco"/"jaco2" (throws std::invalid_argument otherwise).
 Hyper paper_hyper(const std::string& env);
 
 // Sets one value by its dotted name from text ("3000", "0.004", "128,128", "true").

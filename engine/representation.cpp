@@ -65,6 +65,37 @@ void embed(const Representation& rep, const float* X, int64_t n, float* out, int
   }
 }
 
+EmbeddingPass embed_all(const Representation& rep, const float* X, int64_t n, int threads) {
+  constexpr int64_t kChunk = 1024;
+  const MlpShape& s = rep.shape;
+  const int in = s.in(), d = rep.dim();
+  std::vector<int> hidden;  // hidden layers with a ReLU
+  for (int l = 0; l + 1 < s.layers(); ++l)
+    if (s.relu_after(l)) hidden.push_back(l);
+  std::vector<std::vector<char>> alive(hidden.size());
+  for (size_t k = 0; k < hidden.size(); ++k) alive[k].assign(s.widths[hidden[k] + 1], 0);
+  EmbeddingPass out;
+  out.embedding.resize(size_t(n) * d);
+  MlpTape<float> tape;
+  for (int64_t i0 = 0; i0 < n; i0 += kChunk) {
+    const int b = int(std::min(kChunk, n - i0));
+    mlp_forward(s, rep.params.data(), X + i0 * in, b, tape, threads);
+    std::copy(tape.output(), tape.output() + size_t(b) * d, out.embedding.begin() + i0 * d);
+    for (size_t k = 0; k < hidden.size(); ++k) {
+      const int w = s.widths[hidden[k] + 1];
+      const float* a = tape.act[hidden[k]].data();
+      for (int i = 0; i < b; ++i)
+        for (int j = 0; j < w; ++j) alive[k][j] |= a[size_t(i) * w + j] > 0.f;
+    }
+  }
+  for (const auto& a : alive) {
+    size_t dead = 0;
+    for (char c : a) dead += !c;
+    out.dead_fraction.push_back(a.empty() ? 0.f : float(dead) / float(a.size()));
+  }
+  return out;
+}
+
 void require_finite(const std::vector<float>& v, const std::string& what) {
   for (size_t i = 0; i < v.size(); ++i)
     if (!std::isfinite(v[i]))

@@ -37,6 +37,16 @@ MlpShape phi_shape(int in, const Hyper& h);
 // out [n, d] = φ(X [n, in]), in chunks so memory stays bounded for any n.
 void embed(const Representation& rep, const float* X, int64_t n, float* out, int threads = 1);
 
+// φ over a whole trajectory space in one pass: the embedding out [n, d] and, for each hidden
+// layer followed by a ReLU, the fraction of its units that are 0 on every one of the n rows
+// ("dead": a φ whose last hidden layer is all dead is a constant map, and no gradient reaches
+// the layers below it, so no head on it can learn).
+struct EmbeddingPass {
+  std::vector<float> embedding;      // [n, d]
+  std::vector<float> dead_fraction;  // [hidden layers with a ReLU]
+};
+EmbeddingPass embed_all(const Representation& rep, const float* X, int64_t n, int threads = 1);
+
 // Throws std::runtime_error naming `what` if any value is NaN or ±Inf.
 void require_finite(const std::vector<float>& v, const std::string& what);
 

@@ -128,16 +128,19 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   MlpTape<float> tape;
   std::vector<float> xb;
   res.accuracy.resize(R);
+  res.train_accuracy.resize(R);
   res.phi_drift.assign(R, 0.f);
+  auto accuracy_on = [&](const float* p, const std::vector<int32_t>& pairs, const float* labels) {
+    const int n = int(pairs.size() / 2), w = net.in();
+    xb.resize(size_t(2) * n * w);
+    gather_by_role(X.data(), w, pairs.data(), n, 2, xb.data());
+    mlp_forward(net, p, xb.data(), 2 * n, tape, cfg.threads);
+    return preference_accuracy(tape.output(), labels, n);
+  };
   for (int r = 0; r < R; ++r) {
-    const int nt = int(test_pairs[r].size() / 2);
-    const int w = net.in();
-    xb.resize(size_t(2) * nt * w);
-    gather_by_role(X.data(), w, test_pairs[r].data(), nt, 2, xb.data());
     const float* p = t.params.data() + size_t(r) * P;
-    mlp_forward(net, p, xb.data(), 2 * nt, tape, cfg.threads);
-    res.accuracy[r] =
-        preference_accuracy(tape.output(), sets[r].pairs.label.data() + sets[r].train, nt);
+    res.accuracy[r] = accuracy_on(p, test_pairs[r], sets[r].pairs.label.data() + sets[r].train);
+    res.train_accuracy[r] = accuracy_on(p, train_pairs[r], sets[r].pairs.label.data());
     for (size_t i = 0; i < P_phi; ++i)
       res.phi_drift[r] = std::max(res.phi_drift[r], std::abs(p[i] - rep.params[i]));
   }

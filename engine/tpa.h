@@ -21,8 +21,9 @@ struct TpaConfig {
 };
 
 struct TpaResult {
-  std::vector<double> accuracy;  // [R] held-out accuracy per test reward
-  double mean = 0, stddev = 0;   // TPA = mean over rewards; stddev over rewards (n − 1)
+  std::vector<double> accuracy;        // [R] held-out accuracy per test reward
+  std::vector<double> train_accuracy;  // [R] accuracy on the head's own M training pairs
+  double mean = 0, stddev = 0;         // TPA = mean over rewards; stddev over rewards (n − 1)
   int epochs = 0;
   std::vector<float> loss_curves;  // [R, epochs] mean training loss per epoch, per head
   std::vector<float> phi_drift;    // [R] max |Δ| of the head's copy of φ (0 when frozen)

@@ -8,9 +8,37 @@
 
 namespace sirl {
 
+VaeElbo vae_elbo_form(const Hyper& h) {
+  return h.vae_elbo == "mean" ? VaeElbo::mean_over_inputs : VaeElbo::sum_over_inputs;
+}
+
+namespace {
+// KL per latent dimension and reconstruction error over all of Ξ, with z = μ (ε = 0).
+void measure_posterior(const Dataset& d, VaeModel& m, int threads) {
+  constexpr int kChunk = 256;
+  const int L = m.shape.latent;
+  std::vector<float> eps(size_t(kChunk) * L, 0.f);
+  VaeWorkspace<float> ws;
+  VaeLossParts parts;
+  std::vector<double> kl(L, 0.0);
+  double sq = 0;
+  for (int64_t i0 = 0; i0 < d.count; i0 += kChunk) {
+    const int b = int(std::min<int64_t>(kChunk, d.count - i0));
+    vae_loss_and_grad(m.shape, m.params.data(), d.input(i0), b, eps.data(), 0.f, m.elbo,
+                      static_cast<float*>(nullptr), ws, &parts, threads);
+    for (int k = 0; k < L; ++k) kl[k] += parts.kl_per_dim[k] * b;
+    sq += parts.squared_error * b;
+  }
+  m.kl_per_dim.resize(L);
+  for (int k = 0; k < L; ++k) m.kl_per_dim[k] = float(kl[k] / double(d.count));
+  m.reconstruction_mse = sq / double(d.count);
+}
+}  // namespace
+
 VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads) {
   validate(h);
   VaeModel m;
+  m.elbo = vae_elbo_form(h);
   m.shape = make_vae_shape(d.input_dim, h.phi_hidden, h.embedding_dim);
   m.params.resize(m.shape.param_count());
   Rng init(seed_from_key("vae_init", seed)), noise(seed_from_key("vae_noise", seed)),
@@ -23,19 +51,33 @@ VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads)
   std::vector<float> grad(m.params.size()), x(size_t(B) * in), eps(size_t(B) * L);
   AdamState adam(m.params.size());
   VaeWorkspace<float> ws;
+  VaeLossParts parts;
+  double rec_sum = 0, kl_sum = 0;
+  int64_t rows_seen = 0;
   m.loss_curve = run_epochs(T, h.vae.epochs, B, order_rng, [&](const int32_t* rows, int b) {
     for (int i = 0; i < b; ++i)
       std::copy(d.input(rows[i]), d.input(rows[i]) + in, x.begin() + size_t(i) * in);
     for (int i = 0; i < b * L; ++i) eps[i] = float(noise.normal());
     std::fill(grad.begin(), grad.end(), 0.f);
-    const float loss = vae_loss_and_grad(m.shape, m.params.data(), x.data(), b, eps.data(),
-                                         float(h.vae_kl_weight), grad.data(), ws, nullptr, threads);
+    const float loss =
+        vae_loss_and_grad(m.shape, m.params.data(), x.data(), b, eps.data(), float(h.vae_kl_weight),
+                          m.elbo, grad.data(), ws, &parts, threads);
     adam_step(h.vae.adam, adam, m.params.data(), grad.data(), m.params.size());
     m.train_flops += 3 * (m.shape.encoder.forward_flops(b) + m.shape.decoder.forward_flops(b));
+    rec_sum += parts.reconstruction * b;
+    kl_sum += parts.kl * b;
+    if ((rows_seen += b) % T == 0) {  // the epoch's last batch
+      m.reconstruction_curve.push_back(float(rec_sum / double(T)));
+      m.kl_curve.push_back(float(kl_sum / double(T)));
+      rec_sum = kl_sum = 0;
+    }
     return loss;
   });
   require_finite(m.loss_curve, "VAE loss");
   require_finite(m.params, "VAE weights");
+  measure_posterior(d, m, threads);
+  m.train_flops +=
+      m.shape.encoder.forward_flops(int(d.count)) + m.shape.decoder.forward_flops(int(d.count));
   return m;
 }
 

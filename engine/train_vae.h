@@ -12,10 +12,20 @@ namespace sirl {
 
 struct VaeModel {
   VaeShape shape;  // encoder in → phi_hidden… → 2·d, decoder d → …reversed… → in
-  std::vector<float> params;      // [encoder | decoder]
-  std::vector<float> loss_curve;  // mean ELBO loss per epoch
+  std::vector<float> params;  // [encoder | decoder]
+  VaeElbo elbo = VaeElbo::sum_over_inputs;
+  std::vector<float> loss_curve;            // mean loss per epoch (reconstruction + λ·KL)
+  std::vector<float> reconstruction_curve;  // its reconstruction term per epoch
+  std::vector<float> kl_curve;              // its KL term (summed over latents) per epoch
+  // After training, over all of Ξ with z = μ (no sampling): a latent dimension whose KL is ≈ 0
+  // carries no information about the input (posterior collapse).
+  std::vector<float> kl_per_dim;  // [latent] mean over Ξ of KL(q(z_k|ξ) ‖ N(0, 1)), nats
+  double reconstruction_mse = 0;  // mean over Ξ × inputs of (x̂ − x)²
   double train_flops = 0;
 };
+
+// "sum" → sum_over_inputs, "mean" → mean_over_inputs (validate(Hyper) checks the name).
+VaeElbo vae_elbo_form(const Hyper& h);
 
 // Trains on all d.count trajectories with h.vae (epochs, batch, Adam) and h.vae_kl_weight; the
 // initial weights and the reparameterisation noise come from streams of `seed`.

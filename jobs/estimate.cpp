@@ -4,8 +4,7 @@
 #include <chrono>
 #include <functional>
 
-#include "datasets/grid_robot.h"
-#include "datasets/jaco_robot.h"
+#include "datasets/environments.h"
 #include "engine/methods.h"
 #include "engine/tpa.h"
 #include "jobs/scheduler.h"
@@ -28,13 +27,14 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
     JacoConfig small = p.jaco;
     small.trajectories = 300;  // enough to time the training code; generation is not timed here
     small.threads = 0;
-    const Dataset d = env == "jaco" ? make_jaco_dataset(small) : make_grid_dataset();
+    const EnvSpec& spec = env_spec(env);
+    const Dataset d = spec.make(small);
     QueryBundleConfig qc = p.queries;
     qc.similarity = qc.preference = 200;
     qc.fpe_trajectories = std::min<int64_t>(qc.fpe_trajectories, d.count);
     const QueryBundle b = make_query_bundle(d, qc, 1);
     Hyper h = p.hyper.at(env);
-    const bool big = env == "jaco";  // a few steps suffice for GEMM-bound networks
+    const bool big = spec.sampled;  // JacoRobot: a few steps suffice for GEMM-bound networks
     h.sirl.epochs = big ? 1 : 20;
     h.pref.epochs = big ? 1 : 10;
     h.vae.epochs = 1;

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "datasets/environments.h"
 #include "engine/representation.h"
 #include "engine/tpa.h"
 #include "kernels/vae.h"
@@ -52,9 +53,8 @@ struct EnvSize {
   int64_t trajectories;
 };
 EnvSize env_size(const std::string& env, const Profile& p) {
-  if (env == "grid") return {19, 1960};
-  if (env == "jaco") return {p.jaco.waypoints * kJacoStateDim, p.jaco.trajectories};
-  throw std::invalid_argument("no cost model for environment " + env);
+  const EnvSpec& e = env_spec(env);
+  return {e.input_dim(p.jaco), e.trajectories(p.jaco)};
 }
 
 // Forward+backward ≈ 3× the forward multiply-adds (DESIGN.md §9).
@@ -127,7 +127,7 @@ Plan make_plan(const Profile& p) {
         t.bytes = 4.0 * double(p.queries.fpe_trajectories) * (es.input_dim + 16);
         add(std::move(t));
       };
-      auto tpa = [&](const Variant& v, int64_t N, int64_t M, bool frozen) {
+      auto tpa = [&](const Variant& v, int64_t N, int64_t M, bool frozen, bool ablation) {
         const int r = rep(v, N);
         Task t = plan.tasks[r];
         t.key = t.key.substr(0, t.key.size() - 3) + "tpa/M" + std::to_string(M) +
@@ -139,21 +139,22 @@ Plan make_plan(const Profile& p) {
         const MlpShape net = tpa_network(phi, h, frozen);
         t.flops = 20 * train_flops(net, 2 * M, h.tpa.epochs);
         t.bytes = 20 * working_set(net, 2 * h.tpa.batch);
-        add(std::move(t));
+        Task& added = plan.tasks[add(std::move(t))];  // shared by both grids when keys match
+        (ablation ? added.in_ablation : added.in_main) = true;
       };
       for (const auto& v : p.fpe_methods)
         for (int64_t N : grid.fpe_N) fpe(v, N);
       for (const auto& v : p.tpa.methods)
         for (int64_t N : grid.tpa_N)
           for (int64_t M : grid.tpa_M)
-            for (bool fr : frozen_settings(p.tpa, v)) tpa(v, N, M, fr);
+            for (bool fr : frozen_settings(p.tpa, v)) tpa(v, N, M, fr, false);
       for (Method m : p.ablation_methods)
         for (bool with_vae : {false, true}) {
           if (with_vae && !accepts_vae_pretrain(m)) continue;
           const Variant v{m, with_vae};
           for (int64_t N : grid.ablation_N)
             for (int64_t M : grid.ablation_M)
-              for (bool fr : {true, false}) tpa(v, N, M, fr);
+              for (bool fr : {true, false}) tpa(v, N, M, fr, true);
         }
     }
   }

@@ -23,9 +23,10 @@ struct Task {
   int64_t N = 0;    // 0 for methods that use no queries (vae, random)
   int64_t M = 0;    // tpa
   bool frozen = true;
-  std::vector<int> deps;  // indices into Plan::tasks
-  double flops = 0;       // estimated floating-point operations
-  double bytes = 0;       // estimated peak working set
+  bool in_main = false, in_ablation = false;  // tpa: a cell of [tpa] (Fig. 5), [ablation] (Fig. 7)
+  std::vector<int> deps;                      // indices into Plan::tasks
+  double flops = 0;                           // estimated floating-point operations
+  double bytes = 0;                           // estimated peak working set
 };
 
 struct Plan {

@@ -1,5 +1,7 @@
 #include "jobs/profile.h"
 
+#include "datasets/environments.h"
+
 #include <toml++/toml.h>
 #include <algorithm>
 #include <cmath>
@@ -185,6 +187,7 @@ std::string hyper_text(const Reader& r, const toml::node& n, const std::string& 
     return o.str();
   }
   if (n.is_boolean()) return *n.value<bool>() ? "true" : "false";
+  if (n.is_string()) return *n.value<std::string>();
   if (n.is_array()) {
     std::string s;
     for (auto&& e : *n.as_array()) {
@@ -193,7 +196,29 @@ std::string hyper_text(const Reader& r, const toml::node& n, const std::string& 
     }
     return s;
   }
-  r.fail(&n, key + " must be a number, a boolean or an array of integers");
+  r.fail(&n, key + " must be a number, a boolean, a string or an array of integers");
+}
+
+// [tpa]: methods, N, M and which of frozen/unfrozen to run.
+void parse_tpa(const Reader& r, const toml::table& tpa, TpaGrid& g) {
+  r.only_keys(tpa, "[tpa]", {"methods", "N", "M", "frozen"});
+  g.methods = r.variants(tpa, "methods");
+  g.N = r.int_list(tpa, "N", 1, 10'000'000, true);
+  g.M = r.int_list(tpa, "M", 1, 10'000'000, true);
+  if (const toml::node* f = tpa.get("frozen")) {
+    if (f->is_string()) {
+      if (*f->value<std::string>() != "best")
+        r.fail(f, "frozen must be \"best\" or an array of booleans");
+    } else if (f->is_array()) {
+      for (auto&& e : *f->as_array()) {
+        if (!e.is_boolean()) r.fail(f, "frozen must be \"best\" or an array of booleans");
+        g.frozen.push_back(*e.value<bool>());
+      }
+      if (g.frozen.empty()) r.fail(f, "frozen must not be empty");
+    } else {
+      r.fail(f, "frozen must be \"best\" or an array of booleans");
+    }
+  }
 }
 
 }  // namespace
@@ -209,20 +234,27 @@ Profile parse_profile(const std::string& text, const std::string& path) {
   Reader r(root, path);
   r.only_keys(root, "the profile",
               {"name", "description", "envs", "seeds", "queries", "teacher", "fpe", "tpa",
-               "ablation", "hyper", "jaco", "grid", "study"});
+               "ablation", "hyper", "grid", "grid2", "jaco", "jaco2", "study"});
   Profile p;
   p.path = path;
   p.text = text;
   p.name = r.string(root, "name", "", true);
   p.description = r.string(root, "description", "");
   p.envs = r.string_list(root, "envs", true);
-  for (const auto& e : p.envs)
-    if (e != "grid" && e != "jaco")
-      r.fail(root.get("envs"), "unknown environment '" + e + "' (expected grid or jaco)");
-  const std::set<std::string> axis_keys{"seeds", "fpe_N",      "tpa_N",
-                                        "tpa_M", "ablation_N", "ablation_M"};
-  if (const auto* g = r.table(root, "grid", false)) r.only_keys(*g, "[grid]", axis_keys);
+  for (const auto& e : p.envs) {
+    try {
+      env_spec(e);
+    } catch (const std::invalid_argument& err) {
+      r.fail(root.get("envs"), err.what());
+    }
+  }
+  const std::set<std::string> axis_keys{"seeds",      "fpe_N",      "tpa_N",        "tpa_M",
+                                        "ablation_N", "ablation_M", "store_weights"};
+  for (const char* g : {"grid", "grid2", "jaco2"})
+    if (const auto* t = r.table(root, g, false))
+      r.only_keys(*t, std::string("[") + g + "]", axis_keys);
   if (const auto* j = r.table(root, "jaco", false)) {
+    // [jaco] also sets Ξ for both JacoRobot variants (jaco and jaco2).
     std::set<std::string> keys = axis_keys;
     keys.insert({"trajectories", "data_seed", "max_deformation"});
     r.only_keys(*j, "[jaco]", keys);
@@ -249,30 +281,18 @@ Profile parse_profile(const std::string& text, const std::string& path) {
     p.queries.teacher.equal = r.number(*t, "equal", 0, 0, inf);
   }
 
-  const auto* fpe = r.table(root, "fpe", true);
-  r.only_keys(*fpe, "[fpe]", {"methods", "N"});
-  p.fpe_methods = r.variants(*fpe, "methods");
-  p.fpe_N = r.int_list(*fpe, "N", 1, 10'000'000, true);
-
-  const auto* tpa = r.table(root, "tpa", true);
-  r.only_keys(*tpa, "[tpa]", {"methods", "N", "M", "frozen"});
-  p.tpa.methods = r.variants(*tpa, "methods");
-  p.tpa.N = r.int_list(*tpa, "N", 1, 10'000'000, true);
-  p.tpa.M = r.int_list(*tpa, "M", 1, 10'000'000, true);
-  if (const toml::node* f = tpa->get("frozen")) {
-    if (f->is_string()) {
-      if (*f->value<std::string>() != "best")
-        r.fail(f, "frozen must be \"best\" or an array of booleans");
-    } else if (f->is_array()) {
-      for (auto&& e : *f->as_array()) {
-        if (!e.is_boolean()) r.fail(f, "frozen must be \"best\" or an array of booleans");
-        p.tpa.frozen.push_back(*e.value<bool>());
-      }
-      if (p.tpa.frozen.empty()) r.fail(f, "frozen must not be empty");
-    } else {
-      r.fail(f, "frozen must be \"best\" or an array of booleans");
-    }
+  // A profile runs any part of the grid: [fpe], [tpa] and [ablation] are each optional, but at
+  // least one must be there.
+  const auto* fpe = r.table(root, "fpe", false);
+  const auto* tpa = r.table(root, "tpa", false);
+  if (!fpe && !tpa && !r.table(root, "ablation", false))
+    r.fail(&root, "nothing to run: give at least one of [fpe], [tpa] or [ablation]");
+  if (fpe) {
+    r.only_keys(*fpe, "[fpe]", {"methods", "N"});
+    p.fpe_methods = r.variants(*fpe, "methods");
+    p.fpe_N = r.int_list(*fpe, "N", 1, 10'000'000, true);
   }
+  if (tpa) parse_tpa(r, *tpa, p.tpa);
 
   if (const auto* ab = r.table(root, "ablation", false)) {
     r.only_keys(*ab, "[ablation]", {"methods", "N", "M"});
@@ -289,16 +309,23 @@ Profile parse_profile(const std::string& text, const std::string& path) {
 
   for (const auto& env : p.envs) {
     EnvGrid g{p.seeds, p.fpe_N, p.tpa.N, p.tpa.M, p.ablation_N, p.ablation_M};
+    g.store_weights = !env_spec(env).sampled;  // JacoRobot's 3.1 M-float networks: off
     if (const auto* t = r.table(root, env.c_str(), false)) {
       auto axis = [&](const char* key, std::vector<int64_t>& out, int64_t lo, int64_t hi) {
-        if (t->get(key)) out = r.int_list(*t, key, lo, hi, true);
+        // An empty list is allowed here: "this environment runs no such cell".
+        if (t->get(key)) out = r.int_list(*t, key, lo, hi, false);
       };
       axis("seeds", g.seeds, 0, 1'000'000'000);
+      if (g.seeds.empty()) r.fail(t->get("seeds"), "seeds must not be empty");
       axis("fpe_N", g.fpe_N, 1, 10'000'000);
       axis("tpa_N", g.tpa_N, 1, 10'000'000);
       axis("tpa_M", g.tpa_M, 1, 10'000'000);
       axis("ablation_N", g.ablation_N, 1, 10'000'000);
       axis("ablation_M", g.ablation_M, 1, 10'000'000);
+      if (const toml::node* w = t->get("store_weights")) {
+        if (!w->is_boolean()) r.fail(w, "store_weights must be true or false");
+        g.store_weights = *w->value<bool>();
+      }
     }
     p.grid[env] = g;
   }
@@ -327,13 +354,15 @@ Profile parse_profile(const std::string& text, const std::string& path) {
     std::set<std::string> allowed{"all"};
     for (const auto& e : p.envs) allowed.insert(e);
     r.only_keys(*hy, "[hyper] (one sub-table per environment, or 'all')", allowed);
-    for (const char* scope : {"all", "grid", "jaco"}) {
-      const auto* t = r.table(*hy, scope, false);
+    std::vector<std::string> scopes{"all"};
+    scopes.insert(scopes.end(), p.envs.begin(), p.envs.end());
+    for (const std::string& scope : scopes) {
+      const auto* t = r.table(*hy, scope.c_str(), false);
       if (!t) continue;
       for (auto&& [k, v] : *t) {
         const std::string key(k.str());
         for (auto& [env, h] : p.hyper) {
-          if (std::string(scope) != "all" && env != scope) continue;
+          if (scope != "all" && env != scope) continue;
           try {
             set_hyper(h, key, hyper_text(r, v, key));
           } catch (const std::invalid_argument& e) {

@@ -42,6 +42,10 @@ struct TpaGrid {
 // environment down: e.g. JacoRobot with fewer seeds or M points in `quick`).
 struct EnvGrid {
   std::vector<int64_t> seeds, fpe_N, tpa_N, tpa_M, ablation_N, ablation_M;
+  // Keep the networks' weights (`params`) in the results file. They always live in the task
+  // files while the run goes on (resume needs them); off by default for JacoRobot, whose φ and
+  // VAE hold 3.1 M and 6.3 M floats each.
+  bool store_weights = true;
 };
 
 // [study]: the simulated cohort `sirl reproduce` runs through the user-study pipeline (Fig. 6).

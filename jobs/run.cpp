@@ -172,6 +172,21 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
     pending[i] = 1;
     pending_flops += plan.tasks[i].flops;
   }
+  // A finished task whose weights were left out of the results file (store_weights = false) is
+  // computed again when a pending task needs them (deterministic: the same weights come back).
+  // Dependencies precede dependents, so one reverse sweep closes chains (VAE → φ → cells).
+  for (int i = n - 1; i >= 0; --i) {
+    if (!pending[i]) continue;
+    for (int d : plan.tasks[i].deps) {
+      const std::string& k = plan.tasks[d].key;
+      if (pending[d] || store.has(k)) continue;
+      auto it = prior.find(k);
+      if (it == prior.end() || it->second.arrays.count("params")) continue;
+      pending[d] = 1;
+      --reused;
+      pending_flops += plan.tasks[d].flops;
+    }
+  }
 
   RunContext ctx(p, [&](const std::string& key) -> TaskRecord {
     if (store.has(key)) return store.load(key);
@@ -225,6 +240,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
     auto it = all.find(plan.tasks[i].key);
     if (it == all.end() || !mine[i]) continue;
     records.push_back(it->second);
+    if (!p.grid.at(plan.tasks[i].env).store_weights) records.back().arrays.erase("params");
     ++done_mine;
   }
   RunInfo info;

@@ -3,11 +3,12 @@
 #include <chrono>
 #include <stdexcept>
 
-#include "datasets/grid_robot.h"
-#include "datasets/jaco_robot.h"
+#include "datasets/environments.h"
+#include "engine/convergence.h"
 #include "engine/fpe.h"
 #include "engine/methods.h"
 #include "engine/tpa.h"
+#include "jobs/task_outputs.h"
 #include "kernels/rng.h"
 
 namespace sirl {
@@ -28,13 +29,7 @@ std::once_flag& RunContext::once(const std::string& key) {
 
 const Dataset& RunContext::dataset(const std::string& env) {
   std::call_once(once("dataset/" + env), [&] {
-    std::shared_ptr<const Dataset> d;
-    if (env == "grid")
-      d = std::make_shared<const Dataset>(make_grid_dataset());
-    else if (env == "jaco")
-      d = std::make_shared<const Dataset>(make_jaco_dataset(profile_.jaco));
-    else
-      throw std::invalid_argument("environment " + env + " is not available");
+    auto d = std::make_shared<const Dataset>(env_spec(env).make(profile_.jaco));
     std::lock_guard lock(mu_);
     datasets_[env] = std::move(d);
   });
@@ -69,25 +64,14 @@ void RunContext::release(const std::string& key) {
   vaes_.erase(key);
 }
 
-std::shared_ptr<const Representation> RunContext::representation(const std::string& key,
-                                                                 const Task& t) {
+std::shared_ptr<const Representation> RunContext::representation(const std::string& key) {
   {
     std::lock_guard lock(mu_);
     auto it = reps_.find(key);
     if (it != reps_.end()) return it->second;
   }
-  // A resumed run: rebuild φ from its committed record.
-  const TaskRecord rec = load_(key);
-  auto r = std::make_shared<Representation>();
-  const Hyper& h = profile_.hyper.at(t.env);
-  r->shape = phi_shape(dataset(t.env).input_dim, h);
-  r->params = rec.arrays.at("params").data;
-  if (r->params.size() != r->shape.param_count())
-    throw std::runtime_error(key + ": stored φ has " + std::to_string(r->params.size()) +
-                             " parameters, the profile's φ " +
-                             std::to_string(r->shape.param_count()));
-  r->method = t.variant.method;
-  r->vae_pretrain = t.variant.vae;
+  // A resumed run: φ exactly as its record stored it (the fresh path hands out the same).
+  auto r = std::make_shared<const Representation>(get_representation(load_(key)));
   keep(key, r);
   return r;
 }
@@ -99,13 +83,7 @@ std::shared_ptr<const VaeModel> RunContext::vae(const std::string& env, int64_t 
     auto it = vaes_.find(key);
     if (it != vaes_.end()) return it->second;
   }
-  const TaskRecord rec = load_(key);
-  auto v = std::make_shared<VaeModel>();
-  const Hyper& h = profile_.hyper.at(env);
-  v->shape = make_vae_shape(dataset(env).input_dim, h.phi_hidden, h.embedding_dim);
-  v->params = rec.arrays.at("params").data;
-  if (v->params.size() != v->shape.param_count())
-    throw std::runtime_error(key + ": stored VAE does not match the profile's widths");
+  auto v = std::make_shared<const VaeModel>(get_vae(load_(key)));
   keep(key, v);
   return v;
 }
@@ -128,7 +106,29 @@ void describe_cell(const Task& t, TaskRecord& r) {
   if (t.kind == TaskKind::tpa) {
     r.num["M"] = double(t.M);
     r.num["frozen"] = t.frozen;
+    r.num["in_main"] = t.in_main;  // a cell of Fig. 5 ([tpa]), of Fig. 7 ([ablation]), or both
+    r.num["in_ablation"] = t.in_ablation;
   }
+}
+
+}  // namespace
+
+namespace {
+
+// The convergence verdict of a loss curve (engine/convergence.h), as record fields.
+void record_convergence(const std::vector<float>& curve, TaskRecord& r) {
+  const Convergence c = check_convergence(curve);
+  r.num["converged"] = c.converged;
+  r.num["loss_relative_change"] = c.relative_change;
+}
+
+// φ over the whole trajectory space: the embedding [T, d] (a product of the run, not only an
+// input of FPE/TPA) and the dead-unit fraction of each hidden layer. Returns its FLOPs.
+double record_embedding(const Representation& rep, const Dataset& d, TaskRecord& r) {
+  const EmbeddingPass e = embed_all(rep, d.inputs.data(), d.count);
+  r.arrays["embedding"] = array(e.embedding, {uint64_t(d.count), uint64_t(rep.dim())});
+  r.arrays["dead_fraction"] = array(e.dead_fraction);
+  return rep.shape.forward_flops(int(d.count));
 }
 
 }  // namespace
@@ -144,11 +144,11 @@ TaskRecord run_task(const Task& t, RunContext& ctx) {
   try {
     switch (t.kind) {
       case TaskKind::vae: {
-        auto v = std::make_shared<VaeModel>(train_vae(d, h, task_seed(t.env, t.seed, "vae")));
-        r.arrays["params"] = array(v->params);
-        r.arrays["loss_curve"] = array(v->loss_curve);
-        r.num["flops"] = v->train_flops;
-        ctx.keep(t.key, std::shared_ptr<const VaeModel>(v));
+        const VaeModel v = train_vae(d, h, task_seed(t.env, t.seed, "vae"));
+        put_vae(v, r);
+        r.num["flops"] = v.train_flops;
+        record_convergence(v.loss_curve, r);
+        ctx.keep(t.key, std::make_shared<const VaeModel>(get_vae(r)));
         break;
       }
       case TaskKind::rep: {
@@ -156,22 +156,22 @@ TaskRecord run_task(const Task& t, RunContext& ctx) {
         std::shared_ptr<const VaeModel> vae;
         if (t.variant.vae || t.variant.method == Method::vae) vae = ctx.vae(t.env, t.seed);
         MethodConfig c{t.variant.method, t.N, t.variant.vae, h, 1};
-        auto rep = std::make_shared<Representation>(
-            train_representation(d, b, c, task_seed(t.env, t.seed, "phi"), vae.get()));
-        r.arrays["params"] = array(rep->params);
-        r.arrays["loss_curve"] = array(rep->loss_curve);
-        std::string widths;
-        for (int w : rep->shape.widths) widths += (widths.empty() ? "" : ",") + std::to_string(w);
-        r.text["widths"] = widths;
+        const Representation rep =
+            train_representation(d, b, c, task_seed(t.env, t.seed, "phi"), vae.get());
+        put_representation(rep, r);
         r.text["hyper"] = describe(h);
-        r.num["flops"] = rep->train_flops;
-        ctx.keep(t.key, std::shared_ptr<const Representation>(rep));
+        // FLOPs spent in this task: the VAE method's φ is the VAE task's encoder, trained there.
+        r.num["flops"] =
+            (t.variant.method == Method::vae ? 0.0 : rep.train_flops) + record_embedding(rep, d, r);
+        if (t.variant.method != Method::vae && t.variant.method != Method::random)
+          record_convergence(rep.loss_curve, r);
+        ctx.keep(t.key, std::make_shared<const Representation>(get_representation(r)));
         break;
       }
       case TaskKind::fpe: {
         const QueryBundle& b = ctx.bundle(t.env, t.seed);
         const std::string rk = rep_key(t.env, t.seed, t.variant, t.N);
-        const FpeResult f = evaluate_fpe(*ctx.representation(rk, t), d, b.fpe);
+        const FpeResult f = evaluate_fpe(*ctx.representation(rk), d, b.fpe);
         r.num["fpe"] = f.fpe;
         r.num["train_mse"] = f.train_mse;
         r.num["flops"] = 0;
@@ -181,16 +181,28 @@ TaskRecord run_task(const Task& t, RunContext& ctx) {
         const QueryBundle& b = ctx.bundle(t.env, t.seed);
         const std::string rk = rep_key(t.env, t.seed, t.variant, t.N);
         const TpaResult res =
-            evaluate_tpa(*ctx.representation(rk, t), d, b.tpa, TpaConfig{t.M, t.frozen, h, 1},
+            evaluate_tpa(*ctx.representation(rk), d, b.tpa, TpaConfig{t.M, t.frozen, h, 1},
                          task_seed(t.env, t.seed, "tpa"));
         r.num["tpa"] = res.mean;
         r.num["tpa_std"] = res.stddev;
         r.num["flops"] = res.train_flops;
-        std::vector<float> acc(res.accuracy.begin(), res.accuracy.end());
-        const uint64_t R = acc.size();
-        r.arrays["accuracy"] = array(std::move(acc));
+        const uint64_t R = res.accuracy.size();
+        r.arrays["accuracy"] = array(std::vector<float>(res.accuracy.begin(), res.accuracy.end()));
+        r.arrays["train_accuracy"] =
+            array(std::vector<float>(res.train_accuracy.begin(), res.train_accuracy.end()));
+        double train_mean = 0;
+        for (double a : res.train_accuracy) train_mean += a / double(R);
+        r.num["tpa_train"] = train_mean;
         r.arrays["loss_curves"] = array(res.loss_curves, {R, uint64_t(res.epochs)});
         r.arrays["phi_drift"] = array(res.phi_drift);
+        // Converged when every head's loss curve is (the fraction tells how many were).
+        int converged = 0;
+        for (uint64_t k = 0; k < R; ++k) {
+          const auto* c = res.loss_curves.data() + k * res.epochs;
+          converged += check_convergence(std::vector<float>(c, c + res.epochs)).converged;
+        }
+        r.num["converged"] = converged == int(R);
+        r.num["converged_fraction"] = R ? double(converged) / double(R) : 0.0;
         break;
       }
     }

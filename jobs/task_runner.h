@@ -26,7 +26,7 @@ class RunContext {
   const Profile& profile() const { return profile_; }
   const Dataset& dataset(const std::string& env);
   const QueryBundle& bundle(const std::string& env, int64_t seed);
-  std::shared_ptr<const Representation> representation(const std::string& key, const Task& t);
+  std::shared_ptr<const Representation> representation(const std::string& key);
   std::shared_ptr<const VaeModel> vae(const std::string& env, int64_t seed);
   void keep(const std::string& key, std::shared_ptr<const Representation> r);
   void keep(const std::string& key, std::shared_ptr<const VaeModel> v);

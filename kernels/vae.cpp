@@ -31,7 +31,7 @@ VaeShape make_vae_shape(int in, const std::vector<int>& hidden, int latent) {
 
 template <typename T>
 T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const T* eps,
-                    T kl_weight, T* dparams, VaeWorkspace<T>& ws, VaeLossParts* parts,
+                    T kl_weight, VaeElbo elbo, T* dparams, VaeWorkspace<T>& ws, VaeLossParts* parts,
                     int threads) {
   const int in = s.encoder.in(), d = s.latent;
   const T* enc_p = params;
@@ -49,14 +49,17 @@ T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const
   mlp_forward(s.decoder, dec_p, ws.z.data(), B, ws.dec, threads);
   const T* xr = ws.dec.output();
   T rec = 0, kl = 0;
-  const T inv_n = T(1) / (T(B) * in), inv_b = T(1) / T(B);
+  const T inv_b = T(1) / T(B);
+  const T inv_n = elbo == VaeElbo::sum_over_inputs ? inv_b : T(1) / (T(B) * in);
   ws.d_recon.resize(size_t(B) * in);
   for (size_t j = 0; j < size_t(B) * in; ++j) {
     const T e = xr[j] - x[j];
     rec += e * e;
     ws.d_recon[j] = 2 * e * inv_n;
   }
+  const T sq_error = rec / (T(B) * in);
   rec *= inv_n;
+  if (parts) parts->kl_per_dim.assign(d, 0.0);
   ws.d_z.resize(size_t(B) * d);
   if (dparams)
     mlp_backward(s.decoder, dec_p, ws.dec, ws.d_recon.data(), dparams + s.encoder.param_count(),
@@ -66,7 +69,9 @@ T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const
     for (int k = 0; k < d; ++k) {
       const size_t im = size_t(i) * 2 * d + k, il = im + d, iz = size_t(i) * d + k;
       const T mu = h[im], lv = clamp_logvar(h[il]), sd = std::exp(T(0.5) * lv);
-      kl += T(-0.5) * (1 + lv - mu * mu - sd * sd);
+      const T kl_ik = T(-0.5) * (1 + lv - mu * mu - sd * sd);
+      kl += kl_ik;
+      if (parts) parts->kl_per_dim[k] += double(kl_ik) / B;
       if (!dparams) continue;
       // through z = μ + σ·ε, plus the KL term's own gradient
       ws.d_enc_out[im] = ws.d_z[iz] + kl_weight * mu * inv_b;
@@ -81,16 +86,17 @@ T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const
                  threads);
   if (parts) {
     parts->reconstruction = double(rec);
+    parts->squared_error = double(sq_error);
     parts->kl = double(kl);
   }
   return rec + kl_weight * kl;
 }
 
 template float vae_loss_and_grad<float>(const VaeShape&, const float*, const float*, int,
-                                        const float*, float, float*, VaeWorkspace<float>&,
+                                        const float*, float, VaeElbo, float*, VaeWorkspace<float>&,
                                         VaeLossParts*, int);
 template double vae_loss_and_grad<double>(const VaeShape&, const double*, const double*, int,
-                                          const double*, double, double*, VaeWorkspace<double>&,
-                                          VaeLossParts*, int);
+                                          const double*, double, VaeElbo, double*,
+                                          VaeWorkspace<double>&, VaeLossParts*, int);
 
 }  // namespace sirl

@@ -19,9 +19,18 @@ struct VaeShape {
 // hidden = e.g. {128, 128}: encoder in→128→128→2·latent, decoder latent→128→128→in.
 VaeShape make_vae_shape(int in, const std::vector<int>& hidden, int latent);
 
+// How the reconstruction term is scaled.
+//   sum_over_inputs (the standard ELBO, Kingma & Welling): (1/B) Σ_i Σ_j (x̂_ij − x_ij)²
+//   mean_over_inputs: (1/(B·in)) Σ_i Σ_j (x̂_ij − x_ij)² — against the same KL this weighs the
+//   KL `in` times more (≈2000× for JacoRobot's 2037 inputs).
+// The KL is in both forms (1/B) Σ_i Σ_k KL_ik, summed over the latent dimensions.
+enum class VaeElbo { sum_over_inputs, mean_over_inputs };
+
 struct VaeLossParts {
-  double reconstruction = 0;  // mean over batch·in of (x̂ − x)²
-  double kl = 0;              // mean over batch of KL(q(z|x) ‖ N(0, I))
+  double reconstruction = 0;       // the reconstruction term as the form defines it
+  double squared_error = 0;        // mean over batch·in of (x̂ − x)² (form-independent)
+  double kl = 0;                   // mean over batch of Σ_k KL(q(z_k|x) ‖ N(0, 1))
+  std::vector<double> kl_per_dim;  // [latent] mean over batch of KL_k
 };
 
 template <typename T>
@@ -33,11 +42,11 @@ struct VaeWorkspace {
 // params = [encoder params | decoder params]; x [B, in]; eps [B, latent] standard-normal noise
 // (drawn by the caller so the step is a pure function). z = μ + exp(½ log σ²)·eps, with log σ²
 // clamped to [−30, 20] (zero gradient outside, as torch.clamp) so σ cannot overflow.
-//   L = (1/(B·in)) Σ (x̂ − x)²  +  λ · (1/B) Σ_i −½ Σ_k (1 + log σ² − μ² − σ²)
-// Adds ∂L/∂params into dparams (zero it first). Returns L.
+//   L = reconstruction (see VaeElbo)  +  λ · (1/B) Σ_i −½ Σ_k (1 + log σ² − μ² − σ²)
+// Adds ∂L/∂params into dparams (zero it first; may be null). Returns L.
 template <typename T>
 T vae_loss_and_grad(const VaeShape& shape, const T* params, const T* x, int B, const T* eps,
-                    T kl_weight, T* dparams, VaeWorkspace<T>& ws, VaeLossParts* parts = nullptr,
-                    int threads = 1);
+                    T kl_weight, VaeElbo elbo, T* dparams, VaeWorkspace<T>& ws,
+                    VaeLossParts* parts = nullptr, int threads = 1);
 
 }  // namespace sirl

@@ -47,6 +47,9 @@ class H5File {
   void flush();
 
   bool exists(const std::string& object) const;
+  // From now on, numeric arrays of ≥ 4096 elements are written chunked with shuffle + deflate
+  // (h5py and pandas read them transparently). Off by default: task commits stay fast.
+  void set_compression(bool on) { compress_ = on; }
   // Arrays: row-major, dims as given; parent groups are created as needed.
   void write(const std::string& name, const float* data, const std::vector<uint64_t>& dims);
   void write(const std::string& name, const int32_t* data, const std::vector<uint64_t>& dims);
@@ -79,6 +82,7 @@ class H5File {
  private:
   H5File(int64_t id, std::string path) : id_(id), path_(std::move(path)) {}
   int64_t id_;
+  bool compress_ = false;
   std::string path_;
 };
 

@@ -43,7 +43,9 @@ ResultTables build_tables(const std::vector<TaskRecord>& records) {
          &variant = t.tpa.add("variant", C::String), &vae = t.tpa.add("vae", C::Int),
          &frozen = t.tpa.add("frozen", C::Int), &N = t.tpa.add("N", C::Int),
          &M = t.tpa.add("M", C::Int), &seed = t.tpa.add("seed", C::Int),
-         &tpa = t.tpa.add("tpa", C::Double), &sd = t.tpa.add("tpa_std", C::Double);
+         &tpa = t.tpa.add("tpa", C::Double), &sd = t.tpa.add("tpa_std", C::Double),
+         &tr = t.tpa.add("tpa_train", C::Double), &in_main = t.tpa.add("in_main", C::Int),
+         &in_ab = t.tpa.add("in_ablation", C::Int);
     for (const auto& r : records) {
       if (r.kind != "tpa") continue;
       env.strings.push_back(txt(r, "env"));
@@ -56,6 +58,75 @@ ResultTables build_tables(const std::vector<TaskRecord>& records) {
       seed.ints.push_back(int64_t(num(r, "seed")));
       tpa.doubles.push_back(num(r, "tpa"));
       sd.doubles.push_back(num(r, "tpa_std"));
+      tr.doubles.push_back(num(r, "tpa_train"));
+      in_main.ints.push_back(int64_t(num(r, "in_main")));
+      in_ab.ints.push_back(int64_t(num(r, "in_ablation")));
+    }
+  }
+  {
+    // Every training's convergence (engine/convergence.h) and its final loss; dead_fraction is
+    // the share of φ's last hidden layer that is 0 on all of Ξ (−1 where not measured).
+    auto &kind = t.training.add("kind", C::String), &key = t.training.add("key", C::String),
+         &env = t.training.add("env", C::String), &variant = t.training.add("variant", C::String),
+         &N = t.training.add("N", C::Int), &M = t.training.add("M", C::Int),
+         &frozen = t.training.add("frozen", C::Int), &seed = t.training.add("seed", C::Int),
+         &epochs = t.training.add("epochs", C::Int),
+         &final_loss = t.training.add("final_loss", C::Double),
+         &rel = t.training.add("loss_relative_change", C::Double),
+         &conv = t.training.add("converged", C::Int),
+         &frac = t.training.add("converged_fraction", C::Double),
+         &dead = t.training.add("dead_fraction", C::Double);
+    for (const auto& r : records) {
+      if (!r.num.count("converged")) continue;  // FPE, Random and the VAE method train nothing
+      const TaskRecord::Array* curve = nullptr;
+      for (const char* c : {"loss_curve", "loss_curves"})
+        if (auto it = r.arrays.find(c); it != r.arrays.end()) curve = &it->second;
+      int64_t E = 0;
+      double last = 0;
+      if (curve && !curve->data.empty()) {
+        // loss_curves is [heads, epochs]: the mean of the heads' last epochs.
+        const uint64_t rows = curve->dims.size() == 2 ? curve->dims[0] : 1;
+        E = int64_t(curve->data.size() / rows);
+        for (uint64_t k = 0; k < rows; ++k) last += curve->data[(k + 1) * E - 1] / double(rows);
+      }
+      kind.strings.push_back(r.kind);
+      key.strings.push_back(r.key);
+      env.strings.push_back(txt(r, "env"));
+      variant.strings.push_back(r.kind == "vae" ? "vae" : txt(r, "variant"));
+      N.ints.push_back(int64_t(num(r, "N")));
+      M.ints.push_back(int64_t(num(r, "M")));
+      frozen.ints.push_back(int64_t(num(r, "frozen")));
+      seed.ints.push_back(int64_t(num(r, "seed")));
+      epochs.ints.push_back(E);
+      final_loss.doubles.push_back(last);
+      rel.doubles.push_back(num(r, "loss_relative_change"));
+      conv.ints.push_back(int64_t(num(r, "converged")));
+      frac.doubles.push_back(r.num.count("converged_fraction") ? num(r, "converged_fraction")
+                                                               : num(r, "converged"));
+      auto df = r.arrays.find("dead_fraction");
+      dead.doubles.push_back(
+          df != r.arrays.end() && !df->second.data.empty() ? df->second.data.back() : -1.0);
+    }
+  }
+  {
+    // The VAE's posterior per latent dimension: KL ≈ 0 nats means the dimension carries no
+    // information about the trajectory (posterior collapse).
+    auto &env = t.vae_latents.add("env", C::String), &seed = t.vae_latents.add("seed", C::Int),
+         &elbo = t.vae_latents.add("elbo", C::String), &dim = t.vae_latents.add("dim", C::Int),
+         &kl = t.vae_latents.add("kl", C::Double),
+         &mse = t.vae_latents.add("reconstruction_mse", C::Double);
+    for (const auto& r : records) {
+      if (r.kind != "vae") continue;
+      auto it = r.arrays.find("kl_per_dim");
+      if (it == r.arrays.end()) continue;
+      for (size_t k = 0; k < it->second.data.size(); ++k) {
+        env.strings.push_back(txt(r, "env"));
+        seed.ints.push_back(int64_t(num(r, "seed")));
+        elbo.strings.push_back(txt(r, "elbo"));
+        dim.ints.push_back(int64_t(k));
+        kl.doubles.push_back(it->second.data[k]);
+        mse.doubles.push_back(num(r, "reconstruction_mse"));
+      }
     }
   }
   {
@@ -80,6 +151,7 @@ void write_results_file(const std::string& path, const RunInfo& info,
   const std::string partial = path + ".partial";
   {
     H5File f = H5File::create(partial);
+    f.set_compression(true);  // regenerable datasets, embeddings and curves: shuffle + deflate
     f.set_attr("/", "profile_name", info.profile_name);
     f.set_attr("/", "profile_text", info.profile_text);
     f.set_attr("/", "engine_version", info.engine_version);
@@ -104,6 +176,8 @@ void write_results_file(const std::string& path, const RunInfo& info,
     f.write_table("/tables/fpe", t.fpe);
     f.write_table("/tables/tpa", t.tpa);
     f.write_table("/tables/timings", t.timings);
+    f.write_table("/tables/training", t.training);
+    f.write_table("/tables/vae_latents", t.vae_latents);
   }
   std::error_code ec;
   fs::rename(partial, path, ec);
@@ -162,6 +236,8 @@ void export_csv(const ResultTables& t, const std::string& dir) {
   write(t.fpe, "fpe.csv");
   write(t.tpa, "tpa.csv");
   write(t.timings, "timings.csv");
+  write(t.training, "training.csv");
+  write(t.vae_latents, "vae_latents.csv");
 }
 
 }  // namespace sirl

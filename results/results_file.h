@@ -1,8 +1,12 @@
 // The run's results file (DESIGN.md §8): root attributes describing the run, the datasets, every
 // task's record under /runs/<task key>, and long tables that pandas reads directly:
 //   /tables/fpe      env, method, variant, vae, N, seed, fpe, train_mse
-//   /tables/tpa      env, method, variant, vae, frozen, N, M, seed, tpa, tpa_std
+//   /tables/tpa      env, method, variant, vae, frozen, N, M, seed, tpa, tpa_std, tpa_train,
+//                    in_main (a Fig. 5 cell), in_ablation (a Fig. 7 cell)
 //   /tables/timings  kind, key, seconds, flops, gflops
+//   /tables/training kind, key, env, variant, N, M, frozen, seed, epochs, final_loss,
+//                    loss_relative_change, converged, converged_fraction, dead_fraction
+//   /tables/vae_latents  env, seed, elbo, dim, kl, reconstruction_mse
 // Written atomically (a .partial file renamed into place), so the file on disk is always whole.
 #pragma once
 #include <string>
@@ -26,7 +30,7 @@ struct RunInfo {
 };
 
 struct ResultTables {
-  H5Table fpe, tpa, timings;
+  H5Table fpe, tpa, timings, training, vae_latents;
 };
 ResultTables build_tables(const std::vector<TaskRecord>& records);
 
@@ -41,7 +45,7 @@ void write_results_file(const std::string& path, const RunInfo& info,
 RunInfo read_run_info(const std::string& path);
 std::vector<TaskRecord> read_results_records(const std::string& path);
 
-// One CSV per table (fpe.csv, tpa.csv, timings.csv) in dir (created).
+// One CSV per table (fpe.csv, tpa.csv, timings.csv, training.csv, vae_latents.csv) in dir.
 void export_csv(const ResultTables& t, const std::string& dir);
 
 }  // namespace sirl

@@ -1,6 +1,8 @@
 // Profiles, plans, the scheduler and the task store (the batch engine's parts, without a run).
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <atomic>
 #include <filesystem>
 #include <fstream>
@@ -141,14 +143,61 @@ TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
                      "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n")
                 .find("VAE pre-training applies only"),
             std::string::npos);
-  EXPECT_NE(error_of(base).find("missing table [fpe]"), std::string::npos);
+  EXPECT_NE(error_of(base).find("nothing to run: give at least one of [fpe], [tpa] or [ablation]"),
+            std::string::npos)
+      << error_of(base);
+  EXPECT_NE(error_of(base + grid + "[grid]\nstore_weights = 1\n").find("store_weights must be"),
+            std::string::npos);
+  m = error_of(base + grid + "[hyper.grid]\n\"vae.elbo\" = \"avg\"\n");
+  EXPECT_NE(m.find("vae.elbo must be \"sum\""), std::string::npos) << m;
   EXPECT_EQ(error_of(base + "[fpe\n").rfind("bad.toml:4:", 0), 0u) << error_of(base + "[fpe\n");
   EXPECT_NE(error_of(base + grid + "[teacher]\nmistake = 2\n").find("outside [0, 1]"),
             std::string::npos);
 }
 
+// A profile may run any part of the grid: FPE only, TPA only, or the ablation only.
+TEST(Profile, APartOfTheGridIsAProfileOfItsOwn) {
+  const std::string base = "name = \"x\"\nenvs = [\"grid\", \"grid2\"]\nseeds = [0]\n";
+  auto kinds = [](const Plan& plan) {
+    std::map<std::string, int> n;
+    for (const auto& t : plan.tasks) ++n[kind_name(t.kind)];
+    return n;
+  };
+  auto fpe_only =
+      kinds(make_plan(parse_profile(base + "[fpe]\nmethods = [\"sirl\"]\nN = [100]\n")));
+  EXPECT_EQ(fpe_only["fpe"], 2);  // one per environment
+  EXPECT_EQ(fpe_only["rep"], 2);
+  EXPECT_EQ(fpe_only["tpa"], 0);
+  auto tpa_only = kinds(
+      make_plan(parse_profile(base + "[tpa]\nmethods = [\"random\"]\nN = [100]\nM = [10, 20]\n")));
+  EXPECT_EQ(tpa_only["tpa"], 4);
+  EXPECT_EQ(tpa_only["fpe"], 0);
+  const Plan ab =
+      make_plan(parse_profile(base + "[ablation]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n"));
+  auto ab_kinds = kinds(ab);
+  EXPECT_EQ(ab_kinds["tpa"], 2 * 4);  // frozen/unfrozen × with/without VAE, per environment
+  EXPECT_EQ(ab_kinds["vae"], 2);
+  for (const auto& t : ab.tasks)
+    if (t.kind == TaskKind::tpa) EXPECT_TRUE(t.in_ablation && !t.in_main) << t.key;
+}
+
+// Fig. 5 and Fig. 7 read which cells belong to them from the file; the plan marks a cell both
+// when the two grids share it.
+TEST(Plan, MarksTheCellsOfTheMainGridAndOfTheAblation) {
+  const std::string text =
+      "name = \"x\"\nenvs = [\"grid\"]\nseeds = [0]\n[tpa]\nmethods = [\"sirl\"]\nN = [100]\n"
+      "M = [10, 20]\n[ablation]\nmethods = [\"sirl\"]\nN = [100]\nM = [20]\n";
+  const Plan plan = make_plan(parse_profile(text));
+  const auto& frozen20 = plan.tasks[plan.index.at("grid/s0/sirl/N100/tpa/M20/frozen")];
+  EXPECT_TRUE(frozen20.in_main && frozen20.in_ablation);
+  const auto& frozen10 = plan.tasks[plan.index.at("grid/s0/sirl/N100/tpa/M10/frozen")];
+  EXPECT_TRUE(frozen10.in_main && !frozen10.in_ablation);
+  const auto& unfrozen20 = plan.tasks[plan.index.at("grid/s0/sirl/N100/tpa/M20/unfrozen")];
+  EXPECT_TRUE(!unfrozen20.in_main && unfrozen20.in_ablation);
+}
+
 TEST(Profile, ShippedProfilesAreValid) {
-  for (const char* name : {"smoke", "quick", "paper"}) {
+  for (const char* name : {"smoke", "quick", "paper", "paper-grid"}) {
     const Profile p = load_profile(name);
     EXPECT_EQ(p.name, name);
     EXPECT_GT(make_plan(p).tasks.size(), 0u);

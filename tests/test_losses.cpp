@@ -81,7 +81,7 @@ TEST(BradleyTerry, AccuracyCountsAgreement) {
   EXPECT_DOUBLE_EQ(preference_accuracy(r.data(), l.data(), 3), 2.0 / 3);
 }
 
-TEST(Vae, GradientMatchesFiniteDifferences) {
+TEST(Vae, GradientMatchesFiniteDifferencesInBothElboForms) {
   const VaeShape s = make_vae_shape(5, {8, 7}, 3);
   EXPECT_EQ(s.encoder.widths, (std::vector<int>{5, 8, 7, 6}));
   EXPECT_EQ(s.decoder.widths, (std::vector<int>{3, 7, 8, 5}));
@@ -90,20 +90,28 @@ TEST(Vae, GradientMatchesFiniteDifferences) {
   auto params = test::random_vec(s.param_count(), rng, 0.4);
   auto x = test::random_vec(B * 5, rng);
   auto eps = test::random_vec(B * 3, rng);
-  VaeWorkspace<double> ws;
-  std::vector<double> g(params.size(), 0.0);
-  VaeLossParts parts;
-  const double L =
-      vae_loss_and_grad(s, params.data(), x.data(), B, eps.data(), 0.3, g.data(), ws, &parts);
-  EXPECT_NEAR(L, parts.reconstruction + 0.3 * parts.kl, 1e-12);
-  EXPECT_GE(parts.kl, 0.0);
-  test::expect_gradient_matches(
-      [&](const std::vector<double>& p) {
-        VaeWorkspace<double> w;
-        return vae_loss_and_grad(s, p.data(), x.data(), B, eps.data(), 0.3,
-                                 static_cast<double*>(nullptr), w);
-      },
-      params, g);
+  for (VaeElbo form : {VaeElbo::sum_over_inputs, VaeElbo::mean_over_inputs}) {
+    VaeWorkspace<double> ws;
+    std::vector<double> g(params.size(), 0.0);
+    VaeLossParts parts;
+    const double L = vae_loss_and_grad(s, params.data(), x.data(), B, eps.data(), 0.3, form,
+                                       g.data(), ws, &parts);
+    EXPECT_NEAR(L, parts.reconstruction + 0.3 * parts.kl, 1e-12);
+    // The two forms differ by the input width exactly: sum = in · mean.
+    EXPECT_NEAR(parts.reconstruction,
+                (form == VaeElbo::sum_over_inputs ? 5.0 : 1.0) * parts.squared_error, 1e-12);
+    EXPECT_GE(parts.kl, 0.0);
+    double kl_sum = 0;
+    for (double k : parts.kl_per_dim) kl_sum += k;
+    EXPECT_NEAR(kl_sum, parts.kl, 1e-12);
+    test::expect_gradient_matches(
+        [&](const std::vector<double>& p) {
+          VaeWorkspace<double> w;
+          return vae_loss_and_grad(s, p.data(), x.data(), B, eps.data(), 0.3, form,
+                                   static_cast<double*>(nullptr), w);
+        },
+        params, g);
+  }
 }
 
 TEST(Vae, KlIsZeroForStandardNormalPosterior) {
@@ -112,10 +120,31 @@ TEST(Vae, KlIsZeroForStandardNormalPosterior) {
   std::vector<double> p(s.param_count(), 0.0), x(2 * 4, 1.0), eps(2 * 2, 0.5);
   VaeWorkspace<double> ws;
   VaeLossParts parts;
-  vae_loss_and_grad(s, p.data(), x.data(), 2, eps.data(), 1.0, static_cast<double*>(nullptr), ws,
-                    &parts);
+  vae_loss_and_grad(s, p.data(), x.data(), 2, eps.data(), 1.0, VaeElbo::mean_over_inputs,
+                    static_cast<double*>(nullptr), ws, &parts);
   EXPECT_DOUBLE_EQ(parts.kl, 0.0);
-  EXPECT_DOUBLE_EQ(parts.reconstruction, 1.0);  // decoder outputs 0, targets 1
+  EXPECT_DOUBLE_EQ(parts.reconstruction, 1.0);  // decoder outputs 0, targets 1: mean of 1s
+  vae_loss_and_grad(s, p.data(), x.data(), 2, eps.data(), 1.0, VaeElbo::sum_over_inputs,
+                    static_cast<double*>(nullptr), ws, &parts);
+  EXPECT_DOUBLE_EQ(parts.reconstruction, 4.0);  // summed over the 4 inputs, mean over the batch
+}
+
+TEST(Vae, KlPerDimensionMatchesTheClosedForm) {
+  // Zero weights: every row's μ_k and log σ²_k are the last encoder layer's biases, so
+  // KL_k = −½ (1 + lv_k − μ_k² − exp(lv_k)) for every row, computed here by hand.
+  const VaeShape s = make_vae_shape(3, {4}, 2);
+  std::vector<double> p(s.param_count(), 0.0), x(3 * 3, 0.2), eps(3 * 2, 0.1);
+  const int last = s.encoder.layers() - 1;
+  double* b = p.data() + s.encoder.bias_offset(last);  // [μ_0, μ_1, lv_0, lv_1]
+  b[0] = 1.0, b[1] = -0.5, b[2] = std::log(0.25), b[3] = 0.0;
+  VaeWorkspace<double> ws;
+  VaeLossParts parts;
+  vae_loss_and_grad(s, p.data(), x.data(), 3, eps.data(), 0.01, VaeElbo::sum_over_inputs,
+                    static_cast<double*>(nullptr), ws, &parts);
+  ASSERT_EQ(parts.kl_per_dim.size(), 2u);
+  EXPECT_NEAR(parts.kl_per_dim[0], -0.5 * (1 + std::log(0.25) - 1.0 - 0.25), 1e-12);
+  EXPECT_NEAR(parts.kl_per_dim[1], -0.5 * (1 + 0.0 - 0.25 - 1.0), 1e-12);
+  EXPECT_NEAR(parts.kl, parts.kl_per_dim[0] + parts.kl_per_dim[1], 1e-12);
 }
 
 }  // namespace

@@ -1,0 +1,26 @@
+#include "engine/convergence.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sirl {
+
+Convergence check_convergence(const std::vector<float>& curve, double rel_tol, double abs_tol) {
+  Convergence c;
+  const int E = int(curve.size());
+  if (E < 2) return c;
+  c.window = std::max(1, E / 10);
+  auto mean = [&](int from, int to) {
+    double s = 0;
+    for (int i = from; i < to; ++i) s += curve[i];
+    return s / (to - from);
+  };
+  const double b = mean(E - c.window, E), a = mean(E - 2 * c.window, E - c.window);
+  const double scale = std::max(std::abs(a), std::abs(b));
+  c.relative_change = scale > 0 ? (a - b) / scale : 0.0;
+  c.converged =
+      std::isfinite(a) && std::isfinite(b) && std::abs(a - b) <= rel_tol * scale + abs_tol;
+  return c;
+}
+
+}  // namespace sirl

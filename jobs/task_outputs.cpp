@@ -1,0 +1,145 @@
+#include "jobs/task_outputs.h"
+
+#include <charconv>
+#include <stdexcept>
+
+namespace sirl {
+
+namespace {
+
+TaskRecord::Array array(const std::vector<float>& data) {
+  return TaskRecord::Array{{uint64_t(data.size())}, data};
+}
+
+const std::vector<float>& need_array(const TaskRecord& rec, const std::string& name) {
+  auto it = rec.arrays.find(name);
+  if (it == rec.arrays.end())
+    throw std::runtime_error(rec.key + ": the stored record has no '" + name +
+                             "' (written by an older engine, or without weights: rerun with "
+                             "--force to recompute)");
+  return it->second.data;
+}
+double need_num(const TaskRecord& rec, const std::string& name) {
+  auto it = rec.num.find(name);
+  if (it == rec.num.end()) throw std::runtime_error(rec.key + ": the stored record has no " + name);
+  return it->second;
+}
+const std::string& need_text(const TaskRecord& rec, const std::string& name) {
+  auto it = rec.text.find(name);
+  if (it == rec.text.end())
+    throw std::runtime_error(rec.key + ": the stored record has no " + name);
+  return it->second;
+}
+
+void put_shape(const MlpShape& s, const std::string& prefix, TaskRecord& rec) {
+  rec.text[prefix + "widths"] = int_list_text(s.widths);
+  rec.text[prefix + "linear_layers"] = int_list_text(s.linear_layers);
+  rec.num[prefix + "relu_output"] = s.relu_on_output;
+}
+MlpShape get_shape(const TaskRecord& rec, const std::string& prefix) {
+  MlpShape s;
+  s.widths = parse_int_list(need_text(rec, prefix + "widths"), rec.key + " " + prefix + "widths");
+  s.linear_layers = parse_int_list(need_text(rec, prefix + "linear_layers"),
+                                   rec.key + " " + prefix + "linear_layers");
+  s.relu_on_output = need_num(rec, prefix + "relu_output") != 0;
+  try {
+    validate(s);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(rec.key + ": stored network shape: " + e.what());
+  }
+  return s;
+}
+
+void check_size(const TaskRecord& rec, size_t have, size_t want, const char* what) {
+  if (have != want)
+    throw std::runtime_error(rec.key + ": stored " + what + " has " + std::to_string(have) +
+                             " parameters, its shape needs " + std::to_string(want));
+}
+
+}  // namespace
+
+std::string int_list_text(const std::vector<int>& v) {
+  std::string s;
+  for (int x : v) s += (s.empty() ? "" : ",") + std::to_string(x);
+  return s;
+}
+
+std::vector<int> parse_int_list(const std::string& text, const std::string& what) {
+  std::vector<int> out;
+  size_t i = 0;
+  while (i < text.size()) {
+    const size_t j = std::min(text.find(',', i), text.size());
+    int x = 0;
+    auto [p, ec] = std::from_chars(text.data() + i, text.data() + j, x);
+    if (ec != std::errc() || p != text.data() + j)
+      throw std::runtime_error(what + ": '" + text + "' is not a list of integers");
+    out.push_back(x);
+    i = j + 1;
+  }
+  return out;
+}
+
+void put_representation(const Representation& r, TaskRecord& rec) {
+  rec.arrays["params"] = array(r.params);
+  rec.arrays["loss_curve"] = array(r.loss_curve);
+  put_shape(r.shape, "", rec);
+  rec.text["method"] = method_name(r.method);
+  rec.num["vae"] = r.vae_pretrain;
+  rec.num["queries"] = double(r.queries);
+  rec.num["train_flops"] = r.train_flops;
+}
+
+Representation get_representation(const TaskRecord& rec) {
+  Representation r;
+  r.shape = get_shape(rec, "");
+  r.params = need_array(rec, "params");
+  check_size(rec, r.params.size(), r.shape.param_count(), "φ");
+  r.loss_curve = need_array(rec, "loss_curve");
+  try {
+    r.method = parse_method(need_text(rec, "method"));
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(rec.key + ": " + e.what());
+  }
+  r.vae_pretrain = need_num(rec, "vae") != 0;
+  r.queries = int64_t(need_num(rec, "queries"));
+  r.train_flops = need_num(rec, "train_flops");
+  return r;
+}
+
+void put_vae(const VaeModel& v, TaskRecord& rec) {
+  rec.arrays["params"] = array(v.params);
+  rec.arrays["loss_curve"] = array(v.loss_curve);
+  rec.arrays["reconstruction_curve"] = array(v.reconstruction_curve);
+  rec.arrays["kl_curve"] = array(v.kl_curve);
+  rec.arrays["kl_per_dim"] = array(v.kl_per_dim);
+  put_shape(v.shape.encoder, "encoder_", rec);
+  put_shape(v.shape.decoder, "decoder_", rec);
+  rec.num["latent"] = v.shape.latent;
+  rec.text["elbo"] = v.elbo == VaeElbo::sum_over_inputs ? "sum" : "mean";
+  rec.num["reconstruction_mse"] = v.reconstruction_mse;
+  rec.num["train_flops"] = v.train_flops;
+}
+
+VaeModel get_vae(const TaskRecord& rec) {
+  VaeModel v;
+  v.shape.encoder = get_shape(rec, "encoder_");
+  v.shape.decoder = get_shape(rec, "decoder_");
+  v.shape.latent = int(need_num(rec, "latent"));
+  if (v.shape.encoder.out() != 2 * v.shape.latent || v.shape.decoder.in() != v.shape.latent)
+    throw std::runtime_error(rec.key + ": stored VAE shapes do not match its latent width");
+  v.params = need_array(rec, "params");
+  check_size(rec, v.params.size(), v.shape.param_count(), "VAE");
+  v.loss_curve = need_array(rec, "loss_curve");
+  v.reconstruction_curve = need_array(rec, "reconstruction_curve");
+  v.kl_curve = need_array(rec, "kl_curve");
+  v.kl_per_dim = need_array(rec, "kl_per_dim");
+  const std::string& elbo = need_text(rec, "elbo");
+  if (elbo != "sum" && elbo != "mean")
+    throw std::runtime_error(rec.key + ": unknown ELBO form '" + elbo + "'");
+  v.elbo = elbo == "sum" ? VaeElbo::sum_over_inputs : VaeElbo::mean_over_inputs;
+  v.reconstruction_mse = need_num(rec, "reconstruction_mse");
+  v.train_flops = need_num(rec, "train_flops");
+  return v;
+}
+
+}  // namespace sirl
