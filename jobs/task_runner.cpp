@@ -1,5 +1,6 @@
 #include "jobs/task_runner.h"
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 
@@ -197,12 +198,17 @@ TaskRecord run_task(const Task& t, RunContext& ctx) {
         r.arrays["phi_drift"] = array(res.phi_drift);
         // Converged when every head's loss curve is (the fraction tells how many were).
         int converged = 0;
+        std::vector<double> change;
         for (uint64_t k = 0; k < R; ++k) {
           const auto* c = res.loss_curves.data() + k * res.epochs;
-          converged += check_convergence(std::vector<float>(c, c + res.epochs)).converged;
+          const Convergence v = check_convergence(std::vector<float>(c, c + res.epochs));
+          converged += v.converged;
+          change.push_back(v.relative_change);
         }
+        std::sort(change.begin(), change.end());
         r.num["converged"] = converged == int(R);
         r.num["converged_fraction"] = R ? double(converged) / double(R) : 0.0;
+        r.num["loss_relative_change"] = R ? change[R / 2] : 0.0;  // the median head's
         break;
       }
     }

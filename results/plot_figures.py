@@ -4,9 +4,10 @@
     /usr/bin/python3 results/plot_figures.py RESULTS.h5 --out FIGURE_DIR
 
 Writes fig3_grid_similar.{png,pdf}, fig4_fpe.{png,pdf}, fig5_tpa.{png,pdf},
-fig7_ablation.{png,pdf} and report.md (+ report.html). Reads only the file: /tables/fpe,
-/tables/tpa, /tables/timings, /runs/... and /datasets/... (DESIGN.md §8). A partial file (an
-interrupted run) plots with gaps and notes, never zeros.
+fig7_ablation.{png,pdf}, fig_learning_curves.{png,pdf} and report.md (+ report.html). Reads only
+the file: /tables/*, /runs/... and /datasets/... . Every figure plots what the file holds (which
+cells belong to Fig. 5 or Fig. 7 is a column of /tables/tpa), never a re-reading of the profile.
+A partial file (an interrupted run) plots with gaps and notes, never zeros.
 """
 import argparse
 import html
@@ -34,7 +35,8 @@ STYLE = {
     "random": ("#7f7f7f", "Random"),
 }
 ORDER = list(STYLE)
-ENV_TITLE = {"grid": "GridRobot", "jaco": "JacoRobot"}
+ENV_TITLE = {"grid": "GridRobot", "grid2": "GridRobot (laptop + angle)", "jaco": "JacoRobot",
+             "jaco2": "JacoRobot (table + laptop)"}
 ALPHA = 0.05
 
 
@@ -45,9 +47,13 @@ def decode(df):
     return df
 
 
+TABLES = ("fpe", "tpa", "timings", "training", "vae_latents")
+
+
 def load(path):
     f = h5py.File(path, "r")
-    t = {k: decode(pd.DataFrame(f["tables/" + k][:])) for k in ("fpe", "tpa", "timings")}
+    t = {k: decode(pd.DataFrame(f["tables/" + k][:])) if "tables/" + k in f else pd.DataFrame()
+         for k in TABLES}
     return f, t
 
 
@@ -69,12 +75,20 @@ def save(fig, out, name):
 
 
 def main_tpa(tpa):
-    """Fig. 5's cells: each method in the paper's best mode (SIRL frozen, the others unfrozen)."""
-    best_frozen = tpa["variant"].isin(["sirl", "sirl+vae"]).astype(int)
-    return tpa[tpa["frozen"] == best_frozen]
+    """Fig. 5's cells (the file marks them: in_main), each method in the paper's best mode (SIRL
+    frozen, the others unfrozen)."""
+    if tpa.empty:
+        return tpa
+    t = tpa[tpa["in_main"] == 1] if "in_main" in tpa else tpa
+    best_frozen = t["variant"].isin(["sirl", "sirl+vae"]).astype(int)
+    return t[t["frozen"] == best_frozen]
 
 
 def plot_fig4(fpe, envs, out, notes):
+    envs = [e for e in envs if not fpe.empty and (fpe.env == e).any()]
+    if not envs:
+        notes.append("Fig. 4: no FPE cells in this file")
+        return
     fig, axes = plt.subplots(1, len(envs), figsize=(5.2 * len(envs), 3.8), squeeze=False,
                              constrained_layout=True)
     for ax, env in zip(axes[0], envs):
@@ -116,6 +130,10 @@ def plot_fig4(fpe, envs, out, notes):
 
 def plot_fig5(tpa, envs, out, notes):
     t = main_tpa(tpa)
+    envs = [e for e in envs if (t.env == e).any()] if not t.empty else []
+    if not envs:
+        notes.append("Fig. 5: no TPA cells of the main grid in this file")
+        return
     Ns = sorted(n for n in t.N.unique() if n > 0)
     if not Ns:
         Ns = [0]
@@ -153,35 +171,29 @@ def plot_fig5(tpa, envs, out, notes):
     save(fig, out, "fig5_tpa")
 
 
-def ablation_cells(tpa, f):
-    """The ablation's (N, M) from the profile text when present, else the largest N."""
-    prof = f.attrs.get("profile_text", "")
-    if isinstance(prof, bytes):
-        prof = prof.decode()
-    try:
-        import tomllib  # Python ≥ 3.11
-        ab = tomllib.loads(prof).get("ablation", {})
-        return ab.get("N", []), ab.get("M", [])
-    except Exception:
-        return [tpa.N.max()], sorted(tpa.M.unique())
-
-
-def plot_fig7(tpa, envs, f, out, notes):
-    Nab, Mab = ablation_cells(tpa, f)
+def plot_fig7(tpa, envs, out, notes):
+    """Fig. 7 from the cells the file marks as the ablation's (in_ablation), per environment."""
+    ab = tpa[tpa["in_ablation"] == 1] if not tpa.empty and "in_ablation" in tpa else tpa.iloc[0:0]
+    envs = [e for e in envs if (ab.env == e).any()]
+    if not envs:
+        notes.append("Fig. 7: no ablation cells in this file")
+        return
     fig, axes = plt.subplots(1, len(envs), figsize=(7 * len(envs), 3.8), squeeze=False,
                              constrained_layout=True)
     bases = [b for b in ["sirl", "vae", "multipref10", "multipref50", "singlepref", "random"]
-             if b in set(tpa.method)]
+             if b in set(ab.method)]
     configs = [(1, 0, "frozen"), (0, 0, "unfrozen"), (1, 1, "frozen + VAE"), (0, 1, "unfrozen + VAE")]
     hatches = ["", "//", "..", "xx"]
     for ax, env in zip(axes[0], envs):
-        d = tpa[(tpa.env == env) & (tpa.M.isin(Mab)) & ((tpa.N.isin(Nab)) | (tpa.N == 0))]
+        d = ab[ab.env == env]
+        Nab = sorted(int(n) for n in d.N.unique() if n > 0)
+        Mab = sorted(int(m) for m in d.M.unique())
         width = 0.2
         for k, (fr, vae, name) in enumerate(configs):
             ms, cis = [], []
             for b in bases:
                 cell = d[(d.method == b) & (d.frozen == fr) & (d.vae == vae)]
-                # mean over M per seed, then over seeds
+                # mean over the ablation's (N, M) cells per seed, then over seeds
                 per_seed = cell.groupby("seed").tpa.mean()
                 m, ci = mean_ci(per_seed)
                 ms.append(m)
@@ -189,65 +201,72 @@ def plot_fig7(tpa, envs, f, out, notes):
             x = np.arange(len(bases)) + (k - 1.5) * width
             colours = [STYLE[b][0] for b in bases]
             ax.bar(x, np.nan_to_num(ms, nan=0.0) * np.isfinite(ms), width, yerr=np.nan_to_num(cis),
-                   color=colours, edgecolor="black", hatch=hatches[k], alpha=0.85,
-                   label=name if True else None)
-            for xi, m in zip(x, ms):
+                   color=colours, edgecolor="black", hatch=hatches[k], alpha=0.85, label=name)
+            for xi, m, b in zip(x, ms, bases):
                 if np.isnan(m):
-                    ax.text(xi, 0.41, "n/a", rotation=90, ha="center", va="bottom", fontsize=7)
+                    applicable = vae == 0 or b not in ("vae", "random")
+                    ax.text(xi, 0.41, "n/a" if not applicable else "missing", rotation=90,
+                            ha="center", va="bottom", fontsize=7)
+                    if applicable:
+                        notes.append(f"Fig. 7 {ENV_TITLE.get(env, env)}: no {name} cell for "
+                                     f"{STYLE[b][1]}")
         ax.set_xticks(np.arange(len(bases)))
         ax.set_xticklabels([STYLE[b][1] for b in bases], fontsize=8)
         ax.set_ylim(0.4, 1.0)
-        ax.set_ylabel("TPA (mean over M)")
+        ax.set_ylabel("TPA (mean over the cells)")
         ax.set_title(f"{ENV_TITLE.get(env, env)}, N = {Nab}, M = {Mab}")
         ax.grid(alpha=0.3, axis="y")
         handles = [matplotlib.patches.Patch(facecolor="white", edgecolor="black", hatch=h, label=c[2])
                    for h, c in zip(hatches, configs)]
         ax.legend(handles=handles, fontsize=8, loc="upper right")
-    fig.suptitle("Fig. 7: ablation — frozen/unfrozen φ × VAE pre-training (n/a: not applicable "
-                 "or not run)", fontsize=11)
+    fig.suptitle("Fig. 7: ablation — frozen/unfrozen φ × VAE pre-training (n/a: VAE "
+                 "pre-training does not apply)", fontsize=11)
     save(fig, out, "fig7_ablation")
 
 
-def mlp_forward(x, params, widths, relu_output=False):
-    off, h = 0, x
-    layers = len(widths) - 1
-    for l in range(layers):
-        ni, no = widths[l], widths[l + 1]
-        W = params[off:off + ni * no].reshape(no, ni)
-        off += ni * no
-        b = params[off:off + no]
-        off += no
-        h = h @ W.T + b
-        if l + 1 < layers or relu_output:
-            h = np.maximum(h, 0)
-    return h
+def rep_keys(f, env, method):
+    """Representation keys of (env, method) in the file, largest N first, then lowest seed."""
+    keys = [k.decode() for k in f["runs_index"][:]]
+    keys = [k for k in keys if k.startswith(env + "/s") and f"/{method}/N" in k and k.endswith("/rep")]
+    return sorted(keys, key=lambda k: (-int(k.split("/N")[1].split("/")[0]),
+                                       int(k.split("/s")[1].split("/")[0])))
 
 
 def plot_fig3(f, out, notes):
-    if "datasets/grid" not in f:
-        notes.append("Fig. 3: no GridRobot data in this file")
+    """The paper's Fig. 3: on the simplified GridRobot (laptop + angle), trajectories most and
+    least similar to a query under a SIRL φ, from the φ's stored embedding of Ξ."""
+    env = "grid2"
+    keys = rep_keys(f, env, "sirl") if "datasets/grid2" in f else []
+    if not keys:
+        env = "grid"
+        keys = rep_keys(f, env, "sirl") if "datasets/grid" in f else []
+        if keys:
+            notes.append("Fig. 3: no simplified GridRobot (grid2) SIRL φ in this file; drawn on the "
+                         "full GridRobot instead")
+    if not keys:
+        notes.append("Fig. 3: no GridRobot SIRL representation in this file")
         return None
-    g = f["datasets/grid"]
-    X = g["inputs"][:]
-    reps = [k.decode() for k in f["runs_index"][:] if k.decode().startswith("grid/s")
-            and "/sirl/N" in k.decode() and k.decode().endswith("/rep")]
-    if not reps:
-        notes.append("Fig. 3: no SIRL representation in this file")
-        return None
-    key = max(reps, key=lambda k: (int(k.split("/N")[1].split("/")[0]), -int(k.split("/s")[1].split("/")[0])))
+    key = keys[0]
     r = f["runs/" + key]
-    widths = [int(w) for w in r.attrs["widths"].split(",")]
-    E = mlp_forward(X, r["params"][:], widths)
-    q = 0  # the query trajectory: the first of Ξ
-    dist = ((E - E[q]) ** 2).sum(1)
-    dist[q] = np.inf
-    nearest = np.argsort(dist)[:3]
-    dist[q] = -np.inf
-    farthest = np.argsort(dist)[-3:][::-1]
+    if "embedding" not in r:
+        notes.append(f"Fig. 3: {key} has no stored embedding (written by an older engine)")
+        return None
+    E = r["embedding"][:]
+    g = f["datasets/" + env]
+    X = g["inputs"][:]
+    F = g["features"][:]  # normalised φ*; columns as the dataset names them
+    fnames = [n.decode() if isinstance(n, bytes) else n
+              for n in g["features"].attrs.get("feature_names", [])]
+    lap = fnames.index("laptop_distance") if "laptop_distance" in fnames else 0
+    ang = fnames.index("abs_angle") if "abs_angle" in fnames else 1
+    # The paper's two queries: far from the laptop holding the cup on its side; close to the
+    # laptop holding the cup at an angle (|angle| = 30 or 60 degrees).
+    q_far = int(np.argmax(F[:, lap] + F[:, ang]))
+    tilted = np.where(np.isin(np.round(np.abs(X[:, 18]) * 90), [30, 60]))[0]
+    q_near = int(tilted[np.argmin(F[tilted, lap])]) if len(tilted) else int(np.argmin(F[:, lap]))
     objects = g["objects"][:]
-    names = [n.decode() if isinstance(n, bytes) else n for n in g["objects"].attrs["names"]]
-    size = 5
-    scale = size - 1
+    onames = [n.decode() if isinstance(n, bytes) else n for n in g["objects"].attrs["names"]]
+    size, scale = 5, 4
 
     def draw(ax, idx, title, colour):
         ax.set_xlim(-0.5, size - 0.5)
@@ -256,24 +275,141 @@ def plot_fig3(f, out, notes):
         ax.set_xticks(range(size))
         ax.set_yticks(range(size))
         ax.grid(alpha=0.3)
-        for (ox, oy), n in zip(objects, names):
+        for (ox, oy), n in zip(objects, onames):
             marker, c = ("s", "black") if n.startswith("obstacle") else ("D", "tab:orange")
             ax.scatter([ox], [oy], marker=marker, s=260, c=c, zorder=3)
         for i in idx:
             pts = X[i, :18].reshape(9, 2) * scale
             ax.plot(pts[:, 0], pts[:, 1], "-o", color=colour, ms=3, lw=2, alpha=0.8)
-            ang = X[i, 18] * 90
-            ax.annotate(f"{ang:+.0f}°", pts[-1], fontsize=7, color=colour)
+            ax.annotate(f"{X[i, 18] * 90:+.0f}°", pts[-1], fontsize=7, color=colour)
         ax.set_title(title, fontsize=9)
 
-    fig, axes = plt.subplots(1, 3, figsize=(10, 3.6))
-    draw(axes[0], [q], f"query ξ{q}", "black")
-    draw(axes[1], nearest, "most similar (SIRL φ)", "tab:green")
-    draw(axes[2], farthest, "least similar (SIRL φ)", "tab:red")
-    fig.suptitle(f"Fig. 3: GridRobot trajectories under the learned embedding ({key}); "
-                 "■ obstacles, ◆ laptop, end angle in degrees", fontsize=10)
+    fig, axes = plt.subplots(2, 3, figsize=(10, 7))
+    for row, q in enumerate([q_far, q_near]):
+        dist = ((E - E[q]) ** 2).sum(1)
+        dist[q] = np.inf
+        nearest = np.argsort(dist)[:3]
+        dist[q] = -np.inf
+        farthest = np.argsort(dist)[-3:][::-1]
+        draw(axes[row][0], [q], f"query ξ{q}", "black")
+        draw(axes[row][1], nearest, "most similar under φ", "tab:green")
+        draw(axes[row][2], farthest, "least similar under φ", "tab:red")
+    fig.suptitle(f"Fig. 3: {ENV_TITLE.get(env, env)} under a SIRL φ ({key}); ◆ laptop, "
+                 "■ obstacles, end angle in degrees", fontsize=10)
     save(fig, out, "fig3_grid_similar")
     return key
+
+
+def curves_of(f, keys, name):
+    """{key: 1-D curve}; a [heads, epochs] array is averaged over its heads."""
+    out = {}
+    for k in keys:
+        g = f["runs/" + k]
+        if name in g:
+            c = g[name][:]
+            out[k] = c.mean(0) if c.ndim == 2 else c
+    return out
+
+
+def plot_learning_curves(f, t, envs, out, notes):
+    """Per environment: the VAE, each method's φ at its largest N, and the TPA heads of the main
+    grid's largest (N, M): median over seeds with the min–max band."""
+    tr = t["training"]
+    if tr.empty:
+        notes.append("learning curves: no training in this file")
+        return False
+    envs = [e for e in envs if (tr.env == e).any()]
+    panels = [("vae", "VAE (loss per epoch)"), ("rep", "φ training (largest N)"),
+              ("tpa", "TPA heads (largest N, M; mean over heads)")]
+    fig, axes = plt.subplots(len(envs), 3, figsize=(15, 3.3 * len(envs)), squeeze=False,
+                             constrained_layout=True)
+    for r, env in enumerate(envs):
+        for c, (kind, title) in enumerate(panels):
+            ax = axes[r][c]
+            d = tr[(tr.env == env) & (tr.kind == kind)]
+            if kind == "tpa":
+                d = d[(d.N == d.N.max()) & (d.M == d.M.max())] if not d.empty else d
+            for v in ["vae"] if kind == "vae" else ORDER:
+                dv = d[d.variant == v]
+                if kind == "rep" and not dv.empty:
+                    dv = dv[dv.N == dv.N.max()]
+                if dv.empty:
+                    continue
+                cs = list(curves_of(f, dv.key, "loss_curves" if kind == "tpa" else "loss_curve").values())
+                if not cs:
+                    continue
+                n = min(len(x) for x in cs)
+                A = np.stack([x[:n] for x in cs])
+                ep = np.arange(1, n + 1)
+                colour, label = STYLE.get(v, ("#2ca02c", "VAE"))
+                if kind == "tpa":
+                    label += " (frozen)" if (dv.frozen == 1).all() else ""
+                ax.plot(ep, np.median(A, 0), "o-" if n < 10 else "-", ms=3, color=colour,
+                        label=f"{label} ({len(cs)})")
+                ax.fill_between(ep, A.min(0), A.max(0), color=colour, alpha=0.15)
+            ax.set_title(f"{ENV_TITLE.get(env, env)}: {title}", fontsize=9)
+            ax.set_xlabel("epoch")
+            ax.set_ylabel("training loss")
+            ax.grid(alpha=0.3)
+            if ax.lines:
+                ax.set_yscale("log" if kind == "vae" else "linear")
+                ax.legend(fontsize=7)
+            else:
+                ax.text(0.5, 0.5, "not run", ha="center", va="center", transform=ax.transAxes)
+                ax.set_xticks([])
+                ax.set_yticks([])
+    fig.suptitle("Learning curves: median over seeds (band: min–max); (n) = trainings", fontsize=11)
+    save(fig, out, "fig_learning_curves")
+    return True
+
+
+def convergence_lines(t):
+    """One line per (environment, kind, variant): how many of its trainings converged."""
+    tr = t["training"]
+    if tr.empty:
+        return []
+    L = ["", "## Did every training converge?", "",
+         f"Converged: the mean loss over the last 10 % of the epochs differs from the 10 % before "
+         f"by less than 1 % (+1e-4 absolute); a TPA cell counts when all of its heads did. "
+         f"Per-task values: /tables/training.", "",
+         "| env | training | variant | epochs | converged | median Δ over the last 10 % |",
+         "|---|---|---|---:|---:|---:|"]
+    for (env, kind, v), d in tr.groupby(["env", "kind", "variant"]):
+        L.append(f"| {env} | {kind} | {v} | {int(d.epochs.median())} | {int(d.converged.sum())} of "
+                 f"{len(d)} | {100 * d.loss_relative_change.median():+.2f} % |")
+    return L
+
+
+def vae_lines(f, t):
+    """The VAE's posterior (per-latent KL) and how alive each φ's last hidden layer is."""
+    vl = t["vae_latents"]
+    L = []
+    if not vl.empty:
+        L += ["", "## The VAE's posterior", "",
+              "A latent dimension with KL < 0.01 nats carries no information about the trajectory "
+              "(posterior collapse). Per dimension: /tables/vae_latents.", "",
+              "| env | seed | ELBO form | active latents (KL > 0.01) | KL per latent (nats) | "
+              "reconstruction MSE |", "|---|---:|---|---:|---|---:|"]
+        for (env, seed), d in vl.groupby(["env", "seed"]):
+            kl = d.sort_values("dim").kl.values
+            L.append(f"| {env} | {seed} | {d.elbo.iloc[0]} | {(kl > 0.01).sum()} of {len(kl)} | "
+                     f"{', '.join(f'{x:.3g}' for x in kl)} | {d.reconstruction_mse.iloc[0]:.4g} |")
+    dead = []
+    for k in f["runs_index"][:]:
+        k = k.decode()
+        if k.endswith("/rep") and "dead_fraction" in f["runs/" + k]:
+            df = f["runs/" + k]["dead_fraction"][:]
+            env, variant = k.split("/")[0], k.split("/")[2]
+            dead.append((env, variant, float(df[-1]) if len(df) else 0.0))
+    if dead:
+        d = pd.DataFrame(dead, columns=["env", "variant", "dead"])
+        L += ["", "## Dead units", "",
+              "Share of φ's last hidden layer that is 0 on every trajectory of Ξ (a φ whose layer "
+              "is all dead is a constant map: no head on it can learn, frozen or not).", "",
+              "| env | variant | representations | median dead share | max |", "|---|---|---:|---:|---:|"]
+        for (env, v), x in d.groupby(["env", "variant"]):
+            L.append(f"| {env} | {v} | {len(x)} | {x.dead.median():.2f} | {x.dead.max():.2f} |")
+    return L
 
 
 def paired(a, b):
@@ -308,6 +444,7 @@ def verdict(lines, claim, comparisons, better):
 
 def report(f, t, envs, out, notes, fig3_key):
     fpe, tpa, tim = t["fpe"], t["tpa"], t["timings"]
+    envs = [e for e in envs if e != "grid2"]  # grid2 is Fig. 3's environment, not a claim's
     a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
     L = [f"# sirl-bench report: profile `{a.get('profile_name')}`", ""]
     L.append(f"- engine {a.get('engine_version')} (commit {a.get('git_commit')}), host "
@@ -330,7 +467,8 @@ def report(f, t, envs, out, notes, fig3_key):
               prof.strip(), "```"]
     L += ["", "## Figures", ""]
     for name, cap in [("fig3_grid_similar", "Fig. 3"), ("fig4_fpe", "Fig. 4"),
-                      ("fig5_tpa", "Fig. 5"), ("fig7_ablation", "Fig. 7")]:
+                      ("fig5_tpa", "Fig. 5"), ("fig7_ablation", "Fig. 7"),
+                      ("fig_learning_curves", "Learning curves")]:
         if os.path.exists(os.path.join(out, name + ".png")):
             L.append(f"![{cap}]({name}.png)")
     L += ["", "## The paper's claims, checked", ""]
@@ -392,6 +530,8 @@ def report(f, t, envs, out, notes, fig3_key):
         L.append("")
     if "jaco" not in envs:
         L.append("- *VAE weak on JacoRobot*: not evaluated — this run has no JacoRobot cells.")
+    L += convergence_lines(t)
+    L += vae_lines(f, t)
     if fig3_key:
         L.append(f"- Fig. 3 uses the representation `{fig3_key}`.")
     if notes:
@@ -433,7 +573,8 @@ def main():
         sys.exit(f"plot_figures: {a.results}: no such file")
     os.makedirs(a.out, exist_ok=True)
     f, t = load(a.results)
-    envs = sorted(set(t["fpe"].env) | set(t["tpa"].env)) or ["grid"]
+    envs = [e for e in ENV_TITLE if any(not t[k].empty and (t[k].env == e).any()
+                                        for k in ("fpe", "tpa", "training"))] or ["grid"]
     notes = []
     if not f.attrs.get("complete", 1):
         notes.append(f"partial run: {f.attrs.get('tasks_done')} of {f.attrs.get('tasks_total')} "
@@ -446,7 +587,8 @@ def main():
     fig3_key = plot_fig3(f, a.out, notes)
     plot_fig4(t["fpe"], envs, a.out, notes)
     plot_fig5(t["tpa"], envs, a.out, notes)
-    plot_fig7(t["tpa"], envs, f, a.out, notes)
+    plot_fig7(t["tpa"], envs, a.out, notes)
+    plot_learning_curves(f, t, envs, a.out, notes)
     report(f, t, envs, a.out, notes, fig3_key)
     print(f"plot_figures: wrote figures and report.md to {a.out}/")
 

@@ -2,8 +2,11 @@
 """End-to-end checks of `sirl run` on the smoke profile (ctest; Debian's python3 + h5py + pandas).
 
 - the result tables are bit-identical for --threads 1 and --threads 2;
-- a run killed with SIGKILL mid-way, then rerun, ends with the same tables and recomputes
-  nothing that was committed;
+- a run killed with SIGKILL mid-way, then rerun, ends with the same file as a fresh run (every
+  dataset and attribute under /runs, timing fields excepted) and recomputes nothing committed;
+- a results file missing some cells (and JacoRobot's weights, which are not stored by default)
+  resumes to the same file: the representations whose weights are gone are computed again;
+- every representation stores its embedding of Ξ; weights are stored per store_weights;
 - two shards merged equal the single-process run; a shard of another profile is refused;
 - a file from another profile is refused (exit 2) unless --force;
 - pandas reads /tables/* directly; `sirl export --csv` writes the same rows.
@@ -43,6 +46,36 @@ def params(path):
         return {k: f["runs/" + k + "/params"][:] for k in keys if "runs/" + k + "/params" in f}
 
 
+TIMING = {"seconds"}  # the only fields allowed to differ between two runs of one profile
+
+
+def runs_tree(path):
+    """Every dataset and attribute under /runs: {path: value} (timing fields excepted)."""
+    out = {}
+    with h5py.File(path, "r") as f:
+        def visit(name, obj):
+            for a, v in obj.attrs.items():
+                if a not in TIMING:
+                    out[f"{name}@{a}"] = v.tolist() if hasattr(v, "tolist") else v
+            if isinstance(obj, h5py.Dataset):
+                out[name] = obj[:]
+        f["runs"].visititems(visit)
+    return out
+
+
+def same_runs(a, b, what):
+    ta, tb = runs_tree(a), runs_tree(b)
+    if ta.keys() != tb.keys():
+        sys.exit(f"FAIL: {what}: objects differ: only in first {sorted(ta.keys() - tb.keys())[:5]}, "
+                 f"only in second {sorted(tb.keys() - ta.keys())[:5]}")
+    for k in ta:
+        x, y = ta[k], tb[k]
+        eq = np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y
+        if not eq:
+            sys.exit(f"FAIL: {what}: {k} differs: {str(x)[:200]} vs {str(y)[:200]}")
+    print(f"ok: {what} ({len(ta)} datasets and attributes under /runs)")
+
+
 def same(a, b, what):
     for k in a:
         if not a[k].equals(b[k]):
@@ -57,9 +90,20 @@ with tempfile.TemporaryDirectory() as tmp:
     run("run", SMOKE, "--out", two, "--threads", "2", "--quiet")
     ref = tables(one)
     same(ref, tables(two), "--threads 1 and --threads 2 give identical tables")
-    p1, p2 = params(one), params(two)
-    assert p1.keys() == p2.keys() and all(np.array_equal(p1[k], p2[k]) for k in p1)
-    print(f"ok: {len(p1)} stored weight arrays identical across thread counts")
+    same_runs(one, two, "--threads 1 and --threads 2 give identical files")
+    p1 = params(one)
+    with h5py.File(one, "r") as f:
+        reps = [k.decode() for k in f["runs_index"][:] if k.decode().endswith("/rep")]
+        for k in reps:
+            env = k.split("/")[0]
+            T = f[f"datasets/{env}/inputs"].shape[0]
+            e = f[f"runs/{k}/embedding"]
+            assert e.shape == (T, 6), (k, e.shape)
+            # weights: GridRobot's are kept, JacoRobot's are not (store_weights defaults)
+            assert (k in p1) == (not env.startswith("jaco")), k
+        vaes = [k.decode() for k in f["runs_index"][:] if k.decode().endswith("/vae")]
+        assert vaes and all(f[f"runs/{k}/kl_per_dim"].shape == (6,) for k in vaes)
+    print(f"ok: {len(reps)} embeddings [T, 6] stored; weights for GridRobot only ({len(p1)} arrays)")
 
     # pandas reads the tables as DESIGN.md promises; the table covers the grid.
     tpa = pd.DataFrame(h5py.File(one, "r")["tables/tpa"][:])
@@ -90,10 +134,32 @@ with tempfile.TemporaryDirectory() as tmp:
     reused = int(out.split("(")[1].split(" reused")[0])
     assert reused >= committed, f"rerun reused {reused} < {committed} committed tasks:\n{out}"
     same(ref, tables(killed), f"killed after {committed} commits, resumed ({reused} reused): same tables")
+    same_runs(one, killed, "killed and resumed: the same file as a fresh run")
     assert not os.path.exists(staging), "the staging directory is removed once the file is written"
     out = run("run", SMOKE, "--out", killed).stdout
     assert "0 computed" in out, out
     print("ok: rerunning a finished file recomputes nothing")
+
+    # A results file that lost some cells: the JacoRobot cells need φ's weights, which the file
+    # does not keep (store_weights = false), so their representations are computed again.
+    holed = os.path.join(tmp, "holed.h5")
+    with open(one, "rb") as src, open(holed, "wb") as dst:
+        dst.write(src.read())
+    with h5py.File(holed, "r+") as f:
+        keys = [k.decode() for k in f["runs_index"][:]]
+        drop = [k for k in keys if k.startswith("jaco/s1/sirl/N200/tpa")]
+        drop += ["grid/s0/vae/rep"]  # φ of the VAE method: needs the (stored) grid VAE
+        assert len(drop) > 2, drop
+        for k in drop:
+            del f["runs/" + k]
+        del f["runs_index"]
+        f.create_dataset("runs_index", data=[k.encode() for k in keys if k not in drop],
+                         dtype=h5py.string_dtype())
+        f.attrs["complete"] = 0
+    out = run("run", SMOKE, "--out", holed, "--threads", "2").stdout
+    computed = int(out.split("reused, ")[1].split(" computed")[0])
+    assert computed == len(drop) + 1, f"expected {len(drop)} cells + 1 φ recomputed:\n{out}"
+    same_runs(one, holed, f"a file missing {len(drop)} records (and Jaco weights) resumed")
 
     # Shards + merge.
     shards = [os.path.join(tmp, f"shard{i}.h5") for i in range(2)]
