@@ -54,7 +54,7 @@ void register_reproduce(CLI::App& app, Runner& run) {
       study_simulate(sp.env, sp.trajectories, sp.users, sp.similarity, sp.preference, sp.beta,
                      sp.mistake, 0, file);
       study_analyze(file, dir, sp.seeds, sp.splits, sp.epochs, sp.tpa_epochs,
-                    std::max(1, int(std::thread::hardware_concurrency())));
+                    std::max(1, int(std::thread::hardware_concurrency())), sp.random_frozen);
       study_line = "study:   " + dir + "/study_report.md (Fig. 6: " + dir + "/fig6_study.png)\n";
     }
     std::printf("results: %s\nfigures: %s/\nreport:  %s/report.md\n%s", out.c_str(),

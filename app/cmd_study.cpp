@@ -91,7 +91,7 @@ int study_simulate(const std::string& env, int64_t trajectories, int users, int6
 }
 
 int study_analyze(const std::string& file, const std::string& out, int seeds, int splits,
-                  int epochs, int tpa_epochs, int threads) {
+                  int epochs, int tpa_epochs, int threads, bool random_frozen) {
   const Study s = read_study(file);
   const Dataset d = study_dataset(s);
   StudyAnalysisConfig c;
@@ -101,6 +101,7 @@ int study_analyze(const std::string& file, const std::string& out, int seeds, in
   c.seeds = seeds;
   c.cv_splits = splits;
   c.threads = threads;
+  c.random_frozen = random_frozen;
   const auto t0 = std::chrono::steady_clock::now();
   StudyAnalysis a;
   try {
@@ -124,6 +125,8 @@ int study_analyze(const std::string& file, const std::string& out, int seeds, in
     f.set_attr("/study_analysis", "sirl_epochs", int64_t(c.hyper.sirl.epochs));
     f.set_attr("/study_analysis", "tpa_epochs", int64_t(c.hyper.tpa.epochs));
     f.set_attr("/study_analysis", "hyper", describe(c.hyper));
+    f.set_attr("/study_analysis", "random_mode",
+               std::string(random_frozen ? "frozen" : "unfrozen"));
     w("fpe_sirl", a.fpe_sirl);
     w("fpe_random", a.fpe_random);
     w("real_sirl", a.real_sirl);
@@ -132,6 +135,9 @@ int study_analyze(const std::string& file, const std::string& out, int seeds, in
     w("heldout_random", a.heldout_random);
     w("simulated_sirl", a.simulated_sirl);
     w("simulated_random", a.simulated_random);
+    w("real_random_other", a.real_random_other);
+    w("heldout_random_other", a.heldout_random_other);
+    w("simulated_random_other", a.simulated_random_other);
     std::vector<int32_t> both(a.both_features.begin(), a.both_features.end());
     f.write("/study_analysis/both_features", both.data(), {uint64_t(both.size())});
     f.write_strings("/study_analysis/participants", a.participants);
@@ -191,13 +197,15 @@ void register_study(CLI::App& app, Runner& run) {
   // analyze
   static std::string a_file, a_out;
   static int a_seeds = 5, a_splits = 50, a_epochs = 0, a_tpa_epochs = 0, a_threads = 1;
+  static std::string a_random = "unfrozen";
   auto* ana = study->add_subcommand(
       "analyze",
       "SIRL on the pooled similarity answers vs Random, as in the paper's §5: FPE (two-sided\n"
       "t-test over training seeds), TPA Real (70/30, cross-validated), Held-out (SIRL without\n"
       "that participant) and Simulated, each with a one-way ANOVA (method as the factor), also\n"
-      "for the participants whose preference involves every feature. Writes Fig. 6 and\n"
-      "study_report.md (H3, H4) into --out.");
+      "for the participants whose preference involves every feature. SIRL is evaluated frozen,\n"
+      "Random unfrozen (the paper's best baseline; --random frozen to swap), and the report\n"
+      "shows Random in the other mode beside it. Writes Fig. 6 and study_report.md (H3, H4).");
   ana->add_option("file", a_file, "Study file")->required()->check(CLI::ExistingFile);
   ana->add_option("--out", a_out, "Output directory (default: <file>-analysis)");
   ana->add_option("--seeds", a_seeds, "Training seeds for FPE")
@@ -210,6 +218,11 @@ void register_study(CLI::App& app, Runner& run) {
       ->check(CLI::Range(1, 100000));
   ana->add_option("--tpa-epochs", a_tpa_epochs, "Reward-head epochs (default: the paper's)")
       ->check(CLI::Range(1, 100000));
+  ana->add_option("--random", a_random,
+                  "How Random is evaluated in H4: unfrozen (φ fine-tuned with each head, the "
+                  "paper's best baseline) or frozen")
+      ->check(CLI::IsMember({"unfrozen", "frozen"}))
+      ->capture_default_str();
   ana->add_option("--threads", a_threads, "Threads inside each training (GEMM)")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
@@ -224,7 +237,8 @@ void register_study(CLI::App& app, Runner& run) {
                             s_out);
     if (ana->parsed()) {
       const std::string out = a_out.empty() ? a_file + "-analysis" : a_out;
-      return study_analyze(a_file, out, a_seeds, a_splits, a_epochs, a_tpa_epochs, a_threads);
+      return study_analyze(a_file, out, a_seeds, a_splits, a_epochs, a_tpa_epochs, a_threads,
+                           a_random == "frozen");
     }
     return run_study_serve_or_import();
   };

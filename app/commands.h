@@ -42,7 +42,7 @@ int study_simulate(const std::string& env, int64_t trajectories, int users, int6
                    int64_t n_pref, double beta, double mistake, uint64_t seed,
                    const std::string& out);
 int study_analyze(const std::string& file, const std::string& out, int seeds, int splits,
-                  int epochs, int tpa_epochs, int threads);
+                  int epochs, int tpa_epochs, int threads, bool random_frozen = false);
 
 // `sirl run` proper, shared with `sirl reproduce`.
 int run_command(const std::string& profile, const std::string& out, int threads, bool force,

@@ -42,6 +42,7 @@ void for_each_field(H& h, F&& f) {
   schedule("vae", h.vae);
   f("vae.kl_weight", h.vae_kl_weight);
   f("vae.elbo", h.vae_elbo);
+  f("vae.standardize", h.vae_standardize);
   schedule("pref", h.pref);
   f("pref.l2", h.pref_l2);
   schedule("tpa", h.tpa);

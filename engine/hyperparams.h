@@ -30,6 +30,11 @@ struct Hyper {
   // summed over the latent dimensions, both averaged over the batch. "mean": the squared error
   // averaged over batch × inputs (a KL weight in effect `inputs` times larger; collapses φ).
   std::string vae_elbo = "sum";
+  // φ = the encoder's mean μ, expressed in the prior's units: standardised per latent over Ξ
+  // (folded into the last layer, so φ stays an MLP on raw inputs). With λ = 0.01 the prior barely
+  // bounds μ's scale (measured on JacoRobot: std 1–3000 per latent), and the TPA head's L2 penalty
+  // on predicted rewards then swamps its loss: heads on it did not even fit their training pairs.
+  bool vae_standardize = true;
   TrainSchedule pref{5000, 32, {0.01, 1.0}};  // MultiPref-K and SinglePref
   double pref_l2 = 10;
   TrainSchedule tpa{500, 64, {0.001, 1.0}};  // the TPA reward heads

@@ -1,5 +1,6 @@
 #include "engine/study_analysis.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -58,9 +59,30 @@ std::vector<TpaSet> cv_sets(const StudyParticipant& p, const StudyAnalysisConfig
   return sets;
 }
 
+// Per-set held-out accuracies. Unfrozen cells fine-tune one copy of φ per set: they run in
+// chunks of kUnfrozenChunk sets so memory stays bounded (JacoRobot: 3.1 M weights, ×4 with the
+// gradient and Adam's moments, per copy); each chunk's heads draw from their own stream.
+constexpr size_t kUnfrozenChunk = 10;
+std::vector<double> tpa_accuracies(const Representation& rep, const Dataset& d,
+                                   const std::vector<TpaSet>& sets, int64_t M,
+                                   const StudyAnalysisConfig& c, uint64_t seed, bool frozen) {
+  if (frozen)
+    return evaluate_tpa(rep, d, sets, TpaConfig{M, true, c.hyper, c.threads}, seed).accuracy;
+  std::vector<double> acc;
+  for (size_t k = 0; k < sets.size(); k += kUnfrozenChunk) {
+    const std::vector<TpaSet> chunk(sets.begin() + k,
+                                    sets.begin() + std::min(sets.size(), k + kUnfrozenChunk));
+    const TpaResult r = evaluate_tpa(rep, d, chunk, TpaConfig{M, false, c.hyper, c.threads},
+                                     seed_from_key("unfrozen_chunk/" + std::to_string(k), seed));
+    acc.insert(acc.end(), r.accuracy.begin(), r.accuracy.end());
+  }
+  return acc;
+}
+
 double tpa_mean(const Representation& rep, const Dataset& d, const std::vector<TpaSet>& sets,
-                int64_t M, const StudyAnalysisConfig& c, uint64_t seed) {
-  return evaluate_tpa(rep, d, sets, TpaConfig{M, true, c.hyper, c.threads}, seed).mean;
+                int64_t M, const StudyAnalysisConfig& c, uint64_t seed, bool frozen = true) {
+  const auto acc = tpa_accuracies(rep, d, sets, M, c, seed, frozen);
+  return std::accumulate(acc.begin(), acc.end(), 0.0) / double(acc.size());
 }
 
 }  // namespace
@@ -94,7 +116,8 @@ StudyAnalysis analyze_study(const Study& s, const Dataset& d, const StudyAnalysi
     a.participants.push_back(p.id);
     a.both_features.push_back(p.scenario_features.size() >= size_t(d.feature_count()));
     a.real_sirl.push_back(tpa_mean(sirl[0], d, sets, M, c, tpa_seed));
-    a.real_random.push_back(tpa_mean(random[0], d, sets, M, c, tpa_seed));
+    a.real_random.push_back(tpa_mean(random[0], d, sets, M, c, tpa_seed, c.random_frozen));
+    a.real_random_other.push_back(tpa_mean(random[0], d, sets, M, c, tpa_seed, !c.random_frozen));
     std::vector<const StudyParticipant*> others;
     for (const auto& q : s.participants)
       if (q.id != p.id) others.push_back(&q);
@@ -106,6 +129,7 @@ StudyAnalysis analyze_study(const Study& s, const Dataset& d, const StudyAnalysi
       a.heldout_sirl.push_back(tpa_mean(held, d, sets, M, c, tpa_seed));
     }
     a.heldout_random.push_back(a.real_random.back());  // Random uses nobody's data
+    a.heldout_random_other.push_back(a.real_random_other.back());
   }
 
   // Simulated: perfect preferences for random rewards.
@@ -119,10 +143,9 @@ StudyAnalysis analyze_study(const Study& s, const Dataset& d, const StudyAnalysi
   const int64_t Msim = sim.front().train;
   const TpaResult ts =
       evaluate_tpa(sirl[0], d, sim, TpaConfig{Msim, true, c.hyper, c.threads}, tpa_seed);
-  const TpaResult tr =
-      evaluate_tpa(random[0], d, sim, TpaConfig{Msim, true, c.hyper, c.threads}, tpa_seed);
   a.simulated_sirl = ts.accuracy;
-  a.simulated_random = tr.accuracy;
+  a.simulated_random = tpa_accuracies(random[0], d, sim, Msim, c, tpa_seed, c.random_frozen);
+  a.simulated_random_other = tpa_accuracies(random[0], d, sim, Msim, c, tpa_seed, !c.random_frozen);
   return a;
 }
 

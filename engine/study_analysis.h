@@ -23,8 +23,10 @@ struct StudyAnalysisConfig {
   Hyper hyper;  // the environment's; sirl.* and tpa.* are used
   uint64_t seed = 0;
   int threads = 1;
-  // Both representations are evaluated frozen (a head on fixed φ): fine-tuning 50 copies of a
-  // 1024-wide φ per participant would need gigabytes for no change in what is compared.
+  // SIRL is evaluated frozen (its best mode, Fig. 5). Random is evaluated both ways; which one
+  // is "Random" in H4 is this switch: unfrozen by default, as the paper's "best performing
+  // realistic baseline" is in its Fig. 5 (φ and the head trained together per split).
+  bool random_frozen = false;
 };
 
 struct StudyAnalysis {
@@ -35,6 +37,8 @@ struct StudyAnalysis {
   std::vector<double> real_sirl, real_random;            // [P] mean TPA over the CV splits
   std::vector<double> heldout_sirl, heldout_random;      // [P]
   std::vector<double> simulated_sirl, simulated_random;  // [rewards]
+  // Random in the other mode than random_frozen picks (reported beside it).
+  std::vector<double> real_random_other, heldout_random_other, simulated_random_other;
 };
 
 // Throws std::invalid_argument when there are no similarity answers to train on.

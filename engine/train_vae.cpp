@@ -1,6 +1,7 @@
 #include "engine/train_vae.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "engine/epochs.h"
 #include "kernels/adam.h"
@@ -20,7 +21,7 @@ void measure_posterior(const Dataset& d, VaeModel& m, int threads) {
   std::vector<float> eps(size_t(kChunk) * L, 0.f);
   VaeWorkspace<float> ws;
   VaeLossParts parts;
-  std::vector<double> kl(L, 0.0);
+  std::vector<double> kl(L, 0.0), mu_sum(L, 0.0), mu_sq(L, 0.0);
   double sq = 0;
   for (int64_t i0 = 0; i0 < d.count; i0 += kChunk) {
     const int b = int(std::min<int64_t>(kChunk, d.count - i0));
@@ -28,10 +29,25 @@ void measure_posterior(const Dataset& d, VaeModel& m, int threads) {
                       static_cast<float*>(nullptr), ws, &parts, threads);
     for (int k = 0; k < L; ++k) kl[k] += parts.kl_per_dim[k] * b;
     sq += parts.squared_error * b;
+    const float* h = ws.enc.output();  // [b, 2L]: μ | log σ²
+    for (int i = 0; i < b; ++i)
+      for (int k = 0; k < L; ++k) {
+        const double mu = h[size_t(i) * 2 * L + k];
+        mu_sum[k] += mu;
+        mu_sq[k] += mu * mu;
+      }
   }
+  const double n = double(d.count);
   m.kl_per_dim.resize(L);
-  for (int k = 0; k < L; ++k) m.kl_per_dim[k] = float(kl[k] / double(d.count));
-  m.reconstruction_mse = sq / double(d.count);
+  m.latent_mean.resize(L);
+  m.latent_std.resize(L);
+  for (int k = 0; k < L; ++k) {
+    m.kl_per_dim[k] = float(kl[k] / n);
+    const double mean = mu_sum[k] / n;
+    m.latent_mean[k] = float(mean);
+    m.latent_std[k] = float(std::sqrt(std::max(0.0, mu_sq[k] / n - mean * mean)));
+  }
+  m.reconstruction_mse = sq / n;
 }
 }  // namespace
 
@@ -39,6 +55,7 @@ VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads)
   validate(h);
   VaeModel m;
   m.elbo = vae_elbo_form(h);
+  m.standardize = h.vae_standardize;
   m.shape = make_vae_shape(d.input_dim, h.phi_hidden, h.embedding_dim);
   m.params.resize(m.shape.param_count());
   Rng init(seed_from_key("vae_init", seed)), noise(seed_from_key("vae_noise", seed)),
@@ -93,6 +110,17 @@ Representation vae_mean_encoder(const VaeModel& vae) {
   const float* b = vae.params.data() + enc.bias_offset(last);
   r.params.insert(r.params.end(), W, W + size_t(L) * hid);
   r.params.insert(r.params.end(), b, b + L);
+  if (vae.standardize && int(vae.latent_std.size()) == L) {
+    // φ_k = (W_k·h + b_k − mean_k) / std_k: rescale row k of W and b_k (a constant μ_k stays
+    // unscaled rather than dividing by 0).
+    float* Wphi = r.params.data() + enc.weight_offset(last);
+    float* bphi = Wphi + size_t(L) * hid;
+    for (int k = 0; k < L; ++k) {
+      const float s = vae.latent_std[k] > 1e-12f ? 1.f / vae.latent_std[k] : 1.f;
+      for (int j = 0; j < hid; ++j) Wphi[size_t(k) * hid + j] *= s;
+      bphi[k] = (bphi[k] - vae.latent_mean[k]) * s;
+    }
+  }
   r.method = Method::vae;
   r.loss_curve = vae.loss_curve;
   r.train_flops = vae.train_flops;

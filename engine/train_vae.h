@@ -21,6 +21,10 @@ struct VaeModel {
   // carries no information about the input (posterior collapse).
   std::vector<float> kl_per_dim;  // [latent] mean over Ξ of KL(q(z_k|ξ) ‖ N(0, 1)), nats
   double reconstruction_mse = 0;  // mean over Ξ × inputs of (x̂ − x)²
+  // μ's mean and standard deviation over Ξ per latent; vae_mean_encoder folds them into φ when
+  // standardize is set (h.vae_standardize at training time).
+  std::vector<float> latent_mean, latent_std;
+  bool standardize = true;
   double train_flops = 0;
 };
 
@@ -32,7 +36,8 @@ VaeElbo vae_elbo_form(const Hyper& h);
 // Throws std::runtime_error if the loss or weights become non-finite.
 VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads = 1);
 
-// φ = the encoder's mean head: the encoder with its last layer cut to the first d outputs (μ).
+// φ = the encoder's mean head: the encoder with its last layer cut to the first d outputs (μ),
+// and, when vae.standardize, that layer rescaled so φ_k = (μ_k − mean_k) / std_k over Ξ.
 Representation vae_mean_encoder(const VaeModel& vae);
 
 }  // namespace sirl

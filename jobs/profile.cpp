@@ -332,7 +332,7 @@ Profile parse_profile(const std::string& text, const std::string& path) {
   if (const auto* st = r.table(root, "study", false)) {
     r.only_keys(*st, "[study]",
                 {"env", "trajectories", "users", "similarity", "preference", "beta", "mistake",
-                 "epochs", "tpa_epochs", "seeds", "splits"});
+                 "epochs", "tpa_epochs", "seeds", "splits", "random"});
     StudyPlan& sp = p.study;
     sp.enabled = true;
     sp.env = r.string(*st, "env", "jaco2");
@@ -348,6 +348,10 @@ Profile parse_profile(const std::string& text, const std::string& path) {
     sp.tpa_epochs = int(r.integer(*st, "tpa_epochs", 1000, 1, 1'000'000));
     sp.seeds = int(r.integer(*st, "seeds", 5, 2, 100));
     sp.splits = int(r.integer(*st, "splits", 50, 1, 1000));
+    const std::string random = r.string(*st, "random", "unfrozen");
+    if (random != "unfrozen" && random != "frozen")
+      r.fail(st->get("random"), "[study] random must be \"unfrozen\" or \"frozen\"");
+    sp.random_frozen = random == "frozen";
   }
   for (const auto& env : p.envs) p.hyper[env] = paper_hyper(env);
   if (const auto* hy = r.table(root, "hyper", false)) {

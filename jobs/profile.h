@@ -55,6 +55,7 @@ struct StudyPlan {
   int64_t trajectories = 1000, similarity = 100, preference = 100;
   int users = 10, epochs = 3000, tpa_epochs = 1000, seeds = 5, splits = 50;
   double beta = 20, mistake = 0.05;
+  bool random_frozen = false;  // random = "unfrozen" (default, the paper's best) or "frozen"
 };
 
 struct Profile {

@@ -112,6 +112,9 @@ void put_vae(const VaeModel& v, TaskRecord& rec) {
   rec.arrays["reconstruction_curve"] = array(v.reconstruction_curve);
   rec.arrays["kl_curve"] = array(v.kl_curve);
   rec.arrays["kl_per_dim"] = array(v.kl_per_dim);
+  rec.arrays["latent_mean"] = array(v.latent_mean);
+  rec.arrays["latent_std"] = array(v.latent_std);
+  rec.num["standardize"] = v.standardize;
   put_shape(v.shape.encoder, "encoder_", rec);
   put_shape(v.shape.decoder, "decoder_", rec);
   rec.num["latent"] = v.shape.latent;
@@ -133,6 +136,9 @@ VaeModel get_vae(const TaskRecord& rec) {
   v.reconstruction_curve = need_array(rec, "reconstruction_curve");
   v.kl_curve = need_array(rec, "kl_curve");
   v.kl_per_dim = need_array(rec, "kl_per_dim");
+  v.latent_mean = need_array(rec, "latent_mean");
+  v.latent_std = need_array(rec, "latent_std");
+  v.standardize = need_num(rec, "standardize") != 0;
   const std::string& elbo = need_text(rec, "elbo");
   if (elbo != "sum" && elbo != "mean")
     throw std::runtime_error(rec.key + ": unknown ELBO form '" + elbo + "'");

@@ -8,7 +8,8 @@ namespace sirl {
 namespace {
 // log σ² is clamped to [−30, 20] before use: σ = exp(½ log σ²) overflows float (and the loss
 // turns NaN) when a large learning rate meets large inputs (JacoRobot's raw 2037-d states at the
-// paper's lr 0.01). Inside the range the loss and gradient are exactly the textbook ones.
+// paper's lr 0.01). Inside the range the loss and gradient are exactly the textbook ones;
+// outside it only the KL's gradient passes (see below).
 template <typename T>
 T clamp_logvar(T lv) {
   return std::min(std::max(lv, T(-30)), T(20));
@@ -75,10 +76,12 @@ T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const
       if (!dparams) continue;
       // through z = μ + σ·ε, plus the KL term's own gradient
       ws.d_enc_out[im] = ws.d_z[iz] + kl_weight * mu * inv_b;
-      ws.d_enc_out[il] =
-          lv == h[il]  // clamped: no gradient, as torch.clamp
-              ? ws.d_z[iz] * eps[iz] * T(0.5) * sd + kl_weight * T(0.5) * (sd * sd - 1) * inv_b
-              : T(0);
+      // The sample path has no gradient outside the clamp (as torch.clamp), but the KL's does
+      // (straight through): with a zero gradient there, a log σ² that once overshot below −30
+      // stayed there for good (σ ≈ 3e−7: a deterministic auto-encoder whose KL could not act),
+      // as measured on JacoRobot at lr 0.01. The KL pulls it back into range.
+      ws.d_enc_out[il] = (lv == h[il] ? ws.d_z[iz] * eps[iz] * T(0.5) * sd : T(0)) +
+                         kl_weight * T(0.5) * (sd * sd - 1) * inv_b;
     }
   kl *= inv_b;
   if (dparams)

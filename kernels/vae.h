@@ -41,7 +41,9 @@ struct VaeWorkspace {
 
 // params = [encoder params | decoder params]; x [B, in]; eps [B, latent] standard-normal noise
 // (drawn by the caller so the step is a pure function). z = μ + exp(½ log σ²)·eps, with log σ²
-// clamped to [−30, 20] (zero gradient outside, as torch.clamp) so σ cannot overflow.
+// clamped to [−30, 20] so σ cannot overflow; outside the range the sample path has no gradient
+// (as torch.clamp) but the KL's gradient passes straight through, so a log σ² that overshot
+// is pulled back instead of sticking at the bound.
 //   L = reconstruction (see VaeElbo)  +  λ · (1/B) Σ_i −½ Σ_k (1 + log σ² − μ² − σ²)
 // Adds ∂L/∂params into dparams (zero it first; may be null). Returns L.
 template <typename T>

@@ -11,6 +11,7 @@ A partial file (an interrupted run) plots with gaps and notes, never zeros.
 """
 import argparse
 import html
+import json
 import math
 import os
 import sys
@@ -38,6 +39,8 @@ ORDER = list(STYLE)
 ENV_TITLE = {"grid": "GridRobot", "grid2": "GridRobot (laptop + angle)", "jaco": "JacoRobot",
              "jaco2": "JacoRobot (table + laptop)"}
 ALPHA = 0.05
+# What each figure drew, written to figures.json beside them (tests and users check it).
+DRAWN = {}
 
 
 def decode(df):
@@ -210,6 +213,10 @@ def plot_fig7(tpa, envs, out, notes):
                     if applicable:
                         notes.append(f"Fig. 7 {ENV_TITLE.get(env, env)}: no {name} cell for "
                                      f"{STYLE[b][1]}")
+        DRAWN.setdefault("fig7", {})[env] = {
+            "N": Nab, "M": Mab,
+            "bars": int(sum(np.isfinite(p.get_height()) and p.get_height() > 0 for p in ax.patches)),
+            "missing": sum(1 for t in ax.texts if t.get_text() == "missing")}
         ax.set_xticks(np.arange(len(bases)))
         ax.set_xticklabels([STYLE[b][1] for b in bases], fontsize=8)
         ax.set_ylim(0.4, 1.0)
@@ -294,6 +301,7 @@ def plot_fig3(f, out, notes):
         draw(axes[row][0], [q], f"query ξ{q}", "black")
         draw(axes[row][1], nearest, "most similar under φ", "tab:green")
         draw(axes[row][2], farthest, "least similar under φ", "tab:red")
+    DRAWN["fig3"] = {"env": env, "representation": key, "queries": [q_far, q_near]}
     fig.suptitle(f"Fig. 3: {ENV_TITLE.get(env, env)} under a SIRL φ ({key}); ◆ laptop, "
                  "■ obstacles, end angle in degrees", fontsize=10)
     save(fig, out, "fig3_grid_similar")
@@ -590,6 +598,8 @@ def main():
     plot_fig7(t["tpa"], envs, a.out, notes)
     plot_learning_curves(f, t, envs, a.out, notes)
     report(f, t, envs, a.out, notes, fig3_key)
+    with open(os.path.join(a.out, "figures.json"), "w") as fh:
+        json.dump(DRAWN, fh, indent=1)
     print(f"plot_figures: wrote figures and report.md to {a.out}/")
 
 

@@ -31,9 +31,13 @@ try:
 except (OSError, KeyError) as e:
     sys.exit(f"plot_study: {a.analysis}: not a study analysis file ({e})")
 v = {k: g[k][:] for k in ("fpe_sirl", "fpe_random", "real_sirl", "real_random", "heldout_sirl",
-                          "heldout_random", "simulated_sirl", "simulated_random")}
+                          "heldout_random", "simulated_sirl", "simulated_random",
+                          "real_random_other", "heldout_random_other", "simulated_random_other")
+     if k in g}
 both = g["both_features"][:].astype(bool)
 attrs = {k: (x.decode() if isinstance(x, bytes) else x) for k, x in g.attrs.items()}
+MODE = attrs.get("random_mode", "frozen")  # files of older engines evaluated Random frozen
+OTHER = "frozen" if MODE == "unfrozen" else "unfrozen"
 
 
 def ci(x):
@@ -74,7 +78,7 @@ for j, (name, key) in enumerate(groups):
     for k, (meth, col) in enumerate([("sirl", SIRL), ("random", RANDOM)]):
         m, h = ci(v[f"{key}_{meth}"])
         ax1.bar(j + (k - 0.5) * 0.35, m, 0.35, yerr=0 if np.isnan(h) else h, color=col, capsize=4,
-                label=("SIRL" if meth == "sirl" else "Random") if j == 0 else None)
+                label=("SIRL (frozen)" if meth == "sirl" else f"Random ({MODE})") if j == 0 else None)
 ax1.set_xticks(range(3))
 ax1.set_xticklabels([g[0] for g in groups])
 ax1.set_ylim(0.4, 1.0)
@@ -91,7 +95,10 @@ L = ["# User study analysis", "",
      f"- study file `{attrs.get('study_file')}` ({attrs.get('env')}): {len(g['participants'])} "
      f"participants with preference answers, {attrs.get('triplets')} pooled similarity answers",
      f"- SIRL {attrs.get('sirl_epochs')} epochs, {attrs.get('seeds')} training seeds; reward heads "
-     f"{attrs.get('tpa_epochs')} epochs; {attrs.get('cv_splits')} cross-validation splits (70/30)", "",
+     f"{attrs.get('tpa_epochs')} epochs; {attrs.get('cv_splits')} cross-validation splits (70/30)",
+     f"- SIRL is evaluated frozen (its best mode); Random **{MODE}** (the paper compares SIRL with "
+     f"\"Random, the best performing realistic baseline\", unfrozen in its Fig. 5); Random {OTHER} "
+     f"is reported below for comparison", "",
      "![Fig. 6](fig6_study.png)", ""]
 t = stats.ttest_ind(v["fpe_sirl"], v["fpe_random"], equal_var=False)
 d = v["fpe_sirl"].mean() - v["fpe_random"].mean()
@@ -113,6 +120,15 @@ for name, key in groups:
         L.append(f"- **H4 — {name} TPA, {subset}: {verdict(p, diff, '>')}** (one-way ANOVA, method as "
                  f"the factor: F(1, {df}) = {F:.3f}, p = {p:.3g}; SIRL {np.nanmean(s):.3f}, Random "
                  f"{np.nanmean(r):.3f})")
+if "real_random_other" in v:
+    L += ["", f"### The same comparisons against Random {OTHER}", ""]
+    for name, key in groups:
+        s, r = v[f"{key}_sirl"], v[f"{key}_random_other"]
+        F, p, df = anova(s, r)
+        diff = np.nanmean(s) - np.nanmean(r)
+        L.append(f"- {name} TPA, all participants: {verdict(p, diff, '>')} (F(1, {df}) = {F:.3f}, "
+                 f"p = {p:.3g}; SIRL {np.nanmean(s):.3f}, Random {OTHER} {np.nanmean(r):.3f}, "
+                 f"Random {MODE} {np.nanmean(v[f'{key}_random']):.3f})")
 L += ["", "Verdicts: *held* = the claimed direction with p < 0.05; *not held* = significant the "
       "other way; *inconclusive* otherwise.", ""]
 with open(os.path.join(a.out, "study_report.md"), "w") as fh:

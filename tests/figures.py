@@ -1,6 +1,9 @@
 #!/usr/bin/python3
 """The plotting tool on the smoke profile's output (ctest): every figure and the report exist;
-a partial file (one shard of two) still plots, with the missing cells reported as gaps."""
+Fig. 7 draws the cells the file holds even when an environment overrides the ablation's M;
+Fig. 3 is drawn on the simplified GridRobot; a partial file (one shard of two) still plots, with
+the missing cells reported as gaps."""
+import json
 import os
 import subprocess
 import sys
@@ -10,8 +13,9 @@ SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
 SMOKE = os.path.join(SRC, "configs", "smoke.toml")
 PLOT = os.path.join(SRC, "results", "plot_figures.py")
-FILES = [f"{n}.{e}" for n in ("fig3_grid_similar", "fig4_fpe", "fig5_tpa", "fig7_ablation")
-         for e in ("png", "pdf")] + ["report.md", "report.html"]
+FILES = [f"{n}.{e}" for n in ("fig3_grid_similar", "fig4_fpe", "fig5_tpa", "fig7_ablation",
+                               "fig_learning_curves")
+         for e in ("png", "pdf")] + ["report.md", "report.html", "figures.json"]
 
 
 def sh(*cmd):
@@ -37,7 +41,28 @@ with tempfile.TemporaryDirectory() as tmp:
     for claim in ("H1", "H2", "SIRL is better frozen", "Random beats preference"):
         assert claim in rep, f"report lacks {claim}"
     assert "paired t-test" in rep and "p = " in rep
-    print("ok: every figure and the report from the smoke run")
+    for section in ("Did every training converge?", "The VAE's posterior", "Dead units"):
+        assert section in rep, f"report lacks {section}"
+    drawn = json.load(open(os.path.join(tmp, "full", "figures.json")))
+    assert drawn["fig3"]["env"] == "grid2", drawn["fig3"]
+    print("ok: every figure and the report from the smoke run; Fig. 3 on grid2")
+
+    # JacoRobot runs its ablation at another M than the top-level [ablation]: Fig. 7 must draw
+    # the cells the file holds (16 + 4 bars: four methods × 4 configurations, VAE and Random × 2).
+    over = os.path.join(tmp, "override.toml")
+    with open(SMOKE) as f:
+        text = f.read()
+    assert "trajectories = 500\n" in text
+    with open(over, "w") as f:
+        f.write(text.replace("trajectories = 500\n", "trajectories = 500\nablation_M = [80]\n"))
+    ov = os.path.join(tmp, "override.h5")
+    sh(SIRL, "run", over, "--out", ov, "--quiet")
+    sh("/usr/bin/python3", PLOT, ov, "--out", os.path.join(tmp, "ov"))
+    fig7 = json.load(open(os.path.join(tmp, "ov", "figures.json")))["fig7"]
+    assert fig7["jaco"]["M"] == [80] and fig7["grid"]["M"] == [40], fig7
+    for env in ("grid", "jaco"):
+        assert fig7[env]["bars"] == 20 and fig7[env]["missing"] == 0, (env, fig7[env])
+    print("ok: Fig. 7 draws every ablation cell of the file, per environment:", fig7)
 
     part = os.path.join(tmp, "shard.h5")
     sh(SIRL, "run", SMOKE, "--out", part, "--shard", "0/2", "--quiet")

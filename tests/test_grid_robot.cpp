@@ -1,7 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
+#include <string>
+#include <vector>
 
 #include "datasets/grid_robot.h"
 
@@ -29,6 +32,32 @@ TEST(GridRobot, EnumerationCountIsCombinatorial) {
     EXPECT_LE(std::abs(x[18]), 1.f);
   }
   EXPECT_EQ(uniq.size(), size_t(d.count));
+}
+
+// grid2, the paper's Fig. 3 environment: GridRobot's Ξ with only the laptop and the angle.
+TEST(GridRobot, SimplifiedVariantKeepsOnlyTheLaptopAndTheAngle) {
+  const Dataset g = make_grid2_dataset();
+  EXPECT_EQ(g.env, "grid2");
+  EXPECT_EQ(g.feature_names, (std::vector<std::string>{"laptop_distance", "abs_angle"}));
+  EXPECT_EQ(g.object_names, (std::vector<std::string>{"laptop"}));
+  EXPECT_EQ(g.count, 1960);
+  // Hand check on every trajectory: the mean distance to the laptop cell (2,2) over the 9
+  // states, and |angle|, recomputed from the inputs themselves.
+  for (int64_t i = 0; i < g.count; ++i) {
+    const float* x = g.input(i);
+    double lap = 0;
+    for (int s = 0; s < 9; ++s) lap += std::hypot(x[2 * s] * 4 - 2.0, x[2 * s + 1] * 4 - 2.0);
+    ASSERT_NEAR(g.features_raw[2 * i], lap / 9, 1e-5) << i;
+    ASSERT_NEAR(g.features_raw[2 * i + 1], std::abs(x[18]) * 90, 1e-4) << i;
+  }
+  // Normalised over Ξ to exactly [0, 1] per feature.
+  for (int f = 0; f < 2; ++f) {
+    float lo = 1, hi = 0;
+    for (int64_t i = 0; i < g.count; ++i)
+      lo = std::min(lo, g.feature(i)[f]), hi = std::max(hi, g.feature(i)[f]);
+    EXPECT_FLOAT_EQ(lo, 0.f);
+    EXPECT_FLOAT_EQ(hi, 1.f);
+  }
 }
 
 TEST(GridRobot, FeaturesOnHandWorkedPath) {

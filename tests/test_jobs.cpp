@@ -281,6 +281,9 @@ TEST(TaskOutputs, RepresentationAndVaeRoundTripThroughARecordAndAFile) {
   v.reconstruction_curve = {3.5f, 2.5f};
   v.kl_curve = {50, 50};
   v.kl_per_dim = {0.002f, 1.5f};
+  v.latent_mean = {0.5f, -2};
+  v.latent_std = {3, 0.25f};
+  v.standardize = false;
   v.reconstruction_mse = 0.125;
   v.train_flops = 99;
   TaskRecord vr;
@@ -295,6 +298,9 @@ TEST(TaskOutputs, RepresentationAndVaeRoundTripThroughARecordAndAFile) {
   EXPECT_EQ(w.reconstruction_curve, v.reconstruction_curve);
   EXPECT_EQ(w.kl_curve, v.kl_curve);
   EXPECT_EQ(w.kl_per_dim, v.kl_per_dim);
+  EXPECT_EQ(w.latent_mean, v.latent_mean);
+  EXPECT_EQ(w.latent_std, v.latent_std);
+  EXPECT_FALSE(w.standardize);
   EXPECT_EQ(w.reconstruction_mse, 0.125);
   EXPECT_EQ(w.train_flops, 99);
   // The φ a VAE method task hands on keeps the VAE's curve (a resumed run's did not, once).

@@ -129,6 +129,22 @@ TEST(Vae, KlIsZeroForStandardNormalPosterior) {
   EXPECT_DOUBLE_EQ(parts.reconstruction, 4.0);  // summed over the 4 inputs, mean over the batch
 }
 
+TEST(Vae, ALogVarianceBelowTheClampIsPulledBackByTheKl) {
+  // Zero weights, the log σ² bias at −40 (below the clamp at −30): the sample path has no
+  // gradient there, the KL's passes straight through: ∂L/∂b_lv = λ·½·(e^−30 − 1) summed over
+  // the batch and divided by it, i.e. λ·½·(e^−30 − 1) < 0, so gradient descent raises log σ².
+  const VaeShape s = make_vae_shape(3, {4}, 1);
+  std::vector<double> p(s.param_count(), 0.0), x(2 * 3, 0.3), eps(2, 0.7);
+  const size_t b_lv = s.encoder.bias_offset(s.encoder.layers() - 1) + 1;  // [μ, log σ²]
+  p[b_lv] = -40;
+  std::vector<double> g(p.size(), 0.0);
+  VaeWorkspace<double> ws;
+  vae_loss_and_grad(s, p.data(), x.data(), 2, eps.data(), 0.01, VaeElbo::sum_over_inputs, g.data(),
+                    ws);
+  EXPECT_NEAR(g[b_lv], 0.01 * 0.5 * (std::exp(-30.0) - 1), 1e-15);
+  EXPECT_LT(g[b_lv], 0.0);
+}
+
 TEST(Vae, KlPerDimensionMatchesTheClosedForm) {
   // Zero weights: every row's μ_k and log σ²_k are the last encoder layer's biases, so
   // KL_k = −½ (1 + lv_k − μ_k² − exp(lv_k)) for every row, computed here by hand.

@@ -123,18 +123,34 @@ TEST(Methods, RandomIsSirlsStartingPoint) {
   EXPECT_EQ(untrained.params, trained().random.params);
 }
 
-TEST(Methods, VaeMeanEncoderIsTheEncodersMeanColumns) {
+// φ of the VAE method: the encoder's μ columns standardised over Ξ (vae.standardize, default),
+// or the raw μ columns without it; checked against the encoder's own forward pass.
+TEST(Methods, VaeMeanEncoderIsTheEncodersStandardisedMeanColumns) {
   const World& w = world();
   const Trained& t = trained();
+  const int64_t n = w.d.count;
   MlpTape<float> tape;
-  mlp_forward(t.vae.shape.encoder, t.vae.params.data(), w.d.inputs.data(), 5, tape);
-  std::vector<float> e(5 * 6);
-  embed(t.vae_rep, w.d.inputs.data(), 5, e.data());
+  mlp_forward(t.vae.shape.encoder, t.vae.params.data(), w.d.inputs.data(), int(n), tape);
+  const float* h = tape.output();  // [n, 12]: μ | log σ²
+  std::vector<double> mean(6, 0.0), sd(6, 0.0);
+  for (int64_t i = 0; i < n; ++i)
+    for (int k = 0; k < 6; ++k) mean[k] += h[i * 12 + k] / double(n);
+  for (int64_t i = 0; i < n; ++i)
+    for (int k = 0; k < 6; ++k) sd[k] += std::pow(h[i * 12 + k] - mean[k], 2) / double(n);
+  for (auto& v : sd) v = std::sqrt(v);
+  std::vector<float> e(size_t(n) * 6);
+  embed(t.vae_rep, w.d.inputs.data(), n, e.data());
+  for (int64_t i = 0; i < n; i += 97)
+    for (int k = 0; k < 6; ++k)
+      EXPECT_NEAR(e[i * 6 + k], (h[i * 12 + k] - mean[k]) / sd[k], 2e-4) << i << " " << k;
+  VaeModel raw = t.vae;
+  raw.standardize = false;
+  const Representation r = vae_mean_encoder(raw);
+  embed(r, w.d.inputs.data(), 5, e.data());
   // Equal up to float summation order (the GEMM blocks a 6-wide and a 12-wide output apart).
   for (int i = 0; i < 5; ++i)
     for (int k = 0; k < 6; ++k)
-      EXPECT_NEAR(e[i * 6 + k], tape.output()[i * 12 + k],
-                  1e-5f * (1 + std::abs(tape.output()[i * 12 + k])));
+      EXPECT_NEAR(e[i * 6 + k], h[i * 12 + k], 1e-5f * (1 + std::abs(h[i * 12 + k])));
 }
 
 TEST(Methods, SirlPlusVaeStartsFromTheEncoder) {
