@@ -1,5 +1,5 @@
 // Kernel micro-benchmarks (Google Benchmark). Every case reports GFLOP/s through a counter:
-// FLOPs = 2·in·out per layer per sample forward, ×3 for forward + backward (DESIGN.md §9).
+// FLOPs = 2·in·out per layer per sample forward, ×3 for forward + backward (docs/ARCHITECTURE.md §6).
 //   sirl_bench_kernels --benchmark_format=json > kernels.json
 #include <benchmark/benchmark.h>
 

@@ -1,4 +1,4 @@
-// JacoRobot (paper §4.1, Appendix A; DESIGN.md §3): a 7-DoF Kinova Jaco (j2s7s300) over a table
+// JacoRobot (paper §4.1, Appendix A; docs/ARCHITECTURE.md §3): a 7-DoF Kinova Jaco (j2s7s300) over a table
 // with a laptop and a human. Trajectories are straight joint-space paths between random start
 // and goal configurations, smoothly deformed (ξ_D = ξ + μ A⁻¹ ũ, A the acceleration norm,
 // factored once with CHOLMOD); forward kinematics runs through MuJoCo 2.2 (`mj_kinematics`).
@@ -64,7 +64,7 @@ class JacoKinematics {
   Impl* impl_;
 };
 
-// The true features of one state from its end-effector frame (see DESIGN.md §3).
+// The true features of one state from its end-effector frame (see docs/ARCHITECTURE.md §3).
 //   table      EE height above the table (m)
 //   upright    1 − (EE x-axis · world z)
 //   laptop     max(0, 0.3 − ‖EE_xy − laptop_xy‖)

@@ -1,4 +1,4 @@
-// The paper's training hyper-parameters (Appendix B–C; DESIGN.md §5), one set per environment.
+// The paper's training hyper-parameters (Appendix B–C; docs/ARCHITECTURE.md §4), one set per environment.
 // Every value is overridable by name ("sirl.epochs", "tpa.lr", …) so profiles can change any of
 // them, and every run records the full set it used (describe()).
 #pragma once

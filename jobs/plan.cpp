@@ -57,7 +57,7 @@ EnvSize env_size(const std::string& env, const Profile& p) {
   return {e.input_dim(p.jaco), e.trajectories(p.jaco)};
 }
 
-// Forward+backward ≈ 3× the forward multiply-adds (DESIGN.md §9).
+// Forward+backward ≈ 3× the forward multiply-adds (docs/ARCHITECTURE.md §6).
 double train_flops(const MlpShape& s, int64_t rows_per_epoch, int epochs) {
   return 3.0 * s.forward_flops(1) * double(rows_per_epoch) * epochs;
 }

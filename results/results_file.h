@@ -1,4 +1,4 @@
-// The run's results file (DESIGN.md §8): root attributes describing the run, the datasets, every
+// The run's results file (docs/ARCHITECTURE.md §5): root attributes describing the run, the datasets, every
 // task's record under /runs/<task key>, and long tables that pandas reads directly:
 //   /tables/fpe      env, method, variant, vae, N, seed, fpe, train_mse
 //   /tables/tpa      env, method, variant, vae, frozen, N, M, seed, tpa, tpa_std, tpa_train,

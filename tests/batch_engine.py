@@ -105,7 +105,7 @@ with tempfile.TemporaryDirectory() as tmp:
         assert vaes and all(f[f"runs/{k}/kl_per_dim"].shape == (6,) for k in vaes)
     print(f"ok: {len(reps)} embeddings [T, 6] stored; weights for GridRobot only ({len(p1)} arrays)")
 
-    # pandas reads the tables as DESIGN.md promises; the table covers the grid.
+    # pandas reads the tables as the README promises; the table covers the grid.
     tpa = pd.DataFrame(h5py.File(one, "r")["tables/tpa"][:])
     for col in ("env", "method", "variant", "vae", "frozen", "N", "M", "seed", "tpa", "tpa_std"):
         assert col in tpa.columns, col
