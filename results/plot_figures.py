@@ -302,8 +302,9 @@ def plot_fig3(f, out, notes):
         draw(axes[row][1], nearest, "most similar under φ", "tab:green")
         draw(axes[row][2], farthest, "least similar under φ", "tab:red")
     DRAWN["fig3"] = {"env": env, "representation": key, "queries": [q_far, q_near]}
-    fig.suptitle(f"Fig. 3: {ENV_TITLE.get(env, env)} under a SIRL φ ({key}); ◆ laptop, "
-                 "■ obstacles, end angle in degrees", fontsize=10)
+    marks = "◆ laptop" + (", ■ obstacles" if any(n.startswith("obstacle") for n in onames) else "")
+    fig.suptitle(f"Fig. 3: {ENV_TITLE.get(env, env)} under a SIRL φ ({key}); {marks}, "
+                 "end angle in degrees", fontsize=10)
     save(fig, out, "fig3_grid_similar")
     return key
 
