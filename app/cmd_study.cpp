@@ -102,6 +102,13 @@ int study_analyze(const std::string& file, const std::string& out, int seeds, in
   c.cv_splits = splits;
   c.threads = threads;
   c.random_frozen = random_frozen;
+  const auto started = std::chrono::steady_clock::now();
+  c.progress = [&](int done, int total) {
+    const double el =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    std::fprintf(stderr, "sirl study analyze: participant %d/%d done, %.0f s elapsed, ETA %.0f s\n",
+                 done, total, el, done > 0 ? el / done * (total - done) : 0.0);
+  };
   const auto t0 = std::chrono::steady_clock::now();
   StudyAnalysis a;
   try {

@@ -130,6 +130,7 @@ StudyAnalysis analyze_study(const Study& s, const Dataset& d, const StudyAnalysi
     }
     a.heldout_random.push_back(a.real_random.back());  // Random uses nobody's data
     a.heldout_random_other.push_back(a.real_random_other.back());
+    if (c.progress) c.progress(int(a.participants.size()), int(s.participants.size()));
   }
 
   // Simulated: perfect preferences for random rewards.

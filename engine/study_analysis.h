@@ -5,6 +5,7 @@
 // only: the statistics (t-test, ANOVAs) and Fig. 6 are drawn from them by results/plot_study.py.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,8 @@ struct StudyAnalysisConfig {
   // is "Random" in H4 is this switch: unfrozen by default, as the paper's "best performing
   // realistic baseline" is in its Fig. 5 (φ and the head trained together per split).
   bool random_frozen = false;
+  // Called after each participant's TPA (done of total), e.g. to print progress with an ETA.
+  std::function<void(int done, int total)> progress;
 };
 
 struct StudyAnalysis {
