@@ -94,8 +94,11 @@ Plan make_plan(const Profile& p) {
         t.env = env;
         t.seed = seed;
         const VaeShape vs = make_vae_shape(es.input_dim, h.phi_hidden, h.embedding_dim);
+        // training, then one pass over Ξ measuring the posterior (train_vae)
         t.flops = train_flops(vs.encoder, es.trajectories, h.vae.epochs) +
-                  train_flops(vs.decoder, es.trajectories, h.vae.epochs);
+                  train_flops(vs.decoder, es.trajectories, h.vae.epochs) +
+                  vs.encoder.forward_flops(int(es.trajectories)) +
+                  vs.decoder.forward_flops(int(es.trajectories));
         t.bytes = working_set(vs.encoder, h.vae.batch) + working_set(vs.decoder, h.vae.batch);
         return add(std::move(t));
       };
@@ -115,6 +118,7 @@ Plan make_plan(const Profile& p) {
           t.flops = train_flops(phi, 2 * t.N, h.pref.epochs);
           t.bytes = working_set(phi, 2 * h.pref.batch);
         }
+        t.flops += phi.forward_flops(int(es.trajectories));  // the embedding of Ξ it stores
         return add(std::move(t));
       };
       auto fpe = [&](const Variant& v, int64_t N) {

@@ -112,10 +112,6 @@ void describe_cell(const Task& t, TaskRecord& r) {
   }
 }
 
-}  // namespace
-
-namespace {
-
 // The convergence verdict of a loss curve (engine/convergence.h), as record fields.
 void record_convergence(const std::vector<float>& curve, TaskRecord& r) {
   const Convergence c = check_convergence(curve);
