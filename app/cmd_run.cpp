@@ -134,7 +134,7 @@ void register_export(CLI::App& app, Runner& run) {
   run = [] {
     const auto records = read_results_records(file);
     export_csv(build_tables(records), dir);
-    std::printf("wrote %s/{fpe,tpa,timings}.csv from %zu task records\n", dir.c_str(),
+    std::printf("wrote %s/{fpe,tpa,timings,training,vae_latents}.csv from %zu task records\n", dir.c_str(),
                 records.size());
     return 0;
   };

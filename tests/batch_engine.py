@@ -189,6 +189,13 @@ with tempfile.TemporaryDirectory() as tmp:
     run("export", one, "--csv", csv)
     c = pd.read_csv(os.path.join(csv, "tpa.csv"))
     assert len(c) == len(ref["tpa"]) and np.allclose(c["tpa"], ref["tpa"]["tpa"])
-    print("ok: export --csv")
+    with h5py.File(one, "r") as f:
+        for name in ("training", "vae_latents"):
+            t = pd.DataFrame(f["tables/" + name][:])
+            c = pd.read_csv(os.path.join(csv, name + ".csv"))
+            assert len(t) > 0 and len(c) == len(t), (name, len(c), len(t))
+            col = "final_loss" if name == "training" else "kl"
+            assert np.allclose(c[col], t[col]), name
+    print("ok: export --csv (fpe, tpa, timings, training, vae_latents)")
 
 print("PASS")
