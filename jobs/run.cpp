@@ -1,6 +1,11 @@
 #include "jobs/run.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <chrono>
 #include <ctime>
@@ -38,6 +43,41 @@ std::string hostname() {
   gethostname(buf, sizeof buf - 1);
   return buf;
 }
+
+// One writer per output: an exclusive flock on OUT.lock, held for the run's life and released
+// by the kernel if the process dies. The holder writes its pid into the file so a second run
+// can name it. (The file stays: unlinking a lock file lets two later runs lock two inodes.)
+class OutputLock {
+ public:
+  explicit OutputLock(const std::string& out) : path_(out + ".lock") {
+    fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0)
+      throw std::runtime_error(path_ + ": cannot create the lock file: " + std::strerror(errno));
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      const int err = errno;
+      char buf[32] = {};
+      const ssize_t n = ::pread(fd_, buf, sizeof buf - 1, 0);
+      ::close(fd_);
+      if (err == EWOULDBLOCK)
+        throw std::invalid_argument(
+            out + " is being written by another sirl run" +
+            (n > 0 ? " (pid " + std::string(buf, size_t(n)) + ")" : std::string()) +
+            "; wait for it to finish, or choose another --out");
+      throw std::runtime_error(path_ + ": cannot lock: " + std::strerror(err));
+    }
+    const std::string pid = std::to_string(::getpid());
+    if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, pid.data(), pid.size(), 0) < 0) {
+      // the lock holds without the pid; a second run just cannot name us
+    }
+  }
+  ~OutputLock() { ::close(fd_); }
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+};
 
 // The key of the representation a task belongs to (itself for a rep; "" for a VAE).
 std::string group_of(const Task& t) {
@@ -118,6 +158,7 @@ RunSummary run_profile(const Profile& p, const RunOptions& o) {
 namespace {
 
 RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
+  const OutputLock lock(o.out);  // before reading anything of the output: one writer
   const auto t0 = std::chrono::steady_clock::now();
   const std::string started = now_iso();
   const Plan plan = make_plan(p);
@@ -132,16 +173,24 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
     throw std::invalid_argument(where + " was written " + what +
                                 "; rerun with --force to discard it, or choose another --out");
   };
+  const std::string shard =
+      o.shard_count > 1 ? std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count) : "";
   std::map<std::string, TaskRecord> prior;
   if (fs::exists(o.out)) {
     const RunInfo info = read_run_info(o.out);
+    auto part = [](const std::string& s) { return s.empty() ? "the whole run" : "shard " + s; };
     if (!o.force) {
       if (info.profile_text != p.text)
         refuse(o.out, "under a different profile ('" + info.profile_name + "')");
       if (info.engine_version != o.engine_version)
         refuse(o.out, "by engine " + info.engine_version + " (this is " + o.engine_version + ")");
+      // Writing another part of the grid would replace this file's tasks with that part's.
+      if (info.shard != shard)
+        refuse(o.out, "with " + part(info.shard) + " (" + std::to_string(info.tasks_done) +
+                          " tasks), and this run is " + part(shard));
     }
-    if (info.profile_text == p.text && info.engine_version == o.engine_version)
+    if (info.profile_text == p.text && info.engine_version == o.engine_version &&
+        info.shard == shard)
       for (auto& r : read_results_records(o.out)) prior[r.key] = std::move(r);
   }
   const fs::path staging = o.out + ".tasks";
@@ -251,8 +300,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   info.host = hostname();
   info.started = started;
   info.finished = now_iso();
-  info.shard =
-      o.shard_count > 1 ? std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count) : "";
+  info.shard = shard;
   info.threads = threads;
   info.tasks_total = total;
   info.tasks_done = done_mine;

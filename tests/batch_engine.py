@@ -8,7 +8,8 @@
   resumes to the same file: the representations whose weights are gone are computed again;
 - every representation stores its embedding of Ξ; weights are stored per store_weights;
 - two shards merged equal the single-process run; a shard of another profile is refused;
-- a file from another profile is refused (exit 2) unless --force;
+- a file from another profile is refused (exit 2) unless --force; so is writing a shard into a
+  whole run's file (it would drop half the tasks), and a second run on an --out being written;
 - pandas reads /tables/* directly; `sirl export --csv` writes the same rows.
 """
 import os
@@ -160,6 +161,29 @@ with tempfile.TemporaryDirectory() as tmp:
     computed = int(out.split("reused, ")[1].split(" computed")[0])
     assert computed == len(drop) + 1, f"expected {len(drop)} cells + 1 φ recomputed:\n{out}"
     same_runs(one, holed, f"a file missing {len(drop)} records (and Jaco weights) resumed")
+
+    # A shard into a complete whole-run file would rewrite it with half of its tasks: refused.
+    with h5py.File(one, "r") as f:
+        before = int(f.attrs["tasks_done"])
+    p = run("run", SMOKE, "--out", one, "--shard", "0/2", "--quiet", check=False)
+    assert p.returncode == 2 and "the whole run" in p.stderr and "shard 0/2" in p.stderr, p.stderr
+    with h5py.File(one, "r") as f:
+        assert int(f.attrs["tasks_done"]) == before and f.attrs["shard"] in (b"", "")
+    print("ok: a shard into a whole run's file is refused:", p.stderr.strip())
+
+    # One writer per output: a second run on an --out that is being written is refused, naming
+    # the first one's pid; the first finishes undisturbed.
+    busy = os.path.join(tmp, "busy.h5")
+    first = subprocess.Popen([SIRL, "run", SMOKE, "--out", busy, "--threads", "1", "--quiet"],
+                             stdin=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 30
+    while time.time() < deadline and not (os.path.exists(busy + ".lock")
+                                          and os.path.getsize(busy + ".lock") > 0):
+        time.sleep(0.02)
+    p = run("run", SMOKE, "--out", busy, "--quiet", check=False)
+    assert p.returncode == 2 and f"another sirl run (pid {first.pid})" in p.stderr, p.stderr
+    assert first.wait() == 0, first.stderr.read()
+    same(ref, tables(busy), f"a second writer refused ({p.stderr.strip()}); the first run")
 
     # Shards + merge.
     shards = [os.path.join(tmp, f"shard{i}.h5") for i in range(2)]
