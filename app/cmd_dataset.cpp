@@ -36,6 +36,7 @@ struct DatasetArgs {
   int64_t trajectories = 10000;
   std::vector<double> jaco_laptop{0.0, -0.8, 0.0}, jaco_human{-0.2, -0.5, 0.6};
   int threads = 0;
+  bool force = false;
 };
 
 Teacher make_teacher(const DatasetArgs& a, const Dataset& d) {
@@ -62,6 +63,7 @@ Teacher make_teacher(const DatasetArgs& a, const Dataset& d) {
 }
 
 int run_dataset(const DatasetArgs& a) {
+  check_replaceable(a.out, "dataset", a.force);  // before any work
   Dataset d;
   const auto t0 = std::chrono::steady_clock::now();
   try {
@@ -144,6 +146,8 @@ void register_dataset(CLI::App& app, Runner& run) {
       ->check(CLI::IsMember(env_list()))
       ->capture_default_str();
   cmd->add_option("--out", a.out, "Output HDF5 file (written atomically)")->required();
+  cmd->add_flag("--force", a.force,
+                "Replace --out even if it is not a dataset file (a results or study file)");
   cmd->add_option("--trajectories", a.trajectories,
                   "JacoRobot: start-goal pairs (one deformed trajectory each)")
       ->check(CLI::Range(int64_t(10), int64_t(10000000)))

@@ -134,8 +134,8 @@ void register_export(CLI::App& app, Runner& run) {
   run = [] {
     const auto records = read_results_records(file);
     export_csv(build_tables(records), dir);
-    std::printf("wrote %s/{fpe,tpa,timings,training,vae_latents}.csv from %zu task records\n", dir.c_str(),
-                records.size());
+    std::printf("wrote %s/{fpe,tpa,timings,training,vae_latents}.csv from %zu task records\n",
+                dir.c_str(), records.size());
     return 0;
   };
 }

@@ -39,7 +39,8 @@ std::string scenario_text(const Dataset& d, const std::vector<float>& w,
 
 int study_simulate(const std::string& env, int64_t trajectories, int users, int64_t n_sim,
                    int64_t n_pref, double beta, double mistake, uint64_t seed,
-                   const std::string& out) {
+                   const std::string& out, bool force) {
+  check_replaceable(out, "study", force);  // before any work
   Study s;
   s.env = env;
   s.trajectories = trajectories;
@@ -173,6 +174,7 @@ void register_study(CLI::App& app, Runner& run) {
   static int s_users = 10;
   static double s_beta = 20, s_mistake = 0.05;
   static uint64_t s_seed = 0;
+  static bool s_force = false;
   auto* sim = study->add_subcommand(
       "simulate",
       "Write a study file answered by simulated novices: noisy teachers (Boltzmann beta on the\n"
@@ -199,6 +201,7 @@ void register_study(CLI::App& app, Runner& run) {
       ->capture_default_str();
   sim->add_option("--seed", s_seed, "Seed of the data, queries and answers")->capture_default_str();
   sim->add_option("--out", s_out, "Study file to write")->required();
+  sim->add_flag("--force", s_force, "Replace --out even if it is not a study file");
   sim->callback([] {});
 
   // analyze
@@ -240,8 +243,8 @@ void register_study(CLI::App& app, Runner& run) {
 
   run = [sim, ana] {
     if (sim->parsed())
-      return study_simulate(s_env, s_traj, s_users, s_sim, s_pref, s_beta, s_mistake, s_seed,
-                            s_out);
+      return study_simulate(s_env, s_traj, s_users, s_sim, s_pref, s_beta, s_mistake, s_seed, s_out,
+                            s_force);
     if (ana->parsed()) {
       const std::string out = a_out.empty() ? a_file + "-analysis" : a_out;
       return study_analyze(a_file, out, a_seeds, a_splits, a_epochs, a_tpa_epochs, a_threads,

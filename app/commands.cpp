@@ -1,5 +1,9 @@
 #include "app/commands.h"
 
+#include <filesystem>
+
+#include "results/h5.h"
+
 #include <CLI/CLI.hpp>
 #include <map>
 #include <string>
@@ -31,6 +35,27 @@ int run_selected(CLI::App& app) {
     if (it != runners().end() && it->second) return it->second();
   }
   return 2;
+}
+
+void check_replaceable(const std::string& out, const std::string& kind, bool force) {
+  std::error_code ec;
+  if (force || !std::filesystem::exists(out, ec)) return;
+  std::string holds;
+  try {
+    const H5File f = H5File::open_read(out);
+    const bool runs = f.exists("/runs_index"), study = f.exists("/study"),
+               data = f.exists("/datasets");
+    if (kind == "dataset" && data && !runs && !study) return;
+    if (kind == "study" && study) return;
+    holds = runs    ? "a results file"
+            : study ? "a study file"
+            : data  ? "a dataset file"
+                    : "another HDF5 file";
+  } catch (const H5Error&) {
+    holds = "a file that is not HDF5";
+  }
+  throw UsageError(out + " already exists and is " + holds + ", not a " + kind +
+                   " file; choose another --out, or --force to replace it");
 }
 
 std::string sh_quote(const std::string& s) {

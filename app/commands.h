@@ -33,6 +33,11 @@ void register_merge(CLI::App& app, Runner& run);
 // Single-quotes a string for /bin/sh (the plotting scripts are run through std::system).
 std::string sh_quote(const std::string& s);
 
+// Before a command replaces `out`: an existing file must be one this command writes (`kind`:
+// "dataset" has /datasets and no /runs_index or /study; "study" has /study), else it is refused
+// with a UsageError naming what it holds, unless `force`. Never replaces a file silently.
+void check_replaceable(const std::string& out, const std::string& kind, bool force);
+
 // This build's version and git commit (recorded in every results file).
 const char* engine_version();
 const char* git_commit();
@@ -40,7 +45,7 @@ const char* git_commit();
 // `sirl study simulate` and `sirl study analyze` proper, shared with `sirl reproduce`.
 int study_simulate(const std::string& env, int64_t trajectories, int users, int64_t n_sim,
                    int64_t n_pref, double beta, double mistake, uint64_t seed,
-                   const std::string& out);
+                   const std::string& out, bool force = false);
 int study_analyze(const std::string& file, const std::string& out, int seeds, int splits,
                   int epochs, int tpa_epochs, int threads, bool random_frozen = false);
 

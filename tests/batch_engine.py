@@ -170,6 +170,14 @@ with tempfile.TemporaryDirectory() as tmp:
     with h5py.File(one, "r") as f:
         assert int(f.attrs["tasks_done"]) == before and f.attrs["shard"] in (b"", "")
     print("ok: a shard into a whole run's file is refused:", p.stderr.strip())
+    # Commands that write another kind of file refuse to replace a results file.
+    size = os.path.getsize(one)
+    for cmd in (["dataset", "--env", "grid", "--out", one],
+                ["study", "simulate", "--env", "grid", "--users", "2", "--out", one]):
+        p = run(*cmd, check=False)
+        assert p.returncode == 2 and "is a results file" in p.stderr and "--force" in p.stderr, p.stderr
+    assert os.path.getsize(one) == size and tables(one)["tpa"].equals(ref["tpa"])
+    print("ok: dataset / study simulate refuse to replace a results file:", p.stderr.strip())
 
     # One writer per output: a second run on an --out that is being written is refused, naming
     # the first one's pid; the first finishes undisturbed.
