@@ -63,7 +63,6 @@ Teacher make_teacher(const DatasetArgs& a, const Dataset& d) {
 }
 
 int run_dataset(const DatasetArgs& a) {
-  check_replaceable(a.out, "dataset", a.force);  // before any work
   Dataset d;
   const auto t0 = std::chrono::steady_clock::now();
   try {
@@ -94,6 +93,7 @@ int run_dataset(const DatasetArgs& a) {
   qc.fpe_trajectories = a.fpe;
   qc.teacher = make_teacher(a, d);
   const QueryBundle q = make_query_bundle(d, qc, a.seed);
+  check_replaceable(a.out, "dataset", a.force);  // after the arguments are checked
   // Write to a temporary name and rename: a crash never leaves a half-written file at --out.
   const std::string tmp = a.out + ".partial";
   {

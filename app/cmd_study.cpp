@@ -40,7 +40,6 @@ std::string scenario_text(const Dataset& d, const std::vector<float>& w,
 int study_simulate(const std::string& env, int64_t trajectories, int users, int64_t n_sim,
                    int64_t n_pref, double beta, double mistake, uint64_t seed,
                    const std::string& out, bool force) {
-  check_replaceable(out, "study", force);  // before any work
   Study s;
   s.env = env;
   s.trajectories = trajectories;
@@ -59,6 +58,7 @@ int study_simulate(const std::string& env, int64_t trajectories, int users, int6
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
+  check_replaceable(out, "study", force);  // after the arguments are checked
   Rng rng(seed_from_key("study_simulate", seed));
   for (int u = 0; u < users; ++u) {
     char id[32];

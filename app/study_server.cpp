@@ -315,6 +315,12 @@ int run_serve() {
     if (status != 200) return StudyService::error(res, status, msg);
     res.set_content(service.state_json(), "application/json");
   });
+  // cpp-httplib's default sets SO_REUSEPORT, which lets a second server bind a busy port and
+  // take half of the requests. SO_REUSEADDR alone still allows a restart over TIME_WAIT.
+  srv.set_socket_options([](socket_t sock) {  // httplib's global socket_t
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, reinterpret_cast<void*>(&yes), sizeof(yes));
+  });
   if (!srv.bind_to_port(a.host, a.port))
     throw UsageError("cannot listen on " + a.host + ":" + std::to_string(a.port) +
                      " (in use? try --port)");

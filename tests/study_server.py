@@ -75,6 +75,15 @@ with tempfile.TemporaryDirectory() as tmp:
     srv, url, token = serve(study, "alice", port)
     base = f"http://127.0.0.1:{port}"
     assert url.startswith(f"http://127.0.0.1:{port}/?p=alice&t="), url
+    # A second server on the busy port must refuse to start (no SO_REUSEPORT: two servers would
+    # split one participant's requests between them).
+    second = subprocess.run([SIRL, "study", "serve", "--env", "grid", "--participant", "bob",
+                             "--scenario", "Keep away from the laptop.", "--scenario-features",
+                             "laptop_distance", "--out", study + ".other.h5", "--port", str(port)],
+                            capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=30)
+    assert second.returncode == 2 and "cannot listen" in second.stderr, (second.returncode,
+                                                                         second.stderr)
+    print("ok: a second server on a busy port is refused:", second.stderr.strip())
     st, body = http("GET", f"{base}/api/state?p=alice&t={token}")
     assert st == 200 and '"stage":"similarity"' in body and '"index":0' in body, body
     st, page = http("GET", base + "/")
