@@ -40,7 +40,8 @@ hid_t lcpl_intermediate() {
 }
 
 // Dataset creation properties: contiguous, or (compress, and big enough to pay for the chunk
-// index) chunks of ≈256 KiB along the first dimension with byte-shuffle + deflate level 4.
+// index) chunks of ≈256 KiB along the first dimension (at least one row) with byte-shuffle +
+// deflate level 4.
 hid_t dcpl_for(hid_t type, const std::vector<hsize_t>& d, bool compress) {
   size_t total = 1;
   for (auto x : d) total *= size_t(x);
@@ -49,7 +50,6 @@ hid_t dcpl_for(hid_t type, const std::vector<hsize_t>& d, bool compress) {
   const size_t row = H5Tget_size(type) * (total / std::max<size_t>(d[0], 1));
   std::vector<hsize_t> chunk = d;
   chunk[0] = std::clamp<hsize_t>((256 << 10) / std::max<size_t>(row, 1), 1, d[0]);
-  for (size_t k = 1; k < chunk.size() && row > (4u << 20); ++k) chunk[k] = 1;  // huge rows
   H5Pset_chunk(p, int(chunk.size()), chunk.data());
   H5Pset_shuffle(p);
   H5Pset_deflate(p, 4);

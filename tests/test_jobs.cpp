@@ -1,6 +1,8 @@
 // Profiles, plans, the scheduler and the task store (the batch engine's parts, without a run).
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <map>
 
 #include <atomic>
@@ -256,7 +258,8 @@ TEST(TaskOutputs, RepresentationAndVaeRoundTripThroughARecordAndAFile) {
   TaskRecord rec;
   rec.key = "grid/s0/multipref50+vae/N321/rep";
   put_representation(r, rec);
-  const auto path = std::filesystem::temp_directory_path() / "sirl_task_outputs.h5";
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("sirl_task_outputs_" + std::to_string(::getpid()) + ".h5");
   {
     H5File f = H5File::create(path);
     write_record(f, "/r", rec);

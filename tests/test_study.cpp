@@ -33,15 +33,21 @@ Study simulated_cohort(int users, double beta, double mistake) {
   return s;
 }
 
+// GridRobot analysis settings small enough for a unit test: 2 seeds, 20 head epochs.
+StudyAnalysisConfig small_analysis(int sirl_epochs, int splits) {
+  StudyAnalysisConfig c;
+  c.hyper = paper_hyper("grid");
+  c.hyper.sirl.epochs = sirl_epochs;
+  c.hyper.tpa.epochs = 20;
+  c.seeds = 2;
+  c.cv_splits = splits;
+  return c;
+}
+
 TEST(Study, SimulatedCohortOfMildlyNoisyNovicesFindsSirlFpeBelowRandom) {
   const Study s = simulated_cohort(6, 50.0, 0.02);
   const Dataset d = study_dataset(s);
-  StudyAnalysisConfig c;
-  c.hyper = paper_hyper("grid");
-  c.hyper.sirl.epochs = 100;
-  c.hyper.tpa.epochs = 20;
-  c.seeds = 2;
-  c.cv_splits = 3;
+  const StudyAnalysisConfig c = small_analysis(100, 3);
   const StudyAnalysis a = analyze_study(s, d, c);
   EXPECT_EQ(a.triplets, 600);
   ASSERT_EQ(a.fpe_sirl.size(), 2u);
@@ -58,12 +64,7 @@ TEST(Study, RandomIsUnfrozenByDefaultAndTheOtherModeIsReportedBesideIt) {
   EXPECT_FALSE(StudyAnalysisConfig{}.random_frozen);
   const Study s = simulated_cohort(3, 50.0, 0.02);
   const Dataset d = study_dataset(s);
-  StudyAnalysisConfig c;
-  c.hyper = paper_hyper("grid");
-  c.hyper.sirl.epochs = 20;
-  c.hyper.tpa.epochs = 20;
-  c.seeds = 2;
-  c.cv_splits = 2;
+  StudyAnalysisConfig c = small_analysis(20, 2);
   const StudyAnalysis un = analyze_study(s, d, c);
   c.random_frozen = true;
   const StudyAnalysis fr = analyze_study(s, d, c);
@@ -72,7 +73,7 @@ TEST(Study, RandomIsUnfrozenByDefaultAndTheOtherModeIsReportedBesideIt) {
   EXPECT_EQ(un.real_random_other, fr.real_random);
   EXPECT_EQ(un.simulated_random, fr.simulated_random_other);
   EXPECT_EQ(un.heldout_random_other, fr.heldout_random);
-  EXPECT_EQ(un.real_sirl, fr.real_sirl);  // SIRL stays frozen either way
+  EXPECT_EQ(un.real_sirl, fr.real_sirl);            // SIRL stays frozen either way
   EXPECT_NE(un.real_random, un.real_random_other);  // the two modes really differ
 }
 
