@@ -20,12 +20,6 @@
 namespace sirl::app {
 namespace {
 
-std::vector<std::string> env_list() {
-  std::vector<std::string> v;
-  for (const auto& e : environments()) v.push_back(e.name);
-  return v;
-}
-
 struct DatasetArgs {
   std::string env = "grid", out;
   uint64_t seed = 0;
@@ -66,21 +60,16 @@ int run_dataset(const DatasetArgs& a) {
   Dataset d;
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    if (!env_spec(a.env).sampled) {  // GridRobot and its simplified variant
-      GridConfig g;
-      g.obstacle1 = {a.obstacle1[0], a.obstacle1[1]};
-      g.obstacle2 = {a.obstacle2[0], a.obstacle2[1]};
-      g.laptop = {a.laptop[0], a.laptop[1]};
-      d = a.env == "grid2" ? make_grid2_dataset(g) : make_grid_dataset(g);
-    } else {
-      JacoConfig j;
-      j.trajectories = a.trajectories;
-      j.seed = a.seed;
-      j.threads = a.threads;
-      j.with_human = a.env == "jaco";
-      for (int k = 0; k < 3; ++k) j.laptop[k] = a.jaco_laptop[k], j.human[k] = a.jaco_human[k];
-      d = make_jaco_dataset(j);
-    }
+    EnvConfig c;
+    c.grid.obstacle1 = {a.obstacle1[0], a.obstacle1[1]};
+    c.grid.obstacle2 = {a.obstacle2[0], a.obstacle2[1]};
+    c.grid.laptop = {a.laptop[0], a.laptop[1]};
+    c.jaco.trajectories = a.trajectories;
+    c.jaco.seed = a.seed;
+    c.jaco.threads = a.threads;
+    for (int k = 0; k < 3; ++k)
+      c.jaco.laptop[k] = a.jaco_laptop[k], c.jaco.human[k] = a.jaco_human[k];
+    d = env_spec(a.env).make(c);
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
@@ -143,7 +132,7 @@ void register_dataset(CLI::App& app, Runner& run) {
       "Build an environment's trajectory space and query sets (answered by a simulated "
       "teacher) and write them to HDF5 under /datasets/<env>/");
   cmd->add_option("--env", a.env, "Environment")
-      ->check(CLI::IsMember(env_list()))
+      ->check(CLI::IsMember(env_choices()))
       ->capture_default_str();
   cmd->add_option("--out", a.out, "Output HDF5 file (written atomically)")->required();
   cmd->add_flag("--force", a.force,
@@ -212,14 +201,21 @@ void register_dataset(CLI::App& app, Runner& run) {
   run = [] { return run_dataset(a); };
 }
 
+std::vector<std::string> arm_envs() {
+  std::vector<std::string> v;
+  for (const auto& e : environments())
+    if (e.view == EnvView::arm) v.push_back(e.name);
+  return v;
+}
+
 void register_render(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "render",
       "Draw a few JacoRobot end-effector paths over the table, laptop and human (PNG), from a\n"
       "dataset or results file (results/render_jaco.py, Debian's /usr/bin/python3).");
   static std::string env = "jaco", file, out, ids = "0,1,2,3,4,5";
-  cmd->add_option("--env", env, "Environment group")
-      ->check(CLI::IsMember({"jaco", "jaco2"}))
+  cmd->add_option("--env", env, "Environment group (one with an arm view)")
+      ->check(CLI::IsMember(arm_envs()))
       ->capture_default_str();
   cmd->add_option("file", file, "HDF5 file with /datasets/<env>")
       ->required()
@@ -242,7 +238,7 @@ void register_inspect(CLI::App& app, Runner& run) {
       "inspect", "Read a dataset file back (checking every shape and type) and summarise it");
   cmd->add_option("file", file, "HDF5 file written by `sirl dataset`")->required();
   cmd->add_option("--env", env, "Environment group to read")
-      ->check(CLI::IsMember(env_list()))
+      ->check(CLI::IsMember(env_choices()))
       ->capture_default_str();
   run = [] { return run_inspect(file, env); };
 }

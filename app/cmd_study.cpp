@@ -96,7 +96,7 @@ int study_analyze(const std::string& file, const std::string& out, int seeds, in
   const Study s = read_study(file);
   const Dataset d = study_dataset(s);
   StudyAnalysisConfig c;
-  c.hyper = paper_hyper(s.env == "grid" ? "grid" : "jaco");
+  c.hyper = paper_hyper(s.env);
   if (epochs > 0) c.hyper.sirl.epochs = epochs;
   if (tpa_epochs > 0) c.hyper.tpa.epochs = tpa_epochs;
   c.seeds = seeds;
@@ -180,8 +180,8 @@ void register_study(CLI::App& app, Runner& run) {
       "Write a study file answered by simulated novices: noisy teachers (Boltzmann beta on the\n"
       "normalised features, mistakes), each with its own preference scenario (3 in 5 care\n"
       "about every feature).");
-  sim->add_option("--env", s_env, "jaco2 (the paper's study: table + laptop) or grid")
-      ->check(CLI::IsMember({"jaco2", "grid"}))
+  sim->add_option("--env", s_env, "Environment: " + study_env_names() + " (jaco2 is the paper's)")
+      ->check(CLI::IsMember(study_env_choices()))
       ->capture_default_str();
   sim->add_option("--trajectories", s_traj, "JacoRobot trajectory space size")
       ->check(CLI::Range(int64_t(10), int64_t(1000000)))

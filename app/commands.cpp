@@ -1,5 +1,7 @@
 #include "app/commands.h"
 
+#include "datasets/environments.h"
+
 #include <filesystem>
 
 #include "results/h5.h"
@@ -62,6 +64,19 @@ std::string sh_quote(const std::string& s) {
   std::string q = "'";
   for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return q + "'";
+}
+
+std::vector<std::string> env_choices() {
+  std::vector<std::string> v;
+  for (const auto& e : environments()) v.push_back(e.name);
+  return v;
+}
+
+std::vector<std::string> study_env_choices() {
+  std::vector<std::string> v;
+  for (const auto& e : environments())
+    if (e.in_study) v.push_back(e.name);
+  return v;
 }
 
 }  // namespace sirl::app

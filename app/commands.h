@@ -5,6 +5,7 @@
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace CLI {
 class App;
@@ -37,6 +38,10 @@ std::string sh_quote(const std::string& s);
 // "dataset" has /datasets and no /runs_index or /study; "study" has /study), else it is refused
 // with a UsageError naming what it holds, unless `force`. Never replaces a file silently.
 void check_replaceable(const std::string& out, const std::string& kind, bool force);
+
+// Environment names for `--env` choices: every registered one, or those the study may use.
+std::vector<std::string> env_choices();
+std::vector<std::string> study_env_choices();
 
 // This build's version and git commit (recorded in every results file).
 const char* engine_version();

@@ -21,6 +21,7 @@
 #include <sstream>
 
 #include "app/commands.h"
+#include "datasets/environments.h"
 #include "datasets/study.h"
 #include "datasets/study_import.h"
 #include "results/h5.h"
@@ -81,6 +82,7 @@ class StudyService {
   StudyService(Study s, std::string path, std::string participant, int practice)
       : study_(std::move(s)), path_(std::move(path)), id_(std::move(participant)) {
     data_ = study_dataset(study_);
+    view_ = env_spec(study_.env).view;
     practice_ = plan_participant(data_, "practice", practice, practice, 12345);
   }
 
@@ -111,8 +113,10 @@ class StudyService {
     std::ostringstream o;
     const bool sim_left = p.similarity_done() < p.similarity_count();
     const bool pref_left = p.preference_done() < p.preference_count();
+    const EnvSpec& e = env_spec(study_.env);
     o << "{\"participant\":" << json_str(p.id) << ",\"env\":" << json_str(study_.env)
-      << ",\"features\":[";
+      << ",\"view\":" << json_str(view_ == EnvView::plane ? "plane" : "arm")
+      << ",\"features_gloss\":" << json_str(e.study_features) << ",\"features\":[";
     for (int k = 0; k < data_.feature_count(); ++k)
       o << (k ? "," : "") << json_str(data_.feature_names[k]);
     o << "],\"scenario\":" << json_str(p.scenario) << ",\"stage\":"
@@ -143,8 +147,8 @@ class StudyService {
     return o.str();
   }
 
-  // What the page draws: Jaco: the end-effector path [21, 3] (m) and the objects; Grid: the 9
-  // cells and the end angle.
+  // What the page draws (the environment's `draw`): an arm view's end-effector path [21, 3] (m)
+  // and the objects; a plane view's cells [9, 2] and end angle.
   std::string trajectory_json(int64_t id) const {
     std::ostringstream o;
     o << "{\"id\":" << id << ",\"objects\":[";
@@ -155,18 +159,14 @@ class StudyService {
       o << "]}";
     }
     o << "],\"points\":[";
-    const float* x = data_.input(id);
-    if (study_.env == "grid") {
-      for (int s = 0; s < 9; ++s)
-        o << (s ? "," : "") << "[" << x[2 * s] * 4 << "," << x[2 * s + 1] * 4 << "]";
-      o << "],\"angle\":" << x[18] * 90;
-    } else {
-      for (int t = 0; t < data_.input_dim / 97; ++t) {
-        const float* ee = x + t * 97 + 88;
-        o << (t ? "," : "") << "[" << ee[0] << "," << ee[1] << "," << ee[2] << "]";
-      }
+    const TrajectoryView v = env_spec(study_.env).draw(data_, id);
+    for (size_t t = 0; t < v.points.size(); ++t) {
+      o << (t ? "," : "") << "[" << v.points[t][0] << "," << v.points[t][1];
+      if (view_ == EnvView::arm) o << "," << v.points[t][2];
       o << "]";
     }
+    o << "]";
+    if (view_ == EnvView::plane) o << ",\"angle\":" << v.end_angle_deg;
     o << "}";
     return o.str();
   }
@@ -236,6 +236,7 @@ class StudyService {
   Study study_;
   std::string path_, id_;
   Dataset data_;
+  EnvView view_ = EnvView::plane;
   StudyParticipant practice_;
   std::mutex mu_;
 };
@@ -253,7 +254,7 @@ int run_serve() {
   Study s;
   if (fs::exists(a.out)) {
     s = read_study(a.out);
-    if (s.env != a.env || (a.env != "grid" && s.trajectories != a.trajectories))
+    if (s.env != a.env || (env_spec(a.env).sampled && s.trajectories != a.trajectories))
       throw UsageError(a.out + " is a " + s.env + " study over " + std::to_string(s.trajectories) +
                        " trajectories; --env/--trajectories differ");
   } else {
@@ -378,8 +379,8 @@ void register_study_serve(CLI::App& study) {
       "Serve the study page for one participant (local web server) and record every answer in\n"
       "the study file the moment it arrives. Restarting resumes at the next unanswered query.");
   ServeArgs& a = g_serve;
-  c->add_option("--env", a.env, "jaco2 (the paper's study: table + laptop) or grid")
-      ->check(CLI::IsMember({"jaco2", "grid"}))
+  c->add_option("--env", a.env, "Environment: " + study_env_names() + " (jaco2 is the paper's)")
+      ->check(CLI::IsMember(study_env_choices()))
       ->capture_default_str();
   c->add_option("--participant", a.participant, "Participant id (A-Z a-z 0-9 _ -)")->required();
   c->add_option("--similarity", a.similarity, "Recorded similarity queries")
@@ -426,8 +427,8 @@ void register_study_import(CLI::App& study) {
       ->check(CLI::IsMember({"auto", "csv", "json"}))
       ->capture_default_str();
   c->add_option("--out", a.out, "Study file to write")->required();
-  c->add_option("--env", a.env, "jaco2 or grid")
-      ->check(CLI::IsMember({"jaco2", "grid"}))
+  c->add_option("--env", a.env, "Environment: " + study_env_names())
+      ->check(CLI::IsMember(study_env_choices()))
       ->capture_default_str();
   c->add_option("--trajectories", a.trajectories, "JacoRobot trajectory space size")
       ->check(CLI::Range(int64_t(10), int64_t(1000000)))

@@ -1,32 +1,74 @@
-// The environments, declared once each (name, what it is, how to build its Ξ, its sizes, whose
-// paper hyper-parameters it uses); code that needs an environment looks it up here instead of
-// comparing names.
+// The environments, declared once each: name, what it is, how to build its Ξ, its sizes, the
+// paper's hyper-parameters for it, how to draw one of its trajectories and what role it plays in
+// the report. Code that needs an environment looks it up here; nothing outside this registry
+// compares environment names. Adding an environment is one `register_environment` call
+// (docs/ARCHITECTURE.md, "Adding an environment").
 #pragma once
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "datasets/dataset.h"
+#include "datasets/grid_robot.h"
 #include "datasets/jaco_robot.h"
 
 namespace sirl {
 
-struct EnvSpec {
-  const char* name;         // "grid", "grid2", "jaco", "jaco2"
-  const char* title;        // for figures: "GridRobot", …
-  const char* description;  // one line
-  const char* family;       // "grid" or "jaco": the paper's hyper-parameters it uses
-  bool sampled;             // Ξ sampled from the JacoConfig (trajectories, seed) or enumerated
-  // Ξ for this environment. JacoRobot variants read `jaco` (trajectories, seed, objects).
-  Dataset (*make)(const JacoConfig& jaco);
-  int64_t (*trajectories)(const JacoConfig& jaco);  // |Ξ| without building it
-  int (*input_dim)(const JacoConfig& jaco);         // floats per trajectory
+// What a profile or the command line may set about Ξ; each environment reads its own part.
+struct EnvConfig {
+  GridConfig grid;
+  JacoConfig jaco;  // trajectories, data seed, deformation size, object positions
 };
 
+// One trajectory as a figure or the study page draws it: a path of points (2-D cell coordinates
+// for a plane view, 3-D end-effector positions in metres for an arm view) and, for a plane view,
+// the end angle in degrees.
+struct TrajectoryView {
+  std::vector<std::array<float, 3>> points;
+  float end_angle_deg = 0;
+};
+
+enum class EnvView { plane, arm };
+
+// A hyper-parameter default that differs from the engine's (GridRobot's) values, as the profile
+// key and value `[hyper.<env>]` takes (engine/hyperparams.h applies them).
+struct HyperDefault {
+  std::string key, value;
+};
+
+struct EnvSpec {
+  std::string name;         // the profile's and the results file's name: "grid", "jaco2", …
+  std::string title;        // for figures: "GridRobot", …
+  std::string description;  // one line for `--help` and the docs
+  // Ξ is sampled from EnvConfig::jaco (trajectories, seed) rather than enumerated. Sampled
+  // environments keep their network weights out of the results file by default (3.1 M floats).
+  bool sampled = false;
+  // The profile table whose `trajectories`, `data_seed` and `max_deformation` set Ξ (empty: Ξ is
+  // fixed). Both JacoRobot variants read [jaco].
+  std::string data_table;
+  std::vector<HyperDefault> hyper;
+  EnvView view = EnvView::plane;
+  // Roles in the report and figures (stored as attributes of /datasets/<env>):
+  bool in_claims = true;        // its cells decide the paper's claims H1/H2
+  int fig3_rank = 0;            // > 0: Fig. 3 may be drawn on it; the highest rank present wins
+  bool vae_weak_claim = false;  // the paper's "VAE severely underperforms" is checked on it
+  bool in_study = false;        // the user study may run on it
+  std::string study_features;   // the study page's one-line gloss of its features
+  Dataset (*make)(const EnvConfig& cfg) = nullptr;
+  int64_t (*trajectories)(const EnvConfig& cfg) = nullptr;  // |Ξ| without building it
+  int (*input_dim)(const EnvConfig& cfg) = nullptr;         // floats per trajectory
+  TrajectoryView (*draw)(const Dataset& d, int64_t row) = nullptr;
+};
+
+// Every registered environment, in registration order (the built-in four first).
 const std::vector<EnvSpec>& environments();
 // Throws std::invalid_argument naming the known environments.
 const EnvSpec& env_spec(const std::string& name);
 // "grid, grid2, jaco, jaco2".
 std::string env_names();
+// Adds an environment (an extension, or a test's toy environment). Throws std::invalid_argument
+// for a taken or malformed name or a missing function. Not thread-safe: register before running.
+void register_environment(EnvSpec spec);
 
 }  // namespace sirl

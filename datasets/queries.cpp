@@ -42,7 +42,7 @@ RewardSets make_reward_sets(int dim, StreamSet& streams) {
     return make_random_rewards(name, count, dim, rng);
   };
   RewardSets s{
-      random("test", 20), random("multipref10", 10), random("multipref50", 50),
+      random("test", kTestRewards), random("multipref10", 10), random("multipref50", 50),
       RewardSet{"singlepref", 1, dim, std::vector<float>(dim, float(1 / std::sqrt(double(dim))))}};
   std::set<std::vector<float>> seen;
   for (const RewardSet* r : {&s.test, &s.multipref10, &s.multipref50, &s.singlepref})
@@ -182,8 +182,12 @@ TpaSet sample_tpa_set(const Dataset& d, int64_t total, const RewardSet& r, int r
   if (row < 0 || row >= r.count) throw std::invalid_argument("TPA reward row out of range");
   TpaSet s;
   append_pairs(d, total, r, row, t, rng, s.pairs);
-  s.train = int64_t(std::llround(train_fraction * double(total)));
+  s.train = int64_t(std::llround(train_fraction * double(total)));  // tpa_train_count at 0.8
   return s;
+}
+
+int64_t tpa_train_count(int64_t total) {
+  return int64_t(std::llround(kTrainFraction * double(total)));
 }
 
 FpeSplit sample_fpe_split(const Dataset& d, int64_t total, Rng& rng, double train_fraction) {

@@ -23,6 +23,13 @@ RewardSet make_random_rewards(const std::string& name, int count, int dim, Rng& 
 // The same from the stream seed_from_key("rewards/" + name, seed).
 RewardSet make_random_rewards(const std::string& name, int count, int dim, uint64_t seed);
 
+// How many test rewards TPA averages over (the paper's 20), and the share of a TPA reward's pairs
+// (and of FPE's trajectories) that train, the rest held out.
+inline constexpr int kTestRewards = 20;
+inline constexpr double kTrainFraction = 0.8;
+// The training pairs of a TPA set of `total` pairs: round(kTrainFraction · total).
+int64_t tpa_train_count(int64_t total);
+
 // The paper's reward sets: 20 test rewards, 10 and 50 MultiPref training humans, and
 // SinglePref's equal weights 1/√dim. Each random set from its own stream "rewards/<name>" of
 // `streams` (never a stream the queries use); the sets are checked disjoint (no weight vector
@@ -66,13 +73,14 @@ struct TpaSet {
   int64_t train = 0;
 };
 TpaSet sample_tpa_set(const Dataset& d, int64_t total, const RewardSet& rewards, int reward_row,
-                      const Teacher& t, Rng& rng, double train_fraction = 0.8);
+                      const Teacher& t, Rng& rng, double train_fraction = kTrainFraction);
 
 // FPE's labelled trajectories: `total` distinct rows of Ξ, shuffled; the first 80 % train the
 // probe.
 struct FpeSplit {
   std::vector<int32_t> train, test;
 };
-FpeSplit sample_fpe_split(const Dataset& d, int64_t total, Rng& rng, double train_fraction = 0.8);
+FpeSplit sample_fpe_split(const Dataset& d, int64_t total, Rng& rng,
+                          double train_fraction = kTrainFraction);
 
 }  // namespace sirl

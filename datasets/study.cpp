@@ -4,8 +4,7 @@
 #include <random>
 #include <stdexcept>
 
-#include "datasets/grid_robot.h"
-#include "datasets/jaco_robot.h"
+#include "datasets/environments.h"
 
 namespace sirl {
 
@@ -21,15 +20,21 @@ StudyParticipant* Study::find(const std::string& id) {
 }
 
 Dataset study_dataset(const Study& s) {
-  if (s.env == "grid") return make_grid_dataset();
-  if (s.env == "jaco2" || s.env == "jaco") {
-    JacoConfig c;
-    c.trajectories = s.trajectories;
-    c.seed = s.data_seed;
-    c.with_human = s.env == "jaco";
-    return make_jaco_dataset(c);
-  }
-  throw std::invalid_argument("study environment must be jaco2, jaco or grid, got '" + s.env + "'");
+  const EnvSpec& e = env_spec(s.env);
+  if (!e.in_study)
+    throw std::invalid_argument("the study cannot run on environment '" + s.env + "' (" +
+                                study_env_names() + ")");
+  EnvConfig c;
+  c.jaco.trajectories = s.trajectories;
+  c.jaco.seed = s.data_seed;
+  return e.make(c);
+}
+
+std::string study_env_names() {
+  std::string names;
+  for (const auto& e : environments())
+    if (e.in_study) names += (names.empty() ? "" : " or ") + e.name;
+  return names;
 }
 
 void validate_participant_id(const std::string& id) {

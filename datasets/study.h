@@ -31,7 +31,7 @@ struct StudyParticipant {
 };
 
 struct Study {
-  std::string env = "jaco2";  // "jaco2" (the paper's: table + laptop, no human) or "grid"
+  std::string env = "jaco2";  // an environment with in_study (datasets/environments.h)
   int64_t trajectories = 1000;
   uint64_t data_seed = 0;
   std::vector<StudyParticipant> participants;
@@ -41,6 +41,8 @@ struct Study {
 
 // The study's trajectory space (deterministic). Throws std::invalid_argument for a bad env.
 Dataset study_dataset(const Study& s);
+// The environments the study may run on, for messages: "grid or jaco2".
+std::string study_env_names();
 
 // A participant's queries: n similarity triplets and m preference pairs of distinct rows, from
 // the stream seed_from_key("study/" + id, seed). The token is random unless given.

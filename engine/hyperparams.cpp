@@ -5,28 +5,17 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "datasets/environments.h"
+
 namespace sirl {
 
 Hyper paper_hyper(const std::string& env) {
+  // The engine's defaults are GridRobot's; each environment's registration lists what differs
+  // (JacoRobot: 1024-wide networks, its preference and VAE rates, its L2 weights).
   Hyper h;
-  if (env == "grid" || env == "grid2") return h;
-  if (env == "jaco" || env == "jaco2") {
-    h.phi_hidden = {1024, 1024};
-    h.pref_l2 = 1;
-    h.pref.adam.lr = 0.001;
-    // The paper states 0.01 for the VAE in both environments. On JacoRobot's 2037→1024→1024
-    // VAE that diverges in the first epoch (loss ~1e9; the VAE then reconstructs Ξ worse than
-    // the mean trajectory and every VAE-initialised network trains to chance). The paper lowered
-    // the preference networks' rate to 0.001 on JacoRobot "for more stable training"; the engine
-    // does the same for the VAE (docs/fidelity-evidence.md; `vae.lr` restores 0.01).
-    h.vae.adam.lr = 0.001;
-    h.tpa.epochs = 1000;
-    h.tpa_hidden = {1024, 1024};
-    h.tpa_l2 = 1;
-    return h;
-  }
-  throw std::invalid_argument("unknown environment '" + env +
-                              "' (expected grid, grid2, jaco or jaco2)");
+  for (const auto& [key, value] : env_spec(env).hyper) set_hyper(h, key, value);
+  validate(h);
+  return h;
 }
 
 namespace {

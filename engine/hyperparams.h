@@ -42,7 +42,9 @@ struct Hyper {
   double tpa_l2 = 10;
 };
 
-// The paper's values for "grid"/"grid2" or "jaco"/"jaco2" (throws std::invalid_argument otherwise).
+// The paper's values for a registered environment (datasets/environments.h: the engine's
+// defaults plus the environment's HyperDefault list); throws std::invalid_argument for an unknown
+// name.
 Hyper paper_hyper(const std::string& env);
 
 // Sets one value by its dotted name from text ("3000", "0.004", "128,128", "true").

@@ -24,9 +24,9 @@ double seconds_of(const std::function<double()>& f, double* flops) {
 PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
   PlanEstimate e;
   for (const auto& env : p.envs) {
-    JacoConfig small = p.jaco;
-    small.trajectories = 300;  // enough to time the training code; generation is not timed here
-    small.threads = 0;
+    EnvConfig small = p.data;
+    small.jaco.trajectories = 300;  // enough to time the training code; generation is not timed
+    small.jaco.threads = 0;
     const EnvSpec& spec = env_spec(env);
     const Dataset d = spec.make(small);
     QueryBundleConfig qc = p.queries;

@@ -54,7 +54,7 @@ struct EnvSize {
 };
 EnvSize env_size(const std::string& env, const Profile& p) {
   const EnvSpec& e = env_spec(env);
-  return {e.input_dim(p.jaco), e.trajectories(p.jaco)};
+  return {e.input_dim(p.data), e.trajectories(p.data)};
 }
 
 // Forward+backward ≈ 3× the forward multiply-adds (docs/ARCHITECTURE.md §6).
@@ -85,8 +85,8 @@ Plan make_plan(const Profile& p) {
     const Hyper& h = p.hyper.at(env);
     const EnvSize es = env_size(env, p);
     const MlpShape phi = phi_shape(es.input_dim, h);
-    const EnvGrid& grid = p.grid.at(env);
-    for (int64_t seed : grid.seeds) {
+    const EnvAxes& axes = p.axes.at(env);
+    for (int64_t seed : axes.seeds) {
       auto vae = [&]() {
         Task t;
         t.key = vae_key(env, seed);
@@ -141,23 +141,23 @@ Plan make_plan(const Profile& p) {
         t.frozen = frozen;
         t.deps = {r};
         const MlpShape net = tpa_network(phi, h, frozen);
-        t.flops = 20 * train_flops(net, 2 * M, h.tpa.epochs);
-        t.bytes = 20 * working_set(net, 2 * h.tpa.batch);
+        t.flops = kTestRewards * train_flops(net, 2 * M, h.tpa.epochs);
+        t.bytes = kTestRewards * working_set(net, 2 * h.tpa.batch);
         Task& added = plan.tasks[add(std::move(t))];  // shared by both grids when keys match
         (ablation ? added.in_ablation : added.in_main) = true;
       };
       for (const auto& v : p.fpe_methods)
-        for (int64_t N : grid.fpe_N) fpe(v, N);
+        for (int64_t N : axes.fpe_N) fpe(v, N);
       for (const auto& v : p.tpa.methods)
-        for (int64_t N : grid.tpa_N)
-          for (int64_t M : grid.tpa_M)
+        for (int64_t N : axes.tpa_N)
+          for (int64_t M : axes.tpa_M)
             for (bool fr : frozen_settings(p.tpa, v)) tpa(v, N, M, fr, false);
       for (Method m : p.ablation_methods)
         for (bool with_vae : {false, true}) {
           if (with_vae && !accepts_vae_pretrain(m)) continue;
           const Variant v{m, with_vae};
-          for (int64_t N : grid.ablation_N)
-            for (int64_t M : grid.ablation_M)
+          for (int64_t N : axes.ablation_N)
+            for (int64_t M : axes.ablation_M)
               for (bool fr : {true, false}) tpa(v, N, M, fr, true);
         }
     }

@@ -1,6 +1,7 @@
 #include "jobs/profile.h"
 
 #include "datasets/environments.h"
+#include "datasets/study.h"
 
 #include <toml++/toml.h>
 #include <algorithm>
@@ -223,6 +224,38 @@ void parse_tpa(const Reader& r, const toml::table& tpa, TpaGrid& g) {
 
 }  // namespace
 
+namespace {
+
+// Each environment's table takes the axis keys; the table named by an environment's data_table
+// ([jaco] for both JacoRobot variants) also sets Ξ.
+void parse_data_tables(Reader& r, const toml::table& root, EnvConfig& data) {
+  const std::set<std::string> axis_keys{"seeds",      "fpe_N",      "tpa_N",        "tpa_M",
+                                        "ablation_N", "ablation_M", "store_weights"};
+  std::set<std::string> data_tables;
+  for (const auto& e : environments())
+    if (!e.data_table.empty()) data_tables.insert(e.data_table);
+  for (const auto& e : environments()) {
+    const auto* t = r.table(root, e.name.c_str(), false);
+    if (!t) continue;
+    std::set<std::string> keys = axis_keys;
+    if (data_tables.count(e.name)) keys.insert({"trajectories", "data_seed", "max_deformation"});
+    r.only_keys(*t, "[" + e.name + "]", keys);
+    if (!data_tables.count(e.name)) continue;
+    data.jaco.trajectories = r.integer(*t, "trajectories", 10000, 100, 10'000'000);
+    data.jaco.seed = uint64_t(r.integer(*t, "data_seed", 0, 0, 1'000'000'000));
+    data.jaco.max_deformation = r.number(*t, "max_deformation", 0.5, 0, 3.14159);
+  }
+  data.jaco.threads = 1;  // generated inside one task; the data never depends on it
+}
+
+bool env_is_study(const std::string& name) {
+  for (const auto& e : environments())
+    if (e.name == name) return e.in_study;
+  return false;
+}
+
+}  // namespace
+
 Profile parse_profile(const std::string& text, const std::string& path) {
   toml::table root;
   try {
@@ -232,9 +265,10 @@ Profile parse_profile(const std::string& text, const std::string& path) {
                        std::string(e.description()));
   }
   Reader r(root, path);
-  r.only_keys(root, "the profile",
-              {"name", "description", "envs", "seeds", "queries", "teacher", "fpe", "tpa",
-               "ablation", "hyper", "grid", "grid2", "jaco", "jaco2", "study"});
+  std::set<std::string> top{"name", "description", "envs",     "seeds", "queries", "teacher",
+                            "fpe",  "tpa",         "ablation", "hyper", "study"};
+  for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
+  r.only_keys(root, "the profile", top);
   Profile p;
   p.path = path;
   p.text = text;
@@ -250,19 +284,7 @@ Profile parse_profile(const std::string& text, const std::string& path) {
   }
   const std::set<std::string> axis_keys{"seeds",      "fpe_N",      "tpa_N",        "tpa_M",
                                         "ablation_N", "ablation_M", "store_weights"};
-  for (const char* g : {"grid", "grid2", "jaco2"})
-    if (const auto* t = r.table(root, g, false))
-      r.only_keys(*t, std::string("[") + g + "]", axis_keys);
-  if (const auto* j = r.table(root, "jaco", false)) {
-    // [jaco] also sets Ξ for both JacoRobot variants (jaco and jaco2).
-    std::set<std::string> keys = axis_keys;
-    keys.insert({"trajectories", "data_seed", "max_deformation"});
-    r.only_keys(*j, "[jaco]", keys);
-    p.jaco.trajectories = r.integer(*j, "trajectories", 10000, 100, 10'000'000);
-    p.jaco.seed = uint64_t(r.integer(*j, "data_seed", 0, 0, 1'000'000'000));
-    p.jaco.max_deformation = r.number(*j, "max_deformation", 0.5, 0, 3.14159);
-  }
-  p.jaco.threads = 1;  // generated inside one task; the data never depends on it
+  parse_data_tables(r, root, p.data);
   p.seeds = r.int_list(root, "seeds", 0, 1'000'000'000, true);
 
   if (const auto* q = r.table(root, "queries", false)) {
@@ -308,7 +330,7 @@ Profile parse_profile(const std::string& text, const std::string& path) {
   }
 
   for (const auto& env : p.envs) {
-    EnvGrid g{p.seeds, p.fpe_N, p.tpa.N, p.tpa.M, p.ablation_N, p.ablation_M};
+    EnvAxes g{p.seeds, p.fpe_N, p.tpa.N, p.tpa.M, p.ablation_N, p.ablation_M};
     g.store_weights = !env_spec(env).sampled;  // JacoRobot's 3.1 M-float networks: off
     if (const auto* t = r.table(root, env.c_str(), false)) {
       auto axis = [&](const char* key, std::vector<int64_t>& out, int64_t lo, int64_t hi) {
@@ -327,7 +349,7 @@ Profile parse_profile(const std::string& text, const std::string& path) {
         g.store_weights = *w->value<bool>();
       }
     }
-    p.grid[env] = g;
+    p.axes[env] = g;
   }
   if (const auto* st = r.table(root, "study", false)) {
     r.only_keys(*st, "[study]",
@@ -335,9 +357,8 @@ Profile parse_profile(const std::string& text, const std::string& path) {
                  "epochs", "tpa_epochs", "seeds", "splits", "random"});
     StudyPlan& sp = p.study;
     sp.enabled = true;
-    sp.env = r.string(*st, "env", "jaco2");
-    if (sp.env != "jaco2" && sp.env != "grid")
-      r.fail(st->get("env"), "[study] env must be jaco2 or grid");
+    sp.env = r.string(*st, "env", sp.env);
+    if (!env_is_study(sp.env)) r.fail(st->get("env"), "[study] env must be " + study_env_names());
     sp.trajectories = r.integer(*st, "trajectories", 1000, 10, 1'000'000);
     sp.users = int(r.integer(*st, "users", 10, 2, 10'000));
     sp.similarity = r.integer(*st, "similarity", 100, 1, 100'000);
@@ -403,8 +424,8 @@ Profile parse_profile(const std::string& text, const std::string& path) {
       if (v.method == Method::multipref50) return true;
     return false;
   };
-  const int64_t tpa_train = std::llround(0.8 * double(p.queries.tpa_pairs));
-  for (const auto& [env, g] : p.grid) {
+  const int64_t tpa_train = tpa_train_count(p.queries.tpa_pairs);
+  for (const auto& [env, g] : p.axes) {
     check_n(g.fpe_N, "fpe", has_mp50(p.fpe_methods));
     check_n(g.tpa_N, "tpa", has_mp50(p.tpa.methods));
     check_n(g.ablation_N, "ablation",

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "datasets/jaco_robot.h"
+#include "datasets/environments.h"
 #include "datasets/query_bundle.h"
 #include "engine/hyperparams.h"
 #include "engine/representation.h"
@@ -38,9 +38,9 @@ struct TpaGrid {
   std::vector<bool> frozen;  // empty = "best"
 };
 
-// The numeric axes of the grid for one environment (a profile may scale an expensive
+// The numeric axes of the experiment grid for one environment (a profile may scale an expensive
 // environment down: e.g. JacoRobot with fewer seeds or M points in `quick`).
-struct EnvGrid {
+struct EnvAxes {
   std::vector<int64_t> seeds, fpe_N, tpa_N, tpa_M, ablation_N, ablation_M;
   // Keep the networks' weights (`params`) in the results file. They always live in the task
   // files while the run goes on (resume needs them); off by default for JacoRobot, whose φ and
@@ -71,9 +71,9 @@ struct Profile {
   std::vector<Method> ablation_methods;
   std::vector<int64_t> ablation_N, ablation_M;
   std::map<std::string, Hyper> hyper;  // per env: the paper's values with this profile's overrides
-  JacoConfig jaco;                     // [jaco]: trajectories, data_seed (JacoRobot's Ξ)
-  // Per env: the top-level seeds/N/M unless its [grid] or [jaco] table overrides them.
-  std::map<std::string, EnvGrid> grid;
+  EnvConfig data;  // Ξ's settings ([jaco]: trajectories, data_seed, max_deformation)
+  // Per env: the top-level seeds/N/M unless the env's own table ([grid], [jaco], …) overrides them.
+  std::map<std::string, EnvAxes> axes;
   StudyPlan study;
 };
 

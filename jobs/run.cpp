@@ -289,7 +289,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
     auto it = all.find(plan.tasks[i].key);
     if (it == all.end() || !mine[i]) continue;
     records.push_back(it->second);
-    if (!p.grid.at(plan.tasks[i].env).store_weights) records.back().arrays.erase("params");
+    if (!p.axes.at(plan.tasks[i].env).store_weights) records.back().arrays.erase("params");
     ++done_mine;
   }
   RunInfo info;
@@ -308,7 +308,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   info.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::vector<RunDataset> datasets;
   for (const auto& env : p.envs)
-    datasets.push_back({&ctx.dataset(env), &ctx.bundle(env, p.grid.at(env).seeds.front())});
+    datasets.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
   write_results_file(o.out, info, datasets, records);
   if (failure) std::rethrow_exception(failure);
   fs::remove_all(staging);  // everything is in the results file now

@@ -30,7 +30,7 @@ std::once_flag& RunContext::once(const std::string& key) {
 
 const Dataset& RunContext::dataset(const std::string& env) {
   std::call_once(once("dataset/" + env), [&] {
-    auto d = std::make_shared<const Dataset>(env_spec(env).make(profile_.jaco));
+    auto d = std::make_shared<const Dataset>(env_spec(env).make(profile_.data));
     std::lock_guard lock(mu_);
     datasets_[env] = std::move(d);
   });

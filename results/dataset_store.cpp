@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "datasets/environments.h"
 #include "results/h5.h"
 
 namespace sirl {
@@ -64,6 +65,14 @@ void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q, const std:
   const u64 T = u64(d.count), F = u64(d.feature_count());
   f.group(g);
   f.set_attr(g, "env", d.env);
+  // The environment's registration, so figures and reports need no list of names.
+  const EnvSpec& e = env_spec(d.env);
+  f.set_attr(g, "title", e.title);
+  f.set_attr(g, "description", e.description);
+  f.set_attr(g, "view", std::string(e.view == EnvView::plane ? "plane" : "arm"));
+  f.set_attr(g, "in_claims", int64_t(e.in_claims));
+  f.set_attr(g, "fig3_rank", int64_t(e.fig3_rank));
+  f.set_attr(g, "vae_weak_claim", int64_t(e.vae_weak_claim));
   f.set_attr(g, "engine_version", version);
   f.set_attr(g, "generator_seed", int64_t(d.seed));
   f.set_attr(g, "query_seed", int64_t(q.seed));

@@ -36,8 +36,21 @@ STYLE = {
     "random": ("#7f7f7f", "Random"),
 }
 ORDER = list(STYLE)
-ENV_TITLE = {"grid": "GridRobot", "grid2": "GridRobot (laptop + angle)", "jaco": "JacoRobot",
-             "jaco2": "JacoRobot (table + laptop)"}
+# Each environment's registration as the run stored it (attributes of /datasets/<env>: title,
+# in_claims, fig3_rank, vae_weak_claim, view), so no environment name is spelled out here.
+ENV = {}
+
+
+def load_envs(f):
+    for name, g in f.get("datasets", {}).items():
+        a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in g.attrs.items()}
+        ENV[name] = {"title": a.get("title", name), "in_claims": int(a.get("in_claims", 1)),
+                     "fig3_rank": int(a.get("fig3_rank", 0)),
+                     "vae_weak_claim": int(a.get("vae_weak_claim", 0))}
+
+
+def title(env):
+    return ENV.get(env, {}).get("title", env)
 ALPHA = 0.05
 # What each figure drew, written to figures.json beside them (tests and users check it).
 DRAWN = {}
@@ -116,12 +129,12 @@ def plot_fig4(fpe, envs, out, notes):
                 cis.append(ci)
             ms, cis = np.array(ms), np.array(cis)
             if np.isnan(ms).any():
-                notes.append(f"Fig. 4 {ENV_TITLE.get(env, env)}: {label} missing at N = "
+                notes.append(f"Fig. 4 {title(env)}: {label} missing at N = "
                              f"{[x for x, m in zip(xs, ms) if np.isnan(m)]} (drawn as gaps)")
             ax.plot(xs, ms, "o-", color=colour, label=label, ms=4)
             ok = np.isfinite(cis)
             ax.fill_between(np.array(xs)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour, alpha=0.15)
-        ax.set_title(ENV_TITLE.get(env, env))
+        ax.set_title(title(env))
         ax.set_ylim(bottom=0)  # an MSE: CI bands of few seeds may dip below 0
         ax.set_xlabel("representation queries N")
         ax.set_ylabel("FPE (test MSE, normalised features)")
@@ -156,13 +169,13 @@ def plot_fig5(tpa, envs, out, notes):
                 ms = np.array([s[0] for s in stats_])
                 cis = np.array([s[1] for s in stats_])
                 if np.isnan(ms).any():
-                    notes.append(f"Fig. 5 {ENV_TITLE.get(env, env)} N={n}: {label} missing at M = "
+                    notes.append(f"Fig. 5 {title(env)} N={n}: {label} missing at M = "
                                  f"{[m for m, x in zip(Ms, ms) if np.isnan(x)]} (gaps)")
                 ax.plot(Ms, ms, "o-", color=colour, label=label, ms=4)
                 ok = np.isfinite(cis)
                 ax.fill_between(np.array(Ms)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour,
                                 alpha=0.15)
-            ax.set_title(f"{ENV_TITLE.get(env, env)}, N = {n}")
+            ax.set_title(f"{title(env)}, N = {n}")
             ax.set_ylim(0.35, 1.0)
             ax.set_xlabel("preference queries per test reward M")
             if c == 0:
@@ -211,7 +224,7 @@ def plot_fig7(tpa, envs, out, notes):
                     ax.text(xi, 0.41, "n/a" if not applicable else "missing", rotation=90,
                             ha="center", va="bottom", fontsize=7)
                     if applicable:
-                        notes.append(f"Fig. 7 {ENV_TITLE.get(env, env)}: no {name} cell for "
+                        notes.append(f"Fig. 7 {title(env)}: no {name} cell for "
                                      f"{STYLE[b][1]}")
         DRAWN.setdefault("fig7", {})[env] = {
             "N": Nab, "M": Mab,
@@ -221,7 +234,7 @@ def plot_fig7(tpa, envs, out, notes):
         ax.set_xticklabels([STYLE[b][1] for b in bases], fontsize=8)
         ax.set_ylim(0.4, 1.0)
         ax.set_ylabel("TPA (mean over the cells)")
-        ax.set_title(f"{ENV_TITLE.get(env, env)}, N = {Nab}, M = {Mab}")
+        ax.set_title(f"{title(env)}, N = {Nab}, M = {Mab}")
         ax.grid(alpha=0.3, axis="y")
         handles = [matplotlib.patches.Patch(facecolor="white", edgecolor="black", hatch=h, label=c[2])
                    for h, c in zip(hatches, configs)]
@@ -242,16 +255,18 @@ def rep_keys(f, env, method):
 def plot_fig3(f, out, notes):
     """The paper's Fig. 3: on the simplified GridRobot (laptop + angle), trajectories most and
     least similar to a query under a SIRL φ, from the φ's stored embedding of Ξ."""
-    env = "grid2"
-    keys = rep_keys(f, env, "sirl") if "datasets/grid2" in f else []
-    if not keys:
-        env = "grid"
-        keys = rep_keys(f, env, "sirl") if "datasets/grid" in f else []
+    # The environment Fig. 3 is drawn on: the highest fig3_rank with a SIRL φ in the file.
+    ranked = sorted((e for e in ENV if ENV[e]["fig3_rank"] > 0), key=lambda e: -ENV[e]["fig3_rank"])
+    env, keys = None, []
+    for e in ranked:
+        keys = rep_keys(f, e, "sirl")
         if keys:
-            notes.append("Fig. 3: no simplified GridRobot (grid2) SIRL φ in this file; drawn on the "
-                         "full GridRobot instead")
+            env = e
+            break
+    if env and env != ranked[0]:
+        notes.append(f"Fig. 3: no {title(ranked[0])} SIRL φ in this file; drawn on {title(env)}")
     if not keys:
-        notes.append("Fig. 3: no GridRobot SIRL representation in this file")
+        notes.append("Fig. 3: no SIRL representation of a Fig. 3 environment in this file")
         return None
     key = keys[0]
     r = f["runs/" + key]
@@ -303,7 +318,7 @@ def plot_fig3(f, out, notes):
         draw(axes[row][2], farthest, "least similar under φ", "tab:red")
     DRAWN["fig3"] = {"env": env, "representation": key, "queries": [q_far, q_near]}
     marks = "◆ laptop" + (", ■ obstacles" if any(n.startswith("obstacle") for n in onames) else "")
-    fig.suptitle(f"Fig. 3: {ENV_TITLE.get(env, env)} under a SIRL φ ({key}); {marks}, "
+    fig.suptitle(f"Fig. 3: {title(env)} under a SIRL φ ({key}); {marks}, "
                  "end angle in degrees", fontsize=10)
     save(fig, out, "fig3_grid_similar")
     return key
@@ -356,7 +371,7 @@ def plot_learning_curves(f, t, envs, out, notes):
                 ax.plot(ep, np.median(A, 0), "o-" if n < 10 else "-", ms=3, color=colour,
                         label=f"{label} ({len(cs)})")
                 ax.fill_between(ep, A.min(0), A.max(0), color=colour, alpha=0.15)
-            ax.set_title(f"{ENV_TITLE.get(env, env)}: {title}", fontsize=9)
+            ax.set_title(f"{title(env)}: {title}", fontsize=9)
             ax.set_xlabel("epoch")
             ax.set_ylabel("training loss")
             ax.grid(alpha=0.3)
@@ -453,7 +468,7 @@ def verdict(lines, claim, comparisons, better):
 
 def report(f, t, envs, out, notes, fig3_key):
     fpe, tpa, tim = t["fpe"], t["tpa"], t["timings"]
-    envs = [e for e in envs if e != "grid2"]  # grid2 is Fig. 3's environment, not a claim's
+    envs = [e for e in envs if ENV.get(e, {}).get("in_claims", 1)]  # e.g. Fig. 3's own env
     a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
     L = [f"# sirl-bench report: profile `{a.get('profile_name')}`", ""]
     L.append(f"- engine {a.get('engine_version')} (commit {a.get('git_commit')}), host "
@@ -482,7 +497,7 @@ def report(f, t, envs, out, notes, fig3_key):
             L.append(f"![{cap}]({name}.png)")
     L += ["", "## The paper's claims, checked", ""]
     for env in envs:
-        L.append(f"### {ENV_TITLE.get(env, env)}")
+        L.append(f"### {title(env)}")
         d = fpe[fpe.env == env]
         if not d.empty:
             nmax = d.N.max()
@@ -528,16 +543,16 @@ def report(f, t, envs, out, notes, fig3_key):
             sign = ">" if meth == "sirl" else "<"
             verdict(L, f"Secondary — {claim} (ablation cells, mean over N, M)",
                     [("frozen − unfrozen", *paired(fr, un))], sign)
-        if env == "jaco":
+        if ENV.get(env, {}).get("vae_weak_claim"):
             x = fpe[(fpe.env == env)]
             if not x.empty:
                 nmax = x.N.max()
                 v = x[(x.variant == "vae")].set_index("seed").fpe
                 s = x[(x.variant == "sirl") & (x.N == nmax)].set_index("seed").fpe
-                verdict(L, "Secondary — VAE is weak on JacoRobot (FPE above SIRL's)",
+                verdict(L, f"Secondary — VAE is weak on {title(env)} (FPE above SIRL's)",
                         [("vae", *paired(v, s))], ">")
         L.append("")
-    if "jaco" not in envs:
+    if not any(ENV.get(e, {}).get("vae_weak_claim") for e in envs):
         L.append("- *VAE weak on JacoRobot*: not evaluated — this run has no JacoRobot cells.")
     L += convergence_lines(t)
     L += vae_lines(f, t)
@@ -582,8 +597,9 @@ def main():
         sys.exit(f"plot_figures: {a.results}: no such file")
     os.makedirs(a.out, exist_ok=True)
     f, t = load(a.results)
-    envs = [e for e in ENV_TITLE if any(not t[k].empty and (t[k].env == e).any()
-                                        for k in ("fpe", "tpa", "training"))] or ["grid"]
+    load_envs(f)
+    envs = [e for e in ENV if any(not t[k].empty and (t[k].env == e).any()
+                                  for k in ("fpe", "tpa", "training"))] or list(ENV)[:1]
     notes = []
     if not f.attrs.get("complete", 1):
         notes.append(f"partial run: {f.attrs.get('tasks_done')} of {f.attrs.get('tasks_total')} "

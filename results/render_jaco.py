@@ -18,7 +18,7 @@ ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDe
 ap.add_argument("file")
 ap.add_argument("--out", required=True)
 ap.add_argument("--ids", default="0,1,2,3,4,5", help="comma-separated trajectory rows")
-ap.add_argument("--env", default="jaco", choices=["jaco", "jaco2"])
+ap.add_argument("--env", default="jaco", help="an environment with an arm view (sirl render checks)")
 a = ap.parse_args()
 
 try:

@@ -99,7 +99,7 @@ function drawJaco2D(canvas, t, color) {  // fallback: top view
   ctx.stroke();
 }
 
-async function showOptions(env, ids) {
+async function showOptions(view, ids) {
   const views = $("views");
   views.innerHTML = "";
   animators.length = 0;
@@ -109,7 +109,7 @@ async function showOptions(env, ids) {
     div.className = "view";
     div.innerHTML = `<div><b>Trajectory ${i + 1}</b></div>`;
     views.appendChild(div);
-    if (env === "grid") {
+    if (view === "plane") {
       const c = document.createElement("canvas"); c.width = c.height = 250; div.appendChild(c);
       drawGrid(c, t, COLORS[i]);
     } else if (THREE) {
@@ -145,10 +145,10 @@ function progress(s) {
   $("progress").textContent = `similarity ${s.similarity.done}/${s.similarity.total} · preference ${s.preference.done}/${s.preference.total}`;
 }
 
-async function practice(env, list, kind) {
+async function practice(view, list, kind) {
   for (let i = 0; i < list.length; i++) {
     text(`<p class="practice">Practice ${i + 1} of ${list.length} (not recorded): ${kind === "similarity" ? "which two of these three trajectories are most similar?" : "which trajectory do you prefer?"}</p>`);
-    await showOptions(env, list[i]);
+    await showOptions(view, list[i]);
     await buttons(kind === "similarity" ? SIM_CHOICES : PREF_CHOICES);
   }
 }
@@ -161,10 +161,10 @@ async function run() {
   progress(s);
   const feats = s.features.join(" and ");
   if (s.stage === "similarity" && s.similarity.done === 0) {
-    text(`<h2>Welcome</h2><p>A robot arm carries objects over a table. Each picture shows the path of its hand. People care about how a trajectory relates to: <b>${feats}</b> (${s.env === "grid" ? "distances to the obstacles and the laptop, and the final angle" : "the hand's height above the table, and how close it passes to the laptop"}).</p><p>First you will see groups of three trajectories and tell us which two are <b>most similar</b>.${s.env === "grid" ? "" : " Drag a 3-D view to turn it; press Replay to watch the motion."} A few practice questions come first.</p>`);
+    text(`<h2>Welcome</h2><p>A robot arm carries objects over a table. Each picture shows the path of its hand. People care about how a trajectory relates to: <b>${feats}</b> (${s.features_gloss}).</p><p>First you will see groups of three trajectories and tell us which two are <b>most similar</b>.${s.view === "plane" ? "" : " Drag a 3-D view to turn it; press Replay to watch the motion."} A few practice questions come first.</p>`);
     $("views").innerHTML = "";
     await continueButton("Start practice");
-    await practice(s.env, s.practice.similarity, "similarity");
+    await practice(s.view, s.practice.similarity, "similarity");
     text("<p>Practice done. Now the recorded questions.</p>");
     await continueButton("Begin");
   }
@@ -174,7 +174,7 @@ async function run() {
       text(`<h2>Your scenario</h2><p>${s.scenario}</p><p>Now you will see two trajectories at a time: pick the one you prefer in this scenario. A few practice questions come first.</p>`);
       $("views").innerHTML = "";
       await continueButton("Start practice");
-      await practice(s.env, s.practice.preference, "preference");
+      await practice(s.view, s.practice.preference, "preference");
       text("<p>Practice done. Now the recorded questions.</p>");
       await continueButton("Begin");
       scenarioShown = true;
@@ -183,7 +183,7 @@ async function run() {
     text(n.kind === "similarity"
       ? `<p>Question ${n.index + 1} of ${s.similarity.total}: which two of these three trajectories are <b>most similar</b>?</p>`
       : `<p>Question ${n.index + 1} of ${s.preference.total} — ${s.scenario} Which trajectory do you prefer?</p>`);
-    await showOptions(s.env, n.trajectories);
+    await showOptions(s.view, n.trajectories);
     const shown = performance.now();
     const answer = await buttons(n.kind === "similarity" ? SIM_CHOICES : PREF_CHOICES);
     const body = new URLSearchParams({ p: P, t: T, kind: n.kind, index: n.index, answer, response_ms: Math.round(performance.now() - shown) });
