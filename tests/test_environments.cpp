@@ -1,0 +1,166 @@
+// datasets/environments: the registry. A new environment is one registration: this file adds a
+// toy environment and runs a smoke-sized plan on it without touching any other file.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+
+#include "datasets/environments.h"
+#include "engine/hyperparams.h"
+#include "jobs/profile.h"
+#include "jobs/run.h"
+#include "kernels/rng.h"
+#include "results/h5.h"
+#include "results/results_file.h"
+
+namespace sirl {
+namespace {
+
+// "toyline": 240 paths of 5 points in the unit square; features: mean x, mean y, length.
+constexpr int kToyPoints = 5;
+constexpr int64_t kToyCount = 240;
+
+Dataset make_toy(const EnvConfig&) {
+  Dataset d;
+  d.env = "toyline";
+  d.count = kToyCount;
+  d.input_dim = 2 * kToyPoints;
+  d.input_description = "5 points (x, y) in [0, 1]^2";
+  d.feature_names = {"mean_x", "mean_y", "length"};
+  d.feature_units = {"1", "1", "1"};
+  d.object_dim = 2;
+  d.object_units = "1";
+  Rng rng(seed_from_key("toyline", 0));
+  for (int64_t i = 0; i < d.count; ++i) {
+    double sx = 0, sy = 0, len = 0, px = 0, py = 0;
+    for (int k = 0; k < kToyPoints; ++k) {
+      const double x = rng.uniform(), y = rng.uniform();
+      d.inputs.push_back(float(x));
+      d.inputs.push_back(float(y));
+      sx += x, sy += y;
+      if (k) len += std::hypot(x - px, y - py);
+      px = x, py = y;
+    }
+    d.features_raw.insert(d.features_raw.end(),
+                          {float(sx / kToyPoints), float(sy / kToyPoints), float(len)});
+  }
+  normalise_features(d);
+  return d;
+}
+
+TrajectoryView draw_toy(const Dataset& d, int64_t row) {
+  TrajectoryView v;
+  for (int k = 0; k < kToyPoints; ++k)
+    v.points.push_back({d.input(row)[2 * k], d.input(row)[2 * k + 1], 0});
+  return v;
+}
+
+EnvSpec toy_spec() {
+  EnvSpec e;
+  e.name = "toyline";
+  e.title = "Toy lines";
+  e.description = "a test's toy environment";
+  e.hyper = {{"phi.hidden", "16,16"}, {"tpa.hidden", "8"}};
+  e.make = make_toy;
+  e.trajectories = [](const EnvConfig&) { return kToyCount; };
+  e.input_dim = [](const EnvConfig&) { return 2 * kToyPoints; };
+  e.draw = draw_toy;
+  return e;
+}
+
+void register_toy_once() {
+  static bool done = false;
+  if (!done) register_environment(toy_spec());
+  done = true;
+}
+
+TEST(Environments, RefusesATakenNameAMalformedNameAndAMissingFunction) {
+  register_toy_once();
+  EXPECT_THROW(register_environment(toy_spec()), std::invalid_argument);  // taken
+  EnvSpec bad = toy_spec();
+  bad.name = "Bad Name";
+  EXPECT_THROW(register_environment(bad), std::invalid_argument);
+  bad = toy_spec();
+  bad.name = "toy_nodraw";
+  bad.draw = nullptr;
+  EXPECT_THROW(register_environment(bad), std::invalid_argument);
+  EXPECT_THROW(env_spec("toy_nodraw"), std::invalid_argument);  // nothing half-registered
+}
+
+TEST(Environments, PaperHyperAppliesTheRegisteredDefaults) {
+  register_toy_once();
+  const Hyper toy = paper_hyper("toyline"), grid = paper_hyper("grid");
+  EXPECT_EQ(toy.phi_hidden, (std::vector<int>{16, 16}));
+  EXPECT_EQ(toy.tpa_hidden, (std::vector<int>{8}));
+  EXPECT_EQ(toy.sirl.epochs, grid.sirl.epochs);  // everything else: the engine's defaults
+  // The paper's JacoRobot differences, from the registry.
+  const Hyper jaco = paper_hyper("jaco");
+  EXPECT_EQ(jaco.phi_hidden, (std::vector<int>{1024, 1024}));
+  EXPECT_DOUBLE_EQ(jaco.pref.adam.lr, 0.001);
+  EXPECT_DOUBLE_EQ(grid.pref.adam.lr, 0.01);
+  EXPECT_DOUBLE_EQ(jaco.tpa_l2, 1);
+  EXPECT_DOUBLE_EQ(grid.tpa_l2, 10);
+}
+
+TEST(Environments, AToyEnvironmentRunsASmokePlanWithNoOtherCode) {
+  register_toy_once();
+  const std::string profile = R"(
+name = "toy"
+envs = ["toyline"]
+seeds = [0]
+[queries]
+similarity = 100
+preference = 100
+tpa_pairs = 40
+fpe_trajectories = 200
+[fpe]
+methods = ["sirl", "random"]
+N = [50, 100]
+[tpa]
+methods = ["sirl", "random"]
+N = [100]
+M = [16]
+[hyper.toyline]
+"sirl.epochs" = 5
+"tpa.epochs" = 5
+)";
+  const Profile p = parse_profile(profile, "toy.toml");
+  const std::string out =
+      (std::filesystem::temp_directory_path() / ("sirl_toy_" + std::to_string(getpid()) + ".h5"))
+          .string();
+  std::filesystem::remove(out);
+  RunOptions o;
+  o.out = out;
+  o.threads = 2;
+  o.quiet = true;
+  const RunSummary s = run_profile(p, o);
+  EXPECT_EQ(s.ran, s.tasks);
+  EXPECT_GT(s.tasks, 0);
+
+  const auto records = read_results_records(out);
+  std::set<std::string> kinds;
+  for (const auto& r : records) {
+    EXPECT_EQ(r.key.rfind("toyline/s0/", 0), 0u) << r.key;
+    kinds.insert(r.kind);
+  }
+  EXPECT_EQ(kinds, (std::set<std::string>{"rep", "fpe", "tpa"}));
+  for (const auto& r : records) {
+    if (r.kind == "fpe") {
+      EXPECT_TRUE(std::isfinite(r.num.at("fpe")));
+      EXPECT_GE(r.num.at("fpe"), 0);
+    }
+    if (r.kind == "tpa") {
+      EXPECT_GE(r.num.at("tpa"), 0);
+      EXPECT_LE(r.num.at("tpa"), 1);
+    }
+  }
+  const H5File f = H5File::open_read(out);
+  EXPECT_EQ(f.attr_string("/datasets/toyline", "title"), "Toy lines");
+  std::filesystem::remove(out);
+}
+
+}  // namespace
+}  // namespace sirl
