@@ -1,5 +1,7 @@
 #include "datasets/study_import.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -108,119 +110,6 @@ double number(const std::string& v, const std::string& where, const char* what) 
   throw std::invalid_argument(where + ": " + what + " '" + v + "' is not a number");
 }
 
-// A small JSON reader (objects, arrays, strings, numbers, true/false/null): enough for the
-// documented import schema, with the byte offset in every error.
-struct Json {
-  enum Type { Null, Bool, Num, Str, Arr, Obj } type = Null;
-  double num = 0;
-  bool b = false;
-  std::string str;
-  std::vector<Json> arr;
-  std::map<std::string, Json> obj;
-};
-
-class JsonReader {
- public:
-  explicit JsonReader(const std::string& s, std::string where) : s_(s), where_(std::move(where)) {}
-  Json parse() {
-    Json v = value();
-    ws();
-    if (i_ != s_.size()) fail("unexpected text after the document");
-    return v;
-  }
-
- private:
-  [[noreturn]] void fail(const std::string& what) {
-    throw std::invalid_argument(where_ + ": byte " + std::to_string(i_) + ": " + what);
-  }
-  void ws() {
-    while (i_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[i_]))) ++i_;
-  }
-  bool eat(char c) {
-    ws();
-    if (i_ < s_.size() && s_[i_] == c) return ++i_, true;
-    return false;
-  }
-  Json value() {
-    ws();
-    if (i_ >= s_.size()) fail("unexpected end of file");
-    Json v;
-    const char c = s_[i_];
-    if (c == '{') {
-      ++i_;
-      v.type = Json::Obj;
-      if (eat('}')) return v;
-      do {
-        ws();
-        if (i_ >= s_.size() || s_[i_] != '"') fail("expected a key string");
-        std::string k = string();
-        if (!eat(':')) fail("expected ':'");
-        v.obj[k] = value();
-      } while (eat(','));
-      if (!eat('}')) fail("expected ',' or '}'");
-    } else if (c == '[') {
-      ++i_;
-      v.type = Json::Arr;
-      if (eat(']')) return v;
-      do v.arr.push_back(value());
-      while (eat(','));
-      if (!eat(']')) fail("expected ',' or ']'");
-    } else if (c == '"') {
-      v.type = Json::Str;
-      v.str = string();
-    } else if (s_.compare(i_, 4, "true") == 0 || s_.compare(i_, 5, "false") == 0) {
-      v.type = Json::Bool;
-      v.b = s_[i_] == 't';
-      i_ += v.b ? 4 : 5;
-    } else if (s_.compare(i_, 4, "null") == 0) {
-      i_ += 4;
-    } else {
-      size_t used = 0;
-      try {
-        v.num = std::stod(s_.substr(i_, 64), &used);
-      } catch (const std::exception&) {
-        fail("expected a value");
-      }
-      v.type = Json::Num;
-      i_ += used;
-    }
-    return v;
-  }
-  std::string string() {
-    std::string out;
-    ++i_;  // opening quote
-    while (i_ < s_.size() && s_[i_] != '"') {
-      char c = s_[i_++];
-      if (c == '\\') {
-        if (i_ >= s_.size()) break;
-        const char e = s_[i_++];
-        switch (e) {
-          case 'n':
-            c = '\n';
-            break;
-          case 't':
-            c = '\t';
-            break;
-          case 'u':  // keep it simple: \uXXXX below 0x80 only
-            if (i_ + 4 > s_.size()) fail("bad \\u escape");
-            c = char(std::stoi(s_.substr(i_, 4), nullptr, 16) & 0x7f);
-            i_ += 4;
-            break;
-          default:
-            c = e;
-        }
-      }
-      out += c;
-    }
-    if (i_ >= s_.size()) fail("unterminated string");
-    ++i_;
-    return out;
-  }
-  const std::string& s_;
-  std::string where_;
-  size_t i_ = 0;
-};
-
 std::string slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::invalid_argument(path + ": cannot read");
@@ -264,47 +153,70 @@ void import_study_csv(const std::string& path, const Dataset& d, Study& s) {
   }
 }
 
-void import_study_json(const std::string& path, const Dataset& d, Study& s) {
+// The answers file parsed by nlohmann-json, nesting limited: the schema is 3 levels deep, and a
+// hostile file of 100,000 '[' must be one clear error, not a stack overflow.
+nlohmann::json parse_answers(const std::string& path) {
+  constexpr int kMaxDepth = 16;
   const std::string text = slurp(path);
-  const Json doc = JsonReader(text, path).parse();
-  const Json* list = &doc;
-  if (doc.type == Json::Obj) {
-    auto it = doc.obj.find("answers");
-    if (it == doc.obj.end()) throw std::invalid_argument(path + ": no \"answers\" array");
-    list = &it->second;
+  auto limit = [&](int depth, nlohmann::json::parse_event_t e, nlohmann::json&) {
+    if ((e == nlohmann::json::parse_event_t::object_start ||
+         e == nlohmann::json::parse_event_t::array_start) &&
+        depth >= kMaxDepth)
+      throw std::invalid_argument(path + ": nested deeper than " + std::to_string(kMaxDepth) +
+                                  " levels (the answers schema has 3)");
+    return true;
+  };
+  try {
+    return nlohmann::json::parse(text, limit);
+  } catch (const nlohmann::json::exception& e) {  // parse_error, or out_of_range for 1e400
+    // e.what() is "[json.exception.parse_error.101] parse error at line L, column C: …".
+    std::string what = e.what();
+    if (const size_t k = what.find("] "); k != std::string::npos) what = what.substr(k + 2);
+    throw std::invalid_argument(path + ": " + what);
   }
-  if (list->type != Json::Arr) throw std::invalid_argument(path + ": \"answers\" must be an array");
-  for (size_t k = 0; k < list->arr.size(); ++k) {
+}
+
+void import_study_json(const std::string& path, const Dataset& d, Study& s) {
+  using nlohmann::json;
+  const json doc = parse_answers(path);
+  const json* list = &doc;
+  if (doc.is_object()) {
+    if (!doc.contains("answers")) throw std::invalid_argument(path + ": no \"answers\" array");
+    list = &doc["answers"];
+  }
+  if (!list->is_array()) throw std::invalid_argument(path + ": \"answers\" must be an array");
+  for (size_t k = 0; k < list->size(); ++k) {
     const std::string where = path + ": record " + std::to_string(k);
-    const Json& o = list->arr[k];
-    if (o.type != Json::Obj) throw std::invalid_argument(where + ": not an object");
-    auto field = [&](const char* name, Json::Type t, bool required) -> const Json* {
-      auto it = o.obj.find(name);
-      if (it == o.obj.end()) {
+    const json& o = (*list)[k];
+    if (!o.is_object()) throw std::invalid_argument(where + ": not an object");
+    auto field = [&](const char* name, json::value_t t, bool required) -> const json* {
+      const auto it = o.find(name);
+      if (it == o.end()) {
         if (required) throw std::invalid_argument(where + ": missing \"" + name + "\"");
         return nullptr;
       }
-      if (it->second.type != t)
-        throw std::invalid_argument(where + ": \"" + name + "\" has the wrong type");
-      return &it->second;
+      // Any JSON number is a number here (the library tells integers from floats).
+      const bool ok = t == json::value_t::number_float ? it->is_number() : it->type() == t;
+      if (!ok) throw std::invalid_argument(where + ": \"" + name + "\" has the wrong type");
+      return &*it;
     };
+    constexpr auto kStr = json::value_t::string, kNum = json::value_t::number_float,
+                   kArr = json::value_t::array;
     Record r;
-    r.participant = field("participant", Json::Str, true)->str;
-    r.kind = field("kind", Json::Str, true)->str;
-    for (const Json& t : field("trajectories", Json::Arr, true)->arr) {
-      if (t.type != Json::Num)
-        throw std::invalid_argument(where + ": trajectories must be numbers");
-      r.trajectories.push_back(t.num);
+    r.participant = field("participant", kStr, true)->get<std::string>();
+    r.kind = field("kind", kStr, true)->get<std::string>();
+    for (const json& t : *field("trajectories", kArr, true)) {
+      if (!t.is_number()) throw std::invalid_argument(where + ": trajectories must be numbers");
+      r.trajectories.push_back(t.get<double>());
     }
-    r.answer = field("answer", Json::Num, true)->num;
-    r.response_ms = field("response_ms", Json::Num, true)->num;
-    if (const Json* t = field("timestamp", Json::Num, false)) r.timestamp = t->num;
-    if (const Json* t = field("scenario", Json::Str, false)) r.scenario = t->str;
-    if (const Json* t = field("scenario_features", Json::Arr, false))
-      for (const Json& f : t->arr) {
-        if (f.type != Json::Str)
-          throw std::invalid_argument(where + ": scenario_features are strings");
-        r.scenario_features.push_back(f.str);
+    r.answer = field("answer", kNum, true)->get<double>();
+    r.response_ms = field("response_ms", kNum, true)->get<double>();
+    if (const json* t = field("timestamp", kNum, false)) r.timestamp = t->get<double>();
+    if (const json* t = field("scenario", kStr, false)) r.scenario = t->get<std::string>();
+    if (const json* t = field("scenario_features", kArr, false))
+      for (const json& f : *t) {
+        if (!f.is_string()) throw std::invalid_argument(where + ": scenario_features are strings");
+        r.scenario_features.push_back(f.get<std::string>());
       }
     add(r, d, s, where);
   }

@@ -9,7 +9,7 @@ packages=(
   build-essential cmake ninja-build pkg-config ccache git
   # engine dependencies
   libeigen3-dev libtbb-dev libhdf5-dev libsuitesparse-dev libmujoco-dev
-  libcli11-dev libtomlplusplus-dev libfmt-dev
+  libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev
   libbenchmark-dev libgtest-dev libgmock-dev
   # MPI scale-out
   libopenmpi-dev openmpi-bin

@@ -258,7 +258,14 @@ TEST(StudyImport, BadRecordsNameTheLineAndTheProblem) {
                    d);
   EXPECT_TRUE(has(m, "record 0: missing \"response_ms\"")) << m;
   m = import_error(true, R"({"answers": [{"participant": "ann", )", d);
-  EXPECT_TRUE(has(m, "byte")) << m;
+  EXPECT_TRUE(has(m, "sirl_bad.json: parse error at line 1, column 37")) << m;
+  m = import_error(true, R"({"answers": []} trailing)", d);
+  EXPECT_TRUE(has(m, "parse error")) << m;
+  m = import_error(true, R"({"answers": [{"participant": "ann", "answer": 1e400}]})", d);
+  EXPECT_TRUE(has(m, "1e400")) << m;
+  // A hostile file of 100,000 '[' (issue 17): one clear line, no stack overflow.
+  m = import_error(true, std::string(100000, '['), d);
+  EXPECT_TRUE(has(m, "nested deeper than 16 levels")) << m;
   m = import_error(true, R"([{"participant": 7}])", d);
   EXPECT_TRUE(has(m, "\"participant\" has the wrong type")) << m;
 }
