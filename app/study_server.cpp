@@ -10,6 +10,7 @@
 #include "app/study_server.h"
 
 #include <httplib.h>
+#include <nlohmann/json.hpp>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -50,25 +51,17 @@ struct ImportArgs {
 CLI::App* g_serve_cmd = nullptr;
 CLI::App* g_import_cmd = nullptr;
 
-std::string json_str(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\')
-      o += '\\', o += c;
-    else if (c == '\n')
-      o += "\\n";
-    else if (static_cast<unsigned char>(c) < 0x20)
-      o += ' ';
-    else
-      o += c;
-  }
-  return o + "\"";
+using nlohmann::json;
+
+// Serialised text; invalid UTF-8 (a hostile request echoed in an error) becomes U+FFFD instead of
+// an exception.
+std::string text(const json& j) {
+  return j.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
-std::string ids_json(const int32_t* v, int n) {
-  std::string s = "[";
-  for (int i = 0; i < n; ++i) s += (i ? "," : "") + std::to_string(v[i]);
-  return s + "]";
+// Rows of Ξ as a JSON array.
+json ids(const int32_t* v, int n) {
+  return json(std::vector<int32_t>(v, v + n));
 }
 
 double now_unix() {
@@ -104,71 +97,59 @@ class StudyService {
 
   static void error(httplib::Response& res, int status, const std::string& msg) {
     res.status = status;
-    res.set_content("{\"error\":" + json_str(msg) + "}", "application/json");
+    res.set_content(text(json{{"error", msg}}), "application/json");
   }
 
   std::string state_json() {
     std::lock_guard lock(mu_);
     const StudyParticipant& p = me();
-    std::ostringstream o;
     const bool sim_left = p.similarity_done() < p.similarity_count();
     const bool pref_left = p.preference_done() < p.preference_count();
-    const EnvSpec& e = env_spec(study_.env);
-    o << "{\"participant\":" << json_str(p.id) << ",\"env\":" << json_str(study_.env)
-      << ",\"view\":" << json_str(view_ == EnvView::plane ? "plane" : "arm")
-      << ",\"features_gloss\":" << json_str(e.study_features) << ",\"features\":[";
-    for (int k = 0; k < data_.feature_count(); ++k)
-      o << (k ? "," : "") << json_str(data_.feature_names[k]);
-    o << "],\"scenario\":" << json_str(p.scenario) << ",\"stage\":"
-      << json_str(sim_left    ? "similarity"
-                  : pref_left ? "preference"
-                              : "done")
-      << ",\"similarity\":{\"done\":" << p.similarity_done()
-      << ",\"total\":" << p.similarity_count()
-      << "},\"preference\":{\"done\":" << p.preference_done()
-      << ",\"total\":" << p.preference_count() << "},\"next\":";
+    json o;
+    o["participant"] = p.id;
+    o["env"] = study_.env;
+    o["view"] = view_ == EnvView::plane ? "plane" : "arm";
+    o["features_gloss"] = env_spec(study_.env).study_features;
+    o["features"] = data_.feature_names;
+    o["scenario"] = p.scenario;
+    o["stage"] = sim_left ? "similarity" : pref_left ? "preference" : "done";
+    o["similarity"] = {{"done", p.similarity_done()}, {"total", p.similarity_count()}};
+    o["preference"] = {{"done", p.preference_done()}, {"total", p.preference_count()}};
     if (sim_left)
-      o << "{\"kind\":\"similarity\",\"index\":" << p.similarity_done()
-        << ",\"trajectories\":" << ids_json(p.similarity.data() + 3 * p.similarity_done(), 3)
-        << "}";
+      o["next"] = {{"kind", "similarity"},
+                   {"index", p.similarity_done()},
+                   {"trajectories", ids(p.similarity.data() + 3 * p.similarity_done(), 3)}};
     else if (pref_left)
-      o << "{\"kind\":\"preference\",\"index\":" << p.preference_done()
-        << ",\"trajectories\":" << ids_json(p.preference.data() + 2 * p.preference_done(), 2)
-        << "}";
+      o["next"] = {{"kind", "preference"},
+                   {"index", p.preference_done()},
+                   {"trajectories", ids(p.preference.data() + 2 * p.preference_done(), 2)}};
     else
-      o << "null";
-    o << ",\"practice\":{\"similarity\":[";
+      o["next"] = nullptr;
+    json sim = json::array(), pref = json::array();
     for (int64_t i = 0; i < practice_.similarity_count(); ++i)
-      o << (i ? "," : "") << ids_json(practice_.similarity.data() + 3 * i, 3);
-    o << "],\"preference\":[";
+      sim.push_back(ids(practice_.similarity.data() + 3 * i, 3));
     for (int64_t i = 0; i < practice_.preference_count(); ++i)
-      o << (i ? "," : "") << ids_json(practice_.preference.data() + 2 * i, 2);
-    o << "]}}";
-    return o.str();
+      pref.push_back(ids(practice_.preference.data() + 2 * i, 2));
+    o["practice"] = {{"similarity", sim}, {"preference", pref}};
+    return text(o);
   }
 
   // What the page draws (the environment's `draw`): an arm view's end-effector path [21, 3] (m)
   // and the objects; a plane view's cells [9, 2] and end angle.
   std::string trajectory_json(int64_t id) const {
-    std::ostringstream o;
-    o << "{\"id\":" << id << ",\"objects\":[";
+    json objects = json::array();
     for (size_t k = 0; k < data_.object_names.size(); ++k) {
-      o << (k ? "," : "") << "{\"name\":" << json_str(data_.object_names[k]) << ",\"pos\":[";
-      for (int j = 0; j < data_.object_dim; ++j)
-        o << (j ? "," : "") << data_.object_positions[k * data_.object_dim + j];
-      o << "]}";
+      const float* pos = data_.object_positions.data() + k * data_.object_dim;
+      objects.push_back({{"name", data_.object_names[k]},
+                         {"pos", std::vector<float>(pos, pos + data_.object_dim)}});
     }
-    o << "],\"points\":[";
     const TrajectoryView v = env_spec(study_.env).draw(data_, id);
-    for (size_t t = 0; t < v.points.size(); ++t) {
-      o << (t ? "," : "") << "[" << v.points[t][0] << "," << v.points[t][1];
-      if (view_ == EnvView::arm) o << "," << v.points[t][2];
-      o << "]";
-    }
-    o << "]";
-    if (view_ == EnvView::plane) o << ",\"angle\":" << v.end_angle_deg;
-    o << "}";
-    return o.str();
+    json points = json::array();
+    for (const auto& q : v.points)
+      points.push_back(view_ == EnvView::arm ? json{q[0], q[1], q[2]} : json{q[0], q[1]});
+    json o = {{"id", id}, {"objects", objects}, {"points", points}};
+    if (view_ == EnvView::plane) o["angle"] = v.end_angle_deg;
+    return text(o);
   }
 
   int64_t trajectory_count() const { return data_.count; }

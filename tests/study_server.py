@@ -3,6 +3,7 @@
 token, another participant, malformed, duplicate, out of order) gets 400/403 and changes
 nothing; after kill -9 and a restart the study resumes at the next unanswered query.
 With STUDY_BROWSER=1 it also drives the real page in Debian's chromium (playwright-core)."""
+import json
 import os
 import signal
 import socket
@@ -134,7 +135,8 @@ with tempfile.TemporaryDirectory() as tmp:
     srv, url, token2 = serve(study, "alice", port)
     assert token2 == token, "the participant keeps their token (and URL) across restarts"
     st, body = http("GET", f"{base}/api/state?p=alice&t={token}")
-    assert st == 200 and '"kind":"similarity","index":2' in body, body
+    nxt = json.loads(body)["next"] if st == 200 else None
+    assert nxt and nxt["kind"] == "similarity" and nxt["index"] == 2, body
     assert answers(study, "alice")[0] == [2, 0]
     print("ok: after kill -9 and restart the study resumes at the next unanswered query")
 
@@ -142,7 +144,14 @@ with tempfile.TemporaryDirectory() as tmp:
                     dict(p="bob", t=token_b, kind="similarity", index=2, answer=1, response_ms=1))
     assert st == 403, body
     st, body = http("GET", f"{base}/api/trajectory?p=alice&t={token}&id=5")
-    assert st == 200 and '"points"' in body, body
+    assert st == 200, body
+    # GridRobot: 9 cells of a corner-to-corner path of unit moves, and an end angle in 30° steps.
+    tr = json.loads(body)
+    pts = tr["points"]
+    assert len(pts) == 9 and all(len(q) == 2 and 0 <= q[0] <= 4 and 0 <= q[1] <= 4 for q in pts), tr
+    assert all(abs(a[0] - b[0]) + abs(a[1] - b[1]) == 1 for a, b in zip(pts, pts[1:])), tr
+    assert tr["angle"] in (-90, -60, -30, 0, 30, 60, 90), tr
+    assert [o["name"] for o in tr["objects"]] == ["obstacle1", "obstacle2", "laptop"], tr
     st, body = http("GET", f"{base}/api/trajectory?p=alice&t={token}&id=999999")
     assert st == 400, body
     print("ok: another participant's token is refused; trajectory API checks its id")
