@@ -22,16 +22,17 @@ void register_reproduce(CLI::App& app, Runner& run) {
   static bool force = false, no_study = false;
   cmd->add_option("--profile", profile, "Profile: smoke, quick, paper, or a .toml path")
       ->capture_default_str();
-  cmd->add_option("--out", out, "Results file (default: results/<profile>.h5)");
-  cmd->add_option("--figures", figures, "Figure directory (default: results/<profile>-figures)");
+  cmd->add_option("--out", out, "Results file (default: out/<profile>.h5)");
+  cmd->add_option("--figures", figures, "Figure directory (default: out/<profile>-figures)");
   cmd->add_option("--threads", threads, "Worker threads (default: every core)")
       ->check(CLI::Range(1, 4096));
   cmd->add_flag("--force", force, "Overwrite results from another profile or engine version");
   cmd->add_flag("--no-study", no_study, "Skip the simulated user study (Fig. 6)");
   run = [] {
     const std::string stem = std::filesystem::path(profile).stem().string();
-    if (out.empty()) out = "results/" + stem + ".h5";
-    if (figures.empty()) figures = "results/" + stem + "-figures";
+    // out/ (git-ignored; run_command makes it) is the default home of results.
+    if (out.empty()) out = "out/" + stem + ".h5";
+    if (figures.empty()) figures = "out/" + stem + "-figures";
     const int rc = run_command(profile, out, threads, force, "", false);
     if (rc != 0 || mpi_rank_from_env() > 0) return rc;  // MPI workers do not plot
     const std::string script = std::string(SIRL_SOURCE_DIR) + "/results/plot_figures.py";
