@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "app/commands.h"
+#include "results/results_file.h"
 #include "build_info.h"
 
 namespace sirl::app {
@@ -19,6 +20,8 @@ void register_version(CLI::App& app, Runner& run) {
   run = [] {
     std::printf("sirl-bench %s\n", SIRL_VERSION);
     std::printf("commit:    %s\n", SIRL_GIT_COMMIT);
+    std::printf("results:   schema version %lld (reads 1 to %lld)\n",
+                (long long)kResultsSchemaVersion, (long long)kResultsSchemaVersion);
     std::printf("build:     %s\n", SIRL_BUILD_TYPE);
     std::printf("compiler:  %s\n", SIRL_CXX_COMPILER);
     std::printf("flags:     %s\n", SIRL_CXX_FLAGS);

@@ -256,37 +256,10 @@ bool env_is_study(const std::string& name) {
 
 }  // namespace
 
-Profile parse_profile(const std::string& text, const std::string& path) {
-  toml::table root;
-  try {
-    root = toml::parse(text, path);
-  } catch (const toml::parse_error& e) {
-    throw ProfileError(path + ":" + std::to_string(e.source().begin.line) + ": " +
-                       std::string(e.description()));
-  }
-  Reader r(root, path);
-  std::set<std::string> top{"name", "description", "envs",     "seeds", "queries", "teacher",
-                            "fpe",  "tpa",         "ablation", "hyper", "study"};
-  for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
-  r.only_keys(root, "the profile", top);
-  Profile p;
-  p.path = path;
-  p.text = text;
-  p.name = r.string(root, "name", "", true);
-  p.description = r.string(root, "description", "");
-  p.envs = r.string_list(root, "envs", true);
-  for (const auto& e : p.envs) {
-    try {
-      env_spec(e);
-    } catch (const std::invalid_argument& err) {
-      r.fail(root.get("envs"), err.what());
-    }
-  }
-  const std::set<std::string> axis_keys{"seeds",      "fpe_N",      "tpa_N",        "tpa_M",
-                                        "ablation_N", "ablation_M", "store_weights"};
-  parse_data_tables(r, root, p.data);
-  p.seeds = r.int_list(root, "seeds", 0, 1'000'000'000, true);
+namespace {
 
+// [queries] and [teacher]: the budgets and the simulated human.
+void parse_queries(Reader& r, const toml::table& root, Profile& p) {
   if (const auto* q = r.table(root, "queries", false)) {
     r.only_keys(*q, "[queries]", {"similarity", "preference", "tpa_pairs", "fpe_trajectories"});
     p.queries.similarity = r.integer(*q, "similarity", 1000, 1, 10'000'000);
@@ -302,7 +275,10 @@ Profile parse_profile(const std::string& text, const std::string& path) {
     p.queries.teacher.skip = r.number(*t, "skip", 0, 0, inf);
     p.queries.teacher.equal = r.number(*t, "equal", 0, 0, inf);
   }
+}
 
+// [fpe], [tpa], [ablation]: which cells run.
+void parse_cells(Reader& r, const toml::table& root, Profile& p) {
   // A profile runs any part of the grid: [fpe], [tpa] and [ablation] are each optional, but at
   // least one must be there.
   const auto* fpe = r.table(root, "fpe", false);
@@ -328,7 +304,10 @@ Profile parse_profile(const std::string& text, const std::string& path) {
     p.ablation_N = r.int_list(*ab, "N", 1, 10'000'000, true);
     p.ablation_M = r.int_list(*ab, "M", 1, 10'000'000, true);
   }
+}
 
+// Per environment: the top-level axes unless its own table overrides them.
+void parse_env_axes(Reader& r, const toml::table& root, Profile& p) {
   for (const auto& env : p.envs) {
     EnvAxes g{p.seeds, p.fpe_N, p.tpa.N, p.tpa.M, p.ablation_N, p.ablation_M};
     g.store_weights = !env_spec(env).sampled;  // JacoRobot's 3.1 M-float networks: off
@@ -351,6 +330,10 @@ Profile parse_profile(const std::string& text, const std::string& path) {
     }
     p.axes[env] = g;
   }
+}
+
+// [study]: the simulated cohort of the user-study pipeline.
+void parse_study(Reader& r, const toml::table& root, Profile& p) {
   if (const auto* st = r.table(root, "study", false)) {
     r.only_keys(*st, "[study]",
                 {"env", "trajectories", "users", "similarity", "preference", "beta", "mistake",
@@ -374,6 +357,10 @@ Profile parse_profile(const std::string& text, const std::string& path) {
       r.fail(st->get("random"), "[study] random must be \"unfrozen\" or \"frozen\"");
     sp.random_frozen = random == "frozen";
   }
+}
+
+// The paper's hyper-parameters per environment, then [hyper.all] and [hyper.<env>] overrides.
+void parse_hyper(Reader& r, const toml::table& root, Profile& p) {
   for (const auto& env : p.envs) p.hyper[env] = paper_hyper(env);
   if (const auto* hy = r.table(root, "hyper", false)) {
     std::set<std::string> allowed{"all"};
@@ -404,8 +391,10 @@ Profile parse_profile(const std::string& text, const std::string& path) {
       }
     }
   }
+}
 
-  // Cross-checks: budgets must cover the grid.
+// Cross-checks: budgets must cover the grid.
+void check_budgets(Reader& r, const toml::table& root, const Profile& p) {
   auto check_n = [&](const std::vector<int64_t>& Ns, const char* table, bool has_mp50) {
     for (int64_t N : Ns) {
       if (N > p.queries.similarity || N > p.queries.preference)
@@ -439,6 +428,44 @@ Profile parse_profile(const std::string& text, const std::string& path) {
                      " training pairs per test reward (80 % of [queries] tpa_pairs = " +
                      std::to_string(p.queries.tpa_pairs) + ")");
   }
+}
+
+}  // namespace
+
+Profile parse_profile(const std::string& text, const std::string& path) {
+  toml::table root;
+  try {
+    root = toml::parse(text, path);
+  } catch (const toml::parse_error& e) {
+    throw ProfileError(path + ":" + std::to_string(e.source().begin.line) + ": " +
+                       std::string(e.description()));
+  }
+  Reader r(root, path);
+  std::set<std::string> top{"name", "description", "envs",     "seeds", "queries", "teacher",
+                            "fpe",  "tpa",         "ablation", "hyper", "study"};
+  for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
+  r.only_keys(root, "the profile", top);
+  Profile p;
+  p.path = path;
+  p.text = text;
+  p.name = r.string(root, "name", "", true);
+  p.description = r.string(root, "description", "");
+  p.envs = r.string_list(root, "envs", true);
+  for (const auto& e : p.envs) {
+    try {
+      env_spec(e);
+    } catch (const std::invalid_argument& err) {
+      r.fail(root.get("envs"), err.what());
+    }
+  }
+  parse_data_tables(r, root, p.data);
+  p.seeds = r.int_list(root, "seeds", 0, 1'000'000'000, true);
+  parse_queries(r, root, p);
+  parse_cells(r, root, p);
+  parse_env_axes(r, root, p);
+  parse_study(r, root, p);
+  parse_hyper(r, root, p);
+  check_budgets(r, root, p);
   return p;
 }
 

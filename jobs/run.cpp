@@ -11,6 +11,7 @@
 #include <ctime>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <thread>
 
@@ -157,42 +158,38 @@ RunSummary run_profile(const Profile& p, const RunOptions& o) {
 
 namespace {
 
-RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
-  const OutputLock lock(o.out);  // before reading anything of the output: one writer
-  const auto t0 = std::chrono::steady_clock::now();
-  const std::string started = now_iso();
-  const Plan plan = make_plan(p);
-  const int n = int(plan.tasks.size());
-  const std::vector<char> mine = shard_tasks(plan, o.shard_index, o.shard_count);
-  const int threads = mpi_size > 1    ? mpi_size - 1
-                      : o.threads > 0 ? o.threads
-                                      : std::max(1, int(std::thread::hardware_concurrency()));
+[[noreturn]] void refuse(const std::string& where, const std::string& what) {
+  throw std::invalid_argument(where + " was written " + what +
+                              "; rerun with --force to discard it, or choose another --out");
+}
 
-  // Earlier results: the results file itself, and the staging directory of an interrupted run.
-  auto refuse = [&](const std::string& where, const std::string& what) {
-    throw std::invalid_argument(where + " was written " + what +
-                                "; rerun with --force to discard it, or choose another --out");
-  };
-  const std::string shard =
-      o.shard_count > 1 ? std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count) : "";
+// Resume policy for the results file: its records count as done only when it was written by this
+// profile, this engine and this part of the grid; otherwise the run is refused (or, with --force,
+// starts over).
+std::map<std::string, TaskRecord> load_prior(const Profile& p, const RunOptions& o,
+                                             const std::string& shard) {
   std::map<std::string, TaskRecord> prior;
-  if (fs::exists(o.out)) {
-    const RunInfo info = read_run_info(o.out);
-    auto part = [](const std::string& s) { return s.empty() ? "the whole run" : "shard " + s; };
-    if (!o.force) {
-      if (info.profile_text != p.text)
-        refuse(o.out, "under a different profile ('" + info.profile_name + "')");
-      if (info.engine_version != o.engine_version)
-        refuse(o.out, "by engine " + info.engine_version + " (this is " + o.engine_version + ")");
-      // Writing another part of the grid would replace this file's tasks with that part's.
-      if (info.shard != shard)
-        refuse(o.out, "with " + part(info.shard) + " (" + std::to_string(info.tasks_done) +
-                          " tasks), and this run is " + part(shard));
-    }
-    if (info.profile_text == p.text && info.engine_version == o.engine_version &&
-        info.shard == shard)
-      for (auto& r : read_results_records(o.out)) prior[r.key] = std::move(r);
+  if (!fs::exists(o.out)) return prior;
+  const RunInfo info = read_run_info(o.out);
+  auto part = [](const std::string& s) { return s.empty() ? "the whole run" : "shard " + s; };
+  if (!o.force) {
+    if (info.profile_text != p.text)
+      refuse(o.out, "under a different profile ('" + info.profile_name + "')");
+    if (info.engine_version != o.engine_version)
+      refuse(o.out, "by engine " + info.engine_version + " (this is " + o.engine_version + ")");
+    // Writing another part of the grid would replace this file's tasks with that part's.
+    if (info.shard != shard)
+      refuse(o.out, "with " + part(info.shard) + " (" + std::to_string(info.tasks_done) +
+                        " tasks), and this run is " + part(shard));
   }
+  if (info.profile_text == p.text && info.engine_version == o.engine_version && info.shard == shard)
+    for (auto& r : read_results_records(o.out)) prior[r.key] = std::move(r);
+  return prior;
+}
+
+// The staging directory of committed tasks: kept when it belongs to this profile and engine (an
+// interrupted run), refused or (--force) discarded otherwise.
+std::unique_ptr<TaskStore> open_staging(const Profile& p, const RunOptions& o) {
   const fs::path staging = o.out + ".tasks";
   if (fs::exists(staging)) {
     TaskStore probe(staging);
@@ -203,61 +200,63 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
       fs::remove_all(staging);
     }
   }
-  TaskStore store(staging);
-  store.write_manifest("profile.toml", p.text);
-  store.write_manifest("engine_version", o.engine_version);
+  auto store = std::make_unique<TaskStore>(staging);
+  store->write_manifest("profile.toml", p.text);
+  store->write_manifest("engine_version", o.engine_version);
+  return store;
+}
 
-  std::vector<char> pending(n, 0);
-  int total = 0, reused = 0;
-  double pending_flops = 0;
+struct PendingSet {
+  std::vector<char> pending;  // [tasks] 1 = to compute in this run
+  int total = 0, reused = 0;  // this shard's tasks, and those already done
+  double flops = 0;           // the pending tasks' FLOPs (for the ETA)
+};
+
+PendingSet find_pending(const Plan& plan, const std::vector<char>& mine,
+                        const std::map<std::string, TaskRecord>& prior, const TaskStore& store) {
+  const int n = int(plan.tasks.size());
+  PendingSet ps;
+  ps.pending.assign(n, 0);
   for (int i = 0; i < n; ++i) {
     if (!mine[i]) continue;
-    ++total;
+    ++ps.total;
     const std::string& k = plan.tasks[i].key;
     if (prior.count(k) || store.has(k)) {
-      ++reused;
+      ++ps.reused;
       continue;
     }
-    pending[i] = 1;
-    pending_flops += plan.tasks[i].flops;
+    ps.pending[i] = 1;
+    ps.flops += plan.tasks[i].flops;
   }
   // A finished task whose weights were left out of the results file (store_weights = false) is
   // computed again when a pending task needs them (deterministic: the same weights come back).
   // Dependencies precede dependents, so one reverse sweep closes chains (VAE → φ → cells).
   for (int i = n - 1; i >= 0; --i) {
-    if (!pending[i]) continue;
+    if (!ps.pending[i]) continue;
     for (int d : plan.tasks[i].deps) {
       const std::string& k = plan.tasks[d].key;
-      if (pending[d] || store.has(k)) continue;
+      if (ps.pending[d] || store.has(k)) continue;
       auto it = prior.find(k);
       if (it == prior.end() || it->second.arrays.count("params")) continue;
-      pending[d] = 1;
-      --reused;
-      pending_flops += plan.tasks[d].flops;
+      ps.pending[d] = 1;
+      --ps.reused;
+      ps.flops += plan.tasks[d].flops;
     }
   }
+  return ps;
+}
 
-  RunContext ctx(p, [&](const std::string& key) -> TaskRecord {
-    if (store.has(key)) return store.load(key);
-    auto it = prior.find(key);
-    if (it == prior.end()) throw std::runtime_error("missing result of task " + key);
-    return it->second;
-  });
-
+// Runs the pending tasks (threads, or MPI workers), committing each as it finishes. Returns the
+// first failure instead of throwing, so the caller still writes what finished.
+std::exception_ptr execute(const Plan& plan, const std::vector<char>& pending, RunContext& ctx,
+                           TaskStore& store, int threads, int mpi_size, Progress& progress) {
+  const int n = int(plan.tasks.size());
   // Cached outputs are released when their last pending dependent finishes.
   std::vector<int> users(n, 0);
   for (int i = 0; i < n; ++i)
     if (pending[i])
       for (int d : plan.tasks[i].deps) ++users[d];
   std::mutex users_mu;
-
-  const int to_run = total - reused;
-  if (!o.quiet)
-    std::fprintf(stderr, "sirl run: profile %s, %d tasks (%d already done), %d %s → %s\n",
-                 p.name.c_str(), total, reused, threads, mpi_size > 1 ? "MPI workers" : "threads",
-                 o.out.c_str());
-  Progress progress(to_run, pending_flops, o.quiet);
-  std::exception_ptr failure;
   try {
     if (mpi_size > 1) {
       mpi_dispatch(plan, pending, [&](int i, const TaskRecord& rec) {
@@ -276,22 +275,64 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
       });
     }
   } catch (...) {
-    failure = std::current_exception();
+    return std::current_exception();
   }
-  progress.finish();
+  return nullptr;
+}
 
-  // Assemble whatever is finished (a partial file plots with gaps; a rerun completes it).
+// This shard's finished records in plan order, weights dropped where the profile says so.
+std::vector<TaskRecord> finished_records(const Profile& p, const Plan& plan,
+                                         const std::vector<char>& mine,
+                                         std::map<std::string, TaskRecord> prior,
+                                         const TaskStore& store) {
   std::map<std::string, TaskRecord> all = std::move(prior);
   for (const auto& k : store.keys()) all[k] = store.load(k);
   std::vector<TaskRecord> records;
-  int done_mine = 0;
-  for (int i = 0; i < n; ++i) {
+  for (size_t i = 0; i < plan.tasks.size(); ++i) {
     auto it = all.find(plan.tasks[i].key);
     if (it == all.end() || !mine[i]) continue;
     records.push_back(it->second);
     if (!p.axes.at(plan.tasks[i].env).store_weights) records.back().arrays.erase("params");
-    ++done_mine;
   }
+  return records;
+}
+
+RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
+  const OutputLock lock(o.out);  // before reading anything of the output: one writer
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::string started = now_iso();
+  const Plan plan = make_plan(p);
+  const std::vector<char> mine = shard_tasks(plan, o.shard_index, o.shard_count);
+  const int threads = mpi_size > 1    ? mpi_size - 1
+                      : o.threads > 0 ? o.threads
+                                      : std::max(1, int(std::thread::hardware_concurrency()));
+  const std::string shard =
+      o.shard_count > 1 ? std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count) : "";
+
+  // Earlier results: the results file itself, and the staging directory of an interrupted run.
+  std::map<std::string, TaskRecord> prior = load_prior(p, o, shard);
+  const std::unique_ptr<TaskStore> staged = open_staging(p, o);
+  TaskStore& store = *staged;
+  const PendingSet ps = find_pending(plan, mine, prior, store);
+  RunContext ctx(p, [&](const std::string& key) -> TaskRecord {
+    if (store.has(key)) return store.load(key);
+    auto it = prior.find(key);
+    if (it == prior.end()) throw std::runtime_error("missing result of task " + key);
+    return it->second;
+  });
+
+  const int to_run = ps.total - ps.reused;
+  if (!o.quiet)
+    std::fprintf(stderr, "sirl run: profile %s, %d tasks (%d already done), %d %s → %s\n",
+                 p.name.c_str(), ps.total, ps.reused, threads,
+                 mpi_size > 1 ? "MPI workers" : "threads", o.out.c_str());
+  Progress progress(to_run, ps.flops, o.quiet);
+  const std::exception_ptr failure =
+      execute(plan, ps.pending, ctx, store, threads, mpi_size, progress);
+  progress.finish();
+
+  // Assemble whatever is finished (a partial file plots with gaps; a rerun completes it).
+  const std::vector<TaskRecord> records = finished_records(p, plan, mine, std::move(prior), store);
   RunInfo info;
   info.profile_name = p.name;
   info.profile_text = p.text;
@@ -302,19 +343,19 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   info.finished = now_iso();
   info.shard = shard;
   info.threads = threads;
-  info.tasks_total = total;
-  info.tasks_done = done_mine;
-  info.complete = done_mine == total;
+  info.tasks_total = ps.total;
+  info.tasks_done = int64_t(records.size());
+  info.complete = info.tasks_done == ps.total;
   info.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::vector<RunDataset> datasets;
   for (const auto& env : p.envs)
     datasets.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
   write_results_file(o.out, info, datasets, records);
   if (failure) std::rethrow_exception(failure);
-  fs::remove_all(staging);  // everything is in the results file now
+  fs::remove_all(store.dir());  // everything is in the results file now
   RunSummary s;
-  s.tasks = total;
-  s.reused = reused;
+  s.tasks = ps.total;
+  s.reused = ps.reused;
   s.ran = to_run;
   s.seconds = info.wall_seconds;
   return s;

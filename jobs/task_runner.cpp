@@ -128,6 +128,91 @@ double record_embedding(const Representation& rep, const Dataset& d, TaskRecord&
   return rep.shape.forward_flops(int(d.count));
 }
 
+// Each task kind's computation: inputs from the context, outputs into the record (through
+// task_outputs' put_*, so a resumed run reads back exactly what a fresh one wrote).
+void run_vae(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const VaeModel v =
+      train_vae(ctx.dataset(t.env), ctx.profile().hyper.at(t.env), task_seed(t.env, t.seed, "vae"));
+  put_vae(v, r);
+  r.num["flops"] = v.train_flops;
+  record_convergence(v.loss_curve, r);
+  ctx.keep(t.key, std::make_shared<const VaeModel>(get_vae(r)));
+}
+
+void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const Hyper& h = ctx.profile().hyper.at(t.env);
+  const Dataset& d = ctx.dataset(t.env);
+  std::shared_ptr<const VaeModel> vae;
+  if (t.variant.vae || t.variant.method == Method::vae) vae = ctx.vae(t.env, t.seed);
+  MethodConfig c{t.variant.method, t.N, t.variant.vae, h, 1};
+  const Representation rep = train_representation(d, ctx.bundle(t.env, t.seed), c,
+                                                  task_seed(t.env, t.seed, "phi"), vae.get());
+  put_representation(rep, r);
+  r.text["hyper"] = describe(h);
+  // FLOPs spent in this task: the VAE method's φ is the VAE task's encoder, trained there.
+  r.num["flops"] =
+      (t.variant.method == Method::vae ? 0.0 : rep.train_flops) + record_embedding(rep, d, r);
+  if (t.variant.method != Method::vae && t.variant.method != Method::random)
+    record_convergence(rep.loss_curve, r);
+  ctx.keep(t.key, std::make_shared<const Representation>(get_representation(r)));
+}
+
+void run_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const std::string rk = rep_key(t.env, t.seed, t.variant, t.N);
+  const FpeResult f =
+      evaluate_fpe(*ctx.representation(rk), ctx.dataset(t.env), ctx.bundle(t.env, t.seed).fpe);
+  r.num["fpe"] = f.fpe;
+  r.num["train_mse"] = f.train_mse;
+  r.num["flops"] = 0;
+}
+
+void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const std::string rk = rep_key(t.env, t.seed, t.variant, t.N);
+  const TpaResult res = evaluate_tpa(
+      *ctx.representation(rk), ctx.dataset(t.env), ctx.bundle(t.env, t.seed).tpa,
+      TpaConfig{t.M, t.frozen, ctx.profile().hyper.at(t.env), 1}, task_seed(t.env, t.seed, "tpa"));
+  r.num["tpa"] = res.mean;
+  r.num["tpa_std"] = res.stddev;
+  r.num["flops"] = res.train_flops;
+  const uint64_t R = res.accuracy.size();
+  r.arrays["accuracy"] = array(std::vector<float>(res.accuracy.begin(), res.accuracy.end()));
+  r.arrays["train_accuracy"] =
+      array(std::vector<float>(res.train_accuracy.begin(), res.train_accuracy.end()));
+  double train_mean = 0;
+  for (double a : res.train_accuracy) train_mean += a / double(R);
+  r.num["tpa_train"] = train_mean;
+  r.arrays["loss_curves"] = array(res.loss_curves, {R, uint64_t(res.epochs)});
+  r.arrays["phi_drift"] = array(res.phi_drift);
+  // Converged when every head's loss curve is (the fraction tells how many were).
+  int converged = 0;
+  std::vector<double> change;
+  for (uint64_t k = 0; k < R; ++k) {
+    const auto* c = res.loss_curves.data() + k * res.epochs;
+    const Convergence v = check_convergence(std::vector<float>(c, c + res.epochs));
+    converged += v.converged;
+    change.push_back(v.relative_change);
+  }
+  std::sort(change.begin(), change.end());
+  r.num["converged"] = converged == int(R);
+  r.num["converged_fraction"] = R ? double(converged) / double(R) : 0.0;
+  r.num["loss_relative_change"] = R ? change[R / 2] : 0.0;  // the median head's
+}
+
+using TaskFn = void (*)(const Task&, RunContext&, TaskRecord&);
+TaskFn task_fn(TaskKind k) {
+  switch (k) {
+    case TaskKind::vae:
+      return run_vae;
+    case TaskKind::rep:
+      return run_rep;
+    case TaskKind::fpe:
+      return run_fpe;
+    case TaskKind::tpa:
+      return run_tpa;
+  }
+  throw std::logic_error("unknown task kind");
+}
+
 }  // namespace
 
 TaskRecord run_task(const Task& t, RunContext& ctx) {
@@ -136,78 +221,8 @@ TaskRecord run_task(const Task& t, RunContext& ctx) {
   r.key = t.key;
   r.kind = kind_name(t.kind);
   describe_cell(t, r);
-  const Hyper& h = ctx.profile().hyper.at(t.env);
-  const Dataset& d = ctx.dataset(t.env);
   try {
-    switch (t.kind) {
-      case TaskKind::vae: {
-        const VaeModel v = train_vae(d, h, task_seed(t.env, t.seed, "vae"));
-        put_vae(v, r);
-        r.num["flops"] = v.train_flops;
-        record_convergence(v.loss_curve, r);
-        ctx.keep(t.key, std::make_shared<const VaeModel>(get_vae(r)));
-        break;
-      }
-      case TaskKind::rep: {
-        const QueryBundle& b = ctx.bundle(t.env, t.seed);
-        std::shared_ptr<const VaeModel> vae;
-        if (t.variant.vae || t.variant.method == Method::vae) vae = ctx.vae(t.env, t.seed);
-        MethodConfig c{t.variant.method, t.N, t.variant.vae, h, 1};
-        const Representation rep =
-            train_representation(d, b, c, task_seed(t.env, t.seed, "phi"), vae.get());
-        put_representation(rep, r);
-        r.text["hyper"] = describe(h);
-        // FLOPs spent in this task: the VAE method's φ is the VAE task's encoder, trained there.
-        r.num["flops"] =
-            (t.variant.method == Method::vae ? 0.0 : rep.train_flops) + record_embedding(rep, d, r);
-        if (t.variant.method != Method::vae && t.variant.method != Method::random)
-          record_convergence(rep.loss_curve, r);
-        ctx.keep(t.key, std::make_shared<const Representation>(get_representation(r)));
-        break;
-      }
-      case TaskKind::fpe: {
-        const QueryBundle& b = ctx.bundle(t.env, t.seed);
-        const std::string rk = rep_key(t.env, t.seed, t.variant, t.N);
-        const FpeResult f = evaluate_fpe(*ctx.representation(rk), d, b.fpe);
-        r.num["fpe"] = f.fpe;
-        r.num["train_mse"] = f.train_mse;
-        r.num["flops"] = 0;
-        break;
-      }
-      case TaskKind::tpa: {
-        const QueryBundle& b = ctx.bundle(t.env, t.seed);
-        const std::string rk = rep_key(t.env, t.seed, t.variant, t.N);
-        const TpaResult res =
-            evaluate_tpa(*ctx.representation(rk), d, b.tpa, TpaConfig{t.M, t.frozen, h, 1},
-                         task_seed(t.env, t.seed, "tpa"));
-        r.num["tpa"] = res.mean;
-        r.num["tpa_std"] = res.stddev;
-        r.num["flops"] = res.train_flops;
-        const uint64_t R = res.accuracy.size();
-        r.arrays["accuracy"] = array(std::vector<float>(res.accuracy.begin(), res.accuracy.end()));
-        r.arrays["train_accuracy"] =
-            array(std::vector<float>(res.train_accuracy.begin(), res.train_accuracy.end()));
-        double train_mean = 0;
-        for (double a : res.train_accuracy) train_mean += a / double(R);
-        r.num["tpa_train"] = train_mean;
-        r.arrays["loss_curves"] = array(res.loss_curves, {R, uint64_t(res.epochs)});
-        r.arrays["phi_drift"] = array(res.phi_drift);
-        // Converged when every head's loss curve is (the fraction tells how many were).
-        int converged = 0;
-        std::vector<double> change;
-        for (uint64_t k = 0; k < R; ++k) {
-          const auto* c = res.loss_curves.data() + k * res.epochs;
-          const Convergence v = check_convergence(std::vector<float>(c, c + res.epochs));
-          converged += v.converged;
-          change.push_back(v.relative_change);
-        }
-        std::sort(change.begin(), change.end());
-        r.num["converged"] = converged == int(R);
-        r.num["converged_fraction"] = R ? double(converged) / double(R) : 0.0;
-        r.num["loss_relative_change"] = R ? change[R / 2] : 0.0;  // the median head's
-        break;
-      }
-    }
+    task_fn(t.kind)(t, ctx, r);
   } catch (const std::exception& e) {
     throw std::runtime_error("task " + t.key + ": " + e.what());
   }

@@ -344,6 +344,11 @@ double H5File::attr_double(const std::string& o, const std::string& a) const {
   if (H5Aread(attr, H5T_NATIVE_DOUBLE, &v) < 0) fail(path_, "cannot read attribute " + o + "@" + a);
   return v;
 }
+bool H5File::has_attr(const std::string& o, const std::string& a) const {
+  Hid obj = open_object(id_, path_, o);
+  return H5Aexists(obj, a.c_str()) > 0;
+}
+
 int64_t H5File::attr_int(const std::string& o, const std::string& a) const {
   Hid attr = open_attr(id_, path_, o, a);
   int64_t v = 0;

@@ -74,6 +74,7 @@ class H5File {
   void set_attr(const std::string& object, const std::string& attr, int64_t value);
   void set_attr(const std::string& object, const std::string& attr,
                 const std::vector<std::string>& values);
+  bool has_attr(const std::string& object, const std::string& attr) const;
   std::string attr_string(const std::string& object, const std::string& attr) const;
   double attr_double(const std::string& object, const std::string& attr) const;
   int64_t attr_int(const std::string& object, const std::string& attr) const;

@@ -152,6 +152,7 @@ void write_results_file(const std::string& path, const RunInfo& info,
   {
     H5File f = H5File::create(partial);
     f.set_compression(true);  // regenerable datasets, embeddings and curves: shuffle + deflate
+    f.set_attr("/", "schema_version", kResultsSchemaVersion);
     f.set_attr("/", "profile_name", info.profile_name);
     f.set_attr("/", "profile_text", info.profile_text);
     f.set_attr("/", "engine_version", info.engine_version);
@@ -184,9 +185,22 @@ void write_results_file(const std::string& path, const RunInfo& info,
   if (ec) throw H5Error(path + ": cannot move the finished file into place: " + ec.message());
 }
 
+int64_t check_results_schema(const H5File& f) {
+  const int64_t v = f.has_attr("/", "schema_version") ? f.attr_int("/", "schema_version") : 1;
+  if (v < 1 || v > kResultsSchemaVersion)
+    throw H5Error(f.path() + ": results schema version " + std::to_string(v) +
+                  ", but this engine reads versions 1 to " + std::to_string(kResultsSchemaVersion) +
+                  " (written by engine " +
+                  (f.has_attr("/", "engine_version") ? f.attr_string("/", "engine_version")
+                                                     : std::string("unknown")) +
+                  "; use that engine, or a newer one)");
+  return v;
+}
+
 RunInfo read_run_info(const std::string& path) {
   H5File f = H5File::open_read(path);
   RunInfo i;
+  i.schema_version = check_results_schema(f);
   i.profile_name = f.attr_string("/", "profile_name");
   i.profile_text = f.attr_string("/", "profile_text");
   i.engine_version = f.attr_string("/", "engine_version");
@@ -205,6 +219,7 @@ RunInfo read_run_info(const std::string& path) {
 
 std::vector<TaskRecord> read_results_records(const std::string& path) {
   H5File f = H5File::open_read(path);
+  check_results_schema(f);
   std::vector<TaskRecord> out;
   for (const auto& k : f.read_strings("/runs_index")) out.push_back(read_record(f, "/runs/" + k));
   return out;

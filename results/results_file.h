@@ -20,6 +20,14 @@
 
 namespace sirl {
 
+// The results file's layout version (docs/RESULTS.md), stored as /@schema_version. Version 1
+// (engine 0.1.0, no attribute) lacks the environment attributes of /datasets/<env>; it is still
+// read. A file of a newer version is refused with one line naming both versions.
+inline constexpr int64_t kResultsSchemaVersion = 2;
+// The file's version (1 when the attribute is missing); throws H5Error for a version this engine
+// cannot read.
+int64_t check_results_schema(const H5File& f);
+
 struct RunInfo {
   std::string profile_name, profile_text, engine_version, git_commit, host;
   std::string started, finished;  // ISO 8601 UTC
@@ -27,6 +35,7 @@ struct RunInfo {
   int64_t threads = 0, tasks_total = 0, tasks_done = 0;
   double wall_seconds = 0;
   bool complete = false;
+  int64_t schema_version = kResultsSchemaVersion;
 };
 
 struct ResultTables {

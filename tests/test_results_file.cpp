@@ -1,0 +1,88 @@
+// results/results_file: the schema version. A file written by the previous engine (fixture
+// tests/data/results_v1.h5, made by engine 0.1.0 from tests/data/results_v1.toml) stays readable;
+// a file of a newer version is refused with one line naming both versions.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <set>
+
+#include "results/h5.h"
+#include "results/results_file.h"
+
+namespace sirl {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kFixture = std::string(SIRL_SOURCE_DIR) + "/tests/data/results_v1.h5";
+
+std::string temp_copy(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / (std::to_string(getpid()) + "_" + name);
+  fs::copy_file(kFixture, p, fs::copy_options::overwrite_existing);
+  return p.string();
+}
+
+TEST(ResultsFile, AVersionOneFileFromThePreviousEngineIsRead) {
+  const RunInfo info = read_run_info(kFixture);
+  EXPECT_EQ(info.schema_version, 1);
+  EXPECT_EQ(info.profile_name, "fixture-v1");
+  EXPECT_EQ(info.engine_version, "0.1.0");
+  EXPECT_TRUE(info.complete);
+  const auto records = read_results_records(kFixture);
+  // The fixture's profile: 2 representations (sirl N50, random), 2 FPE cells, 1 TPA cell.
+  std::multiset<std::string> kinds;
+  for (const auto& r : records) kinds.insert(r.kind);
+  EXPECT_EQ(kinds.count("rep"), 2u);
+  EXPECT_EQ(kinds.count("fpe"), 2u);
+  EXPECT_EQ(kinds.count("tpa"), 1u);
+  const ResultTables t = build_tables(records);
+  EXPECT_EQ(t.fpe.rows(), 2u);
+  EXPECT_EQ(t.tpa.rows(), 1u);
+}
+
+TEST(ResultsFile, ANewerVersionIsRefusedNamingBothVersions) {
+  const std::string p = temp_copy("future.h5");
+  {
+    H5File f = H5File::open_rw(p);
+    f.set_attr("/", "schema_version", int64_t(99));
+  }
+  try {
+    read_run_info(p);
+    ADD_FAILURE() << "a version-99 file was read";
+  } catch (const H5Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("results schema version 99"), std::string::npos) << m;
+    EXPECT_NE(m.find("reads versions 1 to " + std::to_string(kResultsSchemaVersion)),
+              std::string::npos)
+        << m;
+    EXPECT_EQ(m.find('\n'), std::string::npos) << "one line: " << m;
+  }
+  EXPECT_THROW(read_results_records(p), H5Error);
+  fs::remove(p);
+}
+
+TEST(ResultsFile, TheCurrentEngineWritesItsVersionAndReadsItBack) {
+  const std::string p = temp_copy("rewritten.h5");
+  const RunInfo old = read_run_info(kFixture);
+  const auto records = read_results_records(kFixture);
+  write_results_file(p, old, {}, records);
+  {
+    const H5File f = H5File::open_read(p);
+    EXPECT_EQ(f.attr_int("/", "schema_version"), kResultsSchemaVersion);
+  }
+  const RunInfo back = read_run_info(p);
+  EXPECT_EQ(back.schema_version, kResultsSchemaVersion);
+  EXPECT_EQ(back.profile_name, old.profile_name);
+  const auto again = read_results_records(p);
+  ASSERT_EQ(again.size(), records.size());
+  for (size_t i = 0; i < records.size(); ++i) {
+    EXPECT_EQ(again[i].key, records[i].key);
+    EXPECT_EQ(again[i].num, records[i].num);
+  }
+  fs::remove(p);
+}
+
+}  // namespace
+}  // namespace sirl
