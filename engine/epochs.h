@@ -2,6 +2,7 @@
 // a fresh permutation of the n examples each epoch, cut into batches of `batch` (the last one
 // shorter when batch does not divide n).
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <numeric>
 #include <utility>
@@ -34,6 +35,31 @@ std::vector<float> run_epochs(int64_t n, int epochs, int batch, Rng& rng, Step&&
     curve.push_back(float(sum / double(n)));
   }
   return curve;
+}
+
+// The same for R models trained side by side on n examples each, every model with its own order
+// stream rngs[m] (shuffled in model order each epoch). step(orders, b) trains model m on
+// orders[m][0..b) and returns the R batch losses. Returns the curves [R, epochs].
+template <typename Step>
+std::vector<float> run_epochs_batched(int64_t n, int epochs, int batch, std::vector<Rng>& rngs,
+                                      Step&& step) {
+  const size_t R = rngs.size();
+  std::vector<float> curves(R * size_t(epochs), 0.f);
+  std::vector<std::vector<int32_t>> order(R);
+  std::vector<const int32_t*> rows(R);
+  std::vector<double> sum(R);
+  for (int e = 0; e < epochs && n > 0; ++e) {
+    for (size_t m = 0; m < R; ++m) shuffle_order(n, rngs[m], order[m]);
+    std::fill(sum.begin(), sum.end(), 0.0);
+    for (int64_t i0 = 0; i0 < n; i0 += batch) {
+      const int b = int(n - i0 < batch ? n - i0 : batch);
+      for (size_t m = 0; m < R; ++m) rows[m] = order[m].data() + i0;
+      const std::vector<float>& losses = step(rows, b);
+      for (size_t m = 0; m < R; ++m) sum[m] += double(losses[m]) * b;
+    }
+    for (size_t m = 0; m < R; ++m) curves[m * epochs + e] = float(sum[m] / double(n));
+  }
+  return curves;
 }
 
 }  // namespace sirl

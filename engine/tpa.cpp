@@ -28,13 +28,11 @@ MlpShape tpa_network(const MlpShape& phi, const Hyper& h, bool frozen) {
   return s;
 }
 
-TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::vector<TpaSet>& sets,
-                       const TpaConfig& cfg, uint64_t seed) {
-  validate(cfg.hyper);
-  const int R = int(sets.size());
-  const int64_t M = cfg.M;
-  if (R < 1) throw std::invalid_argument("TPA needs at least one test reward");
-  for (int r = 0; r < R; ++r) {
+namespace {
+
+void check_sets(const std::vector<TpaSet>& sets, int64_t M) {
+  if (sets.empty()) throw std::invalid_argument("TPA needs at least one test reward");
+  for (size_t r = 0; r < sets.size(); ++r) {
     const TpaSet& s = sets[r];
     if (M < 1 || M > s.train)
       throw std::invalid_argument("TPA M=" + std::to_string(M) + " outside [1, " +
@@ -44,9 +42,18 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
       throw std::invalid_argument("TPA test reward " + std::to_string(r) +
                                   " has no held-out pairs");
   }
+}
 
-  // The rows of Ξ the cell touches, compacted: X [U, w] holds raw inputs (unfrozen) or φ(ξ)
-  // (frozen), and every pair index is remapped into it.
+// The rows of Ξ a cell touches, compacted: X [U, w] holds raw inputs (unfrozen) or φ(ξ) (frozen),
+// and every reward's training pairs (its first M) and held-out pairs are remapped into it.
+struct CellRows {
+  std::vector<float> X;
+  std::vector<std::vector<int32_t>> train, test;  // [R][2·pairs] rows of X
+};
+
+CellRows compact_rows(const Representation& rep, const Dataset& d, const std::vector<TpaSet>& sets,
+                      const TpaConfig& cfg) {
+  const size_t R = sets.size();
   std::vector<int32_t> compact(d.count, -1), used;
   auto remap = [&](int32_t row) {
     if (compact[row] < 0) {
@@ -55,76 +62,87 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
     }
     return compact[row];
   };
-  std::vector<std::vector<int32_t>> train_pairs(R), test_pairs(R);
-  for (int r = 0; r < R; ++r) {
+  CellRows c;
+  c.train.resize(R);
+  c.test.resize(R);
+  for (size_t r = 0; r < R; ++r) {
     const auto& p = sets[r].pairs.pairs;
-    for (int64_t i = 0; i < 2 * M; ++i) train_pairs[r].push_back(remap(p[i]));
+    for (int64_t i = 0; i < 2 * cfg.M; ++i) c.train[r].push_back(remap(p[i]));
     for (int64_t i = 2 * sets[r].train; i < 2 * sets[r].pairs.count; ++i)
-      test_pairs[r].push_back(remap(p[i]));
+      c.test[r].push_back(remap(p[i]));
   }
   const int64_t U = int64_t(used.size());
   std::vector<float> raw(size_t(U) * d.input_dim);
   for (int64_t u = 0; u < U; ++u)
     std::copy(d.input(used[u]), d.input(used[u]) + d.input_dim, raw.begin() + u * d.input_dim);
-  std::vector<float> X;
   if (cfg.frozen) {
-    X.resize(size_t(U) * rep.dim());
-    embed(rep, raw.data(), U, X.data(), cfg.threads);
-    require_finite(X, "TPA: φ(ξ)");
+    c.X.resize(size_t(U) * rep.dim());
+    embed(rep, raw.data(), U, c.X.data(), cfg.threads);
+    require_finite(c.X, "TPA: φ(ξ)");
   } else {
-    X = std::move(raw);
+    c.X = std::move(raw);
   }
+  return c;
+}
 
-  const Hyper& h = cfg.hyper;
-  const MlpShape net = tpa_network(rep.shape, h, cfg.frozen);
+// Every head's initial weights [R, P]: φ's (unfrozen) followed by a fresh head from the stream
+// "tpa_head/<r>" of `seed`.
+std::vector<float> initial_heads(const Representation& rep, const TpaConfig& cfg, size_t R,
+                                 const MlpShape& net, uint64_t seed) {
   const size_t P = net.param_count(), P_phi = cfg.frozen ? 0 : rep.params.size();
-  const MlpShape head_only = tpa_network(rep.shape, h, true);
-  std::vector<float> init(size_t(R) * P);
-  for (int r = 0; r < R; ++r) {
-    float* p = init.data() + size_t(r) * P;
+  const MlpShape head_only = tpa_network(rep.shape, cfg.hyper, true);
+  std::vector<float> init(R * P);
+  for (size_t r = 0; r < R; ++r) {
+    float* p = init.data() + r * P;
     if (!cfg.frozen) std::copy(rep.params.begin(), rep.params.end(), p);
     Rng rng(seed_from_key("tpa_head/" + std::to_string(r), seed));
     mlp_init(head_only, p + P_phi, rng);  // the head's layers follow φ's in the flat layout
   }
-  BatchedTrainer t(net, R, h.tpa.adam, std::move(init));
+  return init;
+}
+
+}  // namespace
+
+TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::vector<TpaSet>& sets,
+                       const TpaConfig& cfg, uint64_t seed) {
+  validate(cfg.hyper);
+  check_sets(sets, cfg.M);
+  const int R = int(sets.size());
+  const int64_t M = cfg.M;
+  const CellRows rows = compact_rows(rep, d, sets, cfg);
+  const Hyper& h = cfg.hyper;
+  const MlpShape net = tpa_network(rep.shape, h, cfg.frozen);
+  const size_t P = net.param_count(), P_phi = cfg.frozen ? 0 : rep.params.size();
+  BatchedTrainer t(net, R, h.tpa.adam, initial_heads(rep, cfg, size_t(R), net, seed));
 
   std::vector<Rng> order_rng;
   for (int r = 0; r < R; ++r)
     order_rng.emplace_back(seed_from_key("tpa_order/" + std::to_string(r), seed));
   TpaResult res;
   res.epochs = h.tpa.epochs;
-  res.loss_curves.assign(size_t(R) * res.epochs, 0.f);
-  const int B = h.tpa.batch;
-  std::vector<std::vector<int32_t>> order(R);
   std::vector<int32_t> pairs;
   std::vector<float> label;
-  std::vector<double> epoch_loss(R);
-  for (int e = 0; e < res.epochs; ++e) {
-    for (int r = 0; r < R; ++r) shuffle_order(M, order_rng[r], order[r]);
-    std::fill(epoch_loss.begin(), epoch_loss.end(), 0.0);
-    for (int64_t i0 = 0; i0 < M; i0 += B) {
-      const int b = int(std::min<int64_t>(B, M - i0));
-      pairs.resize(size_t(R) * b * 2);
-      label.resize(size_t(R) * b);
-      for (int r = 0; r < R; ++r)
-        for (int i = 0; i < b; ++i) {
-          const int64_t j = order[r][i0 + i];
-          pairs[(size_t(r) * b + i) * 2] = train_pairs[r][2 * j];
-          pairs[(size_t(r) * b + i) * 2 + 1] = train_pairs[r][2 * j + 1];
-          label[size_t(r) * b + i] = sets[r].pairs.label[j];
-        }
-      preference_train_step_batched(t, X.data(), pairs.data(), label.data(), b, float(h.tpa_l2),
-                                    cfg.threads);
-      for (int r = 0; r < R; ++r) epoch_loss[r] += double(t.losses[r]) * b;
-      res.train_flops += 3 * R * net.forward_flops(2 * b);
-    }
-    for (int r = 0; r < R; ++r)
-      res.loss_curves[size_t(r) * res.epochs + e] = float(epoch_loss[r] / M);
-  }
+  res.loss_curves = run_epochs_batched(
+      M, res.epochs, h.tpa.batch, order_rng,
+      [&](const std::vector<const int32_t*>& order, int b) -> const std::vector<float>& {
+        pairs.resize(size_t(R) * b * 2);
+        label.resize(size_t(R) * b);
+        for (int r = 0; r < R; ++r)
+          for (int i = 0; i < b; ++i) {
+            const int64_t j = order[r][i];
+            pairs[(size_t(r) * b + i) * 2] = rows.train[r][2 * j];
+            pairs[(size_t(r) * b + i) * 2 + 1] = rows.train[r][2 * j + 1];
+            label[size_t(r) * b + i] = sets[r].pairs.label[j];
+          }
+        preference_train_step_batched(t, rows.X.data(), pairs.data(), label.data(), b,
+                                      float(h.tpa_l2), cfg.threads);
+        res.train_flops += 3 * R * net.forward_flops(2 * b);
+        return t.losses;
+      });
   require_finite(res.loss_curves, "TPA loss (frozen=" + std::to_string(cfg.frozen) + ")");
   require_finite(t.params, "TPA head weights");
 
-  // Held-out accuracy of each head.
+  // Held-out and training accuracy of each head.
   MlpTape<float> tape;
   std::vector<float> xb;
   res.accuracy.resize(R);
@@ -133,14 +151,14 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   auto accuracy_on = [&](const float* p, const std::vector<int32_t>& pairs, const float* labels) {
     const int n = int(pairs.size() / 2), w = net.in();
     xb.resize(size_t(2) * n * w);
-    gather_by_role(X.data(), w, pairs.data(), n, 2, xb.data());
+    gather_by_role(rows.X.data(), w, pairs.data(), n, 2, xb.data());
     mlp_forward(net, p, xb.data(), 2 * n, tape, cfg.threads);
     return preference_accuracy(tape.output(), labels, n);
   };
   for (int r = 0; r < R; ++r) {
     const float* p = t.params.data() + size_t(r) * P;
-    res.accuracy[r] = accuracy_on(p, test_pairs[r], sets[r].pairs.label.data() + sets[r].train);
-    res.train_accuracy[r] = accuracy_on(p, train_pairs[r], sets[r].pairs.label.data());
+    res.accuracy[r] = accuracy_on(p, rows.test[r], sets[r].pairs.label.data() + sets[r].train);
+    res.train_accuracy[r] = accuracy_on(p, rows.train[r], sets[r].pairs.label.data());
     for (size_t i = 0; i < P_phi; ++i)
       res.phi_drift[r] = std::max(res.phi_drift[r], std::abs(p[i] - rep.params[i]));
   }

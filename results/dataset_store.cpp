@@ -60,12 +60,14 @@ void check_index_range(const H5File& f, const std::string& name, const std::vect
 
 }  // namespace
 
-void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q, const std::string& version) {
-  const std::string g = "/datasets/" + d.env;
-  const u64 T = u64(d.count), F = u64(d.feature_count());
-  f.group(g);
+namespace {
+
+// /datasets/<env> attributes: the environment's registration (so figures and reports need no
+// list of names), provenance and the simulated teacher.
+void write_env_attrs(H5File& f, const std::string& g, const Dataset& d, const QueryBundle& q,
+                     const std::string& version) {
+  const u64 T = u64(d.count);
   f.set_attr(g, "env", d.env);
-  // The environment's registration, so figures and reports need no list of names.
   const EnvSpec& e = env_spec(d.env);
   f.set_attr(g, "title", e.title);
   f.set_attr(g, "description", e.description);
@@ -86,7 +88,11 @@ void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q, const std:
   for (int k = 0; k < d.feature_count(); ++k)
     if (t.mask.empty() || t.mask[k]) mask.push_back(d.feature_names[k]);
   f.set_attr(g, "teacher_features", mask);
+}
 
+// Ξ: inputs, true features, objects and (sampled environments) the paths behind the inputs.
+void write_trajectory_space(H5File& f, const std::string& g, const Dataset& d) {
+  const u64 T = u64(d.count), F = u64(d.feature_count());
   f.write(g + "/inputs", d.inputs.data(), {T, u64(d.input_dim)});
   f.set_attr(
       g + "/inputs", "description",
@@ -116,7 +122,10 @@ void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q, const std:
         "configuration-space paths behind the inputs [T,waypoints,dofs] (joint angles, rad)");
   }
   if (!d.model_text.empty()) f.set_attr(g, "model_mjcf", d.model_text);
+}
 
+// The reward sets and every query set of the bundle.
+void write_query_bundle(H5File& f, const std::string& g, const QueryBundle& q) {
   write_rewards(f, g + "/rewards/test", q.rewards.test);
   write_rewards(f, g + "/rewards/multipref10", q.rewards.multipref10);
   write_rewards(f, g + "/rewards/multipref50", q.rewards.multipref50);
@@ -147,19 +156,14 @@ void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q, const std:
   f.write(g + "/queries/fpe/test", q.fpe.test.data(), {u64(q.fpe.test.size())});
   f.set_attr(g + "/queries/fpe", "description",
              "FPE probe split: rows of inputs, 80 % train / 20 % test");
-  f.flush();
 }
 
-StoredDataset read_dataset(const H5File& f, const std::string& env) {
-  const std::string g = "/datasets/" + env;
-  if (!f.exists(g))
-    throw H5Error(f.path() + ": no dataset for env '" + env + "' (missing group " + g + ")");
-  StoredDataset s;
+void read_trajectory_space(const H5File& f, const std::string& g, StoredDataset& s) {
   Dataset& d = s.data;
+  std::vector<u64> dims;
   d.env = f.attr_string(g, "env");
   s.engine_version = f.attr_string(g, "engine_version");
   d.seed = uint64_t(f.attr_int(g, "generator_seed"));
-  std::vector<u64> dims;
   d.inputs = f.read_f32(g + "/inputs", {-1, -1}, &dims);
   d.count = int64_t(dims[0]);
   d.input_dim = int(dims[1]);
@@ -182,7 +186,12 @@ StoredDataset read_dataset(const H5File& f, const std::string& env) {
     d.path_dofs = int(dims[2]);
     d.model_text = f.attr_string(g, "model_mjcf");
   }
+}
 
+void read_query_bundle(const H5File& f, const std::string& g, StoredDataset& s) {
+  const Dataset& d = s.data;
+  const int F = d.feature_count();
+  std::vector<u64> dims;
   QueryBundle& q = s.queries;
   q.seed = uint64_t(f.attr_int(g, "query_seed"));
   Teacher& t = q.config.teacher;
@@ -231,6 +240,26 @@ StoredDataset read_dataset(const H5File& f, const std::string& env) {
   q.config.preference = q.singlepref.count;
   q.config.tpa_pairs = P;
   q.config.fpe_trajectories = int64_t(q.fpe.train.size() + q.fpe.test.size());
+}
+
+}  // namespace
+
+void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q, const std::string& version) {
+  const std::string g = "/datasets/" + d.env;
+  f.group(g);
+  write_env_attrs(f, g, d, q, version);
+  write_trajectory_space(f, g, d);
+  write_query_bundle(f, g, q);
+  f.flush();
+}
+
+StoredDataset read_dataset(const H5File& f, const std::string& env) {
+  const std::string g = "/datasets/" + env;
+  if (!f.exists(g))
+    throw H5Error(f.path() + ": no dataset for env '" + env + "' (missing group " + g + ")");
+  StoredDataset s;
+  read_trajectory_space(f, g, s);
+  read_query_bundle(f, g, s);
   return s;
 }
 

@@ -10,138 +10,187 @@ namespace sirl {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+using C = H5Table::Column;
+
+double num_or(const TaskRecord& r, const char* k, double fallback) {
+  auto it = r.num.find(k);
+  return it == r.num.end() ? fallback : it->second;
+}
+
+double need_num(const TaskRecord& r, const char* k) {
+  auto it = r.num.find(k);
+  if (it == r.num.end()) throw H5Error("task " + r.key + ": its record has no number '" + k + "'");
+  return it->second;
+}
+const std::string& need_text(const TaskRecord& r, const char* k) {
+  auto it = r.text.find(k);
+  if (it == r.text.end()) throw H5Error("task " + r.key + ": its record has no text '" + k + "'");
+  return it->second;
+}
+
+// A column read from every record of one kind: `key` names the record's text (String column) or
+// number (Int, Double). A record without it is an error, not a silent 0.
+struct ColumnSpec {
+  const char* name;
+  C::Type type;
+  const char* key;
+};
+
+H5Table cell_table(const std::vector<TaskRecord>& records, const std::string& kind,
+                   const std::vector<ColumnSpec>& spec) {
+  H5Table t;
+  for (const auto& c : spec) t.add(c.name, c.type);
+  for (const auto& r : records) {
+    if (r.kind != kind) continue;
+    for (size_t k = 0; k < spec.size(); ++k) {
+      const ColumnSpec& c = spec[k];
+      if (c.type == C::String) {
+        auto it = r.text.find(c.key);
+        if (it == r.text.end())
+          throw H5Error("task " + r.key + ": its record has no text '" + c.key + "'");
+        t.columns[k].strings.push_back(it->second);
+        continue;
+      }
+      auto it = r.num.find(c.key);
+      if (it == r.num.end())
+        throw H5Error("task " + r.key + ": its record has no number '" + c.key + "'");
+      if (c.type == C::Int)
+        t.columns[k].ints.push_back(int64_t(it->second));
+      else
+        t.columns[k].doubles.push_back(it->second);
+    }
+  }
+  return t;
+}
+
+H5Table fpe_table(const std::vector<TaskRecord>& records) {
+  return cell_table(records, "fpe",
+                    {{"env", C::String, "env"},
+                     {"method", C::String, "method"},
+                     {"variant", C::String, "variant"},
+                     {"vae", C::Int, "vae"},
+                     {"N", C::Int, "N"},
+                     {"seed", C::Int, "seed"},
+                     {"fpe", C::Double, "fpe"},
+                     {"train_mse", C::Double, "train_mse"}});
+}
+
+H5Table tpa_table(const std::vector<TaskRecord>& records) {
+  return cell_table(records, "tpa",
+                    {{"env", C::String, "env"},
+                     {"method", C::String, "method"},
+                     {"variant", C::String, "variant"},
+                     {"vae", C::Int, "vae"},
+                     {"frozen", C::Int, "frozen"},
+                     {"N", C::Int, "N"},
+                     {"M", C::Int, "M"},
+                     {"seed", C::Int, "seed"},
+                     {"tpa", C::Double, "tpa"},
+                     {"tpa_std", C::Double, "tpa_std"},
+                     {"tpa_train", C::Double, "tpa_train"},
+                     {"in_main", C::Int, "in_main"},
+                     {"in_ablation", C::Int, "in_ablation"}});
+}
+
+// The final loss and epoch count of a record's curve: loss_curves is [heads, epochs] (the mean of
+// the heads' last epochs), loss_curve [epochs].
+std::pair<int64_t, double> final_loss_of(const TaskRecord& r) {
+  const TaskRecord::Array* curve = nullptr;
+  for (const char* c : {"loss_curve", "loss_curves"})
+    if (auto it = r.arrays.find(c); it != r.arrays.end()) curve = &it->second;
+  if (!curve || curve->data.empty()) return {0, 0.0};
+  const uint64_t rows = curve->dims.size() == 2 ? curve->dims[0] : 1;
+  const int64_t E = int64_t(curve->data.size() / rows);
+  double last = 0;
+  for (uint64_t k = 0; k < rows; ++k) last += curve->data[(k + 1) * E - 1] / double(rows);
+  return {E, last};
+}
+
+// Every training's convergence (engine/convergence.h) and its final loss; dead_fraction is the
+// share of φ's last hidden layer that is 0 on all of Ξ (−1 where not measured). Columns a kind
+// does not have (N, M, frozen of a VAE) are 0.
+H5Table training_table(const std::vector<TaskRecord>& records) {
+  H5Table t;
+  auto &kind = t.add("kind", C::String), &key = t.add("key", C::String),
+       &env = t.add("env", C::String), &variant = t.add("variant", C::String),
+       &N = t.add("N", C::Int), &M = t.add("M", C::Int), &frozen = t.add("frozen", C::Int),
+       &seed = t.add("seed", C::Int), &epochs = t.add("epochs", C::Int),
+       &final_loss = t.add("final_loss", C::Double),
+       &rel = t.add("loss_relative_change", C::Double), &conv = t.add("converged", C::Int),
+       &frac = t.add("converged_fraction", C::Double), &dead = t.add("dead_fraction", C::Double);
+  for (const auto& r : records) {
+    if (!r.num.count("converged")) continue;  // FPE, Random and the VAE method train nothing
+    const auto [E, last] = final_loss_of(r);
+    kind.strings.push_back(r.kind);
+    key.strings.push_back(r.key);
+    env.strings.push_back(need_text(r, "env"));
+    variant.strings.push_back(r.kind == "vae" ? "vae" : need_text(r, "variant"));
+    N.ints.push_back(int64_t(num_or(r, "N", 0)));
+    M.ints.push_back(int64_t(num_or(r, "M", 0)));
+    frozen.ints.push_back(int64_t(num_or(r, "frozen", 0)));
+    seed.ints.push_back(int64_t(need_num(r, "seed")));
+    epochs.ints.push_back(E);
+    final_loss.doubles.push_back(last);
+    rel.doubles.push_back(need_num(r, "loss_relative_change"));
+    conv.ints.push_back(int64_t(need_num(r, "converged")));
+    frac.doubles.push_back(num_or(r, "converged_fraction", need_num(r, "converged")));
+    auto df = r.arrays.find("dead_fraction");
+    dead.doubles.push_back(df != r.arrays.end() && !df->second.data.empty() ? df->second.data.back()
+                                                                            : -1.0);
+  }
+  return t;
+}
+
+// The VAE's posterior per latent dimension: KL ≈ 0 nats means the dimension carries no
+// information about the trajectory (posterior collapse).
+H5Table vae_latents_table(const std::vector<TaskRecord>& records) {
+  H5Table t;
+  auto &env = t.add("env", C::String), &seed = t.add("seed", C::Int),
+       &elbo = t.add("elbo", C::String), &dim = t.add("dim", C::Int), &kl = t.add("kl", C::Double),
+       &mse = t.add("reconstruction_mse", C::Double);
+  for (const auto& r : records) {
+    if (r.kind != "vae") continue;
+    auto it = r.arrays.find("kl_per_dim");
+    if (it == r.arrays.end()) continue;
+    for (size_t k = 0; k < it->second.data.size(); ++k) {
+      env.strings.push_back(need_text(r, "env"));
+      seed.ints.push_back(int64_t(need_num(r, "seed")));
+      elbo.strings.push_back(need_text(r, "elbo"));
+      dim.ints.push_back(int64_t(k));
+      kl.doubles.push_back(it->second.data[k]);
+      mse.doubles.push_back(need_num(r, "reconstruction_mse"));
+    }
+  }
+  return t;
+}
+
+H5Table timings_table(const std::vector<TaskRecord>& records) {
+  H5Table t;
+  auto &kind = t.add("kind", C::String), &key = t.add("key", C::String),
+       &sec = t.add("seconds", C::Double), &fl = t.add("flops", C::Double),
+       &gf = t.add("gflops", C::Double);
+  for (const auto& r : records) {
+    kind.strings.push_back(r.kind);
+    key.strings.push_back(r.key);
+    const double s = num_or(r, "seconds", 0), f = num_or(r, "flops", 0);
+    sec.doubles.push_back(s);
+    fl.doubles.push_back(f);
+    gf.doubles.push_back(s > 0 ? f / s * 1e-9 : 0.0);
+  }
+  return t;
+}
+
+}  // namespace
+
 ResultTables build_tables(const std::vector<TaskRecord>& records) {
-  using C = H5Table::Column;
   ResultTables t;
-  auto num = [](const TaskRecord& r, const char* k) {
-    auto it = r.num.find(k);
-    return it == r.num.end() ? 0.0 : it->second;
-  };
-  auto txt = [](const TaskRecord& r, const char* k) {
-    auto it = r.text.find(k);
-    return it == r.text.end() ? std::string() : it->second;
-  };
-  {
-    auto &env = t.fpe.add("env", C::String), &method = t.fpe.add("method", C::String),
-         &variant = t.fpe.add("variant", C::String), &vae = t.fpe.add("vae", C::Int),
-         &N = t.fpe.add("N", C::Int), &seed = t.fpe.add("seed", C::Int),
-         &fpe = t.fpe.add("fpe", C::Double), &tr = t.fpe.add("train_mse", C::Double);
-    for (const auto& r : records) {
-      if (r.kind != "fpe") continue;
-      env.strings.push_back(txt(r, "env"));
-      method.strings.push_back(txt(r, "method"));
-      variant.strings.push_back(txt(r, "variant"));
-      vae.ints.push_back(int64_t(num(r, "vae")));
-      N.ints.push_back(int64_t(num(r, "N")));
-      seed.ints.push_back(int64_t(num(r, "seed")));
-      fpe.doubles.push_back(num(r, "fpe"));
-      tr.doubles.push_back(num(r, "train_mse"));
-    }
-  }
-  {
-    auto &env = t.tpa.add("env", C::String), &method = t.tpa.add("method", C::String),
-         &variant = t.tpa.add("variant", C::String), &vae = t.tpa.add("vae", C::Int),
-         &frozen = t.tpa.add("frozen", C::Int), &N = t.tpa.add("N", C::Int),
-         &M = t.tpa.add("M", C::Int), &seed = t.tpa.add("seed", C::Int),
-         &tpa = t.tpa.add("tpa", C::Double), &sd = t.tpa.add("tpa_std", C::Double),
-         &tr = t.tpa.add("tpa_train", C::Double), &in_main = t.tpa.add("in_main", C::Int),
-         &in_ab = t.tpa.add("in_ablation", C::Int);
-    for (const auto& r : records) {
-      if (r.kind != "tpa") continue;
-      env.strings.push_back(txt(r, "env"));
-      method.strings.push_back(txt(r, "method"));
-      variant.strings.push_back(txt(r, "variant"));
-      vae.ints.push_back(int64_t(num(r, "vae")));
-      frozen.ints.push_back(int64_t(num(r, "frozen")));
-      N.ints.push_back(int64_t(num(r, "N")));
-      M.ints.push_back(int64_t(num(r, "M")));
-      seed.ints.push_back(int64_t(num(r, "seed")));
-      tpa.doubles.push_back(num(r, "tpa"));
-      sd.doubles.push_back(num(r, "tpa_std"));
-      tr.doubles.push_back(num(r, "tpa_train"));
-      in_main.ints.push_back(int64_t(num(r, "in_main")));
-      in_ab.ints.push_back(int64_t(num(r, "in_ablation")));
-    }
-  }
-  {
-    // Every training's convergence (engine/convergence.h) and its final loss; dead_fraction is
-    // the share of φ's last hidden layer that is 0 on all of Ξ (−1 where not measured).
-    auto &kind = t.training.add("kind", C::String), &key = t.training.add("key", C::String),
-         &env = t.training.add("env", C::String), &variant = t.training.add("variant", C::String),
-         &N = t.training.add("N", C::Int), &M = t.training.add("M", C::Int),
-         &frozen = t.training.add("frozen", C::Int), &seed = t.training.add("seed", C::Int),
-         &epochs = t.training.add("epochs", C::Int),
-         &final_loss = t.training.add("final_loss", C::Double),
-         &rel = t.training.add("loss_relative_change", C::Double),
-         &conv = t.training.add("converged", C::Int),
-         &frac = t.training.add("converged_fraction", C::Double),
-         &dead = t.training.add("dead_fraction", C::Double);
-    for (const auto& r : records) {
-      if (!r.num.count("converged")) continue;  // FPE, Random and the VAE method train nothing
-      const TaskRecord::Array* curve = nullptr;
-      for (const char* c : {"loss_curve", "loss_curves"})
-        if (auto it = r.arrays.find(c); it != r.arrays.end()) curve = &it->second;
-      int64_t E = 0;
-      double last = 0;
-      if (curve && !curve->data.empty()) {
-        // loss_curves is [heads, epochs]: the mean of the heads' last epochs.
-        const uint64_t rows = curve->dims.size() == 2 ? curve->dims[0] : 1;
-        E = int64_t(curve->data.size() / rows);
-        for (uint64_t k = 0; k < rows; ++k) last += curve->data[(k + 1) * E - 1] / double(rows);
-      }
-      kind.strings.push_back(r.kind);
-      key.strings.push_back(r.key);
-      env.strings.push_back(txt(r, "env"));
-      variant.strings.push_back(r.kind == "vae" ? "vae" : txt(r, "variant"));
-      N.ints.push_back(int64_t(num(r, "N")));
-      M.ints.push_back(int64_t(num(r, "M")));
-      frozen.ints.push_back(int64_t(num(r, "frozen")));
-      seed.ints.push_back(int64_t(num(r, "seed")));
-      epochs.ints.push_back(E);
-      final_loss.doubles.push_back(last);
-      rel.doubles.push_back(num(r, "loss_relative_change"));
-      conv.ints.push_back(int64_t(num(r, "converged")));
-      frac.doubles.push_back(r.num.count("converged_fraction") ? num(r, "converged_fraction")
-                                                               : num(r, "converged"));
-      auto df = r.arrays.find("dead_fraction");
-      dead.doubles.push_back(
-          df != r.arrays.end() && !df->second.data.empty() ? df->second.data.back() : -1.0);
-    }
-  }
-  {
-    // The VAE's posterior per latent dimension: KL ≈ 0 nats means the dimension carries no
-    // information about the trajectory (posterior collapse).
-    auto &env = t.vae_latents.add("env", C::String), &seed = t.vae_latents.add("seed", C::Int),
-         &elbo = t.vae_latents.add("elbo", C::String), &dim = t.vae_latents.add("dim", C::Int),
-         &kl = t.vae_latents.add("kl", C::Double),
-         &mse = t.vae_latents.add("reconstruction_mse", C::Double);
-    for (const auto& r : records) {
-      if (r.kind != "vae") continue;
-      auto it = r.arrays.find("kl_per_dim");
-      if (it == r.arrays.end()) continue;
-      for (size_t k = 0; k < it->second.data.size(); ++k) {
-        env.strings.push_back(txt(r, "env"));
-        seed.ints.push_back(int64_t(num(r, "seed")));
-        elbo.strings.push_back(txt(r, "elbo"));
-        dim.ints.push_back(int64_t(k));
-        kl.doubles.push_back(it->second.data[k]);
-        mse.doubles.push_back(num(r, "reconstruction_mse"));
-      }
-    }
-  }
-  {
-    auto &kind = t.timings.add("kind", C::String), &key = t.timings.add("key", C::String),
-         &sec = t.timings.add("seconds", C::Double), &fl = t.timings.add("flops", C::Double),
-         &gf = t.timings.add("gflops", C::Double);
-    for (const auto& r : records) {
-      kind.strings.push_back(r.kind);
-      key.strings.push_back(r.key);
-      const double s = num(r, "seconds"), f = num(r, "flops");
-      sec.doubles.push_back(s);
-      fl.doubles.push_back(f);
-      gf.doubles.push_back(s > 0 ? f / s * 1e-9 : 0.0);
-    }
-  }
+  t.fpe = fpe_table(records);
+  t.tpa = tpa_table(records);
+  t.training = training_table(records);
+  t.vae_latents = vae_latents_table(records);
+  t.timings = timings_table(records);
   return t;
 }
 
