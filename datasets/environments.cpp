@@ -34,14 +34,12 @@ int64_t jaco_count(const EnvConfig& c) {
 int jaco_dim(const EnvConfig& c) {
   return c.jaco.waypoints * kJacoStateDim;
 }
-// Input layout (jaco_robot.h): per state 7 angles, 7 rotations (63), 7 frame positions (21; frame
-// 7 = the end effector), objects. The end effector of state t is at t·97 + 7 + 63 + 6·3.
+// Input layout (jaco_robot.h): the end effector of state t is at t·97 + kJacoEndEffector.
 TrajectoryView jaco_draw(const Dataset& d, int64_t row) {
-  constexpr int kEndEffector = kJacoDofs + 9 * kJacoDofs + 3 * (kJacoDofs - 1);
   const float* x = d.input(row);
   TrajectoryView v;
   for (int t = 0; t < d.input_dim / kJacoStateDim; ++t) {
-    const float* ee = x + t * kJacoStateDim + kEndEffector;
+    const float* ee = x + t * kJacoStateDim + kJacoEndEffector;
     v.points.push_back({ee[0], ee[1], ee[2]});
   }
   return v;

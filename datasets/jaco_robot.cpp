@@ -129,19 +129,15 @@ struct Deformation {
 
 }  // namespace
 
-Dataset make_jaco_dataset(const JacoConfig& cfg) {
-  validate(cfg);
-  const int W = cfg.waypoints, n = kJacoDofs, S = kJacoStateDim;
-  const int64_t T = cfg.trajectories;
-  const DeformationNorm norm(W, n);
-  const int m = norm.interior();
-  JacoKinematics kin(cfg);
-  const int threads = cfg.threads > 0 ? cfg.threads : omp_get_max_threads();
-  kin.ensure_workspaces(threads);
+namespace {
 
+// Everything about the dataset but its rows: sizes, names, units, objects.
+Dataset jaco_dataset_header(const JacoConfig& cfg) {
+  const int W = cfg.waypoints, n = kJacoDofs;
+  const int64_t T = cfg.trajectories;
   Dataset d;
   d.env = cfg.with_human ? "jaco" : "jaco2";
-  d.input_dim = W * S;
+  d.input_dim = W * kJacoStateDim;
   d.count = T;
   d.seed = cfg.seed;
   d.inputs.assign(size_t(T) * d.input_dim, 0.f);
@@ -168,102 +164,142 @@ Dataset make_jaco_dataset(const JacoConfig& cfg) {
   }
   d.object_dim = 3;
   d.object_units = "m";
-  const int F = d.feature_count();
-  d.features_raw.assign(size_t(T) * F, 0.f);
+  d.features_raw.assign(size_t(T) * d.feature_count(), 0.f);
+  return d;
+}
 
+// 1. Trajectory k's straight joint-space path [W, n] and its random deformations, from its own
+// stream "jaco/trajectory/<k>".
+void sample_path(const JacoConfig& cfg, const JacoKinematics& kin, int m, int64_t k,
+                 std::vector<double>& p, std::vector<Deformation>& defs) {
+  const int W = cfg.waypoints, n = kJacoDofs;
+  Rng rng(seed_from_key("jaco/trajectory/" + std::to_string(k), cfg.seed));
+  std::array<double, 7> start, delta;
+  for (int j = 0; j < n; ++j) {
+    start[j] = rng.uniform(kin.lower[j], kin.upper[j]);
+    const double goal = rng.uniform(kin.lower[j], kin.upper[j]);
+    // the shortest path: continuous joints may go either way round
+    delta[j] = kin.limited[j] ? goal - start[j] : wrap(goal - start[j]);
+  }
+  p.assign(size_t(W) * n, 0.0);
+  for (int t = 0; t < W; ++t)
+    for (int j = 0; j < n; ++j) p[size_t(t) * n + j] = start[j] + delta[j] * t / (W - 1);
+  const int count =
+      cfg.max_deformations > 0 ? 1 + int(rng.uniform_int(uint64_t(cfg.max_deformations))) : 0;
+  for (int i = 0; i < count; ++i) {
+    Deformation df;
+    df.waypoint = int(rng.uniform_int(uint64_t(m)));
+    for (double& x : df.u) x = rng.uniform(-1.0, 1.0);
+    df.mu = rng.uniform(0.0, cfg.max_deformation);
+    defs.push_back(df);
+  }
+}
+
+// 2. One CHOLMOD solve for every deformation of a chunk: column c of the result [columns, N] is
+// A⁻¹ ũ_c.
+std::vector<double> solve_deformations(const DeformationNorm& norm,
+                                       const std::vector<std::vector<Deformation>>& defs) {
+  const int N = norm.size(), m = norm.interior();
+  int columns = 0;
+  for (const auto& ds : defs) columns += int(ds.size());
+  std::vector<double> B(size_t(N) * columns, 0.0);
+  int col = 0;
+  for (const auto& ds : defs)
+    for (const auto& df : ds) {
+      for (int j = 0; j < kJacoDofs; ++j) B[size_t(col) * N + j * m + df.waypoint] = df.u[j];
+      ++col;
+    }
+  norm.solve(B.data(), columns);
+  return B;
+}
+
+// 3. Adds μ·(A⁻¹ũ / ‖A⁻¹ũ‖∞) for each deformation (solutions from column `col` of B on); halves
+// the μ's until the limited joints stay in range (undeformed as a last resort).
+void apply_deformations(const JacoConfig& cfg, const JacoKinematics& kin,
+                        const DeformationNorm& norm, const std::vector<Deformation>& ds,
+                        const double* B, int& col, std::vector<double>& p) {
+  const int W = cfg.waypoints, n = kJacoDofs, N = norm.size(), m = norm.interior();
+  std::vector<double> disp(size_t(W) * n, 0.0);
+  for (size_t k = 0; k < ds.size(); ++k) {
+    const double* x = B + size_t(col++) * N;
+    double peak = 0;
+    for (int i = 0; i < N; ++i) peak = std::max(peak, std::abs(x[i]));
+    if (peak == 0) continue;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < m; ++i) disp[size_t(i + 1) * n + j] += ds[k].mu * x[j * m + i] / peak;
+  }
+  for (int attempt = 0; attempt < 12; ++attempt) {
+    bool ok = true;
+    for (int t = 0; t < W && ok; ++t)
+      for (int j = 0; j < n && ok; ++j)
+        if (kin.limited[j]) {
+          const double q = p[size_t(t) * n + j] + disp[size_t(t) * n + j];
+          ok = q >= kin.lower[j] && q <= kin.upper[j];
+        }
+    if (ok) break;
+    for (double& v : disp) v *= attempt < 11 ? 0.5 : 0.0;  // last resort: undeformed
+  }
+  for (size_t i = 0; i < p.size(); ++i) p[i] += disp[i];
+}
+
+// 4. Forward kinematics of every waypoint of trajectory k → its input row (the state layout of
+// jaco_robot.h), its true features (means over the waypoints) and its stored path.
+void write_trajectory(const JacoConfig& cfg, JacoKinematics& kin, int worker, int64_t k,
+                      const std::vector<double>& p, Dataset& d) {
+  const int W = cfg.waypoints, n = kJacoDofs;
+  float* in = d.inputs.data() + size_t(k) * d.input_dim;
+  std::array<double, 4> feat{0, 0, 0, 0};
+  for (int t = 0; t < W; ++t) {
+    const double* q = p.data() + size_t(t) * n;
+    const JacoFrames fr = kin.frames(q, worker);
+    float* s = in + size_t(t) * kJacoStateDim;
+    for (int j = 0; j < n; ++j) s[kJacoAngles + j] = float(q[j]);
+    for (int i = 0; i < 9 * n; ++i) s[kJacoRotations + i] = float(fr.rot[i]);
+    for (int i = 0; i < 3 * n; ++i) s[kJacoPositions + i] = float(fr.pos[i]);
+    for (int i = 0; i < 3; ++i) {
+      s[kJacoLaptop + i] = float(cfg.laptop[i]);
+      s[kJacoHuman + i] = cfg.with_human ? float(cfg.human[i]) : 0.f;
+    }
+    const auto f = jaco_state_features(cfg, fr.pos.data() + 18, fr.rot.data() + 54);
+    for (int i = 0; i < 4; ++i) feat[i] += f[i] / W;  // mean over the waypoints
+  }
+  float* fr = d.features_raw.data() + size_t(k) * d.feature_count();
+  if (cfg.with_human)
+    for (int i = 0; i < 4; ++i) fr[i] = float(feat[i]);
+  else
+    fr[0] = float(feat[0]), fr[1] = float(feat[2]);
+  std::transform(p.begin(), p.end(), d.paths.begin() + size_t(k) * W * n,
+                 [](double v) { return float(v); });
+}
+
+}  // namespace
+
+Dataset make_jaco_dataset(const JacoConfig& cfg) {
+  validate(cfg);
+  const int64_t T = cfg.trajectories;
+  const DeformationNorm norm(cfg.waypoints, kJacoDofs);
+  JacoKinematics kin(cfg);
+  const int threads = cfg.threads > 0 ? cfg.threads : omp_get_max_threads();
+  kin.ensure_workspaces(threads);
+  Dataset d = jaco_dataset_header(cfg);
+
+  // Chunks of trajectories share one sparse solve; every trajectory draws from its own stream,
+  // so the data never depends on the thread count.
   constexpr int64_t kChunk = 128;
   const int64_t chunks = (T + kChunk - 1) / kChunk;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
   for (int64_t c = 0; c < chunks; ++c) {
     const int w = omp_get_thread_num();
     const int64_t k0 = c * kChunk, k1 = std::min(T, k0 + kChunk);
-    // 1. Straight joint-space paths and their deformations, each from the trajectory's stream.
-    std::vector<std::vector<double>> path(k1 - k0, std::vector<double>(size_t(W) * n));
+    std::vector<std::vector<double>> path(k1 - k0);
     std::vector<std::vector<Deformation>> defs(k1 - k0);
-    int columns = 0;
-    for (int64_t k = k0; k < k1; ++k) {
-      Rng rng(seed_from_key("jaco/trajectory/" + std::to_string(k), cfg.seed));
-      std::array<double, 7> start, delta;
-      for (int j = 0; j < n; ++j) {
-        start[j] = rng.uniform(kin.lower[j], kin.upper[j]);
-        const double goal = rng.uniform(kin.lower[j], kin.upper[j]);
-        // the shortest path: continuous joints may go either way round
-        delta[j] = kin.limited[j] ? goal - start[j] : wrap(goal - start[j]);
-      }
-      auto& p = path[k - k0];
-      for (int t = 0; t < W; ++t)
-        for (int j = 0; j < n; ++j) p[size_t(t) * n + j] = start[j] + delta[j] * t / (W - 1);
-      const int count =
-          cfg.max_deformations > 0 ? 1 + int(rng.uniform_int(uint64_t(cfg.max_deformations))) : 0;
-      for (int i = 0; i < count; ++i) {
-        Deformation df;
-        df.waypoint = int(rng.uniform_int(uint64_t(m)));
-        for (double& x : df.u) x = rng.uniform(-1.0, 1.0);
-        df.mu = rng.uniform(0.0, cfg.max_deformation);
-        defs[k - k0].push_back(df);
-      }
-      columns += count;
-    }
-    // 2. One CHOLMOD solve for every deformation of the chunk: column = A⁻¹ ũ.
-    const int N = norm.size();
-    std::vector<double> B(size_t(N) * columns, 0.0);
+    for (int64_t k = k0; k < k1; ++k)
+      sample_path(cfg, kin, norm.interior(), k, path[k - k0], defs[k - k0]);
+    const std::vector<double> B = solve_deformations(norm, defs);
     int col = 0;
-    for (auto& ds : defs)
-      for (const auto& df : ds) {
-        for (int j = 0; j < n; ++j) B[size_t(col) * N + j * m + df.waypoint] = df.u[j];
-        ++col;
-      }
-    norm.solve(B.data(), columns);
-    // 3. Add μ·(A⁻¹ũ / ‖A⁻¹ũ‖∞); halve the μ's until the limited joints stay in range.
-    col = 0;
     for (int64_t k = k0; k < k1; ++k) {
-      auto& p = path[k - k0];
-      const auto& ds = defs[k - k0];
-      std::vector<double> disp(size_t(W) * n, 0.0);
-      for (const auto& df : ds) {
-        const double* x = B.data() + size_t(col++) * N;
-        double peak = 0;
-        for (int i = 0; i < N; ++i) peak = std::max(peak, std::abs(x[i]));
-        if (peak == 0) continue;
-        for (int j = 0; j < n; ++j)
-          for (int i = 0; i < m; ++i) disp[size_t(i + 1) * n + j] += df.mu * x[j * m + i] / peak;
-      }
-      for (int attempt = 0; attempt < 12; ++attempt) {
-        bool ok = true;
-        for (int t = 0; t < W && ok; ++t)
-          for (int j = 0; j < n && ok; ++j)
-            if (kin.limited[j]) {
-              const double q = p[size_t(t) * n + j] + disp[size_t(t) * n + j];
-              ok = q >= kin.lower[j] && q <= kin.upper[j];
-            }
-        if (ok) break;
-        for (double& v : disp) v *= attempt < 11 ? 0.5 : 0.0;  // last resort: undeformed
-      }
-      for (size_t i = 0; i < p.size(); ++i) p[i] += disp[i];
-      // 4. Forward kinematics of every waypoint → states and features.
-      float* in = d.inputs.data() + size_t(k) * d.input_dim;
-      std::array<double, 4> feat{0, 0, 0, 0};
-      for (int t = 0; t < W; ++t) {
-        const double* q = p.data() + size_t(t) * n;
-        const JacoFrames fr = kin.frames(q, w);
-        float* s = in + size_t(t) * S;
-        for (int j = 0; j < 7; ++j) s[j] = float(q[j]);
-        for (int i = 0; i < 63; ++i) s[7 + i] = float(fr.rot[i]);
-        for (int i = 0; i < 21; ++i) s[70 + i] = float(fr.pos[i]);
-        for (int i = 0; i < 3; ++i) {
-          s[91 + i] = float(cfg.laptop[i]);
-          s[94 + i] = cfg.with_human ? float(cfg.human[i]) : 0.f;
-        }
-        const auto f = jaco_state_features(cfg, fr.pos.data() + 18, fr.rot.data() + 54);
-        for (int i = 0; i < 4; ++i) feat[i] += f[i] / W;  // mean over the waypoints
-      }
-      float* fr = d.features_raw.data() + size_t(k) * F;
-      if (cfg.with_human)
-        for (int i = 0; i < 4; ++i) fr[i] = float(feat[i]);
-      else
-        fr[0] = float(feat[0]), fr[1] = float(feat[2]);
-      std::transform(p.begin(), p.end(), d.paths.begin() + size_t(k) * W * n,
-                     [](double v) { return float(v); });
+      apply_deformations(cfg, kin, norm, defs[k - k0], B.data(), col, path[k - k0]);
+      write_trajectory(cfg, kin, w, k, path[k - k0], d);
     }
   }
   normalise_features(d);

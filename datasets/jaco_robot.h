@@ -1,6 +1,6 @@
-// JacoRobot (paper §4.1, Appendix A; docs/ARCHITECTURE.md §3): a 7-DoF Kinova Jaco (j2s7s300) over a table
-// with a laptop and a human. Trajectories are straight joint-space paths between random start
-// and goal configurations, smoothly deformed (ξ_D = ξ + μ A⁻¹ ũ, A the acceleration norm,
+// JacoRobot (paper §4.1, Appendix A; docs/ARCHITECTURE.md §3): a 7-DoF Kinova Jaco (j2s7s300) over
+// a table with a laptop and a human. Trajectories are straight joint-space paths between random
+// start and goal configurations, smoothly deformed (ξ_D = ξ + μ A⁻¹ ũ, A the acceleration norm,
 // factored once with CHOLMOD); forward kinematics runs through MuJoCo 2.2 (`mj_kinematics`).
 #pragma once
 #include <array>
@@ -28,9 +28,17 @@ struct JacoConfig {
 // Throws std::invalid_argument naming the bad field.
 void validate(const JacoConfig& cfg);
 
-// Floats per state (7 angles, 7 rotation matrices, 7 frame positions, laptop xyz, human xyz).
+// Floats per state (7 angles, 7 rotation matrices, 7 frame positions, laptop xyz, human xyz),
+// and where each part starts within a state.
 constexpr int kJacoStateDim = 97;
 constexpr int kJacoDofs = 7;
+constexpr int kJacoAngles = 0;                                  // [7] joint angles, rad
+constexpr int kJacoRotations = kJacoAngles + kJacoDofs;         // [7, 9] row-major, world frame
+constexpr int kJacoPositions = kJacoRotations + 9 * kJacoDofs;  // [7, 3] m, world frame
+constexpr int kJacoEndEffector = kJacoPositions + 3 * (kJacoDofs - 1);  // frame 7's [3]
+constexpr int kJacoLaptop = kJacoPositions + 3 * kJacoDofs;             // [3] m
+constexpr int kJacoHuman = kJacoLaptop + 3;                             // [3] m (zeros in jaco2)
+static_assert(kJacoHuman + 3 == kJacoStateDim);
 
 // env "jaco" (4 features: table, upright, laptop, proxemics) or "jaco2" (table, laptop).
 // inputs [T, waypoints·97]; joint_paths [T, waypoints, 7] are kept in Dataset::paths.
