@@ -3,11 +3,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
-#include <thread>
 
 #include "app/commands.h"
 #include "jobs/mpi_run.h"
 #include "jobs/profile.h"
+#include "jobs/study_tasks.h"
+#include "results/results_file.h"
+#include "results/study_store.h"
 
 namespace sirl::app {
 
@@ -33,7 +35,7 @@ void register_reproduce(CLI::App& app, Runner& run) {
     // out/ (git-ignored; run_command makes it) is the default home of results.
     if (out.empty()) out = "out/" + stem + ".h5";
     if (figures.empty()) figures = "out/" + stem + "-figures";
-    const int rc = run_command(profile, out, threads, force, "", false);
+    const int rc = run_command(profile, out, threads, force, "", false, no_study);
     if (rc != 0 || mpi_rank_from_env() > 0) return rc;  // MPI workers do not plot
     const std::string script = std::string(SIRL_SOURCE_DIR) + "/results/plot_figures.py";
     if (!std::filesystem::exists(script))
@@ -47,15 +49,15 @@ void register_reproduce(CLI::App& app, Runner& run) {
     const Profile p = load_profile(profile);
     std::string study_line;
     if (p.study.enabled && !no_study) {
-      const StudyPlan& sp = p.study;
+      // The study ran as tasks of the plan (committed and resumable like the rest); here its
+      // records become the analysis, the cohort's study file, Fig. 6 and study_report.md.
       const std::string dir = figures + "/study", file = dir + "/simulated_study.h5";
       std::filesystem::create_directories(dir);
-      std::fprintf(stderr, "sirl reproduce: simulated user study (%d users, %s)\n", sp.users,
-                   sp.env.c_str());
-      study_simulate(sp.env, sp.trajectories, sp.users, sp.similarity, sp.preference, sp.beta,
-                     sp.mistake, 0, file);
-      study_analyze(file, dir, sp.seeds, sp.splits, sp.epochs, sp.tpa_epochs,
-                    std::max(1, int(std::thread::hardware_concurrency())), sp.random_frozen);
+      std::fprintf(stderr, "sirl reproduce: user study (%d simulated users, %s)\n",
+                   p.study.cohort.users, p.study.cohort.env.c_str());
+      write_study(file, simulate_cohort(p.study.cohort));
+      write_study_analysis(file, p.study.cohort.env, assemble_study(p, read_results_records(out)),
+                           study_config(p), dir);
       study_line = "study:   " + dir + "/study_report.md (Fig. 6: " + dir + "/fig6_study.png)\n";
     }
     std::printf("results: %s\nfigures: %s/\nreport:  %s/report.md\n%s", out.c_str(),

@@ -12,6 +12,7 @@
 #include "jobs/profile.h"
 #include "jobs/progress.h"
 #include "jobs/run.h"
+#include "jobs/task_kinds.h"
 #include "jobs/task_runner.h"
 #include "results/results_file.h"
 
@@ -34,8 +35,9 @@ int default_threads() {
 }  // namespace
 
 int run_command(const std::string& profile_name, const std::string& out, int threads, bool force,
-                const std::string& shard, bool quiet) {
-  const Profile p = load_or_usage(profile_name);
+                const std::string& shard, bool quiet, bool skip_study) {
+  Profile p = load_or_usage(profile_name);
+  if (skip_study) p.study.enabled = false;
   RunOptions o;
   o.out = out;
   o.threads = threads;
@@ -107,12 +109,15 @@ void register_plan(CLI::App& app, Runner& run) {
     for (const auto& e : p.envs) std::printf(" %s", e.c_str());
     std::printf("   seeds: %zu   N (FPE): %zu values   N (TPA): %zu   M: %zu\n", p.seeds.size(),
                 p.fpe_N.size(), p.tpa.N.size(), p.tpa.M.size());
-    std::printf("\n%-6s %8s %14s\n", "kind", "tasks", "GFLOP");
-    for (TaskKind k : {TaskKind::vae, TaskKind::rep, TaskKind::fpe, TaskKind::tpa})
-      std::printf("%-6s %8d %14.1f\n", kind_name(k), plan.count(k), plan.flops(k) * 1e-9);
+    std::printf("\n%-16s %8s %14s  %s\n", "kind", "tasks", "GFLOP", "what it computes");
+    for (const TaskKindSpec& ks : task_kinds()) {
+      if (plan.count(ks.kind) == 0) continue;
+      std::printf("%-16s %8d %14.1f  %s\n", ks.name, plan.count(ks.kind),
+                  plan.flops(ks.kind) * 1e-9, ks.description);
+    }
     double total = 0;
     for (const auto& t : plan.tasks) total += t.flops;
-    std::printf("%-6s %8zu %14.1f\n", "total", plan.tasks.size(), total * 1e-9);
+    std::printf("%-16s %8zu %14.1f\n", "total", plan.tasks.size(), total * 1e-9);
     std::fflush(stdout);
     std::fprintf(stderr, "calibrating on this machine...\n");
     const PlanEstimate e = estimate_plan(plan, p, th);

@@ -19,75 +19,40 @@
 
 namespace sirl::app {
 
-namespace {
-
-// A scenario sentence for a reward over the features ("more table, less laptop").
-std::string scenario_text(const Dataset& d, const std::vector<float>& w,
-                          std::vector<std::string>* involved) {
-  std::string s = "You want the robot to have";
-  bool first = true;
-  for (int k = 0; k < d.feature_count(); ++k) {
-    if (std::abs(w[k]) < 1e-6f) continue;
-    involved->push_back(d.feature_names[k]);
-    s += std::string(first ? " " : " and ") + (w[k] > 0 ? "more " : "less ") + d.feature_names[k];
-    first = false;
-  }
-  return s + ".";
-}
-
-}  // namespace
-
 int study_simulate(const std::string& env, int64_t trajectories, int users, int64_t n_sim,
                    int64_t n_pref, double beta, double mistake, uint64_t seed,
                    const std::string& out, bool force) {
-  Study s;
-  s.env = env;
-  s.trajectories = trajectories;
-  s.data_seed = seed;
-  Dataset d;
+  CohortConfig c;
+  c.env = env;
+  c.trajectories = trajectories;
+  c.users = users;
+  c.similarity = n_sim;
+  c.preference = n_pref;
+  c.beta = beta;
+  c.mistake = mistake;
+  c.seed = seed;
+  // Checked before the file: a bad teacher or environment is a usage error that touches nothing.
+  int64_t count = 0;
   try {
-    d = study_dataset(s);
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(e.what());
-  }
-  Teacher t;
-  t.beta = beta;
-  t.mistake = mistake;
-  try {
+    const Dataset d = study_dataset(Study{env, trajectories, seed, {}});
+    count = d.count;
+    Teacher t;
+    t.beta = beta;
+    t.mistake = mistake;
     validate(t, d.feature_count());
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
   check_replaceable(out, "study", force);  // after the arguments are checked
-  Rng rng(seed_from_key("study_simulate", seed));
-  for (int u = 0; u < users; ++u) {
-    char id[32];
-    std::snprintf(id, sizeof id, "sim%02d", u + 1);
-    StudyParticipant p = plan_participant(d, id, n_sim, n_pref, seed);
-    // 3 in 5 simulated users care about every feature, the others about one (as in the paper,
-    // where 6 of 10 participants had preferences pertaining to both features).
-    p.reward.assign(d.feature_count(), 0.f);
-    const bool both = u % 5 < 3;
-    const int only = int(rng.uniform_int(uint64_t(d.feature_count())));
-    double norm = 0;
-    for (int k = 0; k < d.feature_count(); ++k) {
-      if (!both && k != only) continue;
-      p.reward[k] = float((rng.uniform() < 0.5 ? -1 : 1) * rng.uniform(0.3, 1.0));
-      norm += double(p.reward[k]) * p.reward[k];
-    }
-    for (float& w : p.reward) w = float(w / std::sqrt(norm));
-    p.scenario = scenario_text(d, p.reward, &p.scenario_features);
-    simulate_answers(d, p, t, rng);
-    s.participants.push_back(std::move(p));
-  }
+  const Study s = simulate_cohort(c);
   const auto parent = std::filesystem::path(out).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);
   write_study(out, s);
   std::printf(
       "wrote %s: %d simulated participants on %s (%lld trajectories), %lld similarity + "
       "%lld preference answers each (beta %g, mistakes %g)\n",
-      out.c_str(), users, env.c_str(), (long long)d.count, (long long)n_sim, (long long)n_pref,
-      beta, mistake);
+      out.c_str(), users, env.c_str(), (long long)count, (long long)n_sim, (long long)n_pref, beta,
+      mistake);
   return 0;
 }
 
@@ -117,6 +82,16 @@ int study_analyze(const std::string& file, const std::string& out, int seeds, in
   } catch (const std::invalid_argument& e) {
     throw UsageError(file + ": " + e.what());
   }
+  std::fprintf(stderr, "sirl study analyze: %lld pooled triplets, %zu participants, %.1f s\n",
+               (long long)a.triplets, a.participants.size(),
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  write_study_analysis(file, s.env, a, c, out);
+  return 0;
+}
+
+void write_study_analysis(const std::string& study_file, const std::string& env,
+                          const StudyAnalysis& a, const StudyAnalysisConfig& c,
+                          const std::string& out) {
   std::filesystem::create_directories(out);
   const std::string h5 = out + "/study_analysis.h5";
   {
@@ -125,16 +100,16 @@ int study_analyze(const std::string& file, const std::string& out, int seeds, in
       f.write(std::string("/study_analysis/") + name, v.data(), {uint64_t(v.size())});
     };
     f.group("/study_analysis");
-    f.set_attr("/study_analysis", "study_file", file);
-    f.set_attr("/study_analysis", "env", s.env);
+    f.set_attr("/study_analysis", "study_file", study_file);
+    f.set_attr("/study_analysis", "env", env);
     f.set_attr("/study_analysis", "triplets", int64_t(a.triplets));
-    f.set_attr("/study_analysis", "seeds", int64_t(seeds));
-    f.set_attr("/study_analysis", "cv_splits", int64_t(splits));
+    f.set_attr("/study_analysis", "seeds", int64_t(c.seeds));
+    f.set_attr("/study_analysis", "cv_splits", int64_t(c.cv_splits));
     f.set_attr("/study_analysis", "sirl_epochs", int64_t(c.hyper.sirl.epochs));
     f.set_attr("/study_analysis", "tpa_epochs", int64_t(c.hyper.tpa.epochs));
     f.set_attr("/study_analysis", "hyper", describe(c.hyper));
     f.set_attr("/study_analysis", "random_mode",
-               std::string(random_frozen ? "frozen" : "unfrozen"));
+               std::string(c.random_frozen ? "frozen" : "unfrozen"));
     w("fpe_sirl", a.fpe_sirl);
     w("fpe_random", a.fpe_random);
     w("real_sirl", a.real_sirl);
@@ -151,14 +126,10 @@ int study_analyze(const std::string& file, const std::string& out, int seeds, in
     f.write_strings("/study_analysis/participants", a.participants);
   }
   std::filesystem::rename(h5 + ".partial", h5);
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::fprintf(stderr, "sirl study analyze: %lld pooled triplets, %zu participants, %.1f s\n",
-               (long long)a.triplets, a.participants.size(), secs);
   const std::string cmd = "/usr/bin/python3 " +
                           sh_quote(std::string(SIRL_SOURCE_DIR) + "/results/plot_study.py") + " " +
                           sh_quote(h5) + " --out " + sh_quote(out);
   if (std::system(cmd.c_str()) != 0) throw std::runtime_error("plotting failed: " + cmd);
-  return 0;
 }
 
 void register_study(CLI::App& app, Runner& run) {

@@ -3,8 +3,8 @@
 #include <cstdio>
 
 #include "app/commands.h"
-#include "results/results_file.h"
 #include "build_info.h"
+#include "results/results_file.h"
 
 namespace sirl::app {
 

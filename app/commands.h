@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "engine/study_analysis.h"
+
 namespace CLI {
 class App;
 }
@@ -53,10 +55,16 @@ int study_simulate(const std::string& env, int64_t trajectories, int users, int6
                    const std::string& out, bool force = false);
 int study_analyze(const std::string& file, const std::string& out, int seeds, int splits,
                   int epochs, int tpa_epochs, int threads, bool random_frozen = false);
+// The analysis file (OUT/study_analysis.h5) and, through results/plot_study.py, Fig. 6 and
+// study_report.md. Shared by `sirl study analyze` and `sirl reproduce` (whose study ran as tasks).
+void write_study_analysis(const std::string& study_file, const std::string& env,
+                          const StudyAnalysis& a, const StudyAnalysisConfig& c,
+                          const std::string& out);
 
 // `sirl run` proper, shared with `sirl reproduce`.
+// `skip_study` leaves the profile's [study] tasks out of the plan (`sirl reproduce --no-study`).
 int run_command(const std::string& profile, const std::string& out, int threads, bool force,
-                const std::string& shard, bool quiet);
+                const std::string& shard, bool quiet, bool skip_study = false);
 
 void register_all(CLI::App& app);
 int run_selected(CLI::App& app);

@@ -1,6 +1,7 @@
 #include "datasets/study.h"
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <stdexcept>
 
@@ -113,6 +114,61 @@ std::vector<int32_t> answered_triplets(const std::vector<const StudyParticipant*
       out.push_back(q[neg]);
     }
   return out;
+}
+
+namespace {
+
+// A scenario sentence for a reward over the features ("more table, less laptop").
+std::string scenario_text(const Dataset& d, const std::vector<float>& w,
+                          std::vector<std::string>* involved) {
+  std::string s = "You want the robot to have";
+  bool first = true;
+  for (int k = 0; k < d.feature_count(); ++k) {
+    if (std::abs(w[k]) < 1e-6f) continue;
+    involved->push_back(d.feature_names[k]);
+    s += std::string(first ? " " : " and ") + (w[k] > 0 ? "more " : "less ") + d.feature_names[k];
+    first = false;
+  }
+  return s + ".";
+}
+
+}  // namespace
+
+std::string simulated_participant_id(int u) {
+  char id[32];
+  std::snprintf(id, sizeof id, "sim%02d", u + 1);
+  return id;
+}
+
+Study simulate_cohort(const CohortConfig& c) {
+  Study s;
+  s.env = c.env;
+  s.trajectories = c.trajectories;
+  s.data_seed = c.seed;
+  const Dataset d = study_dataset(s);
+  Teacher t;
+  t.beta = c.beta;
+  t.mistake = c.mistake;
+  validate(t, d.feature_count());
+  Rng rng(seed_from_key("study_simulate", c.seed));
+  for (int u = 0; u < c.users; ++u) {
+    StudyParticipant p =
+        plan_participant(d, simulated_participant_id(u), c.similarity, c.preference, c.seed);
+    p.reward.assign(d.feature_count(), 0.f);
+    const bool both = u % 5 < 3;
+    const int only = int(rng.uniform_int(uint64_t(d.feature_count())));
+    double norm = 0;
+    for (int k = 0; k < d.feature_count(); ++k) {
+      if (!both && k != only) continue;
+      p.reward[k] = float((rng.uniform() < 0.5 ? -1 : 1) * rng.uniform(0.3, 1.0));
+      norm += double(p.reward[k]) * p.reward[k];
+    }
+    for (float& w : p.reward) w = float(w / std::sqrt(norm));
+    p.scenario = scenario_text(d, p.reward, &p.scenario_features);
+    simulate_answers(d, p, t, rng);
+    s.participants.push_back(std::move(p));
+  }
+  return s;
 }
 
 }  // namespace sirl

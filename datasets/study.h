@@ -54,6 +54,24 @@ StudyParticipant plan_participant(const Dataset& d, const std::string& id, int64
 // log-normally around 4 s; timestamps are left 0.
 void simulate_answers(const Dataset& d, StudyParticipant& p, const Teacher& t, Rng& rng);
 
+// A cohort of simulated novices (the reproduction's stand-in for the paper's 10 participants):
+// noisy teachers (Boltzmann β on the normalised features, mistakes), each with a preference
+// scenario: 3 in 5 care about every feature, the others about one (6 of the paper's 10
+// participants had preferences involving both features).
+struct CohortConfig {
+  std::string env = "jaco2";
+  int64_t trajectories = 1000;
+  int users = 10;
+  int64_t similarity = 100, preference = 100;  // answered queries per participant
+  double beta = 20, mistake = 0.05;
+  uint64_t seed = 0;  // the trajectory space's and the cohort's
+};
+// The participant ids simulate_cohort gives: "sim01", "sim02", …
+std::string simulated_participant_id(int u);
+// The cohort's study (env, Ξ's size and seed, every participant's answers). Deterministic.
+// Throws std::invalid_argument for a bad environment or teacher.
+Study simulate_cohort(const CohortConfig& c);
+
 // Pooled similarity answers of `participants` as (positive 1, positive 2, negative) row triplets.
 std::vector<int32_t> answered_triplets(const std::vector<const StudyParticipant*>& participants);
 

@@ -87,53 +87,63 @@ double tpa_mean(const Representation& rep, const Dataset& d, const std::vector<T
 
 }  // namespace
 
-StudyAnalysis analyze_study(const Study& s, const Dataset& d, const StudyAnalysisConfig& c) {
-  StudyAnalysis a;
-  std::vector<const StudyParticipant*> all;
-  for (const auto& p : s.participants) all.push_back(&p);
-  const std::vector<int32_t> pooled = answered_triplets(all);
-  a.triplets = int64_t(pooled.size() / 3);
-  if (a.triplets == 0) throw std::invalid_argument("the study has no similarity answers yet");
+std::vector<int32_t> study_triplets(const Study& s, const std::string& without) {
+  std::vector<const StudyParticipant*> who;
+  for (const auto& p : s.participants)
+    if (p.id != without) who.push_back(&p);
+  return answered_triplets(who);
+}
 
-  // FPE: one fixed labelled split; SIRL and Random for each training seed.
+Representation study_sirl(const Dataset& d, const std::vector<int32_t>& triplets,
+                          const StudyAnalysisConfig& c, int k) {
+  return train_sirl_on(d, triplets, c, seed_from_key("study_seed/" + std::to_string(k), c.seed));
+}
+
+Representation study_random(const Dataset& d, const StudyAnalysisConfig& c, int k) {
+  return random_phi(d, c, seed_from_key("study_seed/" + std::to_string(k), c.seed));
+}
+
+double study_fpe(const Representation& phi, const Dataset& d, const StudyAnalysisConfig& c) {
+  // One fixed labelled split for every φ of the analysis.
   Rng fpe_rng(seed_from_key("study_fpe", c.seed));
   const FpeSplit split = sample_fpe_split(d, std::min(c.fpe_trajectories, d.count), fpe_rng);
-  std::vector<Representation> sirl, random;
-  for (int k = 0; k < c.seeds; ++k) {
-    const uint64_t seed = seed_from_key("study_seed/" + std::to_string(k), c.seed);
-    sirl.push_back(train_sirl_on(d, pooled, c, seed));
-    random.push_back(random_phi(d, c, seed));
-    a.fpe_sirl.push_back(evaluate_fpe(sirl.back(), d, split, c.threads).fpe);
-    a.fpe_random.push_back(evaluate_fpe(random.back(), d, split, c.threads).fpe);
-  }
+  return evaluate_fpe(phi, d, split, c.threads).fpe;
+}
 
-  // TPA on each participant's own preferences: Real and Held-out.
+Representation study_heldout(const Study& s, const Dataset& d, const std::string& id,
+                             const StudyAnalysisConfig& c) {
+  const auto trip = study_triplets(s, id);
+  if (trip.empty()) return Representation{};
+  return train_sirl_on(d, trip, c, seed_from_key("study_heldout", c.seed));
+}
+
+bool study_participant_usable(const StudyParticipant& p, const StudyAnalysisConfig& c) {
+  int64_t M = 0;
+  StudyAnalysisConfig one = c;
+  one.cv_splits = 1;
+  return !cv_sets(p, one, c.seed, &M).empty();
+}
+
+ParticipantTpa study_participant_tpa(const StudyParticipant& p, const Dataset& d,
+                                     const Representation& sirl0, const Representation& random0,
+                                     const Representation& heldout, const StudyAnalysisConfig& c) {
+  ParticipantTpa t;
+  int64_t M = 0;
+  const auto sets = cv_sets(p, c, c.seed, &M);
+  if (sets.empty()) return t;
   const uint64_t tpa_seed = seed_from_key("study_tpa", c.seed);
-  for (const auto& p : s.participants) {
-    int64_t M = 0;
-    const auto sets = cv_sets(p, c, c.seed, &M);
-    if (sets.empty()) continue;
-    a.participants.push_back(p.id);
-    a.both_features.push_back(p.scenario_features.size() >= size_t(d.feature_count()));
-    a.real_sirl.push_back(tpa_mean(sirl[0], d, sets, M, c, tpa_seed));
-    a.real_random.push_back(tpa_mean(random[0], d, sets, M, c, tpa_seed, c.random_frozen));
-    a.real_random_other.push_back(tpa_mean(random[0], d, sets, M, c, tpa_seed, !c.random_frozen));
-    std::vector<const StudyParticipant*> others;
-    for (const auto& q : s.participants)
-      if (q.id != p.id) others.push_back(&q);
-    const auto trip = answered_triplets(others);
-    if (trip.empty()) {
-      a.heldout_sirl.push_back(NAN);
-    } else {
-      const Representation held = train_sirl_on(d, trip, c, seed_from_key("study_heldout", c.seed));
-      a.heldout_sirl.push_back(tpa_mean(held, d, sets, M, c, tpa_seed));
-    }
-    a.heldout_random.push_back(a.real_random.back());  // Random uses nobody's data
-    a.heldout_random_other.push_back(a.real_random_other.back());
-    if (c.progress) c.progress(int(a.participants.size()), int(s.participants.size()));
-  }
+  t.ok = true;
+  t.both_features = p.scenario_features.size() >= size_t(d.feature_count());
+  t.real_sirl = tpa_mean(sirl0, d, sets, M, c, tpa_seed);
+  t.real_random = tpa_mean(random0, d, sets, M, c, tpa_seed, c.random_frozen);
+  t.real_random_other = tpa_mean(random0, d, sets, M, c, tpa_seed, !c.random_frozen);
+  t.heldout_sirl = heldout.params.empty() ? NAN : tpa_mean(heldout, d, sets, M, c, tpa_seed);
+  return t;
+}
 
-  // Simulated: perfect preferences for random rewards.
+SimulatedTpa study_simulated_tpa(const Dataset& d, const Representation& sirl0,
+                                 const Representation& random0, const StudyAnalysisConfig& c) {
+  const uint64_t tpa_seed = seed_from_key("study_tpa", c.seed);
   const RewardSet rewards =
       make_random_rewards("study_simulated", c.simulated_rewards, d.feature_count(), c.seed);
   std::vector<TpaSet> sim;
@@ -141,13 +151,53 @@ StudyAnalysis analyze_study(const Study& s, const Dataset& d, const StudyAnalysi
   for (int r = 0; r < rewards.count; ++r)
     sim.push_back(
         sample_tpa_set(d, c.simulated_queries, rewards, r, Teacher{}, sim_rng, c.train_fraction));
-  const int64_t Msim = sim.front().train;
-  const TpaResult ts =
-      evaluate_tpa(sirl[0], d, sim, TpaConfig{Msim, true, c.hyper, c.threads}, tpa_seed);
-  a.simulated_sirl = ts.accuracy;
-  a.simulated_random = tpa_accuracies(random[0], d, sim, Msim, c, tpa_seed, c.random_frozen);
-  a.simulated_random_other = tpa_accuracies(random[0], d, sim, Msim, c, tpa_seed, !c.random_frozen);
+  const int64_t M = sim.front().train;
+  SimulatedTpa t;
+  t.sirl = evaluate_tpa(sirl0, d, sim, TpaConfig{M, true, c.hyper, c.threads}, tpa_seed).accuracy;
+  t.random = tpa_accuracies(random0, d, sim, M, c, tpa_seed, c.random_frozen);
+  t.random_other = tpa_accuracies(random0, d, sim, M, c, tpa_seed, !c.random_frozen);
+  return t;
+}
+
+StudyAnalysis analyze_study(const Study& s, const Dataset& d, const StudyAnalysisConfig& c) {
+  StudyAnalysis a;
+  const std::vector<int32_t> pooled = study_triplets(s);
+  a.triplets = int64_t(pooled.size() / 3);
+  if (a.triplets == 0) throw std::invalid_argument("the study has no similarity answers yet");
+  std::vector<Representation> sirl, random;
+  for (int k = 0; k < c.seeds; ++k) {
+    sirl.push_back(study_sirl(d, pooled, c, k));
+    random.push_back(study_random(d, c, k));
+    a.fpe_sirl.push_back(study_fpe(sirl.back(), d, c));
+    a.fpe_random.push_back(study_fpe(random.back(), d, c));
+  }
+  for (const auto& p : s.participants) {
+    if (!study_participant_usable(p, c)) continue;
+    const ParticipantTpa t =
+        study_participant_tpa(p, d, sirl[0], random[0], study_heldout(s, d, p.id, c), c);
+    add_participant(a, p.id, t);
+    if (c.progress) c.progress(int(a.participants.size()), int(s.participants.size()));
+  }
+  set_simulated(a, study_simulated_tpa(d, sirl[0], random[0], c));
   return a;
+}
+
+void add_participant(StudyAnalysis& a, const std::string& id, const ParticipantTpa& t) {
+  if (!t.ok) return;
+  a.participants.push_back(id);
+  a.both_features.push_back(t.both_features);
+  a.real_sirl.push_back(t.real_sirl);
+  a.real_random.push_back(t.real_random);
+  a.real_random_other.push_back(t.real_random_other);
+  a.heldout_sirl.push_back(t.heldout_sirl);
+  a.heldout_random.push_back(t.real_random);  // Random uses nobody's data
+  a.heldout_random_other.push_back(t.real_random_other);
+}
+
+void set_simulated(StudyAnalysis& a, const SimulatedTpa& t) {
+  a.simulated_sirl = t.sirl;
+  a.simulated_random = t.random;
+  a.simulated_random_other = t.random_other;
 }
 
 }  // namespace sirl

@@ -11,6 +11,7 @@
 
 #include "datasets/study.h"
 #include "engine/hyperparams.h"
+#include "engine/representation.h"
 
 namespace sirl {
 
@@ -46,5 +47,46 @@ struct StudyAnalysis {
 
 // Throws std::invalid_argument when there are no similarity answers to train on.
 StudyAnalysis analyze_study(const Study& s, const Dataset& d, const StudyAnalysisConfig& c);
+
+// The analysis in pieces, each a pure function of its inputs, so the batch engine runs them as
+// tasks (committed, resumable) and analyze_study above composes the very same calls.
+
+// Every answered similarity triplet of the study, pooled; or all but participant `without`'s.
+std::vector<int32_t> study_triplets(const Study& s, const std::string& without = "");
+// Training seed k's SIRL φ on `triplets` and its Random φ, with their FPE on the analysis' one
+// labelled split.
+Representation study_sirl(const Dataset& d, const std::vector<int32_t>& triplets,
+                          const StudyAnalysisConfig& c, int k);
+Representation study_random(const Dataset& d, const StudyAnalysisConfig& c, int k);
+double study_fpe(const Representation& phi, const Dataset& d, const StudyAnalysisConfig& c);
+// The Held-out φ of one participant: SIRL on everyone else's triplets (empty params when nobody
+// else answered).
+Representation study_heldout(const Study& s, const Dataset& d, const std::string& id,
+                             const StudyAnalysisConfig& c);
+
+// One participant's TPA on their own preferences (cross-validation splits): SIRL (seed 0, frozen),
+// Random (seed 0) in the chosen and the other mode, and the Held-out φ (NaN when it has no
+// params). `ok` is false when the participant has too few untied answers.
+struct ParticipantTpa {
+  bool ok = false;
+  bool both_features = false;
+  double real_sirl = 0, real_random = 0, real_random_other = 0, heldout_sirl = 0;
+};
+// Whether a participant has enough untied preference answers for the cross-validation splits.
+bool study_participant_usable(const StudyParticipant& p, const StudyAnalysisConfig& c);
+ParticipantTpa study_participant_tpa(const StudyParticipant& p, const Dataset& d,
+                                     const Representation& sirl0, const Representation& random0,
+                                     const Representation& heldout, const StudyAnalysisConfig& c);
+
+// TPA on simulated perfect preferences for random rewards: SIRL frozen, Random in both modes.
+struct SimulatedTpa {
+  std::vector<double> sirl, random, random_other;
+};
+SimulatedTpa study_simulated_tpa(const Dataset& d, const Representation& sirl0,
+                                 const Representation& random0, const StudyAnalysisConfig& c);
+
+// Assembly of the pieces into the analysis (participants in the order added).
+void add_participant(StudyAnalysis& a, const std::string& id, const ParticipantTpa& t);
+void set_simulated(StudyAnalysis& a, const SimulatedTpa& t);
 
 }  // namespace sirl

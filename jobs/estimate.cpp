@@ -8,6 +8,7 @@
 #include "engine/methods.h"
 #include "engine/tpa.h"
 #include "jobs/scheduler.h"
+#include "jobs/study_tasks.h"
 
 namespace sirl {
 
@@ -23,7 +24,11 @@ double seconds_of(const std::function<double()>& f, double* flops) {
 
 PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
   PlanEstimate e;
-  for (const auto& env : p.envs) {
+  // The grid's environments and the user study's (its tasks run on its own Ξ).
+  std::vector<std::string> envs = p.envs;
+  if (p.study.enabled && std::find(envs.begin(), envs.end(), p.study.cohort.env) == envs.end())
+    envs.push_back(p.study.cohort.env);
+  for (const auto& env : envs) {
     EnvConfig small = p.data;
     small.jaco.trajectories = 300;  // enough to time the training code; generation is not timed
     small.jaco.threads = 0;
@@ -33,7 +38,7 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
     qc.similarity = qc.preference = 200;
     qc.fpe_trajectories = std::min<int64_t>(qc.fpe_trajectories, d.count);
     const QueryBundle b = make_query_bundle(d, qc, 1);
-    Hyper h = p.hyper.at(env);
+    Hyper h = p.hyper.count(env) ? p.hyper.at(env) : study_config(p).hyper;
     const bool big = spec.sampled;  // JacoRobot: a few steps suffice for GEMM-bound networks
     h.sirl.epochs = big ? 1 : 20;
     h.pref.epochs = big ? 1 : 10;
@@ -73,6 +78,9 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
     std::string kind = kind_name(t.kind);
     if (t.kind == TaskKind::rep) kind = t.variant.method == Method::sirl ? "rep_sirl" : "rep_pref";
     if (t.kind == TaskKind::tpa) kind = t.frozen ? "tpa_frozen" : "tpa_unfrozen";
+    if (t.kind == TaskKind::study_rep || t.kind == TaskKind::study_heldout) kind = "rep_sirl";
+    // A study TPA task mixes frozen and unfrozen cells; the slower rate bounds its time.
+    if (t.kind == TaskKind::study_tpa || t.kind == TaskKind::study_simulated) kind = "tpa_unfrozen";
     double r = 1e9;
     if (auto it = e.gflops_per_s.find(t.env + "/" + kind); it != e.gflops_per_s.end())
       r = std::max(it->second, 1e-3) * 1e9;

@@ -5,22 +5,14 @@
 #include "datasets/environments.h"
 #include "engine/representation.h"
 #include "engine/tpa.h"
+#include "jobs/study_tasks.h"
+#include "jobs/task_kinds.h"
 #include "kernels/vae.h"
 
 namespace sirl {
 
 const char* kind_name(TaskKind k) {
-  switch (k) {
-    case TaskKind::vae:
-      return "vae";
-    case TaskKind::rep:
-      return "rep";
-    case TaskKind::fpe:
-      return "fpe";
-    case TaskKind::tpa:
-      return "tpa";
-  }
-  return "?";
+  return task_kind(k).name;
 }
 
 int Plan::count(TaskKind k) const {
@@ -194,6 +186,7 @@ Plan make_plan(const Profile& p) {
         }
     }
   }
+  add_study_tasks(plan, p);
   return plan;
 }
 

@@ -11,7 +11,8 @@
 
 namespace sirl {
 
-enum class TaskKind { vae, rep, fpe, tpa };
+// The kinds of task (jobs/task_kinds.h describes each: its name, what it computes, its runner).
+enum class TaskKind { vae, rep, fpe, tpa, study_rep, study_heldout, study_tpa, study_simulated };
 const char* kind_name(TaskKind k);
 
 struct Task {
@@ -24,6 +25,7 @@ struct Task {
   int64_t M = 0;    // tpa
   bool frozen = true;
   bool in_main = false, in_ablation = false;  // tpa: a cell of [tpa] (Fig. 5), [ablation] (Fig. 7)
+  std::string participant;                    // study_heldout, study_tpa
   std::vector<int> deps;                      // indices into Plan::tasks
   double flops = 0;                           // estimated floating-point operations
   double bytes = 0;                           // estimated peak working set

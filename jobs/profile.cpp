@@ -283,8 +283,8 @@ void parse_cells(Reader& r, const toml::table& root, Profile& p) {
   // least one must be there.
   const auto* fpe = r.table(root, "fpe", false);
   const auto* tpa = r.table(root, "tpa", false);
-  if (!fpe && !tpa && !r.table(root, "ablation", false))
-    r.fail(&root, "nothing to run: give at least one of [fpe], [tpa] or [ablation]");
+  if (!fpe && !tpa && !r.table(root, "ablation", false) && !r.table(root, "study", false))
+    r.fail(&root, "nothing to run: give at least one of [fpe], [tpa], [ablation] or [study]");
   if (fpe) {
     r.only_keys(*fpe, "[fpe]", {"methods", "N"});
     p.fpe_methods = r.variants(*fpe, "methods");
@@ -339,15 +339,16 @@ void parse_study(Reader& r, const toml::table& root, Profile& p) {
                 {"env", "trajectories", "users", "similarity", "preference", "beta", "mistake",
                  "epochs", "tpa_epochs", "seeds", "splits", "random"});
     StudyPlan& sp = p.study;
+    CohortConfig& c = sp.cohort;
     sp.enabled = true;
-    sp.env = r.string(*st, "env", sp.env);
-    if (!env_is_study(sp.env)) r.fail(st->get("env"), "[study] env must be " + study_env_names());
-    sp.trajectories = r.integer(*st, "trajectories", 1000, 10, 1'000'000);
-    sp.users = int(r.integer(*st, "users", 10, 2, 10'000));
-    sp.similarity = r.integer(*st, "similarity", 100, 1, 100'000);
-    sp.preference = r.integer(*st, "preference", 100, 4, 100'000);
-    sp.beta = r.number(*st, "beta", 20, 1e-9, std::numeric_limits<double>::infinity());
-    sp.mistake = r.number(*st, "mistake", 0.05, 0, 1);
+    c.env = r.string(*st, "env", c.env);
+    if (!env_is_study(c.env)) r.fail(st->get("env"), "[study] env must be " + study_env_names());
+    c.trajectories = r.integer(*st, "trajectories", 1000, 10, 1'000'000);
+    c.users = int(r.integer(*st, "users", 10, 2, 10'000));
+    c.similarity = r.integer(*st, "similarity", 100, 1, 100'000);
+    c.preference = r.integer(*st, "preference", 100, 4, 100'000);
+    c.beta = r.number(*st, "beta", 20, 1e-9, std::numeric_limits<double>::infinity());
+    c.mistake = r.number(*st, "mistake", 0.05, 0, 1);
     sp.epochs = int(r.integer(*st, "epochs", 3000, 1, 1'000'000));
     sp.tpa_epochs = int(r.integer(*st, "tpa_epochs", 1000, 1, 1'000'000));
     sp.seeds = int(r.integer(*st, "seeds", 5, 2, 100));

@@ -11,6 +11,7 @@
 
 #include "datasets/environments.h"
 #include "datasets/query_bundle.h"
+#include "datasets/study.h"
 #include "engine/hyperparams.h"
 #include "engine/representation.h"
 
@@ -48,13 +49,12 @@ struct EnvAxes {
   bool store_weights = true;
 };
 
-// [study]: the simulated cohort `sirl reproduce` runs through the user-study pipeline (Fig. 6).
+// [study]: the simulated cohort `sirl run` takes through the user-study pipeline (Fig. 6) as
+// task kinds of the plan (jobs/study_tasks.h).
 struct StudyPlan {
   bool enabled = false;
-  std::string env = "jaco2";
-  int64_t trajectories = 1000, similarity = 100, preference = 100;
-  int users = 10, epochs = 3000, tpa_epochs = 1000, seeds = 5, splits = 50;
-  double beta = 20, mistake = 0.05;
+  CohortConfig cohort;  // env, trajectories, users, similarity, preference, beta, mistake
+  int epochs = 3000, tpa_epochs = 1000, seeds = 5, splits = 50;
   bool random_frozen = false;  // random = "unfrozen" (default, the paper's best) or "frozen"
 };
 

@@ -80,10 +80,26 @@ class OutputLock {
   int fd_ = -1;
 };
 
-// The key of the representation a task belongs to (itself for a rep; "" for a VAE).
+// The key of the representation a task belongs to (itself for a rep; "" for a VAE, which every
+// shard that needs it pulls in). The user study's tasks stay together in one group.
 std::string group_of(const Task& t) {
-  if (t.kind == TaskKind::vae) return "";
-  return rep_key(t.env, t.seed, t.variant, t.N);
+  switch (t.kind) {
+    case TaskKind::vae:
+      return "";
+    case TaskKind::rep:
+    case TaskKind::fpe:
+    case TaskKind::tpa:
+      return rep_key(t.env, t.seed, t.variant, t.N);
+    default:
+      return "study";
+  }
+}
+
+// Whether the results file keeps a task's weights: the environment's store_weights (the user
+// study's networks, regenerable and 3.1 M floats on JacoRobot, never).
+bool keeps_weights(const Profile& p, const Task& t) {
+  auto it = p.axes.find(t.env);
+  return group_of(t) != "study" && it != p.axes.end() && it->second.store_weights;
 }
 
 }  // namespace
@@ -292,7 +308,7 @@ std::vector<TaskRecord> finished_records(const Profile& p, const Plan& plan,
     auto it = all.find(plan.tasks[i].key);
     if (it == all.end() || !mine[i]) continue;
     records.push_back(it->second);
-    if (!p.axes.at(plan.tasks[i].env).store_weights) records.back().arrays.erase("params");
+    if (!keeps_weights(p, plan.tasks[i])) records.back().arrays.erase("params");
   }
   return records;
 }

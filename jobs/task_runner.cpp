@@ -9,6 +9,7 @@
 #include "engine/fpe.h"
 #include "engine/methods.h"
 #include "engine/tpa.h"
+#include "jobs/task_kinds.h"
 #include "jobs/task_outputs.h"
 #include "kernels/rng.h"
 
@@ -49,6 +50,27 @@ const QueryBundle& RunContext::bundle(const std::string& env, int64_t seed) {
   });
   std::lock_guard lock(mu_);
   return *bundles_.at(key);
+}
+
+const Study& RunContext::study() {
+  std::call_once(once("study"), [&] {
+    auto s = std::make_shared<const Study>(simulate_cohort(profile_.study.cohort));
+    std::lock_guard lock(mu_);
+    study_ = std::move(s);
+  });
+  std::lock_guard lock(mu_);
+  return *study_;
+}
+
+const Dataset& RunContext::study_dataset() {
+  const Study& s = study();
+  std::call_once(once("study_dataset"), [&] {
+    auto d = std::make_shared<const Dataset>(sirl::study_dataset(s));
+    std::lock_guard lock(mu_);
+    study_dataset_ = std::move(d);
+  });
+  std::lock_guard lock(mu_);
+  return *study_dataset_;
 }
 
 void RunContext::keep(const std::string& key, std::shared_ptr<const Representation> r) {
@@ -99,7 +121,7 @@ TaskRecord::Array array(std::vector<float> data, std::vector<uint64_t> dims = {}
 void describe_cell(const Task& t, TaskRecord& r) {
   r.text["env"] = t.env;
   r.num["seed"] = double(t.seed);
-  if (t.kind == TaskKind::vae) return;
+  if (t.kind != TaskKind::rep && t.kind != TaskKind::fpe && t.kind != TaskKind::tpa) return;
   r.text["method"] = method_name(t.variant.method);
   r.text["variant"] = t.variant.name();
   r.num["vae"] = t.variant.vae;
@@ -128,9 +150,11 @@ double record_embedding(const Representation& rep, const Dataset& d, TaskRecord&
   return rep.shape.forward_flops(int(d.count));
 }
 
+}  // namespace
+
 // Each task kind's computation: inputs from the context, outputs into the record (through
 // task_outputs' put_*, so a resumed run reads back exactly what a fresh one wrote).
-void run_vae(const Task& t, RunContext& ctx, TaskRecord& r) {
+void run_vae_task(const Task& t, RunContext& ctx, TaskRecord& r) {
   const VaeModel v =
       train_vae(ctx.dataset(t.env), ctx.profile().hyper.at(t.env), task_seed(t.env, t.seed, "vae"));
   put_vae(v, r);
@@ -139,7 +163,7 @@ void run_vae(const Task& t, RunContext& ctx, TaskRecord& r) {
   ctx.keep(t.key, std::make_shared<const VaeModel>(get_vae(r)));
 }
 
-void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
+void run_rep_task(const Task& t, RunContext& ctx, TaskRecord& r) {
   const Hyper& h = ctx.profile().hyper.at(t.env);
   const Dataset& d = ctx.dataset(t.env);
   std::shared_ptr<const VaeModel> vae;
@@ -157,7 +181,7 @@ void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
   ctx.keep(t.key, std::make_shared<const Representation>(get_representation(r)));
 }
 
-void run_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
+void run_fpe_task(const Task& t, RunContext& ctx, TaskRecord& r) {
   const std::string rk = rep_key(t.env, t.seed, t.variant, t.N);
   const FpeResult f =
       evaluate_fpe(*ctx.representation(rk), ctx.dataset(t.env), ctx.bundle(t.env, t.seed).fpe);
@@ -166,7 +190,7 @@ void run_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
   r.num["flops"] = 0;
 }
 
-void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
+void run_tpa_task(const Task& t, RunContext& ctx, TaskRecord& r) {
   const std::string rk = rep_key(t.env, t.seed, t.variant, t.N);
   const TpaResult res = evaluate_tpa(
       *ctx.representation(rk), ctx.dataset(t.env), ctx.bundle(t.env, t.seed).tpa,
@@ -198,23 +222,6 @@ void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   r.num["loss_relative_change"] = R ? change[R / 2] : 0.0;  // the median head's
 }
 
-using TaskFn = void (*)(const Task&, RunContext&, TaskRecord&);
-TaskFn task_fn(TaskKind k) {
-  switch (k) {
-    case TaskKind::vae:
-      return run_vae;
-    case TaskKind::rep:
-      return run_rep;
-    case TaskKind::fpe:
-      return run_fpe;
-    case TaskKind::tpa:
-      return run_tpa;
-  }
-  throw std::logic_error("unknown task kind");
-}
-
-}  // namespace
-
 TaskRecord run_task(const Task& t, RunContext& ctx) {
   const auto start = std::chrono::steady_clock::now();
   TaskRecord r;
@@ -222,7 +229,7 @@ TaskRecord run_task(const Task& t, RunContext& ctx) {
   r.kind = kind_name(t.kind);
   describe_cell(t, r);
   try {
-    task_fn(t.kind)(t, ctx, r);
+    task_kind(t.kind).run(t, ctx, r);
   } catch (const std::exception& e) {
     throw std::runtime_error("task " + t.key + ": " + e.what());
   }

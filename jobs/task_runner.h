@@ -11,6 +11,7 @@
 
 #include "datasets/dataset.h"
 #include "datasets/query_bundle.h"
+#include "datasets/study.h"
 #include "engine/representation.h"
 #include "engine/train_vae.h"
 #include "jobs/plan.h"
@@ -26,6 +27,9 @@ class RunContext {
   const Profile& profile() const { return profile_; }
   const Dataset& dataset(const std::string& env);
   const QueryBundle& bundle(const std::string& env, int64_t seed);
+  // The user study's simulated cohort ([study]) and its trajectory space.
+  const Study& study();
+  const Dataset& study_dataset();
   std::shared_ptr<const Representation> representation(const std::string& key);
   std::shared_ptr<const VaeModel> vae(const std::string& env, int64_t seed);
   void keep(const std::string& key, std::shared_ptr<const Representation> r);
@@ -41,9 +45,17 @@ class RunContext {
   std::map<std::string, std::shared_ptr<const QueryBundle>> bundles_;
   std::map<std::string, std::shared_ptr<const Representation>> reps_;
   std::map<std::string, std::shared_ptr<const VaeModel>> vaes_;
+  std::shared_ptr<const Study> study_;
+  std::shared_ptr<const Dataset> study_dataset_;
   std::map<std::string, std::unique_ptr<std::once_flag>> once_;
   std::once_flag& once(const std::string& key);
 };
+
+// The runners of the experiment grid's kinds (jobs/task_kinds.h lists every kind's).
+void run_vae_task(const Task& t, RunContext& ctx, TaskRecord& r);
+void run_rep_task(const Task& t, RunContext& ctx, TaskRecord& r);
+void run_fpe_task(const Task& t, RunContext& ctx, TaskRecord& r);
+void run_tpa_task(const Task& t, RunContext& ctx, TaskRecord& r);
 
 // Computes the task, returning its record (timing included). Throws std::runtime_error naming
 // the task on any failure (divergence, bad inputs).

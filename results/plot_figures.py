@@ -49,7 +49,7 @@ def load_envs(f):
                      "vae_weak_claim": int(a.get("vae_weak_claim", 0))}
 
 
-def title(env):
+def env_title(env):
     return ENV.get(env, {}).get("title", env)
 ALPHA = 0.05
 # What each figure drew, written to figures.json beside them (tests and users check it).
@@ -129,12 +129,12 @@ def plot_fig4(fpe, envs, out, notes):
                 cis.append(ci)
             ms, cis = np.array(ms), np.array(cis)
             if np.isnan(ms).any():
-                notes.append(f"Fig. 4 {title(env)}: {label} missing at N = "
+                notes.append(f"Fig. 4 {env_title(env)}: {label} missing at N = "
                              f"{[x for x, m in zip(xs, ms) if np.isnan(m)]} (drawn as gaps)")
             ax.plot(xs, ms, "o-", color=colour, label=label, ms=4)
             ok = np.isfinite(cis)
             ax.fill_between(np.array(xs)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour, alpha=0.15)
-        ax.set_title(title(env))
+        ax.set_title(env_title(env))
         ax.set_ylim(bottom=0)  # an MSE: CI bands of few seeds may dip below 0
         ax.set_xlabel("representation queries N")
         ax.set_ylabel("FPE (test MSE, normalised features)")
@@ -169,13 +169,13 @@ def plot_fig5(tpa, envs, out, notes):
                 ms = np.array([s[0] for s in stats_])
                 cis = np.array([s[1] for s in stats_])
                 if np.isnan(ms).any():
-                    notes.append(f"Fig. 5 {title(env)} N={n}: {label} missing at M = "
+                    notes.append(f"Fig. 5 {env_title(env)} N={n}: {label} missing at M = "
                                  f"{[m for m, x in zip(Ms, ms) if np.isnan(x)]} (gaps)")
                 ax.plot(Ms, ms, "o-", color=colour, label=label, ms=4)
                 ok = np.isfinite(cis)
                 ax.fill_between(np.array(Ms)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour,
                                 alpha=0.15)
-            ax.set_title(f"{title(env)}, N = {n}")
+            ax.set_title(f"{env_title(env)}, N = {n}")
             ax.set_ylim(0.35, 1.0)
             ax.set_xlabel("preference queries per test reward M")
             if c == 0:
@@ -224,7 +224,7 @@ def plot_fig7(tpa, envs, out, notes):
                     ax.text(xi, 0.41, "n/a" if not applicable else "missing", rotation=90,
                             ha="center", va="bottom", fontsize=7)
                     if applicable:
-                        notes.append(f"Fig. 7 {title(env)}: no {name} cell for "
+                        notes.append(f"Fig. 7 {env_title(env)}: no {name} cell for "
                                      f"{STYLE[b][1]}")
         DRAWN.setdefault("fig7", {})[env] = {
             "N": Nab, "M": Mab,
@@ -234,7 +234,7 @@ def plot_fig7(tpa, envs, out, notes):
         ax.set_xticklabels([STYLE[b][1] for b in bases], fontsize=8)
         ax.set_ylim(0.4, 1.0)
         ax.set_ylabel("TPA (mean over the cells)")
-        ax.set_title(f"{title(env)}, N = {Nab}, M = {Mab}")
+        ax.set_title(f"{env_title(env)}, N = {Nab}, M = {Mab}")
         ax.grid(alpha=0.3, axis="y")
         handles = [matplotlib.patches.Patch(facecolor="white", edgecolor="black", hatch=h, label=c[2])
                    for h, c in zip(hatches, configs)]
@@ -264,7 +264,7 @@ def plot_fig3(f, out, notes):
             env = e
             break
     if env and env != ranked[0]:
-        notes.append(f"Fig. 3: no {title(ranked[0])} SIRL φ in this file; drawn on {title(env)}")
+        notes.append(f"Fig. 3: no {env_title(ranked[0])} SIRL φ in this file; drawn on {env_title(env)}")
     if not keys:
         notes.append("Fig. 3: no SIRL representation of a Fig. 3 environment in this file")
         return None
@@ -318,7 +318,7 @@ def plot_fig3(f, out, notes):
         draw(axes[row][2], farthest, "least similar under φ", "tab:red")
     DRAWN["fig3"] = {"env": env, "representation": key, "queries": [q_far, q_near]}
     marks = "◆ laptop" + (", ■ obstacles" if any(n.startswith("obstacle") for n in onames) else "")
-    fig.suptitle(f"Fig. 3: {title(env)} under a SIRL φ ({key}); {marks}, "
+    fig.suptitle(f"Fig. 3: {env_title(env)} under a SIRL φ ({key}); {marks}, "
                  "end angle in degrees", fontsize=10)
     save(fig, out, "fig3_grid_similar")
     return key
@@ -371,7 +371,7 @@ def plot_learning_curves(f, t, envs, out, notes):
                 ax.plot(ep, np.median(A, 0), "o-" if n < 10 else "-", ms=3, color=colour,
                         label=f"{label} ({len(cs)})")
                 ax.fill_between(ep, A.min(0), A.max(0), color=colour, alpha=0.15)
-            ax.set_title(f"{title(env)}: {title}", fontsize=9)
+            ax.set_title(f"{env_title(env)}: {title}", fontsize=9)
             ax.set_xlabel("epoch")
             ax.set_ylabel("training loss")
             ax.grid(alpha=0.3)
@@ -497,7 +497,7 @@ def report(f, t, envs, out, notes, fig3_key):
             L.append(f"![{cap}]({name}.png)")
     L += ["", "## The paper's claims, checked", ""]
     for env in envs:
-        L.append(f"### {title(env)}")
+        L.append(f"### {env_title(env)}")
         d = fpe[fpe.env == env]
         if not d.empty:
             nmax = d.N.max()
@@ -549,7 +549,7 @@ def report(f, t, envs, out, notes, fig3_key):
                 nmax = x.N.max()
                 v = x[(x.variant == "vae")].set_index("seed").fpe
                 s = x[(x.variant == "sirl") & (x.N == nmax)].set_index("seed").fpe
-                verdict(L, f"Secondary — VAE is weak on {title(env)} (FPE above SIRL's)",
+                verdict(L, f"Secondary — VAE is weak on {env_title(env)} (FPE above SIRL's)",
                         [("vae", *paired(v, s))], ">")
         L.append("")
     if not any(ENV.get(e, {}).get("vae_weak_claim") for e in envs):

@@ -13,6 +13,7 @@
 - pandas reads /tables/* directly; `sirl export --csv` writes the same rows.
 """
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -94,7 +95,16 @@ with tempfile.TemporaryDirectory() as tmp:
     same_runs(one, two, "--threads 1 and --threads 2 give identical files")
     p1 = params(one)
     with h5py.File(one, "r") as f:
-        reps = [k.decode() for k in f["runs_index"][:] if k.decode().endswith("/rep")]
+        keys = [k.decode() for k in f["runs_index"][:]]
+        reps = [k for k in keys if k.endswith("/rep") and not k.startswith("study/")]
+        # The user study ran as tasks of the plan: 2 seeds × (SIRL, Random), 4 users × (Held-out
+        # φ, TPA), one simulated-TPA task; its networks are never kept in the results file.
+        study = [k for k in keys if k.startswith("study/")]
+        assert len(study) == 2 * 2 + 4 * 2 + 1, study
+        assert not any(k in p1 for k in study), "study weights in the results file"
+        seeded = [k for k in study if re.match(r"study/s\d+/(sirl|random)/rep$", k)]
+        assert len(seeded) == 4 and all(0 < f[f"runs/{k}"].attrs["fpe"] < 1 for k in seeded), \
+            "every study φ of a training seed has its FPE"
         for k in reps:
             env = k.split("/")[0]
             T = f[f"datasets/{env}/inputs"].shape[0]

@@ -1,0 +1,35 @@
+// The user study (paper §5) as task kinds of the plan, so it gets commits, resume, MPI and a line
+// in `sirl plan` like every other task. The cohort is simulated from [study] (RunContext::study);
+// the tasks are the pieces of engine/study_analysis.h:
+//   study/s<k>/{sirl,random}/rep  SIRL on the pooled triplets / Random, training seed k, + FPE
+//   study/heldout/<id>/rep        SIRL without participant <id>'s triplets
+//   study/tpa/<id>                Real and Held-out TPA on <id>'s own preferences
+//   study/simulated               TPA on simulated perfect preferences
+// assemble_study puts the committed records back together into the analysis `sirl study
+// analyze` computes in one call (the same numbers: tests/test_jobs.cpp).
+#pragma once
+#include <vector>
+
+#include "engine/study_analysis.h"
+#include "jobs/plan.h"
+#include "jobs/profile.h"
+#include "jobs/task_runner.h"
+#include "results/task_record.h"
+
+namespace sirl {
+
+// The analysis settings of a profile's [study] (one thread per task: tasks run in parallel).
+StudyAnalysisConfig study_config(const Profile& p);
+
+// Adds the study's tasks to the plan (when [study] is there).
+void add_study_tasks(Plan& plan, const Profile& p);
+
+void run_study_rep_task(const Task& t, RunContext& ctx, TaskRecord& r);
+void run_study_heldout_task(const Task& t, RunContext& ctx, TaskRecord& r);
+void run_study_tpa_task(const Task& t, RunContext& ctx, TaskRecord& r);
+void run_study_simulated_task(const Task& t, RunContext& ctx, TaskRecord& r);
+
+// The analysis from the study tasks' records. Throws std::runtime_error naming a missing task.
+StudyAnalysis assemble_study(const Profile& p, const std::vector<TaskRecord>& records);
+
+}  // namespace sirl

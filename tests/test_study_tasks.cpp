@@ -1,0 +1,107 @@
+// jobs/study_tasks: the user study as task kinds of the plan. Run through the batch engine (tasks
+// on two threads, committed, assembled from the results file), it must give exactly the numbers
+// `sirl study analyze` computes in one call on the same cohort.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "engine/study_analysis.h"
+#include "jobs/plan.h"
+#include "jobs/profile.h"
+#include "jobs/run.h"
+#include "jobs/study_tasks.h"
+#include "results/results_file.h"
+
+namespace sirl {
+namespace {
+
+const char* kStudyProfile = R"(
+name = "study-tasks"
+envs = ["grid"]
+seeds = [0]
+[study]
+env = "grid"
+users = 3
+similarity = 30
+preference = 12
+epochs = 4
+tpa_epochs = 4
+seeds = 2
+splits = 3
+)";
+
+void expect_same(const std::vector<double>& a, const std::vector<double>& b, const char* what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (std::isnan(a[i]) && std::isnan(b[i])) continue;
+    EXPECT_EQ(a[i], b[i]) << what << "[" << i << "]";
+  }
+}
+
+TEST(StudyTasks, ThePlanHasOneTaskPerPieceWithItsDependencies) {
+  const Profile p = parse_profile(kStudyProfile, "study.toml");
+  const Plan plan = make_plan(p);
+  // 2 seeds × (SIRL, Random), per user a Held-out φ and a TPA task, one simulated-TPA task.
+  EXPECT_EQ(plan.count(TaskKind::study_rep), 4);
+  EXPECT_EQ(plan.count(TaskKind::study_heldout), 3);
+  EXPECT_EQ(plan.count(TaskKind::study_tpa), 3);
+  EXPECT_EQ(plan.count(TaskKind::study_simulated), 1);
+  EXPECT_EQ(int(plan.tasks.size()), 11);  // no grid cells: the profile has only [study]
+  for (const auto& t : plan.tasks) {
+    EXPECT_GT(t.flops, 0) << t.key;
+    if (t.kind == TaskKind::study_tpa) {
+      ASSERT_EQ(t.deps.size(), 3u);
+      EXPECT_EQ(plan.tasks[t.deps[0]].key, "study/s0/sirl/rep");
+      EXPECT_EQ(plan.tasks[t.deps[1]].key, "study/s0/random/rep");
+      EXPECT_EQ(plan.tasks[t.deps[2]].key, "study/heldout/" + t.participant + "/rep");
+    }
+  }
+}
+
+TEST(StudyTasks, TasksGiveExactlyTheOneCallAnalysis) {
+  const Profile p = parse_profile(kStudyProfile, "study.toml");
+  const std::string out = (std::filesystem::temp_directory_path() /
+                           ("sirl_study_tasks_" + std::to_string(getpid()) + ".h5"))
+                              .string();
+  std::filesystem::remove(out);
+  RunOptions o;
+  o.out = out;
+  o.threads = 2;
+  o.quiet = true;
+  const RunSummary s = run_profile(p, o);
+  EXPECT_EQ(s.ran, 11);
+  const StudyAnalysis tasks = assemble_study(p, read_results_records(out));
+
+  const Study cohort = simulate_cohort(p.study.cohort);
+  StudyAnalysisConfig c = study_config(p);
+  c.threads = 2;  // thread count must not matter
+  const StudyAnalysis one = analyze_study(cohort, study_dataset(cohort), c);
+
+  EXPECT_EQ(tasks.triplets, one.triplets);
+  EXPECT_EQ(tasks.triplets, 3 * 30);
+  EXPECT_EQ(tasks.participants, one.participants);
+  EXPECT_EQ(tasks.both_features, one.both_features);
+  expect_same(tasks.fpe_sirl, one.fpe_sirl, "fpe_sirl");
+  expect_same(tasks.fpe_random, one.fpe_random, "fpe_random");
+  expect_same(tasks.real_sirl, one.real_sirl, "real_sirl");
+  expect_same(tasks.real_random, one.real_random, "real_random");
+  expect_same(tasks.real_random_other, one.real_random_other, "real_random_other");
+  expect_same(tasks.heldout_sirl, one.heldout_sirl, "heldout_sirl");
+  expect_same(tasks.simulated_sirl, one.simulated_sirl, "simulated_sirl");
+  expect_same(tasks.simulated_random, one.simulated_random, "simulated_random");
+  expect_same(tasks.simulated_random_other, one.simulated_random_other, "simulated_random_other");
+  // Not vacuous: every participant was analysed and SIRL's FPE is a real number per seed.
+  EXPECT_EQ(tasks.participants.size(), 3u);
+  ASSERT_EQ(tasks.fpe_sirl.size(), 2u);
+  EXPECT_GT(tasks.fpe_sirl[0], 0);
+
+  // A rerun finds every task committed and computes nothing.
+  EXPECT_EQ(run_profile(p, o).ran, 0);
+  std::filesystem::remove(out);
+}
+
+}  // namespace
+}  // namespace sirl
