@@ -151,6 +151,52 @@ with tempfile.TemporaryDirectory() as tmp:
     assert "0 computed" in out, out
     print("ok: rerunning a finished file recomputes nothing")
 
+    # Kill -9 during `sirl reproduce`'s user-study part (its tasks are the plan's last), rerun:
+    # every committed study task is reused, not recomputed, and the study report is written.
+    study_out = os.path.join(tmp, "study.h5")
+    figs = os.path.join(tmp, "study-figures")
+    child = subprocess.Popen([SIRL, "reproduce", "--profile", SMOKE, "--out", study_out,
+                              "--figures", figs, "--threads", "2"],
+                             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL)
+    staging = study_out + ".tasks"
+    seen, before = set(), {}
+    deadline = time.time() + 120
+    while time.time() < deadline and child.poll() is None and len(before) < 2:
+        files = [f for f in os.listdir(staging) if f.endswith(".h5")] if os.path.isdir(staging) else []
+        for name in files:
+            if name in seen:
+                continue
+            seen.add(name)
+            try:
+                with h5py.File(os.path.join(staging, name), "r") as f:
+                    key = f["r"].attrs["task_key"]
+                    key = key.decode() if isinstance(key, bytes) else key
+                    if key.startswith("study/"):
+                        before[key] = {a: f["r"].attrs[a] for a in f["r"].attrs  # params are dropped later
+                                       if a not in ("seconds", "record_arrays")}
+            except OSError:
+                seen.discard(name)  # renamed into place a moment ago: read it next round
+        time.sleep(0.01)
+    if child.poll() is not None:
+        sys.exit("FAIL: the reproduction finished before its study part could be killed")
+    child.send_signal(signal.SIGKILL)
+    child.wait()
+    assert before, "no study task was committed before the kill"
+    p = run("reproduce", "--profile", SMOKE, "--out", study_out, "--figures", figs,
+            "--threads", "2")
+    out = p.stdout + p.stderr
+    reused = int(re.search(r"\((\d+) reused", out).group(1))
+    assert reused >= len(seen), f"rerun reused {reused} < {len(seen)} committed tasks:\n{out}"
+    with h5py.File(study_out, "r") as f:
+        for key, attrs in before.items():
+            after = f["runs/" + key].attrs
+            for a, v in attrs.items():
+                assert np.array_equal(np.asarray(after[a]), np.asarray(v)), (key, a)
+    assert os.path.exists(os.path.join(figs, "study", "study_report.md"))
+    print(f"ok: killed during the study part ({len(before)} study tasks committed), rerun reused "
+          f"{reused} tasks and kept the committed study results; the study report is written")
+
     # A results file that lost some cells: the JacoRobot cells need φ's weights, which the file
     # does not keep (store_weights = false), so their representations are computed again.
     holed = os.path.join(tmp, "holed.h5")
