@@ -87,6 +87,21 @@ TEST(Plan, TaskCountsMatchTheGrid) {
   for (const auto& t : plan.tasks) EXPECT_TRUE(keys.insert(t.key).second) << t.key;
 }
 
+TEST(Plan, CostModelCountsTheFlopsByHand) {
+  const Plan plan = make_plan(parse_profile(kProfile, "t.toml"));
+  // φ 19→128→128→6: 2·(19·128 + 128·128 + 128·6) = 39,168 FLOPs per sample forward.
+  const double phi = 2.0 * (19 * 128 + 128 * 128 + 128 * 6);
+  // SIRL at N = 100 for 7 epochs: 3 (fwd + bwd) × 3N samples × epochs, plus embedding Ξ (1960).
+  EXPECT_DOUBLE_EQ(plan.tasks[plan.index.at("grid/s0/sirl/N100/rep")].flops,
+                   3 * phi * 300 * 7 + phi * 1960);
+  // Random trains nothing: only the embedding of Ξ.
+  EXPECT_DOUBLE_EQ(plan.tasks[plan.index.at("grid/s0/random/rep")].flops, phi * 1960);
+  // A frozen TPA cell, head 6→32→16→1 (1,440 FLOPs forward), 20 heads × 2M = 20 samples × 500.
+  const double head = 2.0 * (6 * 32 + 32 * 16 + 16 * 1);
+  EXPECT_DOUBLE_EQ(plan.tasks[plan.index.at("grid/s0/sirl/N100/tpa/M10/frozen")].flops,
+                   20 * 3 * head * 20 * 500);
+}
+
 TEST(Plan, ShardsPartitionTheWorkAndKeepDependencies) {
   const Plan plan = make_plan(parse_profile(kProfile, "t.toml"));
   std::vector<int> owners(plan.tasks.size(), 0);

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <set>
+#include <stdexcept>
 
 #include "results/h5.h"
 #include "results/results_file.h"
@@ -82,6 +83,68 @@ TEST(ResultsFile, TheCurrentEngineWritesItsVersionAndReadsItBack) {
     EXPECT_EQ(again[i].num, records[i].num);
   }
   fs::remove(p);
+}
+
+TaskRecord fpe_record(const std::string& key, double fpe) {
+  TaskRecord r;
+  r.key = key;
+  r.kind = "fpe";
+  r.text = {{"env", "grid"}, {"method", "sirl"}, {"variant", "sirl+vae"}};
+  r.num = {{"vae", 1}, {"N", 100}, {"seed", 3}, {"fpe", fpe}, {"train_mse", 0.5},
+           {"seconds", 2}, {"flops", 4e9}};
+  return r;
+}
+
+const H5Table::Column& column(const H5Table& t, const std::string& name) {
+  for (const auto& c : t.columns)
+    if (c.name == name) return c;
+  throw std::runtime_error("no column " + name);
+}
+
+TEST(ResultsFile, TablesHoldOneRowPerCellWithTheRecordsValues) {
+  std::vector<TaskRecord> records{fpe_record("a/fpe", 0.25), fpe_record("b/fpe", 0.75)};
+  TaskRecord v;  // a VAE with a 3-epoch curve and 2 latents
+  v.key = "grid/s3/vae";
+  v.kind = "vae";
+  v.text = {{"env", "grid"}, {"elbo", "sum"}};
+  v.num = {{"seed", 3}, {"converged", 1}, {"loss_relative_change", 0.001},
+           {"reconstruction_mse", 0.2}, {"seconds", 0}, {"flops", 1}};
+  v.arrays["loss_curve"] = {{3}, {9, 8, 7}};
+  v.arrays["kl_per_dim"] = {{2}, {0.5f, 0.0f}};
+  records.push_back(v);
+  const ResultTables t = build_tables(records);
+
+  ASSERT_EQ(t.fpe.rows(), 2u);
+  EXPECT_EQ(column(t.fpe, "variant").strings, (std::vector<std::string>{"sirl+vae", "sirl+vae"}));
+  EXPECT_EQ(column(t.fpe, "N").ints, (std::vector<int64_t>{100, 100}));
+  EXPECT_EQ(column(t.fpe, "fpe").doubles, (std::vector<double>{0.25, 0.75}));
+  EXPECT_EQ(t.tpa.rows(), 0u);
+  // timings: every record; GFLOP/s = flops / seconds, 0 when no time was measured.
+  ASSERT_EQ(t.timings.rows(), 3u);
+  EXPECT_EQ(column(t.timings, "gflops").doubles, (std::vector<double>{2, 2, 0}));
+  // training: only what trained (the VAE); final loss = the curve's last epoch.
+  ASSERT_EQ(t.training.rows(), 1u);
+  EXPECT_EQ(column(t.training, "epochs").ints, (std::vector<int64_t>{3}));
+  EXPECT_EQ(column(t.training, "final_loss").doubles, (std::vector<double>{7}));
+  EXPECT_EQ(column(t.training, "variant").strings, (std::vector<std::string>{"vae"}));
+  EXPECT_EQ(column(t.training, "dead_fraction").doubles, (std::vector<double>{-1}));
+  // vae_latents: one row per latent dimension.
+  ASSERT_EQ(t.vae_latents.rows(), 2u);
+  EXPECT_EQ(column(t.vae_latents, "dim").ints, (std::vector<int64_t>{0, 1}));
+  EXPECT_EQ(column(t.vae_latents, "kl").doubles, (std::vector<double>{0.5, 0.0}));
+}
+
+TEST(ResultsFile, ARecordMissingAColumnsKeyIsAnErrorNotAZero) {
+  TaskRecord r = fpe_record("grid/s3/sirl+vae/N100/fpe", 0.25);
+  r.num.erase("train_mse");
+  try {
+    build_tables({r});
+    ADD_FAILURE() << "a record without train_mse made a table";
+  } catch (const H5Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("grid/s3/sirl+vae/N100/fpe"), std::string::npos) << m;
+    EXPECT_NE(m.find("train_mse"), std::string::npos) << m;
+  }
 }
 
 }  // namespace
