@@ -243,16 +243,28 @@ TEST(Scheduler, RunsEveryPendingTaskAfterItsDependencies) {
 }
 
 TEST(Scheduler, StopsAtTheFirstErrorAndRethrowsIt) {
-  const Plan plan = make_plan(parse_profile(kProfile, "t.toml"));
+  // 40 independent tasks (none waits for another, so only the stop flag can keep them from
+  // running) on one thread: the first task to run throws, and no other task may start after it.
+  Plan plan;
+  for (int i = 0; i < 40; ++i) {
+    Task t;
+    t.key = "t" + std::to_string(i);
+    t.flops = 40 - i;  // t0 has the highest rank: it runs first
+    plan.index[t.key] = i;
+    plan.tasks.push_back(t);
+  }
   std::atomic<int> ran{0};
-  std::vector<char> pending(plan.tasks.size(), 1);
-  EXPECT_THROW(run_dag(plan, pending, 2,
-                       [&](int i) {
-                         ++ran;
-                         if (plan.tasks[i].kind == TaskKind::vae) throw std::runtime_error("boom");
-                       }),
-               std::runtime_error);
-  EXPECT_LT(ran.load(), int(plan.tasks.size()));
+  const std::vector<char> pending(plan.tasks.size(), 1);
+  try {
+    run_dag(plan, pending, 1, [&](int i) {
+      ++ran;
+      throw std::runtime_error("boom in " + plan.tasks[i].key);
+    });
+    ADD_FAILURE() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "boom in t0");
+  }
+  EXPECT_EQ(ran.load(), 1);
 }
 
 // The resumed path rebuilds φ and the VAE from records with the same get_* the fresh path uses;
