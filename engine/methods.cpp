@@ -92,7 +92,8 @@ void train_preference(const Dataset& d, const QueryBundle& bundle, const MethodC
                                                human.data(), b, float(cfg.hyper.pref_l2),
                                                cfg.threads);
       });
-  rep.params.assign(t.params.begin(), t.params.begin() + P);  // φ only; the heads are dropped
+  rep.params.assign(t.params.begin(), t.params.begin() + P);  // φ; the heads on the side
+  rep.heads.assign(t.params.begin() + P, t.params.end());
 }
 
 }  // namespace

@@ -27,6 +27,9 @@ struct Representation {
   bool vae_pretrain = false;
   int64_t queries = 0;            // N used for training (0 for VAE and Random)
   std::vector<float> loss_curve;  // mean training loss per epoch (empty for Random)
+  // Preference methods: the K reward heads trained with φ, [K, d + 1] (w, c) per human. Kept in
+  // memory for inspection; not part of a task's record (FPE and TPA use φ alone).
+  std::vector<float> heads;
   double train_flops = 0;         // multiply-adds ×2 spent training (excluding VAE pre-training)
   int dim() const { return shape.out(); }
 };

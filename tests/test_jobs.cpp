@@ -87,6 +87,30 @@ TEST(Plan, TaskCountsMatchTheGrid) {
   for (const auto& t : plan.tasks) EXPECT_TRUE(keys.insert(t.key).second) << t.key;
 }
 
+// frozen = "best" (the default): SIRL frozen, every other method unfrozen (the paper's best
+// configurations, Fig. 5); an explicit list runs the listed modes for every method.
+TEST(Plan, FrozenBestIsSirlFrozenAndTheOthersUnfrozen) {
+  const Plan plan = make_plan(parse_profile(kProfile, "t.toml"));
+  int sirl = 0, others = 0;
+  for (const auto& t : plan.tasks) {
+    if (t.kind != TaskKind::tpa || !t.in_main) continue;
+    if (t.variant.method == Method::sirl) {
+      EXPECT_TRUE(t.frozen) << t.key;
+      ++sirl;
+    } else {
+      EXPECT_FALSE(t.frozen) << t.key;
+      ++others;
+    }
+  }
+  EXPECT_GT(sirl, 0);
+  EXPECT_GT(others, 0);
+  std::string both = kProfile;
+  both.replace(both.find("M = [10, 80]"), 12, "M = [10, 80]\nfrozen = [true, false]");
+  const Plan p2 = make_plan(parse_profile(both, "t.toml"));
+  EXPECT_TRUE(p2.index.count("grid/s0/multipref10/N100/tpa/M10/frozen"));
+  EXPECT_TRUE(p2.index.count("grid/s0/sirl/N100/tpa/M10/unfrozen"));
+}
+
 TEST(Plan, CostModelCountsTheFlopsByHand) {
   const Plan plan = make_plan(parse_profile(kProfile, "t.toml"));
   // φ 19→128→128→6: 2·(19·128 + 128·128 + 128·6) = 39,168 FLOPs per sample forward.

@@ -81,6 +81,15 @@ TEST(BradleyTerry, AccuracyCountsAgreement) {
   EXPECT_DOUBLE_EQ(preference_accuracy(r.data(), l.data(), 3), 2.0 / 3);
 }
 
+TEST(BradleyTerry, AccuracySkipsTiedAnswersAndCountsEqualRewardsAsWrong) {
+  // Pairs 1 and 3 are answered "equal" (0.5): skipped, not counted right or wrong. Pair 2 has
+  // equal predicted rewards for a strict answer: not a win for A, so right only if B preferred.
+  std::vector<float> r = {2, 0, 3, 9, /*B:*/ 1, 1, 3, 0}, l = {1, 0.5f, 1, 0.5f};
+  EXPECT_DOUBLE_EQ(preference_accuracy(r.data(), l.data(), 4), 1.0 / 2);  // 1 right of 2
+  l = {0.5f, 0.5f, 0.5f, 0.5f};
+  EXPECT_DOUBLE_EQ(preference_accuracy(r.data(), l.data(), 4), 0.0);  // nothing to score
+}
+
 TEST(Vae, GradientMatchesFiniteDifferencesInBothElboForms) {
   const VaeShape s = make_vae_shape(5, {8, 7}, 3);
   EXPECT_EQ(s.encoder.widths, (std::vector<int>{5, 8, 7, 6}));
