@@ -116,6 +116,33 @@ with tempfile.TemporaryDirectory() as tmp:
         assert vaes and all(f[f"runs/{k}/kl_per_dim"].shape == (6,) for k in vaes)
     print(f"ok: {len(reps)} embeddings [T, 6] stored; weights for GridRobot only ({len(p1)} arrays)")
 
+    # An independent oracle for FPE: numpy's least squares on the stored embedding, the stored
+    # normalised features and the stored split (the queries of the first seed) must give the
+    # table's fpe and train_mse for every seed-0 cell (swapped columns, a probe fitted on the
+    # test rows, or a wrong target would all differ far beyond the tolerance, which only absorbs
+    # float32 embeddings against double least squares).
+    with h5py.File(one, "r") as f:
+        fpe = pd.DataFrame(f["tables/fpe"][:])
+        for c in ("env", "variant"):
+            fpe[c] = fpe[c].str.decode("utf-8")
+        checked = 0
+        for _, row in fpe[fpe.seed == 0].iterrows():
+            g = f"datasets/{row.env}"
+            key = f"{row.env}/s0/{row.variant}" + (f"/N{row.N}" if row.N else "") + "/rep"
+            E = f[f"runs/{key}/embedding"][:].astype(np.float64)
+            Y = f[f"{g}/features"][:].astype(np.float64)
+            tr, te = f[f"{g}/queries/fpe/train"][:], f[f"{g}/queries/fpe/test"][:]
+            A = np.hstack([E, np.ones((len(E), 1))])
+            beta = np.linalg.lstsq(A[tr], Y[tr], rcond=None)[0]
+            test_mse = float(np.mean((A[te] @ beta - Y[te]) ** 2))
+            train_mse = float(np.mean((A[tr] @ beta - Y[tr]) ** 2))
+            assert abs(test_mse - row.fpe) <= 1e-4 * max(1e-3, test_mse), (key, test_mse, row.fpe)
+            assert abs(train_mse - row.train_mse) <= 1e-4 * max(1e-3, train_mse), (key, train_mse)
+            checked += 1
+        assert checked >= 10, checked
+    print(f"ok: FPE and train_mse of {checked} cells equal numpy's least squares on the stored "
+          "embedding and split")
+
     # pandas reads the tables as the README promises; the table covers the grid.
     tpa = pd.DataFrame(h5py.File(one, "r")["tables/tpa"][:])
     for col in ("env", "method", "variant", "vae", "frozen", "N", "M", "seed", "tpa", "tpa_std"):
