@@ -305,12 +305,45 @@ with tempfile.TemporaryDirectory() as tmp:
     c = pd.read_csv(os.path.join(csv, "tpa.csv"))
     assert len(c) == len(ref["tpa"]) and np.allclose(c["tpa"], ref["tpa"]["tpa"])
     with h5py.File(one, "r") as f:
-        for name in ("training", "vae_latents"):
+        # Every CSV: the same rows and every numeric column equal to the table's (17 digits).
+        for name in ("fpe", "tpa", "timings", "training", "vae_latents"):
             t = pd.DataFrame(f["tables/" + name][:])
-            c = pd.read_csv(os.path.join(csv, name + ".csv"))
+            c = pd.read_csv(os.path.join(csv, name + ".csv"), float_precision="round_trip")
             assert len(t) > 0 and len(c) == len(t), (name, len(c), len(t))
-            col = "final_loss" if name == "training" else "kl"
-            assert np.allclose(c[col], t[col]), name
-    print("ok: export --csv (fpe, tpa, timings, training, vae_latents)")
+            assert list(c.columns) == list(t.columns), (name, list(c.columns))
+            for col in t.columns:
+                if t[col].dtype == object:
+                    assert list(c[col].astype(str)) == [v.decode() for v in t[col]], (name, col)
+                else:
+                    assert np.array_equal(c[col].to_numpy(), t[col].to_numpy()), (name, col)
+    print("ok: export --csv writes every table, every column equal (fpe, tpa, timings, training, "
+          "vae_latents)")
+
+    # Another engine version wrote the file: refused, and --force starts over.
+    with h5py.File(one, "r+") as f:
+        f.attrs["engine_version"] = "0.0.1"
+    p = run("run", SMOKE, "--out", one, "--quiet", check=False)
+    assert p.returncode == 2 and "by engine 0.0.1" in p.stderr and "--force" in p.stderr, p.stderr
+    out = run("run", SMOKE, "--out", one, "--force").stdout
+    assert "(0 reused" in out, out
+    same(ref, tables(one), "a file of another engine version, --force: recomputed, same tables")
+
+    # The staging folder of an interrupted run of another profile: refused, --force discards it.
+    fresh = os.path.join(tmp, "fresh.h5")
+    child = subprocess.Popen([SIRL, "run", other, "--out", fresh, "--threads", "1", "--quiet"],
+                             stdin=subprocess.DEVNULL)
+    deadline = time.time() + 60
+    while time.time() < deadline and child.poll() is None:
+        if os.path.isdir(fresh + ".tasks") and any(n.endswith(".h5") for n in os.listdir(fresh + ".tasks")):
+            break
+        time.sleep(0.01)
+    child.send_signal(signal.SIGKILL)
+    child.wait()
+    assert os.path.isdir(fresh + ".tasks") and not os.path.exists(fresh)
+    p = run("run", SMOKE, "--out", fresh, "--quiet", check=False)
+    assert p.returncode == 2 and "another profile or engine" in p.stderr, p.stderr
+    out = run("run", SMOKE, "--out", fresh, "--force").stdout
+    assert "(0 reused" in out, out
+    same(ref, tables(fresh), "another profile's staging folder, --force: discarded, same tables")
 
 print("PASS")
