@@ -17,7 +17,7 @@ fs::path temp(const std::string& name) {
   return fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()) + ".h5");
 }
 
-QueryBundle small_bundle(const Dataset& d) {
+QueryBundle small_bundle(const Dataset& d, uint64_t seed = 42) {
   QueryBundleConfig c;
   c.similarity = 100;
   c.preference = 100;
@@ -25,7 +25,7 @@ QueryBundle small_bundle(const Dataset& d) {
   c.fpe_trajectories = 300;
   c.teacher.beta = 20;
   c.teacher.mask = {1, 0, 1, 0};
-  return make_query_bundle(d, c, 42);
+  return make_query_bundle(d, c, seed);
 }
 
 TEST(DatasetStore, RoundTripIsExact) {
@@ -67,11 +67,23 @@ TEST(DatasetStore, RoundTripIsExact) {
   fs::remove(path);
 }
 
-TEST(DatasetStore, SameSeedSameBundle) {
+TEST(DatasetStore, SameSeedSameBundleAnotherSeedAnotherBundle) {
   const Dataset d = make_grid_dataset();
-  const auto a = small_bundle(d), b = small_bundle(d);
+  const auto a = small_bundle(d), b = small_bundle(d), c = small_bundle(d, 43);
   EXPECT_EQ(a.similarity.idx, b.similarity.idx);
+  EXPECT_EQ(a.tpa[3].pairs.pairs, b.tpa[3].pairs.pairs);
   EXPECT_EQ(a.tpa[3].pairs.label, b.tpa[3].pairs.label);
+  EXPECT_EQ(a.rewards.test.weights, b.rewards.test.weights);
+  EXPECT_EQ(a.fpe.train, b.fpe.train);
+  // Every query set and reward set changes with the seed (a stream ignoring it would not).
+  EXPECT_NE(a.similarity.idx, c.similarity.idx);
+  EXPECT_NE(a.singlepref.pairs, c.singlepref.pairs);
+  EXPECT_NE(a.multipref10.pairs, c.multipref10.pairs);
+  EXPECT_NE(a.multipref50.pairs, c.multipref50.pairs);
+  EXPECT_NE(a.tpa[3].pairs.pairs, c.tpa[3].pairs.pairs);
+  EXPECT_NE(a.rewards.test.weights, c.rewards.test.weights);
+  EXPECT_NE(a.rewards.multipref10.weights, c.rewards.multipref10.weights);
+  EXPECT_NE(a.fpe.train, c.fpe.train);
 }
 
 TEST(DatasetStore, WrongShapeIsAClearError) {

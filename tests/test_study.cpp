@@ -58,6 +58,34 @@ TEST(Study, SimulatedCohortOfMildlyNoisyNovicesFindsSirlFpeBelowRandom) {
   EXPECT_EQ(a.simulated_sirl.size(), 10u);
 }
 
+// The cross-validated Real and Held-out TPA against an oracle φ: the true features themselves.
+// Each participant's reward is one feature and the teacher nearly perfect (β = 50, 2 % mistakes),
+// so a head on the true features must score well above chance on held-out answers (measured
+// 0.847–0.93; Boltzmann noise on close pairs costs the rest), and a frozen constant φ (nothing to
+// learn from) no better than chance.
+TEST(Study, ParticipantTpaOnTheTrueFeaturesIsNearTheTeachersAccuracy) {
+  const Study s = simulated_cohort(3, 50.0, 0.02);
+  Dataset d = study_dataset(s);
+  d.inputs = d.features;  // φ = identity on the normalised true features
+  d.input_dim = d.feature_count();
+  Representation truth;
+  truth.shape = MlpShape{{4, 4}};
+  truth.params = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0};
+  Representation constant = truth;
+  std::fill(constant.params.begin(), constant.params.end(), 0.f);
+  StudyAnalysisConfig c = small_analysis(20, 4);
+  c.random_frozen = true;  // unfrozen, the constant φ's weights would train
+  c.hyper.tpa.epochs = 200;
+  c.hyper.tpa_l2 = 0;  // the paper's L2 caps even the true features' TPA (Tpa tests)
+  for (const auto& p : s.participants) {
+    const ParticipantTpa t = study_participant_tpa(p, d, truth, constant, truth, c);
+    ASSERT_TRUE(t.ok);
+    EXPECT_GT(t.real_sirl, 0.8) << p.id;
+    EXPECT_EQ(t.heldout_sirl, t.real_sirl) << p.id;  // the same φ and splits
+    EXPECT_LE(t.real_random, 0.6) << p.id;           // constant φ: one reward for all
+  }
+}
+
 // Random is the paper's best realistic baseline, unfrozen (its Fig. 5): the default. The
 // switch swaps which mode H4 uses and which is reported beside it, nothing else.
 TEST(Study, RandomIsUnfrozenByDefaultAndTheOtherModeIsReportedBesideIt) {
@@ -119,12 +147,31 @@ TEST(Study, FileRoundTripsAndRejectsForeignFiles) {
   namespace fs = std::filesystem;
   const std::string path = (fs::temp_directory_path() / "sirl_study_roundtrip.h5").string();
   Study s = simulated_cohort(3, 20.0, 0.05);
+  s.trajectories = 777;  // not the defaults: the file must carry them
+  s.data_seed = 42;
+  for (auto& p : s.participants) {  // distinct response times and timestamps per answer
+    p.similarity_ms.resize(p.similarity_answer.size());
+    p.similarity_time.resize(p.similarity_answer.size());
+    p.preference_ms.resize(p.preference_answer.size());
+    p.preference_time.resize(p.preference_answer.size());
+    for (size_t i = 0; i < p.similarity_ms.size(); ++i) {
+      p.similarity_ms[i] = 900.0f + i;
+      p.similarity_time[i] = 1.7e9 + 0.5 * i;
+    }
+    for (size_t i = 0; i < p.preference_ms.size(); ++i) {
+      p.preference_ms[i] = 100.0f + i;
+      p.preference_time[i] = 1.8e9 + 0.25 * i;
+    }
+  }
   s.participants[1].preference_answer.resize(7);  // a participant halfway through phase 2
   s.participants[1].preference_ms.resize(7);
   s.participants[1].preference_time.resize(7);
   s.participants[2].scenario = "Stay \"far\" from the laptop.";
   write_study(path, s);
   const Study r = read_study(path);
+  EXPECT_EQ(r.env, "grid");
+  EXPECT_EQ(r.trajectories, 777);
+  EXPECT_EQ(r.data_seed, 42u);
   ASSERT_EQ(r.participants.size(), 3u);
   for (size_t i = 0; i < 3; ++i) {
     const auto &a = s.participants[i], &b = r.participants[i];
@@ -137,6 +184,9 @@ TEST(Study, FileRoundTripsAndRejectsForeignFiles) {
     EXPECT_EQ(a.similarity_answer, b.similarity_answer);
     EXPECT_EQ(a.preference_answer, b.preference_answer);
     EXPECT_EQ(a.similarity_ms, b.similarity_ms);
+    EXPECT_EQ(a.preference_ms, b.preference_ms);
+    EXPECT_EQ(a.similarity_time, b.similarity_time);
+    EXPECT_EQ(a.preference_time, b.preference_time);
     EXPECT_EQ(a.reward, b.reward);
   }
   EXPECT_FALSE(fs::exists(path + ".tmp"));
