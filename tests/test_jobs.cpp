@@ -373,9 +373,11 @@ TEST(TaskOutputs, RepresentationAndVaeRoundTripThroughARecordAndAFile) {
   std::filesystem::remove(path);
 }
 
-TEST(TaskStore, CommitsAreDurableAndRoundTrip) {
+// (Durability under a crash is batch_engine.py's kill -9 test; this one is the file format.)
+TEST(TaskStore, CommitsRoundTripAndTornCommitsAreSwept) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / "sirl_task_store_test";
+  const fs::path dir =
+      fs::temp_directory_path() / ("sirl_task_store_test_" + std::to_string(getpid()));
   fs::remove_all(dir);
   TaskRecord r;
   r.key = "grid/s0/sirl/N100/tpa/M10/frozen";

@@ -1,6 +1,8 @@
 // The user study's data, file and analysis (issue #9).
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -145,7 +147,9 @@ TEST(Study, SimulatedAnswersFollowTheTeacher) {
 
 TEST(Study, FileRoundTripsAndRejectsForeignFiles) {
   namespace fs = std::filesystem;
-  const std::string path = (fs::temp_directory_path() / "sirl_study_roundtrip.h5").string();
+  const std::string path =
+      (fs::temp_directory_path() / ("sirl_study_roundtrip_" + std::to_string(getpid()) + ".h5"))
+          .string();
   Study s = simulated_cohort(3, 20.0, 0.05);
   s.trajectories = 777;  // not the defaults: the file must carry them
   s.data_seed = 42;
@@ -212,7 +216,7 @@ namespace sirl {
 namespace {
 
 std::string write_temp(const std::string& name, const std::string& text) {
-  const auto p = std::filesystem::temp_directory_path() / name;
+  const auto p = std::filesystem::temp_directory_path() / (std::to_string(getpid()) + "_" + name);
   std::ofstream(p) << text;
   return p.string();
 }
