@@ -72,10 +72,11 @@ void mpi_abort(int code) {
   std::exit(code);
 }
 
-void mpi_dispatch(const Plan& plan, const std::vector<char>& pending,
-                  const std::function<void(int, const TaskRecord&)>& on_result) {
+std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending,
+                              const std::function<void(int, const TaskRecord&)>& on_result) {
   int size = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
+  std::vector<int> ran(size, 0);  // results received per rank
   ReadyQueue queue(plan, pending);
   std::deque<int> idle;
   std::vector<int> running(size, -1);
@@ -111,10 +112,12 @@ void mpi_dispatch(const Plan& plan, const std::vector<char>& pending,
                                  " for task " + plan.tasks[i].key);
       on_result(i, rec);
       queue.finish(i);
+      ++ran[w];
     }
   }
   mpi_release_workers();
   if (!error.empty()) throw std::runtime_error(error);
+  return ran;
 }
 
 void mpi_work(const Plan& plan, RunContext& ctx) {

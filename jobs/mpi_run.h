@@ -25,9 +25,10 @@ void mpi_release_workers();
 [[noreturn]] void mpi_abort(int code);
 
 // Rank 0: runs the pending tasks on the workers; `on_result` (called on rank 0, one at a time)
-// commits each record. Rethrows the first worker error after the running tasks finish.
-void mpi_dispatch(const Plan& plan, const std::vector<char>& pending,
-                  const std::function<void(int, const TaskRecord&)>& on_result);
+// commits each record. Rethrows the first worker error after the running tasks finish. Returns
+// the tasks each rank ran ([size]; rank 0 runs none).
+std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending,
+                              const std::function<void(int, const TaskRecord&)>& on_result);
 // Ranks > 0: computes the tasks rank 0 sends until told to stop.
 void mpi_work(const Plan& plan, RunContext& ctx);
 

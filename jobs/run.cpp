@@ -265,7 +265,8 @@ PendingSet find_pending(const Plan& plan, const std::vector<char>& mine,
 // Runs the pending tasks (threads, or MPI workers), committing each as it finishes. Returns the
 // first failure instead of throwing, so the caller still writes what finished.
 std::exception_ptr execute(const Plan& plan, const std::vector<char>& pending, RunContext& ctx,
-                           TaskStore& store, int threads, int mpi_size, Progress& progress) {
+                           TaskStore& store, int threads, int mpi_size, Progress& progress,
+                           bool quiet) {
   const int n = int(plan.tasks.size());
   // Cached outputs are released when their last pending dependent finishes.
   std::vector<int> users(n, 0);
@@ -275,10 +276,17 @@ std::exception_ptr execute(const Plan& plan, const std::vector<char>& pending, R
   std::mutex users_mu;
   try {
     if (mpi_size > 1) {
-      mpi_dispatch(plan, pending, [&](int i, const TaskRecord& rec) {
+      const std::vector<int> ran = mpi_dispatch(plan, pending, [&](int i, const TaskRecord& rec) {
         store.commit(rec);
         progress.task_done(rec.key, plan.tasks[i].flops, rec.num.at("seconds"));
       });
+      if (!quiet) {
+        std::string per;
+        for (size_t w = 1; w < ran.size(); ++w)
+          per += (w > 1 ? ", " : "") + std::string("rank ") + std::to_string(w) + " " +
+                 std::to_string(ran[w]);
+        std::fprintf(stderr, "sirl run: tasks per MPI worker: %s\n", per.c_str());
+      }
     } else {
       run_dag(plan, pending, threads, [&](int i) {
         const Task& t = plan.tasks[i];
@@ -344,7 +352,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
                  mpi_size > 1 ? "MPI workers" : "threads", o.out.c_str());
   Progress progress(to_run, ps.flops, o.quiet);
   const std::exception_ptr failure =
-      execute(plan, ps.pending, ctx, store, threads, mpi_size, progress);
+      execute(plan, ps.pending, ctx, store, threads, mpi_size, progress, o.quiet);
   progress.finish();
 
   // Assemble whatever is finished (a partial file plots with gaps; a rerun completes it).

@@ -2,9 +2,11 @@
 """`mpirun --oversubscribe -np 3 sirl run smoke` (rank 0 dispatches and writes, 2 workers pull
 tasks) gives the same tables and weights as a single-process run (ctest, Open MPI on loopback)."""
 import os
+import re
 import subprocess
 import sys
 import tempfile
+import time
 
 import h5py
 import numpy as np
@@ -47,4 +49,29 @@ with tempfile.TemporaryDirectory() as tmp:
     assert ws.keys() == wm.keys() and all(np.array_equal(ws[k], wm[k]) for k in ws)
     assert am["threads"] == 2, am["threads"]
     print(f"ok: MPI (2 workers) == single process: {len(ts['tpa'])} TPA rows, {len(ws)} weight arrays")
+    # Both workers pulled tasks, and between them they ran every task.
+    m = re.search(r"tasks per MPI worker: rank 1 (\d+), rank 2 (\d+)", p.stderr)
+    assert m, p.stderr
+    r1, r2 = int(m.group(1)), int(m.group(2))
+    total = int(re.search(r"(\d+) tasks \(0 already done\)", p.stderr).group(1))
+    assert r1 > 0 and r2 > 0 and r1 + r2 == total, (r1, r2, total)
+    print(f"ok: the workers ran {r1} and {r2} of the {total} tasks")
+
+    # A task that fails on a worker: rank 0 stops dispatching, releases the workers (mpirun
+    # returns instead of hanging), names the failing task, and writes what finished.
+    bad = os.path.join(tmp, "diverge.toml")
+    with open(SMOKE) as f:
+        text = f.read()
+    text = text.replace('[hyper.grid]', '[hyper.grid]\n"sirl.lr" = 1e30', 1)
+    with open(bad, "w") as f:
+        f.write(text)
+    failed = os.path.join(tmp, "failed.h5")
+    t0 = time.time()
+    q = subprocess.run(["mpirun", "--oversubscribe", "-np", "3", SIRL, "run", bad, "--out", failed],
+                       capture_output=True, text=True, env=env, stdin=subprocess.DEVNULL, timeout=120)
+    assert q.returncode != 0 and "grid/s" in q.stderr and "sirl" in q.stderr, q.stderr[-2000:]
+    with h5py.File(failed, "r") as f:
+        assert f.attrs["complete"] == 0 and f.attrs["tasks_done"] > 0, dict(f.attrs)
+    print(f"ok: a failing task under MPI ends the run in {time.time() - t0:.0f} s, named in the "
+          "error, with the finished tasks written")
 print("PASS")
