@@ -9,22 +9,27 @@
 //                                response_ms → 200, or 400/403 with a message and nothing written
 #include "app/study_server.h"
 
+#include <arpa/inet.h>
 #include <httplib.h>
+#include <netinet/in.h>
 #include <nlohmann/json.hpp>
 
 #include <CLI/CLI.hpp>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <sstream>
 
 #include "app/commands.h"
 #include "datasets/environments.h"
 #include "datasets/study.h"
 #include "datasets/study_import.h"
+#include "results/file_lock.h"
 #include "results/h5.h"
 #include "results/study_store.h"
 
@@ -62,6 +67,24 @@ std::string text(const json& j) {
 // Rows of Ξ as a JSON array.
 json ids(const int32_t* v, int n) {
   return json(std::vector<int32_t>(v, v + n));
+}
+
+// Strict request numbers: the whole field, plain decimal, nothing else ("5abc", "1e3" for an
+// integer, " 1", "0x1", "-1" for an index are all refused).
+bool parse_index(const std::string& text, int64_t& out) {
+  if (text.empty() || text.size() > 18) return false;
+  for (char c : text)
+    if (c < '0' || c > '9') return false;
+  out = std::stoll(text);
+  return true;
+}
+bool parse_decimal(const std::string& text, double& out) {
+  if (text.empty() || text.size() > 32) return false;
+  for (char c : text)
+    if (!((c >= '0' && c <= '9') || c == '.' || c == '-' || c == 'e' || c == 'E' || c == '+'))
+      return false;
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), out);
+  return ec == std::errc() && ptr == text.data() + text.size() && std::isfinite(out);
 }
 
 double now_unix() {
@@ -163,19 +186,11 @@ class StudyService {
       return {400, "kind must be similarity or preference, got '" + kind + "'"};
     int64_t index = 0;
     double value = 0, ms = 0;
-    try {
-      size_t used = 0;
-      const std::string is = r.get_param_value("index"), as = r.get_param_value("answer"),
-                        ts = r.get_param_value("response_ms");
-      index = std::stoll(is, &used);
-      if (used != is.size()) throw std::invalid_argument("");
-      value = std::stod(as, &used);
-      if (used != as.size()) throw std::invalid_argument("");
-      ms = std::stod(ts, &used);
-      if (used != ts.size()) throw std::invalid_argument("");
-    } catch (const std::exception&) {
-      return {400, "index, answer and response_ms must be numbers"};
-    }
+    if (!parse_index(r.get_param_value("index"), index))
+      return {400, "index must be a query number (0, 1, 2, ...)"};
+    if (!parse_decimal(r.get_param_value("answer"), value) ||
+        !parse_decimal(r.get_param_value("response_ms"), ms))
+      return {400, "answer and response_ms must be decimal numbers"};
     if (!std::isfinite(ms) || ms < 0 || ms > 3.6e6)
       return {400, "response_ms must be a time in [0, 3600000] ms"};
     std::lock_guard lock(mu_);
@@ -229,9 +244,52 @@ std::string read_file(const fs::path& p) {
   return ss.str();
 }
 
+// The host to listen on: an IPv4 or IPv6 literal or "localhost" (checked before anything is
+// written). Returns whether it is a loopback address; the URL host goes into `url_host`.
+bool check_host(const std::string& host, std::string& url_host) {
+  in_addr v4{};
+  in6_addr v6{};
+  if (host == "localhost") {
+    url_host = host;
+    return true;
+  }
+  if (inet_pton(AF_INET, host.c_str(), &v4) == 1) {
+    const bool any = v4.s_addr == htonl(INADDR_ANY);
+    url_host = any ? "127.0.0.1" : host;
+    return (ntohl(v4.s_addr) >> 24) == 127;
+  }
+  if (inet_pton(AF_INET6, host.c_str(), &v6) == 1) {
+    const bool any = IN6_IS_ADDR_UNSPECIFIED(&v6);
+    url_host = any ? "[::1]" : "[" + host + "]";
+    return IN6_IS_ADDR_LOOPBACK(&v6);
+  }
+  throw UsageError("--host '" + host +
+                   "' is not an IP address (use 127.0.0.1, ::1, localhost, or an address of this "
+                   "machine)");
+}
+
+// One server (or import) per study file: each rewrites the whole file from its memory, so two
+// at once would lose each other's answers. Held for the process's life.
+void lock_study(std::optional<FileLock>& lock, const std::string& out) {
+  try {
+    lock.emplace(out, "sirl study serve/import",
+                 "one process per study file: stop the other first (participants take turns)");
+  } catch (const FileBusy& e) {
+    throw UsageError(e.what());
+  }
+}
+
 int run_serve() {
   const ServeArgs& a = g_serve;
   validate_participant_id(a.participant);
+  std::string url_host;
+  if (!check_host(a.host, url_host))
+    std::fprintf(stderr,
+                 "sirl study serve: WARNING: --host %s is not a loopback address: anyone who can "
+                 "reach this machine and has the link can answer as %s\n",
+                 a.host.c_str(), a.participant.c_str());
+  std::optional<FileLock> lock;
+  lock_study(lock, a.out);
   Study s;
   if (fs::exists(a.out)) {
     s = read_study(a.out);
@@ -243,6 +301,19 @@ int run_serve() {
     s.trajectories = a.trajectories;
     s.data_seed = a.seed;
   }
+  // The port before the file: a server that cannot listen writes nothing.
+  httplib::Server srv;
+  // cpp-httplib's default sets SO_REUSEPORT, which lets a second server bind a busy port and
+  // take half of the requests. SO_REUSEADDR alone still allows a restart over TIME_WAIT.
+  srv.set_socket_options([](socket_t sock) {  // httplib's global socket_t
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, reinterpret_cast<void*>(&yes), sizeof(yes));
+  });
+  if (!srv.bind_to_port(a.host, a.port))
+    throw UsageError("cannot listen on " + a.host + ":" + std::to_string(a.port) +
+                     " (in use? try --port)");
+  // Answers are a few form fields: a larger body is refused (413) before it is read.
+  srv.set_payload_max_length(64 * 1024);
   if (!s.find(a.participant)) {
     const Dataset d = study_dataset(s);
     StudyParticipant p = plan_participant(d, a.participant, a.similarity, a.preference, a.seed);
@@ -259,7 +330,6 @@ int run_serve() {
   const fs::path web = fs::path(SIRL_SOURCE_DIR) / "app" / "study_web";
   const fs::path three = web / "node_modules" / "three";
 
-  httplib::Server srv;
   srv.Get("/", [&](const httplib::Request&, httplib::Response& res) {
     res.set_content(read_file(web / "index.html"), "text/html; charset=utf-8");
   });
@@ -281,11 +351,7 @@ int run_serve() {
   srv.Get("/api/trajectory", [&](const httplib::Request& r, httplib::Response& res) {
     if (!service.authorised(r, res)) return;
     int64_t id = -1;
-    try {
-      id = std::stoll(r.get_param_value("id"));
-    } catch (const std::exception&) {
-    }
-    if (id < 0 || id >= service.trajectory_count())
+    if (!parse_index(r.get_param_value("id"), id) || id >= service.trajectory_count())
       return StudyService::error(
           res, 400,
           "id must be a trajectory row in [0, " + std::to_string(service.trajectory_count()) + ")");
@@ -297,21 +363,11 @@ int run_serve() {
     if (status != 200) return StudyService::error(res, status, msg);
     res.set_content(service.state_json(), "application/json");
   });
-  // cpp-httplib's default sets SO_REUSEPORT, which lets a second server bind a busy port and
-  // take half of the requests. SO_REUSEADDR alone still allows a restart over TIME_WAIT.
-  srv.set_socket_options([](socket_t sock) {  // httplib's global socket_t
-    int yes = 1;
-    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, reinterpret_cast<void*>(&yes), sizeof(yes));
-  });
-  if (!srv.bind_to_port(a.host, a.port))
-    throw UsageError("cannot listen on " + a.host + ":" + std::to_string(a.port) +
-                     " (in use? try --port)");
   std::printf(
       "sirl study serve: participant %s on %s; answers go to %s\n"
       "open: http://%s:%d/?p=%s&t=%s\n",
-      a.participant.c_str(), s.env.c_str(), a.out.c_str(),
-      a.host == "0.0.0.0" ? "127.0.0.1" : a.host.c_str(), a.port, a.participant.c_str(),
-      token.c_str());
+      a.participant.c_str(), s.env.c_str(), a.out.c_str(), url_host.c_str(), a.port,
+      a.participant.c_str(), token.c_str());
   std::fflush(stdout);
   srv.listen_after_bind();
   return 0;
@@ -319,6 +375,8 @@ int run_serve() {
 
 int run_import() {
   const ImportArgs& a = g_import;
+  std::optional<FileLock> lock;
+  lock_study(lock, a.out);
   Study s;
   if (std::filesystem::exists(a.out)) {
     s = read_study(a.out);  // add to an existing study (its env and trajectory space)

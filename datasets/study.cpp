@@ -69,11 +69,17 @@ StudyParticipant plan_participant(const Dataset& d, const std::string& id, int64
   for (int64_t i = 0; i < n_sim; ++i) distinct(3, p.similarity.data() + 3 * i);
   p.preference.resize(size_t(2 * n_pref));
   for (int64_t i = 0; i < n_pref; ++i) distinct(2, p.preference.data() + 2 * i);
-  // The token is a capability, not a key: 128 bits from the OS, not from the study seed.
+  p.token = new_participant_token();
+  return p;
+}
+
+std::string new_participant_token() {
+  // A capability, not a key: 128 bits from the OS, never from a study seed.
   std::random_device rd;
   static const char* hex = "0123456789abcdef";
-  for (int i = 0; i < 32; ++i) p.token += hex[rd() % 16];
-  return p;
+  std::string token;
+  for (int i = 0; i < 32; ++i) token += hex[rd() % 16];
+  return token;
 }
 
 void simulate_answers(const Dataset& d, StudyParticipant& p, const Teacher& t, Rng& rng) {

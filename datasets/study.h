@@ -77,5 +77,7 @@ std::vector<int32_t> answered_triplets(const std::vector<const StudyParticipant*
 
 // Participant ids and tokens: [A-Za-z0-9_-]{1,64}. Throws std::invalid_argument otherwise.
 void validate_participant_id(const std::string& id);
+// A fresh participant token: 32 hex digits (128 bits) from the OS's random device.
+std::string new_participant_token();
 
 }  // namespace sirl

@@ -43,7 +43,7 @@ void add(const Record& r, const Dataset& d, Study& s, const std::string& where) 
   if (!p) {
     StudyParticipant np;
     np.id = r.participant;
-    np.token = "imported";
+    np.token = new_participant_token();  // each participant their own capability
     np.scenario = r.scenario;
     for (const auto& f : r.scenario_features) {
       if (std::find(d.feature_names.begin(), d.feature_names.end(), f) == d.feature_names.end())

@@ -1,7 +1,5 @@
 #include "jobs/run.h"
 
-#include <fcntl.h>
-#include <sys/file.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -20,6 +18,7 @@
 #include "jobs/scheduler.h"
 #include "jobs/task_runner.h"
 #include "kernels/rng.h"
+#include "results/file_lock.h"
 #include "results/h5.h"
 #include "results/results_file.h"
 #include "results/task_store.h"
@@ -44,41 +43,6 @@ std::string hostname() {
   gethostname(buf, sizeof buf - 1);
   return buf;
 }
-
-// One writer per output: an exclusive flock on OUT.lock, held for the run's life and released
-// by the kernel if the process dies. The holder writes its pid into the file so a second run
-// can name it. (The file stays: unlinking a lock file lets two later runs lock two inodes.)
-class OutputLock {
- public:
-  explicit OutputLock(const std::string& out) : path_(out + ".lock") {
-    fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (fd_ < 0)
-      throw std::runtime_error(path_ + ": cannot create the lock file: " + std::strerror(errno));
-    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
-      const int err = errno;
-      char buf[32] = {};
-      const ssize_t n = ::pread(fd_, buf, sizeof buf - 1, 0);
-      ::close(fd_);
-      if (err == EWOULDBLOCK)
-        throw std::invalid_argument(
-            out + " is being written by another sirl run" +
-            (n > 0 ? " (pid " + std::string(buf, size_t(n)) + ")" : std::string()) +
-            "; wait for it to finish, or choose another --out");
-      throw std::runtime_error(path_ + ": cannot lock: " + std::strerror(err));
-    }
-    const std::string pid = std::to_string(::getpid());
-    if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, pid.data(), pid.size(), 0) < 0) {
-      // the lock holds without the pid; a second run just cannot name us
-    }
-  }
-  ~OutputLock() { ::close(fd_); }
-  OutputLock(const OutputLock&) = delete;
-  OutputLock& operator=(const OutputLock&) = delete;
-
- private:
-  std::string path_;
-  int fd_ = -1;
-};
 
 // The key of the representation a task belongs to (itself for a rep; "" for a VAE, which every
 // shard that needs it pulls in). The user study's tasks stay together in one group.
@@ -322,7 +286,8 @@ std::vector<TaskRecord> finished_records(const Profile& p, const Plan& plan,
 }
 
 RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
-  const OutputLock lock(o.out);  // before reading anything of the output: one writer
+  // One writer per output, taken before reading anything of it.
+  const FileLock lock(o.out, "sirl run", "wait for it to finish, or choose another --out");
   const auto t0 = std::chrono::steady_clock::now();
   const std::string started = now_iso();
   const Plan plan = make_plan(p);

@@ -124,14 +124,25 @@ with tempfile.TemporaryDirectory() as tmp:
     assert sim == [2, 0] and ms == [1234.0, 800.0] and all(t > 1.6e9 for t in when), (sim, ms, when)
     print("ok: answers committed at once with response time and timestamp; duplicates refused")
 
-    # A second participant in the same file cannot write through alice's server.
+    # One server per study file: each rewrites the whole file from its memory, so a second one
+    # (another participant, same file) must be refused while the first runs.
     port_b = free_port()
-    srv_b, _, token_b = serve(study + ".bob", "bob", port_b)
-    srv_b.kill()
+    second = subprocess.run([SIRL, "study", "serve", "--env", "grid", "--participant", "bob",
+                             "--scenario", "Stay low.", "--out", study, "--port", str(port_b)],
+                            capture_output=True, text=True,
+                            stdin=subprocess.DEVNULL, timeout=30)
+    assert second.returncode == 2 and "in use by another" in second.stderr, second.stderr
+    with h5py.File(study, "r") as f:
+        assert "bob" not in f["study/participants"], "the refused server wrote to the file"
+    print("ok: a second server on the same study file is refused:", second.stderr.strip())
 
-    # kill -9, restart: resumes at similarity query 2.
+    # kill -9; bob takes his turn on the same file; alice's server restarts and resumes at her
+    # similarity query 2 with both participants in the file.
     srv.send_signal(signal.SIGKILL)
     srv.wait()
+    srv_b, _, token_b = serve(study, "bob", port_b)
+    srv_b.send_signal(signal.SIGTERM)
+    srv_b.wait()
     srv, url, token2 = serve(study, "alice", port)
     assert token2 == token, "the participant keeps their token (and URL) across restarts"
     st, body = http("GET", f"{base}/api/state?p=alice&t={token}")
@@ -140,9 +151,60 @@ with tempfile.TemporaryDirectory() as tmp:
     assert answers(study, "alice")[0] == [2, 0]
     print("ok: after kill -9 and restart the study resumes at the next unanswered query")
 
+    # bob's valid token, in the same file, on alice's server: this server records alice only.
     st, body = http("POST", f"{base}/api/answer",
-                    dict(p="bob", t=token_b, kind="similarity", index=2, answer=1, response_ms=1))
-    assert st == 403, body
+                    dict(p="bob", t=token_b, kind="similarity", index=0, answer=1, response_ms=1))
+    assert st == 403 and "records participant alice only" in body, body
+    assert answers(study, "bob")[0] == [], "bob's answer written through alice's server"
+    # Strict numbers: each of these used to be read as something else.
+    for kw, words in [(dict(index="1e0"), "index must be"), (dict(index="-1"), "index must be"),
+                      (dict(index=" 2"), "index must be"), (dict(answer="0x1"), "decimal"),
+                      (dict(answer="1abc"), "decimal"), (dict(response_ms="nan"), "decimal")]:
+        d = dict(p="alice", t=token, kind="similarity", index=2, answer=1, response_ms=5)
+        d.update(kw)
+        st, body = http("POST", f"{base}/api/answer", d)
+        assert st == 400 and words in body, (kw, st, body)
+    for bad_id in ("5abc", "1e3", "-1", ""):
+        st, body = http("GET", f"{base}/api/trajectory?p=alice&t={token}&id={bad_id}")
+        assert st == 400, (bad_id, st, body)
+    # A body over 64 KiB is refused (413) without being read; nothing is written.
+    big = urllib.request.Request(f"{base}/api/answer", data=b"x" * (200 * 1024), method="POST")
+    try:
+        urllib.request.urlopen(big, timeout=10)
+        st = 200
+    except urllib.error.HTTPError as e:
+        st = e.code
+    except (ConnectionError, urllib.error.URLError):
+        st = 413  # the server may close before the client finished sending
+    assert st == 413, st
+    assert answers(study, "alice")[0] == [2, 0]
+    print("ok: strict numbers, a 200 KiB body refused with 413, nothing written")
+
+    # --host is checked before anything is written; a non-loopback host is served with a warning
+    # and a working URL.
+    fresh = os.path.join(tmp, "host.h5")
+    for bad_host in ("", "not a host", "999.1.1.1"):
+        q = subprocess.run([SIRL, "study", "serve", "--env", "grid", "--participant", "dan",
+                            "--scenario", "x", "--out", fresh, "--host", bad_host,
+                            "--port", str(free_port())], capture_output=True, text=True,
+                           stdin=subprocess.DEVNULL, timeout=30)
+        assert q.returncode == 2 and "--host" in q.stderr, (bad_host, q.returncode, q.stderr)
+        assert not os.path.exists(fresh), f"--host {bad_host!r} wrote the study file"
+    port_any = free_port()
+    pa = subprocess.Popen([SIRL, "study", "serve", "--env", "grid", "--participant", "dan",
+                           "--scenario", "x", "--out", fresh, "--host", "0.0.0.0",
+                           "--port", str(port_any)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                          text=True, stdin=subprocess.DEVNULL)
+    line = ""
+    for _ in range(2):
+        line = pa.stdout.readline()
+        if line.startswith("open: "):
+            break
+    pa.terminate()
+    err = pa.communicate(timeout=30)[1]
+    assert line.startswith(f"open: http://127.0.0.1:{port_any}/?p=dan&t="), line
+    assert "WARNING" in err and "not a loopback address" in err, err
+    print("ok: bad --host values refused before writing; 0.0.0.0 warns and prints a working URL")
     st, body = http("GET", f"{base}/api/trajectory?p=alice&t={token}&id=5")
     assert st == 200, body
     # GridRobot: 9 cells of a corner-to-corner path of unit moves, and an end angle in 30° steps.

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "datasets/study.h"
 #include "datasets/study_import.h"
@@ -279,6 +280,15 @@ TEST(StudyImport, CsvAndJsonGiveTheSameStudy) {
   EXPECT_EQ(ann.preference_answer, (std::vector<float>{1.f}));
   EXPECT_EQ(a.participants[1].preference_answer, (std::vector<float>{0.5f}));
   EXPECT_DOUBLE_EQ(ann.similarity_time[0], 1700000000.5);
+  // Every imported participant gets a capability of their own (not a shared fixed token).
+  std::set<std::string> tokens;
+  for (const Study* st : {&a, &b})
+    for (const auto& p : st->participants) {
+      EXPECT_EQ(p.token.size(), 32u);
+      EXPECT_EQ(p.token.find_first_not_of("0123456789abcdef"), std::string::npos) << p.token;
+      tokens.insert(p.token);
+    }
+  EXPECT_EQ(tokens.size(), a.participants.size() + b.participants.size());
 }
 
 TEST(StudyImport, BadRecordsNameTheLineAndTheProblem) {
