@@ -1,5 +1,8 @@
 #include "results/task_store.h"
 
+#include <atomic>
+#include <cstdlib>
+
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -72,8 +75,22 @@ void TaskStore::commit(const TaskRecord& r) {
   fs::rename(tmp, final, ec);
   if (ec) throw H5Error(final.string() + ": cannot commit task " + r.key + ": " + ec.message());
   fsync_path(dir_.string());
-  std::lock_guard lock(mu_);
-  index_[r.key] = final;
+  {
+    std::lock_guard lock(mu_);
+    index_[r.key] = final;
+  }
+  crash_point_after_commit();
+}
+
+void crash_point_after_commit() {
+  // Crash-point injection for tests: SIRL_CRASH_AFTER_COMMITS=k ends the process, as kill -9
+  // would (no destructors, no flush), right after the k-th durable commit of this process.
+  static const long k = [] {
+    const char* v = std::getenv("SIRL_CRASH_AFTER_COMMITS");
+    return v ? std::strtol(v, nullptr, 10) : 0L;
+  }();
+  static std::atomic<long> commits{0};
+  if (k > 0 && ++commits == k) std::_Exit(137);
 }
 
 TaskRecord TaskStore::load(const std::string& key) const {

@@ -36,4 +36,8 @@ class TaskStore {
   std::map<std::string, std::filesystem::path> index_;
 };
 
+// Test hook: with SIRL_CRASH_AFTER_COMMITS=k in the environment the process ends abruptly (exit
+// code 137, no cleanup) right after its k-th commit, so crash tests kill at an exact point.
+void crash_point_after_commit();
+
 }  // namespace sirl

@@ -151,22 +151,16 @@ with tempfile.TemporaryDirectory() as tmp:
     assert set(tpa["seed"]) == {0, 1}
     print(f"ok: pandas reads /tables/tpa ({len(tpa)} rows)")
 
-    # Kill -9 mid-run, rerun, compare.
+    # Killed mid-run (at an exact point: SIRL_CRASH_AFTER_COMMITS ends the process like kill -9
+    # right after its 20th commit), rerun, compare.
     killed = os.path.join(tmp, "killed.h5")
-    child = subprocess.Popen([SIRL, "run", SMOKE, "--out", killed, "--threads", "2", "--quiet"],
-                             stdin=subprocess.DEVNULL)
+    crash = dict(os.environ, SIRL_CRASH_AFTER_COMMITS="20")
+    child = subprocess.run([SIRL, "run", SMOKE, "--out", killed, "--threads", "2", "--quiet"],
+                           stdin=subprocess.DEVNULL, env=crash)
+    assert child.returncode == 137, child.returncode
     staging = killed + ".tasks"
-    deadline = time.time() + 60
-    while time.time() < deadline:  # wait until some but not all tasks are committed
-        n = len([f for f in os.listdir(staging) if f.endswith(".h5")]) if os.path.isdir(staging) else 0
-        if n >= 20 or child.poll() is not None:
-            break
-        time.sleep(0.02)
-    if child.poll() is not None:
-        sys.exit("FAIL: the run finished before it could be killed; the kill test needs a slower profile")
-    child.send_signal(signal.SIGKILL)
-    child.wait()
     committed = len([f for f in os.listdir(staging) if f.endswith(".h5")])
+    assert committed == 20, committed
     assert not os.path.exists(killed), "a killed run must not leave a results file behind"
     out = run("run", SMOKE, "--out", killed, "--threads", "2").stdout
     reused = int(out.split("(")[1].split(" reused")[0])
@@ -178,38 +172,31 @@ with tempfile.TemporaryDirectory() as tmp:
     assert "0 computed" in out, out
     print("ok: rerunning a finished file recomputes nothing")
 
-    # Kill -9 during `sirl reproduce`'s user-study part (its tasks are the plan's last), rerun:
-    # every committed study task is reused, not recomputed, and the study report is written.
+    # Killed during `sirl reproduce`'s user-study part (on one thread the commit order is fixed:
+    # after 200 commits some study tasks are done and others are not), rerun: every committed
+    # study task is reused, not recomputed, and the study report is written.
     study_out = os.path.join(tmp, "study.h5")
     figs = os.path.join(tmp, "study-figures")
-    child = subprocess.Popen([SIRL, "reproduce", "--profile", SMOKE, "--out", study_out,
-                              "--figures", figs, "--threads", "2"],
-                             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                             stderr=subprocess.DEVNULL)
+    child = subprocess.run([SIRL, "reproduce", "--profile", SMOKE, "--out", study_out,
+                            "--figures", figs, "--threads", "1"], stdin=subprocess.DEVNULL,
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                           env=dict(os.environ, SIRL_CRASH_AFTER_COMMITS="200"))
+    assert child.returncode == 137, child.returncode
     staging = study_out + ".tasks"
     seen, before = set(), {}
-    deadline = time.time() + 120
-    while time.time() < deadline and child.poll() is None and len(before) < 2:
-        files = [f for f in os.listdir(staging) if f.endswith(".h5")] if os.path.isdir(staging) else []
-        for name in files:
-            if name in seen:
-                continue
-            seen.add(name)
-            try:
-                with h5py.File(os.path.join(staging, name), "r") as f:
-                    key = f["r"].attrs["task_key"]
-                    key = key.decode() if isinstance(key, bytes) else key
-                    if key.startswith("study/"):
-                        before[key] = {a: f["r"].attrs[a] for a in f["r"].attrs  # params are dropped later
-                                       if a not in ("seconds", "record_arrays")}
-            except OSError:
-                seen.discard(name)  # renamed into place a moment ago: read it next round
-        time.sleep(0.01)
-    if child.poll() is not None:
-        sys.exit("FAIL: the reproduction finished before its study part could be killed")
-    child.send_signal(signal.SIGKILL)
-    child.wait()
-    assert before, "no study task was committed before the kill"
+    for name in os.listdir(staging):
+        if not name.endswith(".h5"):
+            continue
+        seen.add(name)
+        with h5py.File(os.path.join(staging, name), "r") as f:
+            key = f["r"].attrs["task_key"]
+            key = key.decode() if isinstance(key, bytes) else key
+            if key.startswith("study/"):  # params are dropped from the results file later
+                before[key] = {a: f["r"].attrs[a] for a in f["r"].attrs
+                               if a not in ("seconds", "record_arrays")}
+    assert len(seen) == 200, len(seen)
+    assert 0 < len(before) < 13, f"the crash point is not inside the study part: {len(before)} " \
+        "of 13 study tasks committed (the smoke plan changed: choose another count)"
     p = run("reproduce", "--profile", SMOKE, "--out", study_out, "--figures", figs,
             "--threads", "2")
     out = p.stdout + p.stderr
@@ -330,15 +317,9 @@ with tempfile.TemporaryDirectory() as tmp:
 
     # The staging folder of an interrupted run of another profile: refused, --force discards it.
     fresh = os.path.join(tmp, "fresh.h5")
-    child = subprocess.Popen([SIRL, "run", other, "--out", fresh, "--threads", "1", "--quiet"],
-                             stdin=subprocess.DEVNULL)
-    deadline = time.time() + 60
-    while time.time() < deadline and child.poll() is None:
-        if os.path.isdir(fresh + ".tasks") and any(n.endswith(".h5") for n in os.listdir(fresh + ".tasks")):
-            break
-        time.sleep(0.01)
-    child.send_signal(signal.SIGKILL)
-    child.wait()
+    child = subprocess.run([SIRL, "run", other, "--out", fresh, "--threads", "1", "--quiet"],
+                           stdin=subprocess.DEVNULL, env=dict(os.environ, SIRL_CRASH_AFTER_COMMITS="3"))
+    assert child.returncode == 137, child.returncode
     assert os.path.isdir(fresh + ".tasks") and not os.path.exists(fresh)
     p = run("run", SMOKE, "--out", fresh, "--quiet", check=False)
     assert p.returncode == 2 and "another profile or engine" in p.stderr, p.stderr
