@@ -309,9 +309,11 @@ int run_serve() {
     int yes = 1;
     setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, reinterpret_cast<void*>(&yes), sizeof(yes));
   });
-  if (!srv.bind_to_port(a.host, a.port))
+  // --port 0: any free port, chosen by the OS and printed (no check-then-bind race).
+  const int port = a.port == 0 ? srv.bind_to_any_port(a.host) : a.port;
+  if (port <= 0 || (a.port != 0 && !srv.bind_to_port(a.host, a.port)))
     throw UsageError("cannot listen on " + a.host + ":" + std::to_string(a.port) +
-                     " (in use? try --port)");
+                     " (in use? try --port, or --port 0 for any free port)");
   // Answers are a few form fields: a larger body is refused (413) before it is read.
   srv.set_payload_max_length(64 * 1024);
   if (!s.find(a.participant)) {
@@ -366,7 +368,7 @@ int run_serve() {
   std::printf(
       "sirl study serve: participant %s on %s; answers go to %s\n"
       "open: http://%s:%d/?p=%s&t=%s\n",
-      a.participant.c_str(), s.env.c_str(), a.out.c_str(), url_host.c_str(), a.port,
+      a.participant.c_str(), s.env.c_str(), a.out.c_str(), url_host.c_str(), port,
       a.participant.c_str(), token.c_str());
   std::fflush(stdout);
   srv.listen_after_bind();
@@ -434,7 +436,9 @@ void register_study_serve(CLI::App& study) {
                 "Features the scenario's preference involves (e.g. table,laptop)")
       ->delimiter(',');
   c->add_option("--out", a.out, "Study file (created, or resumed)")->required();
-  c->add_option("--port", a.port, "TCP port")->check(CLI::Range(1, 65535))->capture_default_str();
+  c->add_option("--port", a.port, "TCP port (0: any free port; the URL printed names it)")
+      ->check(CLI::Range(0, 65535))
+      ->capture_default_str();
   c->add_option("--host", a.host, "Address to listen on (127.0.0.1: this machine only)")
       ->capture_default_str();
   c->add_option("--trajectories", a.trajectories, "JacoRobot trajectory space size")

@@ -5,8 +5,8 @@ nothing; after kill -9 and a restart the study resumes at the next unanswered qu
 With STUDY_BROWSER=1 it also drives the real page in Debian's chromium (playwright-core)."""
 import json
 import os
+import re
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -21,15 +21,10 @@ SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
 
 
-def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    p = s.getsockname()[1]
-    s.close()
-    return p
-
-
-def serve(study, participant, port, n_sim=3, n_pref=2):
+def serve(study, participant, port=0, n_sim=3, n_pref=2):
+    """Starts a server (port 0: the OS picks a free one, no check-then-bind race) and returns it
+    with its URL and the participant's token once it prints the URL: the socket is listening by
+    then, so requests queue until the accept loop runs."""
     p = subprocess.Popen([SIRL, "study", "serve", "--env", "grid", "--participant", participant,
                           "--similarity", str(n_sim), "--preference", str(n_pref), "--practice", "1",
                           "--scenario", "Keep away from the laptop.", "--scenario-features",
@@ -41,15 +36,10 @@ def serve(study, participant, port, n_sim=3, n_pref=2):
         line = p.stdout.readline()
         if line.startswith("open: "):
             url = line.split("open: ")[1].strip()
+            break
     if not url:
         p.kill()
         sys.exit(f"FAIL: server did not start: {p.stderr.read()}")
-    for _ in range(100):  # wait until it accepts connections
-        try:
-            socket.create_connection(("127.0.0.1", port), timeout=0.1).close()
-            break
-        except OSError:
-            time.sleep(0.05)
     qs = urllib.parse.parse_qs(urllib.parse.urlparse(url).query)
     return p, url, qs["t"][0]
 
@@ -72,8 +62,9 @@ def answers(study, who):
 
 with tempfile.TemporaryDirectory() as tmp:
     study = os.path.join(tmp, "study.h5")
-    port = free_port()
-    srv, url, token = serve(study, "alice", port)
+    srv, url, token = serve(study, "alice")
+    port = urllib.parse.urlparse(url).port
+    assert port, url
     base = f"http://127.0.0.1:{port}"
     assert url.startswith(f"http://127.0.0.1:{port}/?p=alice&t="), url
     # A second server on the busy port must refuse to start (no SO_REUSEPORT: two servers would
@@ -126,9 +117,8 @@ with tempfile.TemporaryDirectory() as tmp:
 
     # One server per study file: each rewrites the whole file from its memory, so a second one
     # (another participant, same file) must be refused while the first runs.
-    port_b = free_port()
     second = subprocess.run([SIRL, "study", "serve", "--env", "grid", "--participant", "bob",
-                             "--scenario", "Stay low.", "--out", study, "--port", str(port_b)],
+                             "--scenario", "Stay low.", "--out", study, "--port", "0"],
                             capture_output=True, text=True,
                             stdin=subprocess.DEVNULL, timeout=30)
     assert second.returncode == 2 and "in use by another" in second.stderr, second.stderr
@@ -140,7 +130,7 @@ with tempfile.TemporaryDirectory() as tmp:
     # similarity query 2 with both participants in the file.
     srv.send_signal(signal.SIGKILL)
     srv.wait()
-    srv_b, _, token_b = serve(study, "bob", port_b)
+    srv_b, _, token_b = serve(study, "bob")
     srv_b.send_signal(signal.SIGTERM)
     srv_b.wait()
     srv, url, token2 = serve(study, "alice", port)
@@ -186,14 +176,13 @@ with tempfile.TemporaryDirectory() as tmp:
     for bad_host in ("", "not a host", "999.1.1.1"):
         q = subprocess.run([SIRL, "study", "serve", "--env", "grid", "--participant", "dan",
                             "--scenario", "x", "--out", fresh, "--host", bad_host,
-                            "--port", str(free_port())], capture_output=True, text=True,
+                            "--port", "0"], capture_output=True, text=True,
                            stdin=subprocess.DEVNULL, timeout=30)
         assert q.returncode == 2 and "--host" in q.stderr, (bad_host, q.returncode, q.stderr)
         assert not os.path.exists(fresh), f"--host {bad_host!r} wrote the study file"
-    port_any = free_port()
     pa = subprocess.Popen([SIRL, "study", "serve", "--env", "grid", "--participant", "dan",
                            "--scenario", "x", "--out", fresh, "--host", "0.0.0.0",
-                           "--port", str(port_any)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           "--port", "0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                           text=True, stdin=subprocess.DEVNULL)
     line = ""
     for _ in range(2):
@@ -202,7 +191,7 @@ with tempfile.TemporaryDirectory() as tmp:
             break
     pa.terminate()
     err = pa.communicate(timeout=30)[1]
-    assert line.startswith(f"open: http://127.0.0.1:{port_any}/?p=dan&t="), line
+    assert re.match(r"open: http://127\.0\.0\.1:[1-9]\d*/\?p=dan&t=", line), line
     assert "WARNING" in err and "not a loopback address" in err, err
     print("ok: bad --host values refused before writing; 0.0.0.0 warns and prints a working URL")
     st, body = http("GET", f"{base}/api/trajectory?p=alice&t={token}&id=5")
@@ -231,11 +220,10 @@ with tempfile.TemporaryDirectory() as tmp:
         print("ok: chromium answered the rest through the page; the file holds every answer")
         # The JacoRobot page (three.js 3-D views, replay buttons) runs in chromium as well.
         jaco = os.path.join(tmp, "jaco.h5")
-        port_j = free_port()
         pj = subprocess.Popen([SIRL, "study", "serve", "--env", "jaco2", "--trajectories", "200",
                                "--participant", "carol", "--similarity", "2", "--preference", "1",
                                "--practice", "1", "--scenario", "Stay high above the table.",
-                               "--out", jaco, "--port", str(port_j)],
+                               "--out", jaco, "--port", "0"],
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                               stdin=subprocess.DEVNULL)
         line = ""
@@ -243,7 +231,6 @@ with tempfile.TemporaryDirectory() as tmp:
             line = pj.stdout.readline()
             if not line:
                 sys.exit(f"FAIL: jaco2 server did not start: {pj.stderr.read()}")
-        time.sleep(0.3)
         p = subprocess.run(["node", os.path.join(SRC, "tests", "study_browser.mjs"),
                             line.split("open: ")[1].strip()], cwd=web, capture_output=True,
                            text=True, timeout=300)
