@@ -170,18 +170,18 @@ void register_dataset(CLI::App& app, Runner& run) {
       ->capture_default_str();
   cmd->add_option("--beta", a.beta,
                   "Teacher's Boltzmann rationality (inf = perfect oracle, the paper's)")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->capture_default_str();
   cmd->add_option("--mistake", a.mistake, "Teacher's probability of flipping an answer")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   cmd->add_option("--skip", a.skip,
                   "Teacher withholds answers when options differ by less than this")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   cmd->add_option("--equal", a.equal,
                   "Teacher answers 'equal' when options differ by less than this")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   cmd->add_option("--features", a.features,
                   "Features the teacher perceives (default all), e.g. laptop_distance")

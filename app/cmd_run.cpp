@@ -84,7 +84,12 @@ void register_run(CLI::App& app, Runner& run) {
       ->check(CLI::Range(1, 4096));
   cmd->add_option("--shard", shard,
                   "Run only shard i of n (i/n, 0-based), e.g. one Slurm array task; combine the "
-                  "shard files with `sirl merge`");
+                  "shard files with `sirl merge`")
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            return v.empty() ? std::string("must look like i/n, e.g. 0/4") : "";
+          },
+          "i/n"));
   cmd->add_flag("--force", force, "Overwrite results from another profile or engine version");
   cmd->add_flag("--quiet", quiet, "No progress output");
   run = [] { return run_command(profile, out, threads, force, shard, quiet); };

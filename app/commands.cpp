@@ -1,5 +1,8 @@
 #include "app/commands.h"
 
+#include <charconv>
+#include <set>
+
 #include "datasets/environments.h"
 
 #include <filesystem>
@@ -18,6 +21,55 @@ std::map<std::string, Runner>& runners() {
 }
 }  // namespace
 
+namespace {
+
+// Options that take a count, a seed or a port: decimal digits only. CLI11 alone reads "0x10" as
+// 16 and "-1" as 2⁶⁴ − 1 for an unsigned seed.
+const std::set<std::string> kIntegerOptions{
+    "--threads",    "--seed",       "--trajectories", "--users",   "--similarity",
+    "--preference", "--tpa-pairs",  "--fpe",          "--seeds",   "--splits",
+    "--epochs",     "--tpa-epochs", "--port",         "--practice"};
+
+void enforce_decimal_integers(CLI::App& app) {
+  for (CLI::Option* o : app.get_options())
+    if (kIntegerOptions.count(o->get_name())) o->check(decimal_integer());
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
+    enforce_decimal_integers(*sub);
+}
+
+CLI::Validator number_check(const char* what, bool (*ok)(double)) {
+  return CLI::Validator(
+      [what, ok](std::string& v) -> std::string {
+        double x = 0;
+        const auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
+        const bool parsed = ec == std::errc() && p == v.data() + v.size();
+        if (v == "inf" || v == "infinity") return "";
+        if (!parsed || !ok(x)) return std::string("must be ") + what + ", got '" + v + "'";
+        return "";
+      },
+      "NUMBER");
+}
+
+}  // namespace
+
+CLI::Validator decimal_integer() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        if (v.empty() || v.size() > 19 || v.find_first_not_of("0123456789") != std::string::npos)
+          return "must be a non-negative decimal integer, got '" + v + "'";
+        return "";
+      },
+      "INT");
+}
+
+CLI::Validator positive_number() {
+  return number_check("a number > 0 (inf allowed)", [](double x) { return x > 0; });
+}
+
+CLI::Validator non_negative_number() {
+  return number_check("a number >= 0", [](double x) { return x >= 0; });
+}
+
 void register_all(CLI::App& app) {
   register_version(app, runners()["version"]);
   register_reproduce(app, runners()["reproduce"]);
@@ -29,6 +81,7 @@ void register_all(CLI::App& app) {
   register_run(app, runners()["run"]);
   register_export(app, runners()["export"]);
   register_merge(app, runners()["merge"]);
+  enforce_decimal_integers(app);
 }
 
 int run_selected(CLI::App& app) {

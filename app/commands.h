@@ -11,7 +11,8 @@
 
 namespace CLI {
 class App;
-}
+class Validator;
+}  // namespace CLI
 
 namespace sirl::app {
 
@@ -40,6 +41,12 @@ std::string sh_quote(const std::string& s);
 // "dataset" has /datasets and no /runs_index or /study; "study" has /study), else it is refused
 // with a UsageError naming what it holds, unless `force`. Never replaces a file silently.
 void check_replaceable(const std::string& out, const std::string& kind, bool force);
+
+// Validators with one readable line ("must be a number > 0, got '-1'") instead of CLI11's
+// ranges that print DBL_MAX in full; decimal_integer refuses "0x10", "-1", " 3".
+CLI::Validator decimal_integer();
+CLI::Validator positive_number();
+CLI::Validator non_negative_number();
 
 // Environment names for `--env` choices: every registered one, or those the study may use.
 std::vector<std::string> env_choices();

@@ -4,6 +4,7 @@
 #include "datasets/study.h"
 
 #include <toml++/toml.h>
+#include <unistd.h>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -167,6 +168,9 @@ class Reader {
       } catch (const std::invalid_argument& e) {
         fail(t.get(key), std::string(key) + ": " + e.what());
       }
+      for (size_t i = 0; i + 1 < out.size(); ++i)
+        if (out[i].name() == out.back().name())
+          fail(t.get(key), std::string(key) + ": '" + s + "' is listed twice");
     }
     return out;
   }
@@ -257,6 +261,12 @@ bool env_is_study(const std::string& name) {
 }  // namespace
 
 namespace {
+
+std::string describe_widths(const Hyper& h) {
+  std::string s;
+  for (int w : h.phi_hidden) s += (s.empty() ? "" : ",") + std::to_string(w);
+  return "[" + s + "]";
+}
 
 // [queries] and [teacher]: the budgets and the simulated human.
 void parse_queries(Reader& r, const toml::table& root, Profile& p) {
@@ -376,8 +386,9 @@ void parse_hyper(Reader& r, const toml::table& root, Profile& p) {
         const std::string key(k.str());
         for (auto& [env, h] : p.hyper) {
           if (scope != "all" && env != scope) continue;
+          const std::string text = hyper_text(r, v, key);  // fails with file:line itself
           try {
-            set_hyper(h, key, hyper_text(r, v, key));
+            set_hyper(h, key, text);
           } catch (const std::invalid_argument& e) {
             r.fail(&v, e.what());
           }
@@ -390,6 +401,16 @@ void parse_hyper(Reader& r, const toml::table& root, Profile& p) {
       } catch (const std::invalid_argument& e) {
         r.fail(hy, std::string("[hyper.") + env + "]: " + e.what());
       }
+      // One φ in training holds weights, gradient and two Adam moments (16 bytes per weight);
+      // refuse a network that could not fit before anything allocates it.
+      const double bytes =
+          16.0 * double(phi_shape(env_spec(env).input_dim(p.data), h).param_count());
+      const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+      if (bytes > ram)
+        r.fail(hy, "[hyper." + env + "]: φ of widths " + describe_widths(h) + " needs " +
+                       std::to_string(int64_t(bytes / (1 << 30))) +
+                       " GiB to train, this machine has " +
+                       std::to_string(int64_t(ram / (1 << 30))) + " GiB");
     }
   }
 }

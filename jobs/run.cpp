@@ -71,7 +71,11 @@ bool keeps_weights(const Profile& p, const Task& t) {
 void parse_shard(const std::string& text, int& index, int& count) {
   const auto slash = text.find('/');
   try {
-    if (slash == std::string::npos) throw std::invalid_argument("");
+    // Digits, one slash, digits: nothing else (no spaces, signs or hex).
+    if (slash == std::string::npos || slash == 0 || slash + 1 == text.size() || text.size() > 19 ||
+        text.find_first_not_of("0123456789/") != std::string::npos ||
+        text.find('/', slash + 1) != std::string::npos)
+      throw std::invalid_argument("");
     size_t p1 = 0, p2 = 0;
     index = std::stoi(text.substr(0, slash), &p1);
     count = std::stoi(text.substr(slash + 1), &p2);

@@ -165,8 +165,32 @@ TEST(DatasetCli, WriteInspectAndRefuseCorruptFiles) {
   EXPECT_EQ(run(sirl + " dataset --env grid --out " + path.string() + " --features nope", &out), 2)
       << out;
   EXPECT_EQ(run(sirl + " frobnicate", &out), 2) << out;
+  EXPECT_NE(out.find("unknown command 'frobnicate'"), std::string::npos) << out;
   fs::remove(path);
   fs::remove(temp("cli_out"));
+}
+
+// Numbers on the command line are read strictly, with one readable line each (issue 17 item 15):
+// CLI11 alone reads "0x10" as 16, "-1" as 2⁶⁴ − 1 for a seed, and prints DBL_MAX in full.
+TEST(DatasetCli, NumbersAreStrictAndErrorsAreOneReadableLine) {
+  const std::string sirl = SIRL_BINARY;
+  const auto path = temp("cli_numbers");
+  std::string out;
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {" dataset --out " + path.string() + " --threads 0x10", "--threads: must be a non-negative"},
+      {" dataset --out " + path.string() + " --seed -1", "--seed: must be a non-negative"},
+      {" dataset --out " + path.string() + " --similarity ' 3'", "--similarity: must be"},
+      {" dataset --out " + path.string() + " --beta -1", "--beta: must be a number > 0"},
+      {" run smoke --out " + path.string() + " --shard ' 0/2'", "--shard must look like i/n"},
+      {" run smoke --out " + path.string() + " --shard ''", "--shard: must look like i/n"},
+      {" run smoke --out " + path.string() + " --shard 0/2/2", "--shard must look like i/n"},
+  };
+  for (const auto& [args, words] : cases) {
+    EXPECT_EQ(run(sirl + args, &out), 2) << args << "\n" << out;
+    EXPECT_NE(out.find(words), std::string::npos) << args << "\n" << out;
+    EXPECT_LT(out.size(), 300u) << "one short line: " << out;
+    EXPECT_FALSE(fs::exists(path)) << args << " wrote a file";
+  }
 }
 
 }  // namespace

@@ -196,6 +196,16 @@ TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
   EXPECT_EQ(error_of(base + "[fpe\n").rfind("bad.toml:4:", 0), 0u) << error_of(base + "[fpe\n");
   EXPECT_NE(error_of(base + grid + "[teacher]\nmistake = 2\n").find("outside [0, 1]"),
             std::string::npos);
+  // A duplicate method is refused like a duplicate seed (it used to be dropped silently).
+  m = error_of(base + "[fpe]\nmethods = [\"sirl\", \"random\", \"sirl\"]\nN = [100]\n");
+  EXPECT_NE(m.find("'sirl' is listed twice"), std::string::npos) << m;
+  // A network that cannot fit is refused with its size, before anything allocates it.
+  m = error_of(base + grid + "[hyper.grid]\n\"phi.hidden\" = [100000000, 100000000]\n");
+  EXPECT_NE(m.find("GiB to train, this machine has"), std::string::npos) << m;
+  // A float in an integer list: one file:line prefix, not two.
+  m = error_of(base + grid + "[hyper.grid]\n\"phi.hidden\" = [1e8, 1e8]\n");
+  EXPECT_EQ(m.find("bad.toml", 1), std::string::npos) << m;
+  EXPECT_NE(m.find("must be an array of integers"), std::string::npos) << m;
 }
 
 // A profile may run any part of the grid: FPE only, TPA only, or the ablation only.
