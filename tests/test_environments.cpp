@@ -90,6 +90,24 @@ TEST(Environments, RefusesATakenNameAMalformedNameAndAMissingFunction) {
   EXPECT_THROW(env_spec("toy_nodraw"), std::invalid_argument);  // nothing half-registered
 }
 
+// GridRobot's drawing against the dataset's own features: |end angle| is the abs_angle feature
+// (degrees), the 9 points are unit moves between opposite corners, in cells.
+TEST(Environments, GridDrawingMatchesTheTrajectorysFeatures) {
+  const EnvSpec& e = env_spec("grid");
+  const Dataset d = e.make(EnvConfig{});
+  for (int64_t row = 0; row < d.count; row += 37) {
+    const TrajectoryView v = e.draw(d, row);
+    ASSERT_EQ(v.points.size(), 9u);
+    EXPECT_FLOAT_EQ(std::abs(v.end_angle_deg), d.features_raw[size_t(row) * 4 + 3]) << row;
+    for (size_t k = 1; k < 9; ++k)
+      EXPECT_FLOAT_EQ(std::abs(v.points[k][0] - v.points[k - 1][0]) +
+                          std::abs(v.points[k][1] - v.points[k - 1][1]),
+                      1.f)
+          << row;
+    EXPECT_FLOAT_EQ(std::abs(v.points[8][0] - v.points[0][0]), 4.f) << row;
+  }
+}
+
 TEST(Environments, PaperHyperAppliesTheRegisteredDefaults) {
   register_toy_once();
   const Hyper toy = paper_hyper("toyline"), grid = paper_hyper("grid");

@@ -409,6 +409,21 @@ TEST(Tpa, TheUnfrozenNetworkKeepsTheEmbeddingLayerLinear) {
 
 // TPA's spread over the 20 test rewards is the sample standard deviation (n − 1), and the mean
 // is the plain mean: recomputed here in double from the per-reward accuracies.
+// A TPA cell with M pairs trains on exactly the first M of each reward's training split: a pair
+// beyond M changes nothing, the M-th changes the result.
+TEST(Tpa, UsesExactlyTheFirstMTrainingPairs) {
+  const World& w = world();
+  Hyper h = fast_hyper();
+  h.tpa.epochs = 5;
+  const TpaConfig c{20, true, h};
+  const TpaResult base = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 3);
+  std::vector<TpaSet> beyond = w.bundle.tpa, within = w.bundle.tpa;
+  for (auto& s : beyond) s.pairs.label[20] = 1 - s.pairs.label[20];  // pair 21: unused
+  for (auto& s : within) s.pairs.label[19] = 1 - s.pairs.label[19];  // pair 20: used
+  EXPECT_EQ(evaluate_tpa(trained().sirl, w.d, beyond, c, 3).loss_curves, base.loss_curves);
+  EXPECT_NE(evaluate_tpa(trained().sirl, w.d, within, c, 3).loss_curves, base.loss_curves);
+}
+
 TEST(Tpa, MeanAndSampleStandardDeviationOverTheRewards) {
   const World& w = world();
   Hyper h = fast_hyper();

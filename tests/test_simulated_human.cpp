@@ -103,6 +103,23 @@ TEST(BoltzmannTeacher, AgreementFallsAsBetaFalls) {
   }
 }
 
+// Every query shows distinct trajectories: a triplet three, a preference pair two (a query
+// comparing a trajectory with itself carries no information and biases the answer).
+TEST(Queries, EveryQueryShowsDistinctTrajectories) {
+  const Dataset d = make_grid_dataset();
+  QueryBundleConfig c;
+  c.similarity = 3000;  // with 1960 rows, repeats would certainly appear if allowed
+  c.preference = 3000;
+  c.tpa_pairs = 50;
+  const QueryBundle b = make_query_bundle(d, c, 9);
+  for (int64_t i = 0; i < b.similarity.count; ++i) {
+    const int32_t* q = b.similarity.idx.data() + 3 * i;
+    ASSERT_TRUE(q[0] != q[1] && q[0] != q[2] && q[1] != q[2]) << "triplet " << i;
+  }
+  for (const PreferenceSet* p : {&b.singlepref, &b.multipref10, &b.multipref50})
+    for (int64_t i = 0; i < p->count; ++i) ASSERT_NE(p->pairs[2 * i], p->pairs[2 * i + 1]) << i;
+}
+
 TEST(Rewards, UnitNormDisjointAndSeeded) {
   const auto r = make_reward_sets(4, 11);
   EXPECT_EQ(r.test.count, 20);
