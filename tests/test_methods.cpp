@@ -424,6 +424,21 @@ TEST(Tpa, UsesExactlyTheFirstMTrainingPairs) {
   EXPECT_NE(evaluate_tpa(trained().sirl, w.d, within, c, 3).loss_curves, base.loss_curves);
 }
 
+// The paper's L2 on predicted rewards is part of the TPA loss: with M = 10 (one batch per epoch)
+// the first epoch's loss is the loss at the initial heads, so L2 = 10 must add λ·mean(r_A² + r_B²)
+// > 0 to the L2 = 0 loss of the same heads on the same pairs.
+TEST(Tpa, TheL2PenaltyOnPredictedRewardsEntersTheLoss) {
+  const World& w = world();
+  Hyper h = fast_hyper();
+  h.tpa.epochs = 2;
+  h.tpa_l2 = 0;
+  const TpaResult plain = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, {10, true, h}, 3);
+  h.tpa_l2 = 10;
+  const TpaResult l2 = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, {10, true, h}, 3);
+  for (int r = 0; r < 20; ++r)
+    EXPECT_GT(l2.loss_curves[size_t(r) * 2], plain.loss_curves[size_t(r) * 2] + 1e-4) << r;
+}
+
 TEST(Tpa, MeanAndSampleStandardDeviationOverTheRewards) {
   const World& w = world();
   Hyper h = fast_hyper();
