@@ -420,7 +420,10 @@ TEST(Tpa, UsesExactlyTheFirstMTrainingPairs) {
   std::vector<TpaSet> beyond = w.bundle.tpa, within = w.bundle.tpa;
   for (auto& s : beyond) s.pairs.label[20] = 1 - s.pairs.label[20];  // pair 21: unused
   for (auto& s : within) s.pairs.label[19] = 1 - s.pairs.label[19];  // pair 20: used
-  EXPECT_EQ(evaluate_tpa(trained().sirl, w.d, beyond, c, 3).loss_curves, base.loss_curves);
+  const TpaResult b = evaluate_tpa(trained().sirl, w.d, beyond, c, 3);
+  EXPECT_EQ(b.loss_curves, base.loss_curves);
+  EXPECT_EQ(b.train_accuracy, base.train_accuracy);  // scored on the M pairs it trained on
+  EXPECT_EQ(b.accuracy, base.accuracy);
   EXPECT_NE(evaluate_tpa(trained().sirl, w.d, within, c, 3).loss_curves, base.loss_curves);
 }
 
