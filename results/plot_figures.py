@@ -117,6 +117,7 @@ def plot_fig4(fpe, envs, out, notes):
             colour, label = STYLE[v]
             if (dv.N == 0).all():  # VAE and Random use no queries: one value per seed
                 m, ci = mean_ci(dv.fpe)
+                DRAWN.setdefault("fig4", {}).setdefault(env, {})[v] = {"0": float(m)}
                 ax.axhline(m, color=colour, ls="--", lw=1.5, label=label)
                 if np.isfinite(ci) and Ns:
                     ax.axhspan(m - ci, m + ci, color=colour, alpha=0.12)
@@ -128,6 +129,8 @@ def plot_fig4(fpe, envs, out, notes):
                 ms.append(m)  # nan for a missing cell: matplotlib leaves a gap
                 cis.append(ci)
             ms, cis = np.array(ms), np.array(cis)
+            DRAWN.setdefault("fig4", {}).setdefault(env, {})[v] = {
+                str(x): float(m) for x, m in zip(xs, ms) if np.isfinite(m)}
             if np.isnan(ms).any():
                 notes.append(f"Fig. 4 {env_title(env)}: {label} missing at N = "
                              f"{[x for x, m in zip(xs, ms) if np.isnan(m)]} (drawn as gaps)")
@@ -168,6 +171,8 @@ def plot_fig5(tpa, envs, out, notes):
                 stats_ = [mean_ci(dv[dv.M == m].tpa) for m in Ms]
                 ms = np.array([s[0] for s in stats_])
                 cis = np.array([s[1] for s in stats_])
+                DRAWN.setdefault("fig5", {}).setdefault(env, {}).setdefault(str(n), {})[v] = {
+                    str(m): float(x) for m, x in zip(Ms, ms) if np.isfinite(x)}
                 if np.isnan(ms).any():
                     notes.append(f"Fig. 5 {env_title(env)} N={n}: {label} missing at M = "
                                  f"{[m for m, x in zip(Ms, ms) if np.isnan(x)]} (gaps)")

@@ -9,6 +9,9 @@ import subprocess
 import sys
 import tempfile
 
+import h5py
+import pandas as pd
+
 SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
 SMOKE = os.path.join(SRC, "configs", "smoke.toml")
@@ -46,6 +49,30 @@ with tempfile.TemporaryDirectory() as tmp:
     drawn = json.load(open(os.path.join(tmp, "full", "figures.json")))
     assert drawn["fig3"]["env"] == "grid2", drawn["fig3"]
     print("ok: every figure and the report from the smoke run; Fig. 3 on grid2")
+
+    # What Figs. 4 and 5 drew equals the seed means computed here from the tables (a plot of the
+    # wrong column, of train_mse, of the ablation's cells or of the other frozen mode differs).
+    with h5py.File(full, "r") as f:
+        fpe = pd.DataFrame(f["tables/fpe"][:])
+        tpa = pd.DataFrame(f["tables/tpa"][:])
+    for t in (fpe, tpa):
+        for c in ("env", "variant"):
+            t[c] = t[c].str.decode("utf-8")
+    checked = 0
+    for (env, v, n), g in fpe.groupby(["env", "variant", "N"]):
+        want = g.fpe.mean()
+        got = drawn["fig4"][env][v][str(n)]
+        assert abs(got - want) < 1e-12, (env, v, n, got, want)
+        checked += 1
+    main = tpa[(tpa.in_main == 1) & (tpa.frozen == tpa.variant.isin(["sirl", "sirl+vae"]).astype(int))]
+    for (env, v, n, m), g in main.groupby(["env", "variant", "N", "M"]):
+        panels = [str(n)] if n > 0 else list(drawn["fig5"][env])  # N = 0 cells in every panel
+        for panel in panels:
+            got = drawn["fig5"][env][panel][v][str(m)]
+            assert abs(got - g.tpa.mean()) < 1e-12, (env, v, n, m, got, g.tpa.mean())
+            checked += 1
+    assert checked > 50, checked
+    print(f"ok: Figs. 4 and 5 drew the seed means of the tables ({checked} points checked)")
 
     # JacoRobot runs its ablation at another M than the top-level [ablation]: Fig. 7 must draw
     # the cells the file holds (16 + 4 bars: four methods × 4 configurations, VAE and Random × 2).
