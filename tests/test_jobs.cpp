@@ -11,6 +11,7 @@
 #include <mutex>
 #include <set>
 
+#include "jobs/estimate.h"
 #include "jobs/plan.h"
 #include "jobs/profile.h"
 #include "jobs/run.h"
@@ -109,6 +110,29 @@ TEST(Plan, FrozenBestIsSirlFrozenAndTheOthersUnfrozen) {
   const Plan p2 = make_plan(parse_profile(both, "t.toml"));
   EXPECT_TRUE(p2.index.count("grid/s0/multipref10/N100/tpa/M10/frozen"));
   EXPECT_TRUE(p2.index.count("grid/s0/sirl/N100/tpa/M10/unfrozen"));
+}
+
+// sirl plan's estimate: each task takes its FLOPs over its kind's measured rate plus 2 ms, the
+// one-thread total is their sum, and the parallel time lies between total/threads and the total.
+TEST(Plan, EstimateAddsEachTasksFlopsOverItsKindsRate) {
+  const Profile p = parse_profile(kProfile, "t.toml");
+  const Plan plan = make_plan(p);
+  const PlanEstimate e = estimate_plan(plan, p, 2);
+  double total = 0;
+  for (const auto& t : plan.tasks) {
+    std::string kind = kind_name(t.kind);
+    if (t.kind == TaskKind::rep) kind = t.variant.method == Method::sirl ? "rep_sirl" : "rep_pref";
+    if (t.kind == TaskKind::tpa) kind = t.frozen ? "tpa_frozen" : "tpa_unfrozen";
+    const auto it = e.gflops_per_s.find(t.env + "/" + kind);
+    const double rate = it == e.gflops_per_s.end() ? 1e9 : std::max(it->second, 1e-3) * 1e9;
+    total += t.flops / rate + 0.002;
+  }
+  for (const char* k : {"grid/rep_sirl", "grid/rep_pref", "grid/vae", "grid/tpa_frozen"})
+    EXPECT_GT(e.gflops_per_s.at(k), 0.01) << k;  // measured, not the default
+  EXPECT_NEAR(e.seconds_one_thread, total, 1e-9 * total);
+  EXPECT_GE(e.seconds, total / 2 - 1e-9);
+  EXPECT_LE(e.seconds, total + 1e-9);
+  EXPECT_GT(e.peak_bytes, 0);
 }
 
 TEST(Plan, CostModelCountsTheFlopsByHand) {

@@ -114,6 +114,29 @@ TEST(Methods, SameSeedSameWeightsWhateverTheThreadCount) {
   EXPECT_NE(a.params, other.params);
 }
 
+// The multi-threaded paths beside GEMM, SIRL and unfrozen TPA: the VAE's training, the embedding
+// pass and a frozen TPA cell give bit-identical results on 1 and 2 threads.
+TEST(Methods, VaeEmbeddingAndFrozenTpaAreTheSameOnTwoThreads) {
+  const World& w = world();
+  Hyper h = fast_hyper();
+  h.vae.epochs = 3;
+  const VaeModel v1 = train_vae(w.d, h, 5, 1), v2 = train_vae(w.d, h, 5, 2);
+  EXPECT_EQ(v1.params, v2.params);
+  EXPECT_EQ(v1.loss_curve, v2.loss_curve);
+  EXPECT_EQ(v1.kl_per_dim, v2.kl_per_dim);
+  std::vector<float> e1(size_t(w.d.count) * 6), e2(e1.size());
+  embed(trained().sirl, w.d.inputs.data(), w.d.count, e1.data(), 1);
+  embed(trained().sirl, w.d.inputs.data(), w.d.count, e2.data(), 2);
+  EXPECT_EQ(e1, e2);
+  h.tpa.epochs = 10;
+  TpaConfig c{50, true, h, 1};
+  const TpaResult a = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 4);
+  c.threads = 2;
+  const TpaResult b = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 4);
+  EXPECT_EQ(a.accuracy, b.accuracy);
+  EXPECT_EQ(a.loss_curves, b.loss_curves);
+}
+
 TEST(Methods, RandomIsSirlsStartingPoint) {
   const World& w = world();
   Hyper h = fast_hyper();
