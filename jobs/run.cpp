@@ -154,7 +154,14 @@ std::map<std::string, TaskRecord> load_prior(const Profile& p, const RunOptions&
                                              const std::string& shard) {
   std::map<std::string, TaskRecord> prior;
   if (!fs::exists(o.out)) return prior;
-  const RunInfo info = read_run_info(o.out);
+  RunInfo info;
+  try {
+    info = read_run_info(o.out);
+  } catch (const H5Error& e) {
+    if (!o.force) throw;
+    std::fprintf(stderr, "sirl run: %s; --force: computing every task again\n", e.what());
+    return prior;
+  }
   auto part = [](const std::string& s) { return s.empty() ? "the whole run" : "shard " + s; };
   if (!o.force) {
     if (info.profile_text != p.text)

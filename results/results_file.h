@@ -1,5 +1,5 @@
-// The run's results file (docs/ARCHITECTURE.md §5): root attributes describing the run, the datasets, every
-// task's record under /runs/<task key>, and long tables that pandas reads directly:
+// The run's results file (docs/ARCHITECTURE.md §5): root attributes describing the run, the
+// datasets, every task's record under /runs/<task key>, and long tables that pandas reads directly:
 //   /tables/fpe      env, method, variant, vae, N, seed, fpe, train_mse
 //   /tables/tpa      env, method, variant, vae, frozen, N, M, seed, tpa, tpa_std, tpa_train,
 //                    in_main (a Fig. 5 cell), in_ablation (a Fig. 7 cell)
@@ -51,8 +51,15 @@ struct RunDataset {
 void write_results_file(const std::string& path, const RunInfo& info,
                         const std::vector<RunDataset>& datasets,
                         const std::vector<TaskRecord>& records);
+// Both verify the file against its checksum (FILE.sum, written with the file) before HDF5 reads
+// a byte of it: a corrupted file is one clear H5Error, not a crash inside the HDF5 library.
 RunInfo read_run_info(const std::string& path);
 std::vector<TaskRecord> read_results_records(const std::string& path);
+
+// FILE.sum: the file's checksum (a fast 64-bit FNV-1a over its bytes). verify_checksum throws
+// H5Error on a mismatch and does nothing when there is no FILE.sum (files of engine 0.1.0).
+void write_checksum(const std::string& path);
+void verify_checksum(const std::string& path);
 
 // One CSV per table (fpe.csv, tpa.csv, timings.csv, training.csv, vae_latents.csv) in dir.
 void export_csv(const ResultTables& t, const std::string& dir);

@@ -14,6 +14,7 @@
 """
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -307,8 +308,21 @@ with tempfile.TemporaryDirectory() as tmp:
           "vae_latents)")
 
     # Another engine version wrote the file: refused, and --force starts over.
+    # An edited file no longer matches its checksum: refused as changed (exit 1, one line), and
+    # --force recomputes it.
+    edited = os.path.join(tmp, "edited.h5")
+    shutil.copy(one, edited)
+    shutil.copy(one + ".sum", edited + ".sum")
+    with h5py.File(edited, "r+") as f:
+        f.attrs["engine_version"] = "0.0.1"
+    p = run("export", edited, "--csv", os.path.join(tmp, "e"), check=False)
+    assert p.returncode == 1 and "checksum mismatch" in p.stderr and p.stderr.count("\n") == 1, \
+        p.stderr
+    print("ok: an edited results file is refused by its checksum:", p.stderr.strip()[:120])
+    # A file of another engine version (its checksum dropped, as engine 0.1.0 wrote none).
     with h5py.File(one, "r+") as f:
         f.attrs["engine_version"] = "0.0.1"
+    os.remove(one + ".sum")
     p = run("run", SMOKE, "--out", one, "--quiet", check=False)
     assert p.returncode == 2 and "by engine 0.0.1" in p.stderr and "--force" in p.stderr, p.stderr
     out = run("run", SMOKE, "--out", one, "--force").stdout
