@@ -316,6 +316,15 @@ int run_serve() {
                      " (in use? try --port, or --port 0 for any free port)");
   // Answers are a few form fields: a larger body is refused (413) before it is read.
   srv.set_payload_max_length(64 * 1024);
+  // Slow or idle clients must not starve a participant: each connection holds a worker thread
+  // while it is read, so reads time out after 1 s of silence, keep-alive is short, and the pool
+  // is large enough that 64 trickling clients plus a crowd of idle ones leave threads free
+  // (study_server.py opens 64 slow and 200 idle connections and times a real request).
+  srv.set_read_timeout(1, 0);
+  srv.set_write_timeout(5, 0);
+  srv.set_keep_alive_timeout(1);
+  srv.set_keep_alive_max_count(20);
+  srv.new_task_queue = [] { return new httplib::ThreadPool(256); };
   if (!s.find(a.participant)) {
     const Dataset d = study_dataset(s);
     StudyParticipant p = plan_participant(d, a.participant, a.similarity, a.preference, a.seed);

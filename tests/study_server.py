@@ -169,6 +169,40 @@ with tempfile.TemporaryDirectory() as tmp:
     assert answers(study, "alice")[0] == [2, 0]
     print("ok: strict numbers, a 200 KiB body refused with 413, nothing written")
 
+    # Slow and idle clients cannot starve a participant: 64 connections trickling one header line
+    # per 0.5 s and 200 connected but silent ones, then a real request must be answered in < 2 s.
+    import socket
+    import threading
+    import time
+    stop = threading.Event()
+    slow, idle = [], []
+    for _ in range(64):
+        c = socket.create_connection(("127.0.0.1", port), timeout=5)
+        c.sendall(b"GET /api/state HTTP/1.1\r\nHost: x\r\n")
+        slow.append(c)
+    for _ in range(200):
+        idle.append(socket.create_connection(("127.0.0.1", port), timeout=5))
+
+    def trickle():
+        while not stop.is_set():
+            for c in slow:
+                try:
+                    c.sendall(b"X-Slow: 1\r\n")
+                except OSError:
+                    pass
+            time.sleep(0.5)
+    t = threading.Thread(target=trickle, daemon=True)
+    t.start()
+    time.sleep(0.5)
+    t0 = time.time()
+    st, body = http("GET", f"{base}/api/state?p=alice&t={token}")
+    took = time.time() - t0
+    stop.set()
+    for c in slow + idle:
+        c.close()
+    assert st == 200 and took < 2.0, (st, took)
+    print(f"ok: with 64 slow and 200 idle connections open a request was answered in {took:.2f} s")
+
     # --host is checked before anything is written; a non-loopback host is served with a warning
     # and a working URL.
     fresh = os.path.join(tmp, "host.h5")
