@@ -350,7 +350,13 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   std::vector<RunDataset> datasets;
   for (const auto& env : p.envs)
     datasets.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
-  write_results_file(o.out, info, datasets, records);
+  try {
+    write_results_file(o.out, info, datasets, records);
+  } catch (const std::exception&) {
+    // A task's failure (a full disk while saving it) is the cause to report; the results file
+    // then failed for the same reason. Every committed task stays in the staging folder.
+    if (!failure) throw;
+  }
   if (failure) std::rethrow_exception(failure);
   fs::remove_all(store.dir());  // everything is in the results file now
   RunSummary s;

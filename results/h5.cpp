@@ -3,6 +3,7 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
 
 namespace sirl {
@@ -16,9 +17,24 @@ void quiet() {
   thread_local QuietHdf5 q;  // HDF5's error-printing switch is per thread (thread-safe build)
 }
 
-[[noreturn]] void fail(const std::string& file, const std::string& what) {
-  throw H5Error(file + ": " + what);
+// HDF5 does not say why a write failed; the OS's errno does when storage is the cause (a full
+// disk, a file-size limit, a read-only or failing device).
+std::string os_reason() {
+  const int e = errno;
+  if (e == ENOSPC || e == EFBIG || e == EDQUOT || e == EIO || e == EROFS || e == EACCES ||
+      e == ENOENT)
+    return std::string(" (") + std::strerror(e) + ")";
+  return "";
 }
+
+[[noreturn]] void fail(const std::string& file, const std::string& what) {
+  throw H5Error(file + ": " + what + os_reason());
+}
+
+// HDF5 closes what is still open at exit; after a failed write (a full disk) that close crashed
+// inside the library (H5F__close_cb). Files are closed by H5File's destructor; the OS does the
+// rest at exit.
+const int kNoAtexit = (H5dont_atexit(), 0);
 
 // RAII for any hid_t.
 struct Hid {
@@ -142,8 +158,9 @@ Hid vlen_string_type() {
 
 H5File H5File::create(const std::string& path) {
   quiet();
+  errno = 0;
   hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-  if (f < 0) fail(path, "cannot create file (directory missing or not writable?)");
+  if (f < 0) fail(path, "cannot create file");
   return H5File(f, path);
 }
 
@@ -175,7 +192,8 @@ H5File::~H5File() {
   if (id_ >= 0) H5Fclose(id_);
 }
 void H5File::flush() {
-  if (H5Fflush(id_, H5F_SCOPE_GLOBAL) < 0) fail(path_, "flush failed");
+  errno = 0;
+  if (H5Fflush(id_, H5F_SCOPE_GLOBAL) < 0) fail(path_, "cannot write (flush failed)");
 }
 
 bool H5File::exists(const std::string& object) const {

@@ -202,36 +202,44 @@ void write_results_file(const std::string& path, const RunInfo& info,
                         const std::vector<RunDataset>& datasets,
                         const std::vector<TaskRecord>& records) {
   const std::string partial = path + ".partial";
-  {
-    H5File f = H5File::create(partial);
-    f.set_compression(true);  // regenerable datasets, embeddings and curves: shuffle + deflate
-    f.set_attr("/", "schema_version", kResultsSchemaVersion);
-    f.set_attr("/", "profile_name", info.profile_name);
-    f.set_attr("/", "profile_text", info.profile_text);
-    f.set_attr("/", "engine_version", info.engine_version);
-    f.set_attr("/", "git_commit", info.git_commit);
-    f.set_attr("/", "host", info.host);
-    f.set_attr("/", "started", info.started);
-    f.set_attr("/", "finished", info.finished);
-    f.set_attr("/", "shard", info.shard);
-    f.set_attr("/", "threads", info.threads);
-    f.set_attr("/", "tasks_total", info.tasks_total);
-    f.set_attr("/", "tasks_done", info.tasks_done);
-    f.set_attr("/", "wall_seconds", info.wall_seconds);
-    f.set_attr("/", "complete", int64_t(info.complete));
-    for (const auto& d : datasets) write_dataset(f, *d.dataset, *d.bundle, info.engine_version);
-    std::vector<std::string> keys;
-    for (const auto& r : records) {
-      write_record(f, "/runs/" + r.key, r);
-      keys.push_back(r.key);
+  try {
+    {
+      H5File f = H5File::create(partial);
+      f.set_compression(true);  // regenerable datasets, embeddings and curves: shuffle + deflate
+      f.set_attr("/", "schema_version", kResultsSchemaVersion);
+      f.set_attr("/", "profile_name", info.profile_name);
+      f.set_attr("/", "profile_text", info.profile_text);
+      f.set_attr("/", "engine_version", info.engine_version);
+      f.set_attr("/", "git_commit", info.git_commit);
+      f.set_attr("/", "host", info.host);
+      f.set_attr("/", "started", info.started);
+      f.set_attr("/", "finished", info.finished);
+      f.set_attr("/", "shard", info.shard);
+      f.set_attr("/", "threads", info.threads);
+      f.set_attr("/", "tasks_total", info.tasks_total);
+      f.set_attr("/", "tasks_done", info.tasks_done);
+      f.set_attr("/", "wall_seconds", info.wall_seconds);
+      f.set_attr("/", "complete", int64_t(info.complete));
+      for (const auto& d : datasets) write_dataset(f, *d.dataset, *d.bundle, info.engine_version);
+      std::vector<std::string> keys;
+      for (const auto& r : records) {
+        write_record(f, "/runs/" + r.key, r);
+        keys.push_back(r.key);
+      }
+      f.write_strings("/runs_index", keys);
+      const ResultTables t = build_tables(records);
+      f.write_table("/tables/fpe", t.fpe);
+      f.write_table("/tables/tpa", t.tpa);
+      f.write_table("/tables/timings", t.timings);
+      f.write_table("/tables/training", t.training);
+      f.write_table("/tables/vae_latents", t.vae_latents);
+      f.flush();  // a full disk shows here, not silently in the destructor
     }
-    f.write_strings("/runs_index", keys);
-    const ResultTables t = build_tables(records);
-    f.write_table("/tables/fpe", t.fpe);
-    f.write_table("/tables/tpa", t.tpa);
-    f.write_table("/tables/timings", t.timings);
-    f.write_table("/tables/training", t.training);
-    f.write_table("/tables/vae_latents", t.vae_latents);
+  } catch (const std::exception& e) {
+    // Nothing half-written stays behind (a full disk would keep failing on a stale .partial).
+    std::error_code ec;
+    fs::remove(partial, ec);
+    throw H5Error(path + ": the results file could not be written: " + e.what());
   }
   fsync_path(partial);
   // The old checksum goes first: a crash from here on leaves a file without one (read as

@@ -66,9 +66,14 @@ std::vector<std::string> TaskStore::keys() const {
 void TaskStore::commit(const TaskRecord& r) {
   const fs::path final = file_for(dir_, r.key);
   const fs::path tmp = final.string() + ".tmp";
-  {
+  try {
     H5File f = H5File::create(tmp.string());
     write_record(f, "/r", r);
+    f.flush();  // a full disk shows here, not in a destructor
+  } catch (const std::exception& e) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw H5Error("cannot save task " + r.key + ": " + e.what());
   }  // closed: every byte handed to the OS
   fsync_path(tmp.string());
   std::error_code ec;

@@ -173,6 +173,32 @@ with tempfile.TemporaryDirectory() as tmp:
     assert "0 computed" in out, out
     print("ok: rerunning a finished file recomputes nothing")
 
+    # A full disk (simulated by a file-size limit: writes fail with EFBIG as they would with
+    # ENOSPC): one line naming the cause, exit 1 and no crash, nothing half-written left behind,
+    # and once there is room again the rerun reuses every committed task.
+    import resource
+
+    def limited(size):
+        def f():
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+            resource.setrlimit(resource.RLIMIT_FSIZE, (size, size))
+        return f
+    for size, where in ((3_000_000, "the results file could not be written"),
+                        (20_000, "cannot save task")):
+        full = os.path.join(tmp, f"full{size}.h5")
+        p = subprocess.run([SIRL, "run", SMOKE, "--out", full, "--quiet"], preexec_fn=limited(size),
+                           capture_output=True, text=True, stdin=subprocess.DEVNULL)
+        assert p.returncode == 1 and where in p.stderr and "File too large" in p.stderr, \
+            (p.returncode, p.stderr[-500:])
+        assert p.stderr.count("\n") == 1, p.stderr
+        leftovers = [n for n in os.listdir(tmp) if n.startswith(f"full{size}.h5.partial")]
+        if os.path.isdir(full + ".tasks"):
+            leftovers += [n for n in os.listdir(full + ".tasks") if n.endswith(".tmp")]
+        assert not leftovers, leftovers
+        out = run("run", SMOKE, "--out", full, "--threads", "2").stdout
+        same(ref, tables(full), f"a write failing for want of space ({p.stderr.strip()[:90]}...), "
+             "then resumed")
+
     # Killed during `sirl reproduce`'s user-study part (on one thread the commit order is fixed:
     # after 200 commits some study tasks are done and others are not), rerun: every committed
     # study task is reused, not recomputed, and the study report is written.
