@@ -85,12 +85,19 @@ int run_dataset(const DatasetArgs& a) {
   check_replaceable(a.out, "dataset", a.force);  // after the arguments are checked
   // Write to a temporary name and rename: a crash never leaves a half-written file at --out.
   const std::string tmp = a.out + ".partial";
-  {
+  if (const auto dir = std::filesystem::path(a.out).parent_path(); !dir.empty())
+    std::filesystem::create_directories(dir);
+  try {
     H5File f = H5File::create(tmp);
     f.set_compression(true);  // shuffle + deflate: JacoRobot's inputs shrink severalfold
     f.set_attr("/", "engine_version", std::string(SIRL_VERSION));
     f.set_attr("/", "git_commit", std::string(SIRL_GIT_COMMIT));
     write_dataset(f, d, q, SIRL_VERSION);
+    f.flush();
+  } catch (const std::exception&) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);  // nothing half-written stays behind
+    throw;
   }
   std::filesystem::rename(tmp, a.out);
   std::printf(

@@ -202,6 +202,8 @@ void register_merge(CLI::App& app, Runner& run) {
     std::vector<RunDataset> ds;
     for (const auto& env : p.envs)
       ds.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
+    if (const auto dir = std::filesystem::path(out).parent_path(); !dir.empty())
+      std::filesystem::create_directories(dir);
     write_results_file(out, info, ds, records);
     std::printf("merged %zu files: %zu of %zu tasks%s → %s\n", inputs.size(), records.size(),
                 plan.tasks.size(), info.complete ? " (complete)" : " (INCOMPLETE)", out.c_str());

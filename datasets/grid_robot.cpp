@@ -15,6 +15,14 @@ void validate(const GridConfig& c) {
       throw std::invalid_argument("grid object (" + std::to_string(o[0]) + ", " +
                                   std::to_string(o[1]) + ") lies outside the " +
                                   std::to_string(c.size) + "x" + std::to_string(c.size) + " grid");
+  // Two objects on one cell would make two features one (their distances coincide everywhere).
+  const std::array<std::array<int, 2>, 3> objects{c.obstacle1, c.obstacle2, c.laptop};
+  for (int a = 0; a < 3; ++a)
+    for (int b = a + 1; b < 3; ++b)
+      if (objects[a] == objects[b])
+        throw std::invalid_argument("grid objects must sit on different cells: two are at (" +
+                                    std::to_string(objects[a][0]) + ", " +
+                                    std::to_string(objects[a][1]) + ")");
 }
 
 std::array<float, 4> grid_features(const GridConfig& c,

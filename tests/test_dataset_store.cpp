@@ -166,6 +166,15 @@ TEST(DatasetCli, WriteInspectAndRefuseCorruptFiles) {
       << out;
   EXPECT_EQ(run(sirl + " frobnicate", &out), 2) << out;
   EXPECT_NE(out.find("unknown command 'frobnicate'"), std::string::npos) << out;
+  // Two grid objects on one cell would make two features one.
+  EXPECT_EQ(run(sirl + " dataset --env grid --out " + path.string() + " --laptop 1,3", &out), 2)
+      << out;
+  EXPECT_NE(out.find("different cells"), std::string::npos) << out;
+  // Like `sirl run`, `sirl dataset` creates the directory of its --out.
+  const fs::path nested = fs::path(temp("cli_dir")).replace_extension("") / "a" / "b.h5";
+  EXPECT_EQ(run(sirl + " dataset --env grid --out " + nested.string(), &out), 0) << out;
+  EXPECT_TRUE(fs::exists(nested));
+  fs::remove_all(nested.parent_path().parent_path());
   fs::remove(path);
   fs::remove(temp("cli_out"));
 }
