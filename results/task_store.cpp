@@ -69,6 +69,7 @@ void TaskStore::commit(const TaskRecord& r) {
   try {
     H5File f = H5File::create(tmp.string());
     write_record(f, "/r", r);
+    f.set_attr("/r", "record_checksum", record_checksum(r));
     f.flush();  // a full disk shows here, not in a destructor
   } catch (const std::exception& e) {
     std::error_code ec;
@@ -107,7 +108,27 @@ TaskRecord TaskStore::load(const std::string& key) const {
     p = it->second;
   }
   H5File f = H5File::open_read(p.string());
-  return read_record(f, "/r");
+  TaskRecord r = read_record(f, "/r");
+  r.text.erase("record_checksum");  // written beside the record, not part of it
+  if (f.has_attr("/r", "record_checksum") &&
+      f.attr_string("/r", "record_checksum") != record_checksum(r)) {
+    std::error_code ec;
+    fs::remove(p, ec);  // a rerun computes the task again
+    throw H5Error("task " + key + ": its committed file " + p.string() +
+                  " is corrupted (checksum mismatch); it was removed: rerun to compute the task "
+                  "again");
+  }
+  return r;
+}
+
+std::string record_checksum(const TaskRecord& r) {
+  // FNV-1a 64 over the record's canonical serialisation (every key, number and array byte).
+  const std::string bytes = serialize(r);
+  uint64_t h = 0xCBF29CE484222325ull;
+  for (unsigned char c : bytes) h = (h ^ c) * 0x100000001B3ull;
+  char b[17];
+  std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(h));
+  return b;
 }
 
 void TaskStore::write_manifest(const std::string& name, const std::string& text) {

@@ -36,6 +36,10 @@ class TaskStore {
   std::map<std::string, std::filesystem::path> index_;
 };
 
+// The checksum each commit stores beside its record (attribute /r@record_checksum) and load()
+// verifies: a corrupted task file is removed and refused with its task's name.
+std::string record_checksum(const TaskRecord& r);
+
 // Test hook: with SIRL_CRASH_AFTER_COMMITS=k in the environment the process ends abruptly (exit
 // code 137, no cleanup) right after its k-th commit, so crash tests kill at an exact point.
 void crash_point_after_commit();
