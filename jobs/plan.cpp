@@ -37,6 +37,20 @@ std::string rep_key(const std::string& env, int64_t seed, const Variant& v, int6
   return k + "/rep";
 }
 
+// Forward+backward ≈ 3× the forward multiply-adds (docs/ARCHITECTURE.md §6).
+double train_flops(const MlpShape& s, int64_t rows_per_epoch, int epochs) {
+  return 3.0 * s.forward_flops(1) * double(rows_per_epoch) * epochs;
+}
+
+int add_task(Plan& plan, Task t) {
+  auto it = plan.index.find(t.key);
+  if (it != plan.index.end()) return it->second;
+  const int i = int(plan.tasks.size());
+  plan.index[t.key] = i;
+  plan.tasks.push_back(std::move(t));
+  return i;
+}
+
 namespace {
 
 // Trajectory-space size and input width per environment (what the cost model needs).
@@ -47,11 +61,6 @@ struct EnvSize {
 EnvSize env_size(const std::string& env, const Profile& p) {
   const EnvSpec& e = env_spec(env);
   return {e.input_dim(p.data), e.trajectories(p.data)};
-}
-
-// Forward+backward ≈ 3× the forward multiply-adds (docs/ARCHITECTURE.md §6).
-double train_flops(const MlpShape& s, int64_t rows_per_epoch, int epochs) {
-  return 3.0 * s.forward_flops(1) * double(rows_per_epoch) * epochs;
 }
 
 double working_set(const MlpShape& s, int batch_rows) {
@@ -144,14 +153,7 @@ class SeedPlanner {
     t.deps = {r};
     return t;
   }
-  int add(Task t) {
-    auto it = plan_.index.find(t.key);
-    if (it != plan_.index.end()) return it->second;
-    const int i = int(plan_.tasks.size());
-    plan_.index[t.key] = i;
-    plan_.tasks.push_back(std::move(t));
-    return i;
-  }
+  int add(Task t) { return add_task(plan_, std::move(t)); }
 
   Plan& plan_;
   const Profile& p_;

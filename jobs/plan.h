@@ -41,6 +41,12 @@ struct Plan {
 // Throws std::invalid_argument for an inconsistent profile (e.g. a TPA variant with no rep).
 Plan make_plan(const Profile& p);
 
+// For planners (make_plan and jobs/study_tasks.cpp): adds t unless a task with its key is there
+// (a task shared by several cells appears once) and returns its index either way.
+int add_task(Plan& plan, Task t);
+// Training cost: forward + backward ≈ 3× the forward FLOPs, per row per epoch.
+double train_flops(const MlpShape& s, int64_t rows_per_epoch, int epochs);
+
 // The task key of a representation (used by FPE/TPA tasks to find their input).
 std::string rep_key(const std::string& env, int64_t seed, const Variant& v, int64_t N);
 std::string vae_key(const std::string& env, int64_t seed);

@@ -23,21 +23,6 @@ std::string tpa_key(const std::string& id) {
 }
 const char* kSimulatedKey = "study/simulated";
 
-// Forward+backward ≈ 3× the forward multiply-adds (docs/ARCHITECTURE.md §6).
-double train_flops(const MlpShape& s, int64_t samples_per_epoch, int epochs) {
-  return 3.0 * s.forward_flops(1) * double(samples_per_epoch) * epochs;
-}
-
-// Adds one task unless its key is there; returns its index.
-int add(Plan& plan, Task t) {
-  auto it = plan.index.find(t.key);
-  if (it != plan.index.end()) return it->second;
-  const int i = int(plan.tasks.size());
-  plan.index[t.key] = i;
-  plan.tasks.push_back(std::move(t));
-  return i;
-}
-
 Task study_task(std::string key, TaskKind kind, const CohortConfig& c) {
   Task t;
   t.key = std::move(key);
@@ -101,7 +86,7 @@ void add_study_tasks(Plan& plan, const Profile& p) {
       t.variant = Variant{m, false};
       t.flops =
           (m == Method::sirl ? train_flops(z.phi, 3 * z.triplets, c.hyper.sirl.epochs) : 0) + embed;
-      const int i = add(plan, std::move(t));
+      const int i = add_task(plan, std::move(t));
       if (k == 0) (m == Method::sirl ? sirl0 : random0) = i;
     }
   // The other mode's Random is evaluated beside the chosen one: three cells per participant.
@@ -113,19 +98,19 @@ void add_study_tasks(Plan& plan, const Profile& p) {
     Task h = study_task(heldout_key(id), TaskKind::study_heldout, co);
     h.participant = id;
     h.flops = train_flops(z.phi, 3 * (z.triplets - co.similarity), c.hyper.sirl.epochs);
-    const int held = add(plan, std::move(h));
+    const int held = add_task(plan, std::move(h));
     Task t = study_task(tpa_key(id), TaskKind::study_tpa, co);
     t.participant = id;
     t.deps = {sirl0, random0, held};
     t.flops = cells + tpa_flops(z.head_frozen, c.cv_splits, z.train_pairs, c.hyper.tpa.epochs);
-    add(plan, std::move(t));
+    add_task(plan, std::move(t));
   }
   Task s = study_task(kSimulatedKey, TaskKind::study_simulated, co);
   s.deps = {sirl0, random0};
   const int64_t M = std::llround(c.train_fraction * double(c.simulated_queries));
   s.flops = tpa_flops(z.head_frozen, c.simulated_rewards, M, c.hyper.tpa.epochs) * 2 +
             tpa_flops(z.head_unfrozen, c.simulated_rewards, M, c.hyper.tpa.epochs);
-  add(plan, std::move(s));
+  add_task(plan, std::move(s));
 }
 
 void run_study_rep_task(const Task& t, RunContext& ctx, TaskRecord& r) {
