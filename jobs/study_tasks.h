@@ -6,7 +6,7 @@
 //   study/tpa/<id>                Real and Held-out TPA on <id>'s own preferences
 //   study/simulated               TPA on simulated perfect preferences
 // assemble_study puts the committed records back together into the analysis `sirl study
-// analyze` computes in one call (the same numbers: tests/test_jobs.cpp).
+// analyze` computes in one call (the same numbers: tests/test_study_tasks.cpp).
 #pragma once
 #include <vector>
 

@@ -2,8 +2,6 @@
 // toy environment and runs a smoke-sized plan on it without touching any other file.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <cmath>
 #include <filesystem>
 #include <set>
@@ -15,6 +13,7 @@
 #include "kernels/rng.h"
 #include "results/h5.h"
 #include "results/results_file.h"
+#include "tests/scratch_dir.h"
 
 namespace sirl {
 namespace {
@@ -146,10 +145,8 @@ M = [16]
 "tpa.epochs" = 5
 )";
   const Profile p = parse_profile(profile, "toy.toml");
-  const std::string out =
-      (std::filesystem::temp_directory_path() / ("sirl_toy_" + std::to_string(getpid()) + ".h5"))
-          .string();
-  std::filesystem::remove(out);
+  const test::ScratchDir scratch;
+  const std::string out = scratch.file("toy.h5");
   RunOptions o;
   o.out = out;
   o.threads = 2;
@@ -184,7 +181,6 @@ M = [16]
   }
   const H5File f = H5File::open_read(out);
   EXPECT_EQ(f.attr_string("/datasets/toyline", "title"), "Toy lines");
-  std::filesystem::remove(out);
 }
 
 }  // namespace

@@ -34,8 +34,8 @@ TEST(ReadyQueue, PopsByRankAndReleasesDependentsWhenTheirLastDependencyFinishes)
   const Plan p = plan_of({{1, {}}, {10, {0}}, {5, {}}, {2, {1, 2}}});
   ReadyQueue q(p, {1, 1, 1, 1});
   EXPECT_EQ(q.remaining(), 4);
-  ASSERT_EQ(q.size(), 2u);  // t0 and t2 have no dependencies
-  EXPECT_EQ(q.pop(), 0);    // rank 13 before 7
+  ASSERT_EQ(q.size(), 2u);    // t0 and t2 have no dependencies
+  EXPECT_EQ(q.pop(), 0);      // rank 13 before 7
   EXPECT_EQ(q.finish(0), 1);  // t1 ready
   EXPECT_EQ(q.pop(), 1);      // rank 12 before t2's 7
   EXPECT_EQ(q.finish(1), 0);  // t3 still waits for t2

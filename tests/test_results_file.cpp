@@ -3,8 +3,6 @@
 // a file of a newer version is refused with one line naming both versions.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -12,6 +10,7 @@
 
 #include "results/h5.h"
 #include "results/results_file.h"
+#include "tests/scratch_dir.h"
 
 namespace sirl {
 namespace {
@@ -20,8 +19,10 @@ namespace fs = std::filesystem;
 
 const std::string kFixture = std::string(SIRL_SOURCE_DIR) + "/tests/data/results_v1.h5";
 
+// A copy of the fixture in this process's scratch directory (removed when the process ends).
 std::string temp_copy(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / (std::to_string(getpid()) + "_" + name);
+  static const test::ScratchDir scratch("sirl_results_file");
+  const fs::path p = scratch.path() / name;
   fs::copy_file(kFixture, p, fs::copy_options::overwrite_existing);
   return p.string();
 }
@@ -122,8 +123,8 @@ TaskRecord fpe_record(const std::string& key, double fpe) {
   r.key = key;
   r.kind = "fpe";
   r.text = {{"env", "grid"}, {"method", "sirl"}, {"variant", "sirl+vae"}};
-  r.num = {{"vae", 1}, {"N", 100}, {"seed", 3}, {"fpe", fpe}, {"train_mse", 0.5},
-           {"seconds", 2}, {"flops", 4e9}};
+  r.num = {{"vae", 1},         {"N", 100},     {"seed", 3},   {"fpe", fpe},
+           {"train_mse", 0.5}, {"seconds", 2}, {"flops", 4e9}};
   return r;
 }
 
@@ -139,8 +140,12 @@ TEST(ResultsFile, TablesHoldOneRowPerCellWithTheRecordsValues) {
   v.key = "grid/s3/vae";
   v.kind = "vae";
   v.text = {{"env", "grid"}, {"elbo", "sum"}};
-  v.num = {{"seed", 3}, {"converged", 1}, {"loss_relative_change", 0.001},
-           {"reconstruction_mse", 0.2}, {"seconds", 0}, {"flops", 1}};
+  v.num = {{"seed", 3},
+           {"converged", 1},
+           {"loss_relative_change", 0.001},
+           {"reconstruction_mse", 0.2},
+           {"seconds", 0},
+           {"flops", 1}};
   v.arrays["loss_curve"] = {{3}, {9, 8, 7}};
   v.arrays["kl_per_dim"] = {{2}, {0.5f, 0.0f}};
   records.push_back(v);

@@ -3,8 +3,6 @@
 // `sirl study analyze` computes in one call on the same cohort.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <cmath>
 #include <filesystem>
 
@@ -14,6 +12,7 @@
 #include "jobs/run.h"
 #include "jobs/study_tasks.h"
 #include "results/results_file.h"
+#include "tests/scratch_dir.h"
 
 namespace sirl {
 namespace {
@@ -63,10 +62,8 @@ TEST(StudyTasks, ThePlanHasOneTaskPerPieceWithItsDependencies) {
 
 TEST(StudyTasks, TasksGiveExactlyTheOneCallAnalysis) {
   const Profile p = parse_profile(kStudyProfile, "study.toml");
-  const std::string out = (std::filesystem::temp_directory_path() /
-                           ("sirl_study_tasks_" + std::to_string(getpid()) + ".h5"))
-                              .string();
-  std::filesystem::remove(out);
+  const test::ScratchDir scratch;
+  const std::string out = scratch.file("study.h5");
   RunOptions o;
   o.out = out;
   o.threads = 2;
@@ -100,7 +97,6 @@ TEST(StudyTasks, TasksGiveExactlyTheOneCallAnalysis) {
 
   // A rerun finds every task committed and computes nothing.
   EXPECT_EQ(run_profile(p, o).ran, 0);
-  std::filesystem::remove(out);
 }
 
 }  // namespace

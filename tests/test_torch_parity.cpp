@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "engine/train_step.h"
+#include "tests/scratch_dir.h"
 
 namespace sirl {
 namespace {
@@ -53,9 +54,8 @@ void run_parity_case(const std::string& name, std::vector<int> widths, int T) {
   const int steps = 200, B = 64;
   const float margin = 1.f;
   const AdamConfig cfg{0.004, 0.99999};  // the paper's SIRL optimiser
-  const fs::path dir =
-      fs::temp_directory_path() / ("sirl_parity_" + name + "_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const test::ScratchDir scratch("sirl_parity_" + name);
+  const fs::path& dir = scratch.path();
   MlpShape shape{widths};
   Rng rng(seed_from_key("parity/" + name));
   std::vector<float> x(size_t(T) * shape.in()), init(shape.param_count());
@@ -164,7 +164,6 @@ void run_parity_case(const std::string& name, std::vector<int> widths, int T) {
       "(torch32 vs torch64 %.2e), final loss ours %.4f torch %.4f\n",
       name.c_str(), worst_loss, worst_state, kExactSteps, early, w_err, torch_drift, ours.back(),
       torch_losses.back());
-  fs::remove_all(dir);
 }
 
 TEST(TorchParity, GridSizedSirlTraining) {

@@ -1,0 +1,102 @@
+// Plan expansion: task counts, frozen modes, shards, the cells of each figure.
+#include <gtest/gtest.h>
+
+#include <set>
+#include <string>
+#include <vector>
+
+#include "jobs/plan.h"
+#include "jobs/profile.h"
+#include "jobs/run.h"
+#include "tests/small_profile.h"
+
+namespace sirl {
+namespace {
+
+TEST(Plan, TaskCountsMatchTheGrid) {
+  const Profile p = parse_profile(test::kSmallProfile, "t.toml");
+  const Plan plan = make_plan(p);
+  const int S = 3;
+  // VAE: one per seed (sirl+vae and vae need it).
+  EXPECT_EQ(plan.count(TaskKind::vae), S);
+  // FPE: sirl, sirl+vae × 3 N; vae and random once each (no N).
+  EXPECT_EQ(plan.count(TaskKind::fpe), S * (2 * 3 + 2));
+  // TPA main: sirl (frozen) and multipref10 (unfrozen) × 2 N × 2 M; random (unfrozen) × 2 M.
+  // Ablation: sirl, sirl+vae × 2 frozen × 1 M; random × 2 frozen. Cells shared with the main
+  // grid (sirl N300 M80 frozen; random M80 unfrozen) are counted once.
+  const int main_cells = 2 * 2 * 2 + 2;
+  const int ablation_new = 2 * 2 + 2 - 2;
+  EXPECT_EQ(plan.count(TaskKind::tpa), S * (main_cells + ablation_new));
+  // Representations: sirl N100/200/300, sirl+vae N100/200/300, vae, random, multipref10 N100/300.
+  EXPECT_EQ(plan.count(TaskKind::rep), S * (3 + 3 + 1 + 1 + 2));
+  // Every dependency precedes its dependent, and every FPE/TPA task depends on one rep.
+  for (size_t i = 0; i < plan.tasks.size(); ++i) {
+    for (int d : plan.tasks[i].deps) EXPECT_LT(size_t(d), i);
+    if (plan.tasks[i].kind == TaskKind::fpe || plan.tasks[i].kind == TaskKind::tpa) {
+      ASSERT_EQ(plan.tasks[i].deps.size(), 1u);
+      EXPECT_EQ(plan.tasks[plan.tasks[i].deps[0]].kind, TaskKind::rep);
+    }
+  }
+  std::set<std::string> keys;
+  for (const auto& t : plan.tasks) EXPECT_TRUE(keys.insert(t.key).second) << t.key;
+}
+
+// frozen = "best" (the default): SIRL frozen, every other method unfrozen (the paper's best
+// configurations, Fig. 5); an explicit list runs the listed modes for every method.
+TEST(Plan, FrozenBestIsSirlFrozenAndTheOthersUnfrozen) {
+  const Plan plan = make_plan(parse_profile(test::kSmallProfile, "t.toml"));
+  int sirl = 0, others = 0;
+  for (const auto& t : plan.tasks) {
+    if (t.kind != TaskKind::tpa || !t.in_main) continue;
+    if (t.variant.method == Method::sirl) {
+      EXPECT_TRUE(t.frozen) << t.key;
+      ++sirl;
+    } else {
+      EXPECT_FALSE(t.frozen) << t.key;
+      ++others;
+    }
+  }
+  EXPECT_GT(sirl, 0);
+  EXPECT_GT(others, 0);
+  std::string both = test::kSmallProfile;
+  both.replace(both.find("M = [10, 80]"), 12, "M = [10, 80]\nfrozen = [true, false]");
+  const Plan p2 = make_plan(parse_profile(both, "t.toml"));
+  EXPECT_TRUE(p2.index.count("grid/s0/multipref10/N100/tpa/M10/frozen"));
+  EXPECT_TRUE(p2.index.count("grid/s0/sirl/N100/tpa/M10/unfrozen"));
+}
+
+TEST(Plan, ShardsPartitionTheWorkAndKeepDependencies) {
+  const Plan plan = make_plan(parse_profile(test::kSmallProfile, "t.toml"));
+  std::vector<int> owners(plan.tasks.size(), 0);
+  for (int s = 0; s < 3; ++s) {
+    const auto in = shard_tasks(plan, s, 3);
+    for (size_t i = 0; i < in.size(); ++i) {
+      if (!in[i]) continue;
+      if (plan.tasks[i].kind != TaskKind::vae) ++owners[i];
+      for (int d : plan.tasks[i].deps) EXPECT_TRUE(in[d]) << plan.tasks[i].key;
+    }
+  }
+  for (size_t i = 0; i < plan.tasks.size(); ++i) {
+    if (plan.tasks[i].kind != TaskKind::vae) {
+      EXPECT_EQ(owners[i], 1) << plan.tasks[i].key;
+    }
+  }
+}
+
+// Fig. 5 and Fig. 7 read which cells belong to them from the file; the plan marks a cell both
+// when the two grids share it.
+TEST(Plan, MarksTheCellsOfTheMainGridAndOfTheAblation) {
+  const std::string text =
+      "name = \"x\"\nenvs = [\"grid\"]\nseeds = [0]\n[tpa]\nmethods = [\"sirl\"]\nN = [100]\n"
+      "M = [10, 20]\n[ablation]\nmethods = [\"sirl\"]\nN = [100]\nM = [20]\n";
+  const Plan plan = make_plan(parse_profile(text));
+  const auto& frozen20 = plan.tasks[plan.index.at("grid/s0/sirl/N100/tpa/M20/frozen")];
+  EXPECT_TRUE(frozen20.in_main && frozen20.in_ablation);
+  const auto& frozen10 = plan.tasks[plan.index.at("grid/s0/sirl/N100/tpa/M10/frozen")];
+  EXPECT_TRUE(frozen10.in_main && !frozen10.in_ablation);
+  const auto& unfrozen20 = plan.tasks[plan.index.at("grid/s0/sirl/N100/tpa/M20/unfrozen")];
+  EXPECT_TRUE(!unfrozen20.in_main && unfrozen20.in_ablation);
+}
+
+}  // namespace
+}  // namespace sirl

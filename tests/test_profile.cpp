@@ -1,0 +1,134 @@
+// Profiles: parsing, validation with file:line errors, partial grids, the shipped profiles.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "jobs/plan.h"
+#include "jobs/profile.h"
+#include "tests/small_profile.h"
+
+namespace sirl {
+namespace {
+
+TEST(Profile, ParsesTheGridAndOverrides) {
+  const Profile p = parse_profile(test::kSmallProfile, "t.toml");
+  EXPECT_EQ(p.name, "t");
+  EXPECT_EQ(p.seeds, (std::vector<int64_t>{0, 1, 2}));
+  ASSERT_EQ(p.fpe_methods.size(), 4u);
+  EXPECT_TRUE(p.fpe_methods[1].vae);
+  EXPECT_EQ(p.fpe_methods[1].method, Method::sirl);
+  EXPECT_EQ(p.hyper.at("grid").sirl.epochs, 7);
+  EXPECT_EQ(p.hyper.at("grid").tpa_hidden, (std::vector<int>{32, 16}));
+  EXPECT_EQ(p.hyper.at("grid").pref.epochs, 5000);  // untouched: the paper's value
+  EXPECT_EQ(p.queries.similarity, 300);
+}
+
+// The message of the ProfileError thrown for `text`.
+std::string error_of(const std::string& text) {
+  try {
+    parse_profile(text, "bad.toml");
+  } catch (const ProfileError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
+  const std::string base = "name = \"x\"\nenvs = [\"grid\"]\nseeds = [0]\n";
+  const std::string grid =
+      "[fpe]\nmethods = [\"sirl\"]\nN = [100]\n[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n";
+  EXPECT_EQ(error_of(base + grid), "no error");
+  // An unknown key, on line 4.
+  EXPECT_EQ(error_of(base + "sedes = [1]\n" + grid).rfind("bad.toml:4: unknown key 'sedes'", 0), 0u)
+      << error_of(base + "sedes = [1]\n" + grid);
+  // A wrong type.
+  EXPECT_NE(error_of("name = \"x\"\nenvs = \"grid\"\nseeds = [0]\n" + grid)
+                .find("bad.toml:2: envs must be an array of strings"),
+            std::string::npos);
+  // An unknown method, with the list of valid ones.
+  auto m = error_of(base + "[fpe]\nmethods = [\"sirl\", \"pca\"]\nN = [100]\n" +
+                    "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n");
+  EXPECT_NE(m.find("bad.toml:5"), std::string::npos) << m;
+  EXPECT_NE(m.find("unknown method 'pca'"), std::string::npos) << m;
+  EXPECT_NE(m.find("multipref10"), std::string::npos) << m;
+  // M beyond the TPA training split.
+  m = error_of(base + grid + "[queries]\ntpa_pairs = 10\n");
+  EXPECT_NE(m.find("M = 10 exceeds the 8 training pairs"), std::string::npos) << m;
+  m = error_of(base + "[fpe]\nmethods = [\"sirl\"]\nN = [5000]\n" +
+               "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n");
+  EXPECT_NE(m.find("exceeds the query budget"), std::string::npos) << m;
+  // A bad hyper-parameter, named.
+  m = error_of(base + grid + "[hyper.grid]\n\"sirl.epoch\" = 3\n");
+  EXPECT_NE(m.find("bad.toml:12"), std::string::npos) << m;
+  EXPECT_NE(m.find("unknown hyper-parameter 'sirl.epoch'"), std::string::npos) << m;
+  m = error_of(base + grid + "[hyper.grid]\n\"sirl.lr\" = -1\n");
+  EXPECT_NE(m.find("sirl.lr must be > 0"), std::string::npos) << m;
+  // "+vae" only where it applies; a missing table; TOML syntax errors keep their line.
+  EXPECT_NE(error_of(base + "[fpe]\nmethods = [\"random+vae\"]\nN = [100]\n" +
+                     "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n")
+                .find("VAE pre-training applies only"),
+            std::string::npos);
+  EXPECT_NE(error_of(base).find(
+                "nothing to run: give at least one of [fpe], [tpa], [ablation] or [study]"),
+            std::string::npos)
+      << error_of(base);
+  EXPECT_NE(error_of(base + grid + "[grid]\nstore_weights = 1\n").find("store_weights must be"),
+            std::string::npos);
+  m = error_of(base + grid + "[hyper.grid]\n\"vae.elbo\" = \"avg\"\n");
+  EXPECT_NE(m.find("vae.elbo must be \"sum\""), std::string::npos) << m;
+  EXPECT_EQ(error_of(base + "[fpe\n").rfind("bad.toml:4:", 0), 0u) << error_of(base + "[fpe\n");
+  EXPECT_NE(error_of(base + grid + "[teacher]\nmistake = 2\n").find("outside [0, 1]"),
+            std::string::npos);
+  // A duplicate method is refused like a duplicate seed (it used to be dropped silently).
+  m = error_of(base + "[fpe]\nmethods = [\"sirl\", \"random\", \"sirl\"]\nN = [100]\n");
+  EXPECT_NE(m.find("'sirl' is listed twice"), std::string::npos) << m;
+  // A network that cannot fit is refused with its size, before anything allocates it.
+  m = error_of(base + grid + "[hyper.grid]\n\"phi.hidden\" = [100000000, 100000000]\n");
+  EXPECT_NE(m.find("GiB to train, this machine has"), std::string::npos) << m;
+  // A float in an integer list: one file:line prefix, not two.
+  m = error_of(base + grid + "[hyper.grid]\n\"phi.hidden\" = [1e8, 1e8]\n");
+  EXPECT_EQ(m.find("bad.toml", 1), std::string::npos) << m;
+  EXPECT_NE(m.find("must be an array of integers"), std::string::npos) << m;
+}
+
+// A profile may run any part of the grid: FPE only, TPA only, or the ablation only.
+TEST(Profile, APartOfTheGridIsAProfileOfItsOwn) {
+  const std::string base = "name = \"x\"\nenvs = [\"grid\", \"grid2\"]\nseeds = [0]\n";
+  auto kinds = [](const Plan& plan) {
+    std::map<std::string, int> n;
+    for (const auto& t : plan.tasks) ++n[kind_name(t.kind)];
+    return n;
+  };
+  auto fpe_only =
+      kinds(make_plan(parse_profile(base + "[fpe]\nmethods = [\"sirl\"]\nN = [100]\n")));
+  EXPECT_EQ(fpe_only["fpe"], 2);  // one per environment
+  EXPECT_EQ(fpe_only["rep"], 2);
+  EXPECT_EQ(fpe_only["tpa"], 0);
+  auto tpa_only = kinds(
+      make_plan(parse_profile(base + "[tpa]\nmethods = [\"random\"]\nN = [100]\nM = [10, 20]\n")));
+  EXPECT_EQ(tpa_only["tpa"], 4);
+  EXPECT_EQ(tpa_only["fpe"], 0);
+  const Plan ab =
+      make_plan(parse_profile(base + "[ablation]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n"));
+  auto ab_kinds = kinds(ab);
+  EXPECT_EQ(ab_kinds["tpa"], 2 * 4);  // frozen/unfrozen × with/without VAE, per environment
+  EXPECT_EQ(ab_kinds["vae"], 2);
+  for (const auto& t : ab.tasks)
+    if (t.kind == TaskKind::tpa) {
+      EXPECT_TRUE(t.in_ablation && !t.in_main) << t.key;
+    }
+}
+
+TEST(Profile, ShippedProfilesAreValid) {
+  for (const char* name : {"smoke", "quick", "paper", "paper-grid"}) {
+    const Profile p = load_profile(name);
+    EXPECT_EQ(p.name, name);
+    EXPECT_GT(make_plan(p).tasks.size(), 0u);
+  }
+  EXPECT_THROW(load_profile("no-such-profile"), ProfileError);
+}
+
+}  // namespace
+}  // namespace sirl

@@ -1,0 +1,89 @@
+// Query sampling: distinct trajectories per query, reward sets, MultiPref's split over humans.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+#include <vector>
+
+#include "datasets/grid_robot.h"
+#include "datasets/queries.h"
+#include "datasets/query_bundle.h"
+#include "kernels/rng.h"
+
+namespace sirl {
+namespace {
+
+// Every query shows distinct trajectories: a triplet three, a preference pair two (a query
+// comparing a trajectory with itself carries no information and biases the answer).
+TEST(Queries, EveryQueryShowsDistinctTrajectories) {
+  const Dataset d = make_grid_dataset();
+  QueryBundleConfig c;
+  c.similarity = 3000;  // with 1960 rows, repeats would certainly appear if allowed
+  c.preference = 3000;
+  c.tpa_pairs = 50;
+  const QueryBundle b = make_query_bundle(d, c, 9);
+  for (int64_t i = 0; i < b.similarity.count; ++i) {
+    const int32_t* q = b.similarity.idx.data() + 3 * i;
+    ASSERT_TRUE(q[0] != q[1] && q[0] != q[2] && q[1] != q[2]) << "triplet " << i;
+  }
+  for (const PreferenceSet* p : {&b.singlepref, &b.multipref10, &b.multipref50})
+    for (int64_t i = 0; i < p->count; ++i) ASSERT_NE(p->pairs[2 * i], p->pairs[2 * i + 1]) << i;
+}
+
+TEST(Rewards, UnitNormDisjointAndSeeded) {
+  const auto r = make_reward_sets(4, 11);
+  EXPECT_EQ(r.test.count, 20);
+  EXPECT_EQ(r.multipref10.count, 10);
+  EXPECT_EQ(r.multipref50.count, 50);
+  for (const RewardSet* s : {&r.test, &r.multipref10, &r.multipref50, &r.singlepref})
+    for (int i = 0; i < s->count; ++i) {
+      double n = 0;
+      for (int k = 0; k < 4; ++k) n += double(s->weights[4 * i + k]) * s->weights[4 * i + k];
+      EXPECT_NEAR(n, 1.0, 1e-6);
+    }
+  EXPECT_FLOAT_EQ(r.singlepref.weights[0], 0.5f);
+  EXPECT_EQ(make_reward_sets(4, 11).test.weights, r.test.weights);
+  EXPECT_NE(make_reward_sets(4, 12).test.weights, r.test.weights);
+  EXPECT_NE(r.test.weights[0], r.multipref10.weights[0]);
+}
+
+TEST(Queries, MultiPrefSplitsEvenlyOverHumans) {
+  const Dataset d = make_grid_dataset();
+  const auto r = make_reward_sets(4, 1);
+  Rng rng(5);
+  const auto p = sample_preference_queries(d, 100, r.multipref50, Teacher{}, rng);
+  ASSERT_EQ(p.count, 100);
+  std::vector<int> per(50, 0);
+  for (int h : p.human) ++per[h];
+  for (int c : per) EXPECT_EQ(c, 2);
+  // Labels agree with the reward of the human who answered.
+  for (int i = 0; i < p.count; ++i) {
+    const float* w = r.multipref50.weights.data() + 4 * p.human[i];
+    const double ra = reward(w, d.feature(p.pairs[2 * i]), 4),
+                 rb = reward(w, d.feature(p.pairs[2 * i + 1]), 4);
+    if (ra != rb) {
+      EXPECT_EQ(p.label[i], ra > rb ? 1.f : 0.f);
+    }
+  }
+  const auto s = sample_similarity_queries(d, 50, Teacher{}, rng);
+  ASSERT_EQ(s.idx.size(), 150u);
+  for (int i = 0; i < 50; ++i) {
+    auto dist = [&](int a, int b) {
+      double t = 0;
+      for (int k = 0; k < 4; ++k) t += std::pow(d.feature(a)[k] - d.feature(b)[k], 2);
+      return t;
+    };
+    const int p1 = s.idx[3 * i], p2 = s.idx[3 * i + 1], n = s.idx[3 * i + 2];
+    EXPECT_LE(dist(p1, p2), dist(p1, n));
+    EXPECT_LE(dist(p1, p2), dist(p2, n));
+  }
+  const auto f = sample_fpe_split(d, 1000, rng);
+  EXPECT_EQ(f.train.size(), 800u);
+  EXPECT_EQ(f.test.size(), 200u);
+  std::set<int> all(f.train.begin(), f.train.end());
+  all.insert(f.test.begin(), f.test.end());
+  EXPECT_EQ(all.size(), 1000u);
+}
+
+}  // namespace
+}  // namespace sirl

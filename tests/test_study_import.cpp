@@ -1,0 +1,139 @@
+// Importing a study's answers from CSV and JSON, and the errors for bad records.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "datasets/study.h"
+#include "datasets/study_import.h"
+#include "tests/scratch_dir.h"
+
+namespace sirl {
+namespace {
+
+// Writes `text` to a file of the test's scratch directory (removed when the process ends).
+std::string write_temp(const std::string& name, const std::string& text) {
+  static const test::ScratchDir scratch("sirl_import");
+  const std::string p = scratch.file(name);
+  std::ofstream(p) << text;
+  return p;
+}
+
+std::string import_error(bool json, const std::string& text, const Dataset& d) {
+  Study s;
+  s.env = "grid";
+  try {
+    const std::string p = write_temp(json ? "sirl_bad.json" : "sirl_bad.csv", text);
+    json ? import_study_json(p, d, s) : import_study_csv(p, d, s);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(StudyImport, CsvAndJsonGiveTheSameStudy) {
+  Study base;
+  base.env = "grid";
+  const Dataset d = study_dataset(base);
+  const std::string csv = write_temp(
+      "sirl_import.csv",
+      "participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features\n"
+      "ann,similarity,1,2,3,2,1500,1700000000.5,\"Stay away, please\",laptop_distance;abs_angle\n"
+      "ann,similarity,4,5,6,0,900,1700000001,,\n"
+      "ann,preference,7,8,,1,700,1700000002,,\n"
+      "ben,preference,9,10,,0.5,1100,1700000003,Anything,\n");
+  const std::string json = write_temp("sirl_import.json",
+                                      R"({"answers": [
+        {"participant": "ann", "kind": "similarity", "trajectories": [1, 2, 3], "answer": 2,
+         "response_ms": 1500, "timestamp": 1700000000.5, "scenario": "Stay away, please",
+         "scenario_features": ["laptop_distance", "abs_angle"]},
+        {"participant": "ann", "kind": "similarity", "trajectories": [4, 5, 6], "answer": 0,
+         "response_ms": 900, "timestamp": 1700000001},
+        {"participant": "ann", "kind": "preference", "trajectories": [7, 8], "answer": 1,
+         "response_ms": 700, "timestamp": 1700000002},
+        {"participant": "ben", "kind": "preference", "trajectories": [9, 10], "answer": 0.5,
+         "response_ms": 1100, "timestamp": 1700000003, "scenario": "Anything"}]})");
+  Study a = base, b = base;
+  import_study_csv(csv, d, a);
+  import_study_json(json, d, b);
+  ASSERT_EQ(a.participants.size(), 2u);
+  ASSERT_EQ(b.participants.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const auto &x = a.participants[i], &y = b.participants[i];
+    EXPECT_EQ(x.id, y.id);
+    EXPECT_EQ(x.scenario, y.scenario);
+    EXPECT_EQ(x.scenario_features, y.scenario_features);
+    EXPECT_EQ(x.similarity, y.similarity);
+    EXPECT_EQ(x.similarity_answer, y.similarity_answer);
+    EXPECT_EQ(x.preference, y.preference);
+    EXPECT_EQ(x.preference_answer, y.preference_answer);
+    EXPECT_EQ(x.similarity_ms, y.similarity_ms);
+    EXPECT_EQ(x.preference_time, y.preference_time);
+  }
+  const auto& ann = a.participants[0];
+  EXPECT_EQ(ann.scenario, "Stay away, please");
+  EXPECT_EQ(ann.similarity, (std::vector<int32_t>{1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(ann.similarity_answer, (std::vector<int32_t>{2, 0}));
+  EXPECT_EQ(ann.preference_answer, (std::vector<float>{1.f}));
+  EXPECT_EQ(a.participants[1].preference_answer, (std::vector<float>{0.5f}));
+  EXPECT_DOUBLE_EQ(ann.similarity_time[0], 1700000000.5);
+  // Every imported participant gets a capability of their own (not a shared fixed token).
+  std::set<std::string> tokens;
+  for (const Study* st : {&a, &b})
+    for (const auto& p : st->participants) {
+      EXPECT_EQ(p.token.size(), 32u);
+      EXPECT_EQ(p.token.find_first_not_of("0123456789abcdef"), std::string::npos) << p.token;
+      tokens.insert(p.token);
+    }
+  EXPECT_EQ(tokens.size(), a.participants.size() + b.participants.size());
+}
+
+TEST(StudyImport, BadRecordsNameTheLineAndTheProblem) {
+  Study base;
+  base.env = "grid";
+  const Dataset d = study_dataset(base);
+  const std::string h =
+      "participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features\n";
+  auto has = [](const std::string& msg, const std::string& part) {
+    return msg.find(part) != std::string::npos;
+  };
+  std::string m = import_error(false, "who,what\n", d);
+  EXPECT_TRUE(has(m, ":1: the header must be")) << m;
+  m = import_error(false, h + "ann,similarity,1,2,3,2,10,0,,\nann,similarity,1,2,99999,2,10,0,,\n",
+                   d);
+  EXPECT_TRUE(has(m, "sirl_bad.csv:3: trajectory")) << m;
+  m = import_error(false, h + "ann,similarity,1,2,3,5,10,0,,\n", d);
+  EXPECT_TRUE(has(m, ":2: a similarity answer")) << m;
+  m = import_error(false, h + "ann,preference,1,1,,1,10,0,,\n", d);
+  EXPECT_TRUE(has(m, "same trajectory twice")) << m;
+  m = import_error(false, h + "a b,preference,1,2,,1,10,0,,\n", d);
+  EXPECT_TRUE(has(m, "participant id")) << m;
+  m = import_error(false, h + "ann,preference,1,2,,1,fast,0,,\n", d);
+  EXPECT_TRUE(has(m, "response_ms 'fast' is not a number")) << m;
+  m = import_error(false, h + "ann,opinion,1,2,,1,10,0,,\n", d);
+  EXPECT_TRUE(has(m, "kind must be similarity or preference")) << m;
+  m = import_error(false, h + "ann,preference,1,2,,1,10,0,,colour\n", d);
+  EXPECT_TRUE(has(m, "unknown feature 'colour'")) << m;
+  m = import_error(true, R"({"answers": [{"participant": "ann", "kind": "preference",
+      "trajectories": [1, 2], "answer": 1}]})",
+                   d);
+  EXPECT_TRUE(has(m, "record 0: missing \"response_ms\"")) << m;
+  m = import_error(true, R"({"answers": [{"participant": "ann", )", d);
+  EXPECT_TRUE(has(m, "sirl_bad.json: parse error at line 1, column 37")) << m;
+  m = import_error(true, R"({"answers": []} trailing)", d);
+  EXPECT_TRUE(has(m, "parse error")) << m;
+  m = import_error(true, R"({"answers": [{"participant": "ann", "answer": 1e400}]})", d);
+  EXPECT_TRUE(has(m, "1e400")) << m;
+  // A hostile file of 100,000 '[' (issue 17): one clear line, no stack overflow.
+  m = import_error(true, std::string(100000, '['), d);
+  EXPECT_TRUE(has(m, "nested deeper than 16 levels")) << m;
+  m = import_error(true, R"([{"participant": 7}])", d);
+  EXPECT_TRUE(has(m, "\"participant\" has the wrong type")) << m;
+}
+
+}  // namespace
+}  // namespace sirl

@@ -1,0 +1,85 @@
+// The task store: commits round-trip, torn commits are swept, corrupted commits refused.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "results/h5.h"
+#include "results/task_store.h"
+#include "tests/scratch_dir.h"
+
+namespace sirl {
+namespace {
+
+// A byte flipped in a committed task's data (here a weight of a 4096-float array, which HDF5
+// itself never checks) is caught by the record's checksum: refused with the task's name, the
+// file removed so that a rerun computes the task again.
+TEST(TaskStore, ACorruptedCommitIsRefusedByNameAndRemoved) {
+  namespace fs = std::filesystem;
+  const test::ScratchDir scratch;
+  const fs::path dir = scratch.path() / "tasks";
+  TaskRecord r;
+  r.key = "grid/s0/sirl/N100/rep";
+  r.kind = "rep";
+  r.text["env"] = "grid";
+  std::vector<float> w(4096);
+  for (size_t i = 0; i < w.size(); ++i) w[i] = 0.25f + float(i);
+  r.arrays["params"] = {{4096}, w};
+  TaskStore s(dir);
+  s.commit(r);
+  EXPECT_EQ(s.load(r.key), r);
+  // Find weight 2000 (2000.25f) in the file and flip one bit of it.
+  fs::path file;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().extension() == ".h5") file = e.path();
+  std::string bytes;
+  {
+    std::ifstream in(file, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const float target = 2000.25f;
+  const size_t at = bytes.find(std::string(reinterpret_cast<const char*>(&target), 4));
+  ASSERT_NE(at, std::string::npos);
+  bytes[at] = char(bytes[at] ^ 0x01);
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+  try {
+    s.load(r.key);
+    ADD_FAILURE() << "a corrupted task was loaded";
+  } catch (const H5Error& e) {
+    EXPECT_NE(std::string(e.what()).find("task grid/s0/sirl/N100/rep"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("corrupted"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(file));
+  EXPECT_FALSE(TaskStore(dir).has(r.key));  // a rerun computes it again
+}
+
+// (Durability under a crash is batch_engine.py's kill -9 test; this one is the file format.)
+TEST(TaskStore, CommitsRoundTripAndTornCommitsAreSwept) {
+  namespace fs = std::filesystem;
+  const test::ScratchDir scratch;
+  const fs::path dir = scratch.path() / "tasks";
+  TaskRecord r;
+  r.key = "grid/s0/sirl/N100/tpa/M10/frozen";
+  r.kind = "tpa";
+  r.text["env"] = "grid";
+  r.num["tpa"] = 0.8125;
+  r.arrays["loss_curves"] = {{2, 3}, {1, 2, 3, 4, 5, 6}};
+  r.arrays["empty"] = {{0}, {}};
+  {
+    TaskStore s(dir);
+    s.commit(r);
+    EXPECT_TRUE(s.has(r.key));
+  }
+  std::ofstream(dir / "0123456789abcdef.h5.tmp") << "torn";  // an interrupted commit
+  TaskStore again(dir);
+  EXPECT_EQ(again.keys(), std::vector<std::string>{r.key});
+  EXPECT_EQ(again.load(r.key), r);
+  EXPECT_FALSE(fs::exists(dir / "0123456789abcdef.h5.tmp"));
+}
+
+}  // namespace
+}  // namespace sirl
