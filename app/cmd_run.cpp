@@ -102,12 +102,25 @@ void register_plan(CLI::App& app, Runner& run) {
       "(from a ~1 s calibration of the real training code) — without running it.");
   static std::string profile;
   static int threads = 0;
+  static bool list_tasks = false;
   cmd->add_option("profile", profile, "Profile: a name in configs/ or a .toml path")->required();
   cmd->add_option("--threads", threads, "Worker threads to plan for (default: every core)")
       ->check(CLI::Range(1, 4096));
+  cmd->add_flag("--tasks", list_tasks,
+                "List every task instead (one line each: key, kind, estimated GFLOP and MiB, the\n"
+                "keys of the tasks it reads), in the order the plan holds them; no calibration");
   run = [] {
     const Profile p = load_or_usage(profile);
     const Plan plan = make_plan(p);
+    if (list_tasks) {
+      for (const Task& t : plan.tasks) {
+        std::printf("%s %s %.6g %.6g", t.key.c_str(), kind_name(t.kind), t.flops * 1e-9,
+                    t.bytes / (1024.0 * 1024.0));
+        for (int d : t.deps) std::printf(" %s", plan.tasks[size_t(d)].key.c_str());
+        std::printf("\n");
+      }
+      return 0;
+    }
     const int th = threads > 0 ? threads : default_threads();
     std::printf("profile %s (%s): %s\n", p.name.c_str(), p.path.c_str(), p.description.c_str());
     std::printf("envs:");
@@ -143,7 +156,7 @@ void register_export(CLI::App& app, Runner& run) {
   cmd->add_option("--csv", dir, "Directory for fpe.csv, tpa.csv, timings.csv")->required();
   run = [] {
     const auto records = read_results_records(file);
-    export_csv(build_tables(records), dir);
+    export_csv(result_tables(records), dir);
     std::printf("wrote %s/{fpe,tpa,timings,training,vae_latents}.csv from %zu task records\n",
                 dir.c_str(), records.size());
     return 0;
@@ -204,7 +217,7 @@ void register_merge(CLI::App& app, Runner& run) {
       ds.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
     if (const auto dir = std::filesystem::path(out).parent_path(); !dir.empty())
       std::filesystem::create_directories(dir);
-    write_results_file(out, info, ds, records);
+    write_results_file(out, info, ds, records, result_tables(records));
     std::printf("merged %zu files: %zu of %zu tasks%s → %s\n", inputs.size(), records.size(),
                 plan.tasks.size(), info.complete ? " (complete)" : " (INCOMPLETE)", out.c_str());
     return 0;

@@ -9,6 +9,7 @@
 #include "engine/tpa.h"
 #include "jobs/scheduler.h"
 #include "jobs/study_tasks.h"
+#include "jobs/task_kinds.h"
 
 namespace sirl {
 
@@ -75,12 +76,7 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
   std::vector<double> sizes;
   for (size_t i = 0; i < plan.tasks.size(); ++i) {
     const Task& t = plan.tasks[i];
-    std::string kind = kind_name(t.kind);
-    if (t.kind == TaskKind::rep) kind = t.variant.method == Method::sirl ? "rep_sirl" : "rep_pref";
-    if (t.kind == TaskKind::tpa) kind = t.frozen ? "tpa_frozen" : "tpa_unfrozen";
-    if (t.kind == TaskKind::study_rep || t.kind == TaskKind::study_heldout) kind = "rep_sirl";
-    // A study TPA task mixes frozen and unfrozen cells; the slower rate bounds its time.
-    if (t.kind == TaskKind::study_tpa || t.kind == TaskKind::study_simulated) kind = "tpa_unfrozen";
+    const std::string kind = task_kind(t.kind).rate(t);
     double r = 1e9;
     if (auto it = e.gflops_per_s.find(t.env + "/" + kind); it != e.gflops_per_s.end())
       r = std::max(it->second, 1e-3) * 1e9;

@@ -11,12 +11,13 @@
 
 namespace sirl {
 
-// The kinds of task (jobs/task_kinds.h describes each: its name, what it computes, its runner).
+// The kinds of task (jobs/task_kinds.h declares each: key, inputs, cost, runner, table).
 enum class TaskKind { vae, rep, fpe, tpa, study_rep, study_heldout, study_tpa, study_simulated };
 const char* kind_name(TaskKind k);
 
 struct Task {
-  std::string key;  // "grid/s0/vae", "grid/s0/sirl+vae/N100/rep", ".../fpe", ".../tpa/M50/frozen"
+  std::string
+      key;  // set by add_task from the kind's key scheme: "grid/s0/vae", ".../tpa/M50/frozen"
   TaskKind kind = TaskKind::rep;
   std::string env;
   int64_t seed = 0;
@@ -26,9 +27,9 @@ struct Task {
   bool frozen = true;
   bool in_main = false, in_ablation = false;  // tpa: a cell of [tpa] (Fig. 5), [ablation] (Fig. 7)
   std::string participant;                    // study_heldout, study_tpa
-  std::vector<int> deps;                      // indices into Plan::tasks
-  double flops = 0;                           // estimated floating-point operations
-  double bytes = 0;                           // estimated peak working set
+  std::vector<int> deps;                      // indices into Plan::tasks (set by add_task)
+  double flops = 0;                           // estimated floating-point operations (add_task)
+  double bytes = 0;                           // estimated peak working set (add_task)
 };
 
 struct Plan {
@@ -41,14 +42,7 @@ struct Plan {
 // Throws std::invalid_argument for an inconsistent profile (e.g. a TPA variant with no rep).
 Plan make_plan(const Profile& p);
 
-// For planners (make_plan and jobs/study_tasks.cpp): adds t unless a task with its key is there
-// (a task shared by several cells appears once) and returns its index either way.
-int add_task(Plan& plan, Task t);
 // Training cost: forward + backward ≈ 3× the forward FLOPs, per row per epoch.
 double train_flops(const MlpShape& s, int64_t rows_per_epoch, int epochs);
-
-// The task key of a representation (used by FPE/TPA tasks to find their input).
-std::string rep_key(const std::string& env, int64_t seed, const Variant& v, int64_t N);
-std::string vae_key(const std::string& env, int64_t seed);
 
 }  // namespace sirl

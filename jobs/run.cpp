@@ -16,6 +16,7 @@
 #include "jobs/mpi_run.h"
 #include "jobs/progress.h"
 #include "jobs/scheduler.h"
+#include "jobs/task_kinds.h"
 #include "jobs/task_runner.h"
 #include "kernels/rng.h"
 #include "results/file_lock.h"
@@ -44,26 +45,11 @@ std::string hostname() {
   return buf;
 }
 
-// The key of the representation a task belongs to (itself for a rep; "" for a VAE, which every
-// shard that needs it pulls in). The user study's tasks stay together in one group.
-std::string group_of(const Task& t) {
-  switch (t.kind) {
-    case TaskKind::vae:
-      return "";
-    case TaskKind::rep:
-    case TaskKind::fpe:
-    case TaskKind::tpa:
-      return rep_key(t.env, t.seed, t.variant, t.N);
-    default:
-      return "study";
-  }
-}
-
 // Whether the results file keeps a task's weights: the environment's store_weights (the user
 // study's networks, regenerable and 3.1 M floats on JacoRobot, never).
 bool keeps_weights(const Profile& p, const Task& t) {
   auto it = p.axes.find(t.env);
-  return group_of(t) != "study" && it != p.axes.end() && it->second.store_weights;
+  return task_kind(t.kind).stores_weights && it != p.axes.end() && it->second.store_weights;
 }
 
 }  // namespace
@@ -92,7 +78,7 @@ std::vector<char> shard_tasks(const Plan& plan, int index, int count) {
   std::vector<char> in(n, count == 1);
   if (count == 1) return in;
   for (int i = 0; i < n; ++i) {
-    const std::string g = group_of(plan.tasks[i]);
+    const std::string g = task_kind(plan.tasks[i].kind).shard_group(plan.tasks[i]);
     if (!g.empty()) in[i] = seed_from_key(g) % uint64_t(count) == uint64_t(index);
   }
   // Pull in dependencies (the VAEs), last task first so chains close.
@@ -351,7 +337,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   for (const auto& env : p.envs)
     datasets.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
   try {
-    write_results_file(o.out, info, datasets, records);
+    write_results_file(o.out, info, datasets, records, result_tables(records));
   } catch (const std::exception&) {
     // A task's failure (a full disk while saving it) is the cause to report; the results file
     // then failed for the same reason. Every committed task stays in the staging folder.

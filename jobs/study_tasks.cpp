@@ -23,11 +23,22 @@ std::string tpa_key(const std::string& id) {
 }
 const char* kSimulatedKey = "study/simulated";
 
-Task study_task(std::string key, TaskKind kind, const CohortConfig& c) {
+// A study task of `kind` on the cohort's environment, fields set (add_task keys it).
+Task study_task(TaskKind kind, const Profile& p) {
   Task t;
-  t.key = std::move(key);
   t.kind = kind;
-  t.env = c.env;
+  t.env = p.study.cohort.env;
+  return t;
+}
+Task study_rep_task(const Profile& p, int64_t k, Method m) {
+  Task t = study_task(TaskKind::study_rep, p);
+  t.seed = k;
+  t.variant = Variant{m, false};
+  return t;
+}
+Task study_heldout_task(const Profile& p, const std::string& id) {
+  Task t = study_task(TaskKind::study_heldout, p);
+  t.participant = id;
   return t;
 }
 
@@ -73,47 +84,62 @@ StudyAnalysisConfig study_config(const Profile& p) {
 
 void add_study_tasks(Plan& plan, const Profile& p) {
   if (!p.study.enabled) return;
-  const CohortConfig& co = p.study.cohort;
+  for (int64_t k = 0; k < p.study.seeds; ++k)
+    for (Method m : {Method::sirl, Method::random}) add_task(plan, p, study_rep_task(p, k, m));
+  for (int u = 0; u < p.study.cohort.users; ++u) {
+    const std::string id = simulated_participant_id(u);
+    add_task(plan, p, study_heldout_task(p, id));
+    Task t = study_task(TaskKind::study_tpa, p);
+    t.participant = id;
+    add_task(plan, p, std::move(t));
+  }
+  add_task(plan, p, study_task(TaskKind::study_simulated, p));
+}
+
+namespace {
+
+// The pooled SIRL and Random of training seed 0: what every TPA evaluation of the study reads.
+std::vector<Task> seed0_representations(const Profile& p) {
+  return {study_rep_task(p, 0, Method::sirl), study_rep_task(p, 0, Method::random)};
+}
+
+void study_rep_cost(Task& t, const Profile& p) {
   const StudyAnalysisConfig c = study_config(p);
   const StudySizes z = study_sizes(p, c);
   const double embed =
       z.phi.forward_flops(int(std::min<int64_t>(c.fpe_trajectories, z.trajectories)));
-  int sirl0 = -1, random0 = -1;
-  for (int64_t k = 0; k < c.seeds; ++k)
-    for (Method m : {Method::sirl, Method::random}) {
-      Task t = study_task(study_rep_key(k, m), TaskKind::study_rep, co);
-      t.seed = k;
-      t.variant = Variant{m, false};
-      t.flops =
-          (m == Method::sirl ? train_flops(z.phi, 3 * z.triplets, c.hyper.sirl.epochs) : 0) + embed;
-      const int i = add_task(plan, std::move(t));
-      if (k == 0) (m == Method::sirl ? sirl0 : random0) = i;
-    }
-  // The other mode's Random is evaluated beside the chosen one: three cells per participant.
-  const double cells =
-      tpa_flops(z.head_frozen, c.cv_splits, z.train_pairs, c.hyper.tpa.epochs) * 2 +
-      tpa_flops(z.head_unfrozen, c.cv_splits, z.train_pairs, c.hyper.tpa.epochs);
-  for (int u = 0; u < co.users; ++u) {
-    const std::string id = simulated_participant_id(u);
-    Task h = study_task(heldout_key(id), TaskKind::study_heldout, co);
-    h.participant = id;
-    h.flops = train_flops(z.phi, 3 * (z.triplets - co.similarity), c.hyper.sirl.epochs);
-    const int held = add_task(plan, std::move(h));
-    Task t = study_task(tpa_key(id), TaskKind::study_tpa, co);
-    t.participant = id;
-    t.deps = {sirl0, random0, held};
-    t.flops = cells + tpa_flops(z.head_frozen, c.cv_splits, z.train_pairs, c.hyper.tpa.epochs);
-    add_task(plan, std::move(t));
-  }
-  Task s = study_task(kSimulatedKey, TaskKind::study_simulated, co);
-  s.deps = {sirl0, random0};
-  const int64_t M = std::llround(c.train_fraction * double(c.simulated_queries));
-  s.flops = tpa_flops(z.head_frozen, c.simulated_rewards, M, c.hyper.tpa.epochs) * 2 +
-            tpa_flops(z.head_unfrozen, c.simulated_rewards, M, c.hyper.tpa.epochs);
-  add_task(plan, std::move(s));
+  t.flops =
+      (t.variant.method == Method::sirl ? train_flops(z.phi, 3 * z.triplets, c.hyper.sirl.epochs)
+                                        : 0) +
+      embed;
 }
 
-void run_study_rep_task(const Task& t, RunContext& ctx, TaskRecord& r) {
+void study_heldout_cost(Task& t, const Profile& p) {
+  const StudyAnalysisConfig c = study_config(p);
+  const StudySizes z = study_sizes(p, c);
+  t.flops = train_flops(z.phi, 3 * (z.triplets - p.study.cohort.similarity), c.hyper.sirl.epochs);
+}
+
+// Three cells per participant (the other mode's Random is evaluated beside the chosen one), and
+// the Held-out φ's frozen cell.
+void study_tpa_cost(Task& t, const Profile& p) {
+  const StudyAnalysisConfig c = study_config(p);
+  const StudySizes z = study_sizes(p, c);
+  const double frozen = tpa_flops(z.head_frozen, c.cv_splits, z.train_pairs, c.hyper.tpa.epochs);
+  const double cells =
+      frozen * 2 + tpa_flops(z.head_unfrozen, c.cv_splits, z.train_pairs, c.hyper.tpa.epochs);
+  t.flops = cells + frozen;
+}
+
+void study_simulated_cost(Task& t, const Profile& p) {
+  const StudyAnalysisConfig c = study_config(p);
+  const StudySizes z = study_sizes(p, c);
+  const int64_t M = std::llround(c.train_fraction * double(c.simulated_queries));
+  t.flops = tpa_flops(z.head_frozen, c.simulated_rewards, M, c.hyper.tpa.epochs) * 2 +
+            tpa_flops(z.head_unfrozen, c.simulated_rewards, M, c.hyper.tpa.epochs);
+}
+
+void run_study_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
   const StudyAnalysisConfig c = study_config(ctx.profile());
   const Dataset& d = ctx.study_dataset();
   const std::vector<int32_t> pooled = study_triplets(ctx.study());
@@ -127,18 +153,17 @@ void run_study_rep_task(const Task& t, RunContext& ctx, TaskRecord& r) {
   ctx.keep(t.key, std::make_shared<const Representation>(get_representation(r)));
 }
 
-void run_study_heldout_task(const Task& t, RunContext& ctx, TaskRecord& r) {
+void run_study_heldout(const Task& t, RunContext& ctx, TaskRecord& r) {
   const Representation phi =
       study_heldout(ctx.study(), ctx.study_dataset(), t.participant, study_config(ctx.profile()));
   if (phi.params.empty())
     throw std::runtime_error("no other participant answered a similarity query");
   put_representation(phi, r);
-  r.text["participant"] = t.participant;
   r.num["flops"] = phi.train_flops;
   ctx.keep(t.key, std::make_shared<const Representation>(get_representation(r)));
 }
 
-void run_study_tpa_task(const Task& t, RunContext& ctx, TaskRecord& r) {
+void run_study_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   const Study& s = ctx.study();
   const StudyParticipant* p = s.find(t.participant);
   if (!p) throw std::runtime_error("no participant '" + t.participant + "' in the cohort");
@@ -146,7 +171,6 @@ void run_study_tpa_task(const Task& t, RunContext& ctx, TaskRecord& r) {
       *p, ctx.study_dataset(), *ctx.representation(study_rep_key(0, Method::sirl)),
       *ctx.representation(study_rep_key(0, Method::random)),
       *ctx.representation(heldout_key(t.participant)), study_config(ctx.profile()));
-  r.text["participant"] = t.participant;
   r.num["ok"] = a.ok;
   r.num["both_features"] = a.both_features;
   r.num["real_sirl"] = a.real_sirl;
@@ -156,7 +180,7 @@ void run_study_tpa_task(const Task& t, RunContext& ctx, TaskRecord& r) {
   r.num["flops"] = t.flops;  // estimated: TPA cells do not count their own FLOPs here
 }
 
-void run_study_simulated_task(const Task& t, RunContext& ctx, TaskRecord& r) {
+void run_study_simulated(const Task& t, RunContext& ctx, TaskRecord& r) {
   const SimulatedTpa a = study_simulated_tpa(
       ctx.study_dataset(), *ctx.representation(study_rep_key(0, Method::sirl)),
       *ctx.representation(study_rep_key(0, Method::random)), study_config(ctx.profile()));
@@ -169,6 +193,99 @@ void run_study_simulated_task(const Task& t, RunContext& ctx, TaskRecord& r) {
   put("random", a.random);
   put("random_other", a.random_other);
   r.num["flops"] = t.flops;
+}
+
+// Every study task runs with the study; none keeps weights in the results file (the networks are
+// regenerable, and 3.1 M floats each on JacoRobot).
+std::string the_study(const Task&) {
+  return "study";
+}
+const char* sirl_rate(const Task&) {
+  return "rep_sirl";
+}
+// A study TPA task mixes frozen and unfrozen cells; the slower rate bounds its time.
+const char* unfrozen_tpa_rate(const Task&) {
+  return "tpa_unfrozen";
+}
+void describe_participant(const Task& t, TaskRecord& r) {
+  describe_env_and_seed(t, r);
+  r.text["participant"] = t.participant;
+}
+
+}  // namespace
+
+TaskKindSpec study_rep_kind() {
+  return {
+      .kind = TaskKind::study_rep,
+      .name = "study_rep",
+      .description =
+          "user study: SIRL on the pooled answers or Random, per training seed, with its FPE",
+      .key = [](const Task& t) { return study_rep_key(t.seed, t.variant.method); },
+      .inputs = [](const Task&, const Profile&) { return std::vector<Task>{}; },
+      .cost = study_rep_cost,
+      .rate = sirl_rate,
+      .shard_group = the_study,
+      .stores_weights = false,
+      .describe = describe_env_and_seed,
+      .run = run_study_rep,
+      .table = {},
+  };
+}
+
+TaskKindSpec study_heldout_kind() {
+  return {
+      .kind = TaskKind::study_heldout,
+      .name = "study_heldout",
+      .description = "user study: SIRL without one participant's answers",
+      .key = [](const Task& t) { return heldout_key(t.participant); },
+      .inputs = [](const Task&, const Profile&) { return std::vector<Task>{}; },
+      .cost = study_heldout_cost,
+      .rate = sirl_rate,
+      .shard_group = the_study,
+      .stores_weights = false,
+      .describe = describe_participant,
+      .run = run_study_heldout,
+      .table = {},
+  };
+}
+
+TaskKindSpec study_tpa_kind() {
+  return {
+      .kind = TaskKind::study_tpa,
+      .name = "study_tpa",
+      .description = "user study: one participant's Real and Held-out TPA (cross-validated)",
+      .key = [](const Task& t) { return tpa_key(t.participant); },
+      .inputs =
+          [](const Task& t, const Profile& p) {
+            std::vector<Task> in = seed0_representations(p);
+            in.push_back(study_heldout_task(p, t.participant));
+            return in;
+          },
+      .cost = study_tpa_cost,
+      .rate = unfrozen_tpa_rate,
+      .shard_group = the_study,
+      .stores_weights = false,
+      .describe = describe_participant,
+      .run = run_study_tpa,
+      .table = {},
+  };
+}
+
+TaskKindSpec study_simulated_kind() {
+  return {
+      .kind = TaskKind::study_simulated,
+      .name = "study_simulated",
+      .description = "user study: TPA on simulated perfect preferences",
+      .key = [](const Task&) { return std::string(kSimulatedKey); },
+      .inputs = [](const Task&, const Profile& p) { return seed0_representations(p); },
+      .cost = study_simulated_cost,
+      .rate = unfrozen_tpa_rate,
+      .shard_group = the_study,
+      .stores_weights = false,
+      .describe = describe_env_and_seed,
+      .run = run_study_simulated,
+      .table = {},
+  };
 }
 
 StudyAnalysis assemble_study(const Profile& p, const std::vector<TaskRecord>& records) {

@@ -13,7 +13,7 @@
 #include "engine/study_analysis.h"
 #include "jobs/plan.h"
 #include "jobs/profile.h"
-#include "jobs/task_runner.h"
+#include "jobs/task_kinds.h"
 #include "results/task_record.h"
 
 namespace sirl {
@@ -24,10 +24,11 @@ StudyAnalysisConfig study_config(const Profile& p);
 // Adds the study's tasks to the plan (when [study] is there).
 void add_study_tasks(Plan& plan, const Profile& p);
 
-void run_study_rep_task(const Task& t, RunContext& ctx, TaskRecord& r);
-void run_study_heldout_task(const Task& t, RunContext& ctx, TaskRecord& r);
-void run_study_tpa_task(const Task& t, RunContext& ctx, TaskRecord& r);
-void run_study_simulated_task(const Task& t, RunContext& ctx, TaskRecord& r);
+// The four kinds' declarations (jobs/task_kinds.h).
+TaskKindSpec study_rep_kind();
+TaskKindSpec study_heldout_kind();
+TaskKindSpec study_tpa_kind();
+TaskKindSpec study_simulated_kind();
 
 // The analysis from the study tasks' records. Throws std::runtime_error naming a missing task.
 StudyAnalysis assemble_study(const Profile& p, const std::vector<TaskRecord>& records);

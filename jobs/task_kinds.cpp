@@ -2,36 +2,57 @@
 
 #include <stdexcept>
 
+#include "jobs/simulation_tasks.h"
 #include "jobs/study_tasks.h"
 
 namespace sirl {
 
 const std::vector<TaskKindSpec>& task_kinds() {
-  static const std::vector<TaskKindSpec> all{
-      {TaskKind::vae, "vae", "a VAE over Ξ per (env, seed): pre-training and the VAE baseline",
-       run_vae_task},
-      {TaskKind::rep, "rep", "a representation φ per (env, seed, method, N), its embedding of Ξ",
-       run_rep_task},
-      {TaskKind::fpe, "fpe", "FPE of one φ: a linear probe's held-out error", run_fpe_task},
-      {TaskKind::tpa, "tpa", "TPA of one φ at M pairs, frozen or unfrozen: 20 reward heads",
-       run_tpa_task},
-      {TaskKind::study_rep, "study_rep",
-       "user study: SIRL on the pooled answers or Random, per training seed, with its FPE",
-       run_study_rep_task},
-      {TaskKind::study_heldout, "study_heldout",
-       "user study: SIRL without one participant's answers", run_study_heldout_task},
-      {TaskKind::study_tpa, "study_tpa",
-       "user study: one participant's Real and Held-out TPA (cross-validated)", run_study_tpa_task},
-      {TaskKind::study_simulated, "study_simulated",
-       "user study: TPA on simulated perfect preferences", run_study_simulated_task},
-  };
+  static const std::vector<TaskKindSpec> all = [] {
+    std::vector<TaskKindSpec> k{
+        vae_kind(),       rep_kind(),           fpe_kind(),       tpa_kind(),
+        study_rep_kind(), study_heldout_kind(), study_tpa_kind(), study_simulated_kind()};
+    for (size_t i = 0; i < k.size(); ++i)
+      if (int(k[i].kind) != int(i) || !k[i].key || !k[i].inputs || !k[i].cost || !k[i].rate ||
+          !k[i].shard_group || !k[i].describe || !k[i].run)
+        throw std::logic_error(std::string("task kind ") + k[i].name +
+                               ": out of TaskKind order or a function missing");
+    return k;
+  }();
   return all;
 }
 
 const TaskKindSpec& task_kind(TaskKind k) {
-  for (const auto& s : task_kinds())
-    if (s.kind == k) return s;
-  throw std::logic_error("task kind without a registration");
+  return task_kinds().at(size_t(k));
+}
+
+const char* kind_name(TaskKind k) {
+  return task_kind(k).name;
+}
+
+void describe_env_and_seed(const Task& t, TaskRecord& r) {
+  r.text["env"] = t.env;
+  r.num["seed"] = double(t.seed);
+}
+
+int add_task(Plan& plan, const Profile& p, Task t) {
+  const TaskKindSpec& kind = task_kind(t.kind);
+  t.key = kind.key(t);
+  if (auto it = plan.index.find(t.key); it != plan.index.end()) return it->second;
+  t.deps.clear();
+  for (Task& in : kind.inputs(t, p)) t.deps.push_back(add_task(plan, p, std::move(in)));
+  kind.cost(t, p);
+  const int i = int(plan.tasks.size());
+  plan.index[t.key] = i;
+  plan.tasks.push_back(std::move(t));
+  return i;
+}
+
+ResultTables result_tables(const std::vector<TaskRecord>& records) {
+  std::vector<CellTableSpec> cells;
+  for (const TaskKindSpec& k : task_kinds())
+    if (!k.table.name.empty()) cells.push_back(k.table);
+  return build_tables(records, cells);
 }
 
 }  // namespace sirl

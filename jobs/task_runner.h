@@ -31,7 +31,7 @@ class RunContext {
   const Study& study();
   const Dataset& study_dataset();
   std::shared_ptr<const Representation> representation(const std::string& key);
-  std::shared_ptr<const VaeModel> vae(const std::string& env, int64_t seed);
+  std::shared_ptr<const VaeModel> vae(const std::string& key);
   void keep(const std::string& key, std::shared_ptr<const Representation> r);
   void keep(const std::string& key, std::shared_ptr<const VaeModel> v);
   // Drops a cached output once no pending task needs it (bounded memory on long runs).
@@ -50,12 +50,6 @@ class RunContext {
   std::map<std::string, std::unique_ptr<std::once_flag>> once_;
   std::once_flag& once(const std::string& key);
 };
-
-// The runners of the experiment grid's kinds (jobs/task_kinds.h lists every kind's).
-void run_vae_task(const Task& t, RunContext& ctx, TaskRecord& r);
-void run_rep_task(const Task& t, RunContext& ctx, TaskRecord& r);
-void run_fpe_task(const Task& t, RunContext& ctx, TaskRecord& r);
-void run_tpa_task(const Task& t, RunContext& ctx, TaskRecord& r);
 
 // Computes the task, returning its record (timing included). Throws std::runtime_error naming
 // the task on any failure (divergence, bad inputs).

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include "results/dataset_store.h"
 #include "results/durable.h"
@@ -34,68 +35,23 @@ const std::string& need_text(const TaskRecord& r, const char* k) {
   return it->second;
 }
 
-// A column read from every record of one kind: `key` names the record's text (String column) or
-// number (Int, Double). A record without it is an error, not a silent 0.
-struct ColumnSpec {
-  const char* name;
-  C::Type type;
-  const char* key;
-};
-
-H5Table cell_table(const std::vector<TaskRecord>& records, const std::string& kind,
-                   const std::vector<ColumnSpec>& spec) {
+H5Table cell_table(const std::vector<TaskRecord>& records, const CellTableSpec& spec) {
   H5Table t;
-  for (const auto& c : spec) t.add(c.name, c.type);
+  for (const auto& c : spec.columns) t.add(c.name, c.type);
   for (const auto& r : records) {
-    if (r.kind != kind) continue;
-    for (size_t k = 0; k < spec.size(); ++k) {
-      const ColumnSpec& c = spec[k];
+    if (r.kind != spec.kind) continue;
+    for (size_t k = 0; k < spec.columns.size(); ++k) {
+      const TableColumn& c = spec.columns[k];
       if (c.type == C::String) {
-        auto it = r.text.find(c.key);
-        if (it == r.text.end())
-          throw H5Error("task " + r.key + ": its record has no text '" + c.key + "'");
-        t.columns[k].strings.push_back(it->second);
-        continue;
+        t.columns[k].strings.push_back(need_text(r, c.key));
+      } else if (c.type == C::Int) {
+        t.columns[k].ints.push_back(int64_t(need_num(r, c.key)));
+      } else {
+        t.columns[k].doubles.push_back(need_num(r, c.key));
       }
-      auto it = r.num.find(c.key);
-      if (it == r.num.end())
-        throw H5Error("task " + r.key + ": its record has no number '" + c.key + "'");
-      if (c.type == C::Int)
-        t.columns[k].ints.push_back(int64_t(it->second));
-      else
-        t.columns[k].doubles.push_back(it->second);
     }
   }
   return t;
-}
-
-H5Table fpe_table(const std::vector<TaskRecord>& records) {
-  return cell_table(records, "fpe",
-                    {{"env", C::String, "env"},
-                     {"method", C::String, "method"},
-                     {"variant", C::String, "variant"},
-                     {"vae", C::Int, "vae"},
-                     {"N", C::Int, "N"},
-                     {"seed", C::Int, "seed"},
-                     {"fpe", C::Double, "fpe"},
-                     {"train_mse", C::Double, "train_mse"}});
-}
-
-H5Table tpa_table(const std::vector<TaskRecord>& records) {
-  return cell_table(records, "tpa",
-                    {{"env", C::String, "env"},
-                     {"method", C::String, "method"},
-                     {"variant", C::String, "variant"},
-                     {"vae", C::Int, "vae"},
-                     {"frozen", C::Int, "frozen"},
-                     {"N", C::Int, "N"},
-                     {"M", C::Int, "M"},
-                     {"seed", C::Int, "seed"},
-                     {"tpa", C::Double, "tpa"},
-                     {"tpa_std", C::Double, "tpa_std"},
-                     {"tpa_train", C::Double, "tpa_train"},
-                     {"in_main", C::Int, "in_main"},
-                     {"in_ablation", C::Int, "in_ablation"}});
 }
 
 // The final loss and epoch count of a record's curve: loss_curves is [heads, epochs] (the mean of
@@ -188,19 +144,25 @@ H5Table timings_table(const std::vector<TaskRecord>& records) {
 
 }  // namespace
 
-ResultTables build_tables(const std::vector<TaskRecord>& records) {
+const H5Table& ResultTables::at(const std::string& name) const {
+  for (const auto& t : tables)
+    if (t.name == name) return t.table;
+  throw std::out_of_range("no table '" + name + "'");
+}
+
+ResultTables build_tables(const std::vector<TaskRecord>& records,
+                          const std::vector<CellTableSpec>& cells) {
   ResultTables t;
-  t.fpe = fpe_table(records);
-  t.tpa = tpa_table(records);
-  t.training = training_table(records);
-  t.vae_latents = vae_latents_table(records);
-  t.timings = timings_table(records);
+  for (const auto& spec : cells) t.tables.push_back({spec.name, cell_table(records, spec)});
+  t.tables.push_back({"timings", timings_table(records)});
+  t.tables.push_back({"training", training_table(records)});
+  t.tables.push_back({"vae_latents", vae_latents_table(records)});
   return t;
 }
 
 void write_results_file(const std::string& path, const RunInfo& info,
                         const std::vector<RunDataset>& datasets,
-                        const std::vector<TaskRecord>& records) {
+                        const std::vector<TaskRecord>& records, const ResultTables& tables) {
   const std::string partial = path + ".partial";
   try {
     {
@@ -227,12 +189,7 @@ void write_results_file(const std::string& path, const RunInfo& info,
         keys.push_back(r.key);
       }
       f.write_strings("/runs_index", keys);
-      const ResultTables t = build_tables(records);
-      f.write_table("/tables/fpe", t.fpe);
-      f.write_table("/tables/tpa", t.tpa);
-      f.write_table("/tables/timings", t.timings);
-      f.write_table("/tables/training", t.training);
-      f.write_table("/tables/vae_latents", t.vae_latents);
+      for (const auto& t : tables.tables) f.write_table("/tables/" + t.name, t.table);
       f.flush();  // a full disk shows here, not silently in the destructor
     }
   } catch (const std::exception& e) {
@@ -351,8 +308,8 @@ std::vector<TaskRecord> read_results_records(const std::string& path) {
 
 void export_csv(const ResultTables& t, const std::string& dir) {
   fs::create_directories(dir);
-  auto write = [&](const H5Table& tab, const char* name) {
-    const fs::path p = fs::path(dir) / name;
+  auto write = [&](const H5Table& tab, const std::string& name) {
+    const fs::path p = fs::path(dir) / (name + ".csv");
     std::ofstream out(p);
     for (size_t k = 0; k < tab.columns.size(); ++k) out << (k ? "," : "") << tab.columns[k].name;
     out << "\n";
@@ -372,11 +329,7 @@ void export_csv(const ResultTables& t, const std::string& dir) {
     }
     if (!out) throw H5Error(p.string() + ": cannot write");
   };
-  write(t.fpe, "fpe.csv");
-  write(t.tpa, "tpa.csv");
-  write(t.timings, "timings.csv");
-  write(t.training, "training.csv");
-  write(t.vae_latents, "vae_latents.csv");
+  for (const auto& tab : t.tables) write(tab.table, tab.name);
 }
 
 }  // namespace sirl

@@ -1,5 +1,7 @@
 // The run's results file (docs/ARCHITECTURE.md §5): root attributes describing the run, the
-// datasets, every task's record under /runs/<task key>, and long tables that pandas reads directly:
+// datasets, every task's record under /runs/<task key>, and long tables that pandas reads directly
+// (fpe and tpa are the FPE and TPA task kinds' tables, declared with them:
+// jobs/simulation_tasks.cpp):
 //   /tables/fpe      env, method, variant, vae, N, seed, fpe, train_mse
 //   /tables/tpa      env, method, variant, vae, frozen, N, M, seed, tpa, tpa_std, tpa_train,
 //                    in_main (a Fig. 5 cell), in_ablation (a Fig. 7 cell)
@@ -38,10 +40,33 @@ struct RunInfo {
   int64_t schema_version = kResultsSchemaVersion;
 };
 
-struct ResultTables {
-  H5Table fpe, tpa, timings, training, vae_latents;
+// A table of one kind's records (a task kind declares it: jobs/task_kinds.h): one row per record,
+// each column read from one record field (`key`: text for String columns, a number for Int and
+// Double). A record without the field is an error naming the task, never a silent 0.
+struct TableColumn {
+  const char* name;
+  H5Table::Column::Type type;
+  const char* key;
 };
-ResultTables build_tables(const std::vector<TaskRecord>& records);
+struct CellTableSpec {
+  std::string name;  // the table: /tables/<name>, <name>.csv
+  std::string kind;  // the records it reads: those of this kind
+  std::vector<TableColumn> columns;
+};
+
+struct NamedTable {
+  std::string name;
+  H5Table table;
+};
+struct ResultTables {
+  std::vector<NamedTable> tables;  // in the file's order
+  // The table called `name`; throws std::out_of_range naming it.
+  const H5Table& at(const std::string& name) const;
+};
+// The cell tables in the order given, then the tables every kind contributes to: timings,
+// training (each training's convergence), vae_latents.
+ResultTables build_tables(const std::vector<TaskRecord>& records,
+                          const std::vector<CellTableSpec>& cells);
 
 struct RunDataset {
   const Dataset* dataset;
@@ -50,7 +75,7 @@ struct RunDataset {
 
 void write_results_file(const std::string& path, const RunInfo& info,
                         const std::vector<RunDataset>& datasets,
-                        const std::vector<TaskRecord>& records);
+                        const std::vector<TaskRecord>& records, const ResultTables& tables);
 // Both verify the file against its checksum (FILE.sum, written with the file) before HDF5 reads
 // a byte of it: a corrupted file is one clear H5Error, not a crash inside the HDF5 library.
 RunInfo read_run_info(const std::string& path);
@@ -61,7 +86,7 @@ std::vector<TaskRecord> read_results_records(const std::string& path);
 void write_checksum(const std::string& path);
 void verify_checksum(const std::string& path);
 
-// One CSV per table (fpe.csv, tpa.csv, timings.csv, training.csv, vae_latents.csv) in dir.
+// One CSV per table (<name>.csv: fpe.csv, tpa.csv, timings.csv, training.csv, …) in dir.
 void export_csv(const ResultTables& t, const std::string& dir);
 
 }  // namespace sirl

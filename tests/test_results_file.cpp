@@ -8,6 +8,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "jobs/task_kinds.h"
 #include "results/h5.h"
 #include "results/results_file.h"
 #include "tests/scratch_dir.h"
@@ -40,9 +41,9 @@ TEST(ResultsFile, AVersionOneFileFromThePreviousEngineIsRead) {
   EXPECT_EQ(kinds.count("rep"), 2u);
   EXPECT_EQ(kinds.count("fpe"), 2u);
   EXPECT_EQ(kinds.count("tpa"), 1u);
-  const ResultTables t = build_tables(records);
-  EXPECT_EQ(t.fpe.rows(), 2u);
-  EXPECT_EQ(t.tpa.rows(), 1u);
+  const ResultTables t = result_tables(records);
+  EXPECT_EQ(t.at("fpe").rows(), 2u);
+  EXPECT_EQ(t.at("tpa").rows(), 1u);
 }
 
 TEST(ResultsFile, ANewerVersionIsRefusedNamingBothVersions) {
@@ -70,7 +71,7 @@ TEST(ResultsFile, TheCurrentEngineWritesItsVersionAndReadsItBack) {
   const std::string p = temp_copy("rewritten.h5");
   const RunInfo old = read_run_info(kFixture);
   const auto records = read_results_records(kFixture);
-  write_results_file(p, old, {}, records);
+  write_results_file(p, old, {}, records, result_tables(records));
   {
     const H5File f = H5File::open_read(p);
     EXPECT_EQ(f.attr_int("/", "schema_version"), kResultsSchemaVersion);
@@ -92,7 +93,8 @@ TEST(ResultsFile, TheCurrentEngineWritesItsVersionAndReadsItBack) {
 // HDF5 library); without FILE.sum (engine 0.1.0's files) it is read unverified.
 TEST(ResultsFile, AFlippedByteIsRefusedByTheChecksumBeforeHdf5ReadsIt) {
   const std::string p = temp_copy("checksummed.h5");
-  write_results_file(p, read_run_info(kFixture), {}, read_results_records(kFixture));
+  const auto records = read_results_records(kFixture);
+  write_results_file(p, read_run_info(kFixture), {}, records, result_tables(records));
   ASSERT_TRUE(fs::exists(p + ".sum"));
   EXPECT_NO_THROW(read_run_info(p));
   {
@@ -149,33 +151,34 @@ TEST(ResultsFile, TablesHoldOneRowPerCellWithTheRecordsValues) {
   v.arrays["loss_curve"] = {{3}, {9, 8, 7}};
   v.arrays["kl_per_dim"] = {{2}, {0.5f, 0.0f}};
   records.push_back(v);
-  const ResultTables t = build_tables(records);
+  const ResultTables t = result_tables(records);
 
-  ASSERT_EQ(t.fpe.rows(), 2u);
-  EXPECT_EQ(column(t.fpe, "variant").strings, (std::vector<std::string>{"sirl+vae", "sirl+vae"}));
-  EXPECT_EQ(column(t.fpe, "N").ints, (std::vector<int64_t>{100, 100}));
-  EXPECT_EQ(column(t.fpe, "fpe").doubles, (std::vector<double>{0.25, 0.75}));
-  EXPECT_EQ(t.tpa.rows(), 0u);
+  ASSERT_EQ(t.at("fpe").rows(), 2u);
+  EXPECT_EQ(column(t.at("fpe"), "variant").strings,
+            (std::vector<std::string>{"sirl+vae", "sirl+vae"}));
+  EXPECT_EQ(column(t.at("fpe"), "N").ints, (std::vector<int64_t>{100, 100}));
+  EXPECT_EQ(column(t.at("fpe"), "fpe").doubles, (std::vector<double>{0.25, 0.75}));
+  EXPECT_EQ(t.at("tpa").rows(), 0u);
   // timings: every record; GFLOP/s = flops / seconds, 0 when no time was measured.
-  ASSERT_EQ(t.timings.rows(), 3u);
-  EXPECT_EQ(column(t.timings, "gflops").doubles, (std::vector<double>{2, 2, 0}));
+  ASSERT_EQ(t.at("timings").rows(), 3u);
+  EXPECT_EQ(column(t.at("timings"), "gflops").doubles, (std::vector<double>{2, 2, 0}));
   // training: only what trained (the VAE); final loss = the curve's last epoch.
-  ASSERT_EQ(t.training.rows(), 1u);
-  EXPECT_EQ(column(t.training, "epochs").ints, (std::vector<int64_t>{3}));
-  EXPECT_EQ(column(t.training, "final_loss").doubles, (std::vector<double>{7}));
-  EXPECT_EQ(column(t.training, "variant").strings, (std::vector<std::string>{"vae"}));
-  EXPECT_EQ(column(t.training, "dead_fraction").doubles, (std::vector<double>{-1}));
+  ASSERT_EQ(t.at("training").rows(), 1u);
+  EXPECT_EQ(column(t.at("training"), "epochs").ints, (std::vector<int64_t>{3}));
+  EXPECT_EQ(column(t.at("training"), "final_loss").doubles, (std::vector<double>{7}));
+  EXPECT_EQ(column(t.at("training"), "variant").strings, (std::vector<std::string>{"vae"}));
+  EXPECT_EQ(column(t.at("training"), "dead_fraction").doubles, (std::vector<double>{-1}));
   // vae_latents: one row per latent dimension.
-  ASSERT_EQ(t.vae_latents.rows(), 2u);
-  EXPECT_EQ(column(t.vae_latents, "dim").ints, (std::vector<int64_t>{0, 1}));
-  EXPECT_EQ(column(t.vae_latents, "kl").doubles, (std::vector<double>{0.5, 0.0}));
+  ASSERT_EQ(t.at("vae_latents").rows(), 2u);
+  EXPECT_EQ(column(t.at("vae_latents"), "dim").ints, (std::vector<int64_t>{0, 1}));
+  EXPECT_EQ(column(t.at("vae_latents"), "kl").doubles, (std::vector<double>{0.5, 0.0}));
 }
 
 TEST(ResultsFile, ARecordMissingAColumnsKeyIsAnErrorNotAZero) {
   TaskRecord r = fpe_record("grid/s3/sirl+vae/N100/fpe", 0.25);
   r.num.erase("train_mse");
   try {
-    build_tables({r});
+    result_tables({r});
     ADD_FAILURE() << "a record without train_mse made a table";
   } catch (const H5Error& e) {
     const std::string m = e.what();

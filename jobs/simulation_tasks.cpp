@@ -1,0 +1,347 @@
+#include "jobs/simulation_tasks.h"
+
+#include <algorithm>
+
+#include "datasets/environments.h"
+#include "datasets/queries.h"
+#include "engine/convergence.h"
+#include "engine/fpe.h"
+#include "engine/methods.h"
+#include "engine/tpa.h"
+#include "jobs/task_outputs.h"
+#include "kernels/vae.h"
+
+namespace sirl {
+
+std::string vae_key(const std::string& env, int64_t seed) {
+  return env + "/s" + std::to_string(seed) + "/vae";
+}
+
+std::string rep_key(const std::string& env, int64_t seed, const Variant& v, int64_t N) {
+  std::string k = env + "/s" + std::to_string(seed) + "/" + v.name();
+  if (uses_queries(v.method)) k += "/N" + std::to_string(N);
+  return k + "/rep";
+}
+
+Task experiment_cell(TaskKind kind, const std::string& env, int64_t seed, const Variant& v,
+                     int64_t N) {
+  Task t;
+  t.kind = kind;
+  t.env = env;
+  t.seed = seed;
+  t.variant = v;
+  t.N = uses_queries(v.method) ? N : 0;
+  return t;
+}
+
+namespace {
+
+// ---- sizes the cost models read ----
+
+// φ's shape and the trajectory space of one environment under a profile.
+struct EnvSizes {
+  const Hyper& h;
+  int input_dim;
+  int64_t trajectories;
+  MlpShape phi;
+};
+EnvSizes env_sizes(const Task& t, const Profile& p) {
+  const EnvSpec& e = env_spec(t.env);
+  const Hyper& h = p.hyper.at(t.env);
+  const int in = e.input_dim(p.data);
+  return {h, in, e.trajectories(p.data), phi_shape(in, h)};
+}
+
+// Bytes of one training: params, gradient, Adam's m and v, and one batch's activations.
+double working_set(const MlpShape& s, int batch_rows) {
+  double act = 0;
+  for (int w : s.widths) act += double(w) * batch_rows;
+  return 4.0 * (4.0 * double(s.param_count()) + 2 * act);
+}
+
+// ---- what the runners share ----
+
+TaskRecord::Array array(std::vector<float> data, std::vector<uint64_t> dims = {}) {
+  if (dims.empty()) dims = {uint64_t(data.size())};
+  return TaskRecord::Array{std::move(dims), std::move(data)};
+}
+
+// The convergence verdict of a loss curve (engine/convergence.h), as record fields.
+void record_convergence(const std::vector<float>& curve, TaskRecord& r) {
+  const Convergence c = check_convergence(curve);
+  r.num["converged"] = c.converged;
+  r.num["loss_relative_change"] = c.relative_change;
+}
+
+// φ over the whole trajectory space: the embedding [T, d] (a product of the run, not only an
+// input of FPE/TPA) and the dead-unit fraction of each hidden layer. Returns its FLOPs.
+double record_embedding(const Representation& rep, const Dataset& d, TaskRecord& r) {
+  const EmbeddingPass e = embed_all(rep, d.inputs.data(), d.count);
+  r.arrays["embedding"] = array(e.embedding, {uint64_t(d.count), uint64_t(rep.dim())});
+  r.arrays["dead_fraction"] = array(e.dead_fraction);
+  return rep.shape.forward_flops(int(d.count));
+}
+
+Task vae_input(const Task& t) {
+  Task v;
+  v.kind = TaskKind::vae;
+  v.env = t.env;
+  v.seed = t.seed;
+  return v;
+}
+Task rep_input(const Task& t) {
+  return experiment_cell(TaskKind::rep, t.env, t.seed, t.variant, t.N);
+}
+
+// Every task of the experiment shards with its φ; a VAE goes to every shard that needs it.
+std::string by_representation(const Task& t) {
+  return t.kind == TaskKind::vae ? "" : rep_key(t.env, t.seed, t.variant, t.N);
+}
+
+// What a record says about its task: env and seed, and for φ and its cells the method and sizes.
+void describe_variant(const Task& t, TaskRecord& r) {
+  describe_env_and_seed(t, r);
+  r.text["method"] = method_name(t.variant.method);
+  r.text["variant"] = t.variant.name();
+  r.num["vae"] = t.variant.vae;
+  r.num["N"] = double(t.N);
+}
+void describe_tpa(const Task& t, TaskRecord& r) {
+  describe_variant(t, r);
+  r.num["M"] = double(t.M);
+  r.num["frozen"] = t.frozen;
+  r.num["in_main"] = t.in_main;  // a cell of Fig. 5 ([tpa]), of Fig. 7 ([ablation]), or both
+  r.num["in_ablation"] = t.in_ablation;
+}
+
+// ---- vae ----
+
+void vae_cost(Task& t, const Profile& p) {
+  const EnvSizes z = env_sizes(t, p);
+  const VaeShape vs = make_vae_shape(z.input_dim, z.h.phi_hidden, z.h.embedding_dim);
+  // training, then one pass over Ξ measuring the posterior (train_vae)
+  t.flops = train_flops(vs.encoder, z.trajectories, z.h.vae.epochs) +
+            train_flops(vs.decoder, z.trajectories, z.h.vae.epochs) +
+            vs.encoder.forward_flops(int(z.trajectories)) +
+            vs.decoder.forward_flops(int(z.trajectories));
+  t.bytes = working_set(vs.encoder, z.h.vae.batch) + working_set(vs.decoder, z.h.vae.batch);
+}
+
+void run_vae(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const VaeModel v =
+      train_vae(ctx.dataset(t.env), ctx.profile().hyper.at(t.env), task_seed(t.env, t.seed, "vae"));
+  put_vae(v, r);
+  r.num["flops"] = v.train_flops;
+  record_convergence(v.loss_curve, r);
+  ctx.keep(t.key, std::make_shared<const VaeModel>(get_vae(r)));
+}
+
+// ---- rep ----
+
+bool reads_vae(const Variant& v) {
+  return v.vae || v.method == Method::vae;
+}
+
+void rep_cost(Task& t, const Profile& p) {
+  const EnvSizes z = env_sizes(t, p);
+  t.flops = 0;
+  if (t.variant.method == Method::sirl) {
+    t.flops = train_flops(z.phi, 3 * t.N, z.h.sirl.epochs);
+    t.bytes = working_set(z.phi, 3 * z.h.sirl.batch);
+  } else if (uses_queries(t.variant.method)) {
+    t.flops = train_flops(z.phi, 2 * t.N, z.h.pref.epochs);
+    t.bytes = working_set(z.phi, 2 * z.h.pref.batch);
+  }
+  t.flops += z.phi.forward_flops(int(z.trajectories));  // the embedding of Ξ it stores
+}
+
+void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const Hyper& h = ctx.profile().hyper.at(t.env);
+  const Dataset& d = ctx.dataset(t.env);
+  std::shared_ptr<const VaeModel> vae;
+  if (reads_vae(t.variant)) vae = ctx.vae(vae_key(t.env, t.seed));
+  MethodConfig c{t.variant.method, t.N, t.variant.vae, h, 1};
+  const Representation rep = train_representation(d, ctx.bundle(t.env, t.seed), c,
+                                                  task_seed(t.env, t.seed, "phi"), vae.get());
+  put_representation(rep, r);
+  r.text["hyper"] = describe(h);
+  // FLOPs spent in this task: the VAE method's φ is the VAE task's encoder, trained there.
+  r.num["flops"] =
+      (t.variant.method == Method::vae ? 0.0 : rep.train_flops) + record_embedding(rep, d, r);
+  if (t.variant.method != Method::vae && t.variant.method != Method::random)
+    record_convergence(rep.loss_curve, r);
+  ctx.keep(t.key, std::make_shared<const Representation>(get_representation(r)));
+}
+
+// ---- fpe ----
+
+void fpe_cost(Task& t, const Profile& p) {
+  const EnvSizes z = env_sizes(t, p);
+  t.flops = z.phi.forward_flops(int(p.queries.fpe_trajectories));
+  t.bytes = 4.0 * double(p.queries.fpe_trajectories) * (z.input_dim + 16);
+}
+
+void run_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const FpeResult f = evaluate_fpe(*ctx.representation(rep_key(t.env, t.seed, t.variant, t.N)),
+                                   ctx.dataset(t.env), ctx.bundle(t.env, t.seed).fpe);
+  r.num["fpe"] = f.fpe;
+  r.num["train_mse"] = f.train_mse;
+  r.num["flops"] = 0;
+}
+
+// ---- tpa ----
+
+void tpa_cost(Task& t, const Profile& p) {
+  const EnvSizes z = env_sizes(t, p);
+  const MlpShape net = tpa_network(z.phi, z.h, t.frozen);
+  t.flops = kTestRewards * train_flops(net, 2 * t.M, z.h.tpa.epochs);
+  t.bytes = kTestRewards * working_set(net, 2 * z.h.tpa.batch);
+}
+
+// Converged when every head's loss curve is (the fraction tells how many were); the relative
+// change reported is the median head's.
+void record_heads_convergence(const TpaResult& res, TaskRecord& r) {
+  const uint64_t R = res.accuracy.size();
+  int converged = 0;
+  std::vector<double> change;
+  for (uint64_t k = 0; k < R; ++k) {
+    const auto* c = res.loss_curves.data() + k * res.epochs;
+    const Convergence v = check_convergence(std::vector<float>(c, c + res.epochs));
+    converged += v.converged;
+    change.push_back(v.relative_change);
+  }
+  std::sort(change.begin(), change.end());
+  r.num["converged"] = converged == int(R);
+  r.num["converged_fraction"] = R ? double(converged) / double(R) : 0.0;
+  r.num["loss_relative_change"] = R ? change[R / 2] : 0.0;
+}
+
+void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const TpaResult res = evaluate_tpa(*ctx.representation(rep_key(t.env, t.seed, t.variant, t.N)),
+                                     ctx.dataset(t.env), ctx.bundle(t.env, t.seed).tpa,
+                                     TpaConfig{t.M, t.frozen, ctx.profile().hyper.at(t.env), 1},
+                                     task_seed(t.env, t.seed, "tpa"));
+  r.num["tpa"] = res.mean;
+  r.num["tpa_std"] = res.stddev;
+  r.num["flops"] = res.train_flops;
+  const uint64_t R = res.accuracy.size();
+  r.arrays["accuracy"] = array(std::vector<float>(res.accuracy.begin(), res.accuracy.end()));
+  r.arrays["train_accuracy"] =
+      array(std::vector<float>(res.train_accuracy.begin(), res.train_accuracy.end()));
+  double train_mean = 0;
+  for (double a : res.train_accuracy) train_mean += a / double(R);
+  r.num["tpa_train"] = train_mean;
+  r.arrays["loss_curves"] = array(res.loss_curves, {R, uint64_t(res.epochs)});
+  r.arrays["phi_drift"] = array(res.phi_drift);
+  record_heads_convergence(res, r);
+}
+
+using C = H5Table::Column;
+
+}  // namespace
+
+TaskKindSpec vae_kind() {
+  return {
+      .kind = TaskKind::vae,
+      .name = "vae",
+      .description = "a VAE over Ξ per (env, seed): pre-training and the VAE baseline",
+      .key = [](const Task& t) { return vae_key(t.env, t.seed); },
+      .inputs = [](const Task&, const Profile&) { return std::vector<Task>{}; },
+      .cost = vae_cost,
+      .rate = [](const Task&) { return "vae"; },
+      .shard_group = by_representation,
+      .stores_weights = true,
+      .describe = describe_env_and_seed,
+      .run = run_vae,
+      .table = {},
+  };
+}
+
+TaskKindSpec rep_kind() {
+  return {
+      .kind = TaskKind::rep,
+      .name = "rep",
+      .description = "a representation φ per (env, seed, method, N), its embedding of Ξ",
+      .key = [](const Task& t) { return rep_key(t.env, t.seed, t.variant, t.N); },
+      .inputs =
+          [](const Task& t, const Profile&) {
+            return reads_vae(t.variant) ? std::vector<Task>{vae_input(t)} : std::vector<Task>{};
+          },
+      .cost = rep_cost,
+      .rate =
+          [](const Task& t) { return t.variant.method == Method::sirl ? "rep_sirl" : "rep_pref"; },
+      .shard_group = by_representation,
+      .stores_weights = true,
+      .describe = describe_variant,
+      .run = run_rep,
+      .table = {},
+  };
+}
+
+TaskKindSpec fpe_kind() {
+  return {
+      .kind = TaskKind::fpe,
+      .name = "fpe",
+      .description = "FPE of one φ: a linear probe's held-out error",
+      .key =
+          [](const Task& t) {
+            const std::string k = rep_key(t.env, t.seed, t.variant, t.N);
+            return k.substr(0, k.size() - 3) + "fpe";
+          },
+      .inputs = [](const Task& t, const Profile&) { return std::vector<Task>{rep_input(t)}; },
+      .cost = fpe_cost,
+      .rate = [](const Task&) { return "fpe"; },
+      .shard_group = by_representation,
+      .stores_weights = true,
+      .describe = describe_variant,
+      .run = run_fpe,
+      .table = {"fpe",
+                "fpe",
+                {{"env", C::String, "env"},
+                 {"method", C::String, "method"},
+                 {"variant", C::String, "variant"},
+                 {"vae", C::Int, "vae"},
+                 {"N", C::Int, "N"},
+                 {"seed", C::Int, "seed"},
+                 {"fpe", C::Double, "fpe"},
+                 {"train_mse", C::Double, "train_mse"}}},
+  };
+}
+
+TaskKindSpec tpa_kind() {
+  return {
+      .kind = TaskKind::tpa,
+      .name = "tpa",
+      .description = "TPA of one φ at M pairs, frozen or unfrozen: 20 reward heads",
+      .key =
+          [](const Task& t) {
+            const std::string k = rep_key(t.env, t.seed, t.variant, t.N);
+            return k.substr(0, k.size() - 3) + "tpa/M" + std::to_string(t.M) +
+                   (t.frozen ? "/frozen" : "/unfrozen");
+          },
+      .inputs = [](const Task& t, const Profile&) { return std::vector<Task>{rep_input(t)}; },
+      .cost = tpa_cost,
+      .rate = [](const Task& t) { return t.frozen ? "tpa_frozen" : "tpa_unfrozen"; },
+      .shard_group = by_representation,
+      .stores_weights = true,
+      .describe = describe_tpa,
+      .run = run_tpa,
+      .table = {"tpa",
+                "tpa",
+                {{"env", C::String, "env"},
+                 {"method", C::String, "method"},
+                 {"variant", C::String, "variant"},
+                 {"vae", C::Int, "vae"},
+                 {"frozen", C::Int, "frozen"},
+                 {"N", C::Int, "N"},
+                 {"M", C::Int, "M"},
+                 {"seed", C::Int, "seed"},
+                 {"tpa", C::Double, "tpa"},
+                 {"tpa_std", C::Double, "tpa_std"},
+                 {"tpa_train", C::Double, "tpa_train"},
+                 {"in_main", C::Int, "in_main"},
+                 {"in_ablation", C::Int, "in_ablation"}}},
+  };
+}
+
+}  // namespace sirl

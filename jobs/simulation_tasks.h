@@ -1,0 +1,29 @@
+// The paper's simulation experiments (Fig. 4, 5 and 7) as task kinds, per (environment, seed):
+//   <env>/s<seed>/vae                         a VAE over Ξ (pre-training, the VAE baseline)
+//   <env>/s<seed>/<variant>[/N<N>]/rep        a representation φ (N only for query methods)
+//   <env>/s<seed>/<variant>[/N<N>]/fpe        FPE of that φ
+//   <env>/s<seed>/<variant>[/N<N>]/tpa/M<M>/{frozen,unfrozen}   TPA of that φ at M pairs
+// Each function returns a kind's whole declaration (jobs/task_kinds.h).
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "jobs/task_kinds.h"
+
+namespace sirl {
+
+TaskKindSpec vae_kind();
+TaskKindSpec rep_kind();
+TaskKindSpec fpe_kind();
+TaskKindSpec tpa_kind();
+
+// The keys other code looks tasks up by (the VAE and φ a cell reads).
+std::string vae_key(const std::string& env, int64_t seed);
+std::string rep_key(const std::string& env, int64_t seed, const Variant& v, int64_t N);
+
+// A cell of the experiment (an fpe or tpa task) on φ of (env, seed, v, N), fields set: N is
+// dropped for methods that use no queries (their φ is shared by every N).
+Task experiment_cell(TaskKind kind, const std::string& env, int64_t seed, const Variant& v,
+                     int64_t N);
+
+}  // namespace sirl
