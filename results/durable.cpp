@@ -3,6 +3,13 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+#include <vector>
+
 namespace sirl {
 
 void fsync_path(const std::string& path) {
@@ -11,6 +18,30 @@ void fsync_path(const std::string& path) {
     ::fsync(fd);
     ::close(fd);
   }
+}
+
+uint64_t file_checksum(const std::string& path, uint64_t offset) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot read");
+  in.seekg(std::streamoff(offset));
+  uint64_t h = 0xCBF29CE484222325ull;
+  std::vector<char> buf(1 << 20);
+  while (in) {
+    in.read(buf.data(), std::streamsize(buf.size()));
+    const size_t n = size_t(in.gcount());
+    for (size_t i = 0; i < n; i += 8) {
+      uint64_t w = 0;
+      std::memcpy(&w, buf.data() + i, std::min<size_t>(8, n - i));
+      h = (h ^ w) * 0x100000001B3ull;
+    }
+  }
+  return h;
+}
+
+std::string hex64(uint64_t v) {
+  char b[17];
+  std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(v));
+  return b;
 }
 
 }  // namespace sirl

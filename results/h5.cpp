@@ -156,10 +156,19 @@ Hid vlen_string_type() {
 
 }  // namespace
 
-H5File H5File::create(const std::string& path) {
+H5File H5File::create(const std::string& path, uint64_t userblock_bytes) {
   quiet();
   errno = 0;
-  hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  hid_t fcpl = H5P_DEFAULT;
+  if (userblock_bytes > 0) {
+    fcpl = H5Pcreate(H5P_FILE_CREATE);
+    if (fcpl < 0 || H5Pset_userblock(fcpl, hsize_t(userblock_bytes)) < 0) {
+      if (fcpl >= 0) H5Pclose(fcpl);
+      fail(path, "bad userblock size " + std::to_string(userblock_bytes));
+    }
+  }
+  hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl, H5P_DEFAULT);
+  if (fcpl != H5P_DEFAULT) H5Pclose(fcpl);
   if (f < 0) fail(path, "cannot create file");
   return H5File(f, path);
 }

@@ -36,7 +36,9 @@ struct H5Table {
 
 class H5File {
  public:
-  static H5File create(const std::string& path);     // truncates an existing file
+  // Truncates an existing file. A userblock (a power of two ≥ 512 bytes) reserves the file's
+  // first bytes for the caller; HDF5 neither reads nor writes them.
+  static H5File create(const std::string& path, uint64_t userblock_bytes = 0);
   static H5File open_read(const std::string& path);  // throws H5Error: missing, not HDF5, truncated
   static H5File open_rw(const std::string& path);
   H5File(H5File&& o) noexcept;

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 
 #include "kernels/rng.h"
 #include "results/durable.h"
@@ -14,6 +15,86 @@
 namespace sirl {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// Every commit starts with a userblock HDF5 leaves alone, holding what is needed to trust the
+// file before the HDF5 library reads a byte of it (a corrupted HDF5 file can crash the library):
+//   "SIRLTASK1\n" <checksum of bytes [kFrameBytes, end), 16 hex> "\n" <task key> "\n" NUL…
+// Commits of engine 0.2.0 without it (they start with HDF5's signature) are still read.
+constexpr uint64_t kFrameBytes = 1024;
+constexpr std::string_view kFrameMagic = "SIRLTASK1\n";
+constexpr std::string_view kHdf5Signature = "\x89HDF\r\n\x1a\n";
+
+struct Frame {
+  bool framed = false;  // false: a commit of engine 0.2.0 (plain HDF5)
+  std::string checksum, key;
+};
+
+// Throws H5Error if the file is neither a framed commit nor plain HDF5.
+Frame read_frame(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::string head(kFrameBytes, '\0');
+  in.read(head.data(), std::streamsize(head.size()));
+  head.resize(size_t(in.gcount()));
+  Frame f;
+  if (head.starts_with(kHdf5Signature)) return f;
+  const size_t sum_end = kFrameMagic.size() + 16, key_end = head.find('\n', sum_end + 1);
+  if (!head.starts_with(kFrameMagic) || head.size() < kFrameBytes || head[sum_end] != '\n' ||
+      key_end == std::string::npos)
+    throw H5Error(p.string() + ": not a task commit (corrupted or truncated)");
+  f.framed = true;
+  f.checksum = head.substr(kFrameMagic.size(), 16);
+  f.key = head.substr(sum_end + 1, key_end - sum_end - 1);
+  return f;
+}
+
+// Fills the userblock of a closed commit file for `key`.
+void write_frame(const fs::path& p, const std::string& key) {
+  std::string head =
+      std::string(kFrameMagic) + hex64(file_checksum(p.string(), kFrameBytes)) + "\n" + key + "\n";
+  if (head.size() > kFrameBytes) throw H5Error("task key too long for a commit: " + key);
+  head.resize(kFrameBytes, '\0');
+  std::fstream out(p, std::ios::in | std::ios::out | std::ios::binary);
+  out.seekp(0);
+  out.write(head.data(), std::streamsize(head.size()));
+  out.flush();
+  if (!out) throw H5Error(p.string() + ": cannot write the commit's frame");
+}
+
+// The record committed in `p` for `key`, verified before HDF5 opens the file (framed commits)
+// and against the record checksum after. A corrupted file is refused naming the task (and
+// removed when `remove_if_corrupt`, so that a rerun computes the task again).
+TaskRecord read_commit(const fs::path& p, const std::string& key, bool remove_if_corrupt) {
+  auto corrupted = [&](const std::string& why) {
+    std::error_code ec;
+    if (remove_if_corrupt) fs::remove(p, ec);
+    return H5Error("task " + key + ": its committed file " + p.string() + " is corrupted (" + why +
+                   ")" +
+                   (remove_if_corrupt ? "; it was removed: rerun to compute the task again" : ""));
+  };
+  Frame frame;
+  try {
+    frame = read_frame(p);
+  } catch (const H5Error&) {
+    throw corrupted("no commit header");
+  }
+  if (frame.framed) {
+    if (frame.key != key) throw H5Error(p.string() + ": holds task " + frame.key + ", not " + key);
+    if (hex64(file_checksum(p.string(), kFrameBytes)) != frame.checksum)
+      throw corrupted("checksum mismatch");
+  }
+  H5File f = H5File::open_read(p.string());
+  TaskRecord r = read_record(f, "/r");
+  r.text.erase("record_checksum");  // written beside the record, not part of it
+  if (r.key != key) throw H5Error(p.string() + ": holds task " + r.key + ", not " + key);
+  if (f.has_attr("/r", "record_checksum") &&
+      f.attr_string("/r", "record_checksum") != record_checksum(r))
+    throw corrupted("record checksum mismatch");
+  return r;
+}
+
+}  // namespace
 
 TaskStore::TaskStore(fs::path dir) : dir_(std::move(dir)) {
   std::error_code ec;
@@ -27,8 +108,13 @@ TaskStore::TaskStore(fs::path dir) : dir_(std::move(dir)) {
     }
     if (!name.ends_with(".h5")) continue;
     try {
-      H5File f = H5File::open_read(e.path().string());
-      index_[f.attr_string("/r", "task_key")] = e.path();
+      const Frame frame = read_frame(e.path());  // indexing reads no HDF5 (and is fast)
+      if (frame.framed) {
+        index_[frame.key] = e.path();
+      } else {
+        H5File f = H5File::open_read(e.path().string());
+        index_[f.attr_string("/r", "task_key")] = e.path();
+      }
     } catch (const H5Error&) {
       fs::remove(e.path(), ec);  // cannot happen with rename commits; never trust a bad file
     }
@@ -45,10 +131,7 @@ fs::path TaskStore::file_for(const fs::path& dir, const std::string& key) {
 TaskRecord TaskStore::load_from(const fs::path& dir, const std::string& key) {
   const fs::path p = file_for(dir, key);
   if (!fs::exists(p)) throw H5Error(dir.string() + ": no committed task " + key);
-  H5File f = H5File::open_read(p.string());
-  TaskRecord r = read_record(f, "/r");
-  if (r.key != key) throw H5Error(p.string() + ": holds task " + r.key + ", not " + key);
-  return r;
+  return read_commit(p, key, false);  // another process's file: never removed from here
 }
 
 bool TaskStore::has(const std::string& key) const {
@@ -67,15 +150,18 @@ void TaskStore::commit(const TaskRecord& r) {
   const fs::path final = file_for(dir_, r.key);
   const fs::path tmp = final.string() + ".tmp";
   try {
-    H5File f = H5File::create(tmp.string());
-    write_record(f, "/r", r);
-    f.set_attr("/r", "record_checksum", record_checksum(r));
-    f.flush();  // a full disk shows here, not in a destructor
+    {
+      H5File f = H5File::create(tmp.string(), kFrameBytes);
+      write_record(f, "/r", r);
+      f.set_attr("/r", "record_checksum", record_checksum(r));
+      f.flush();  // a full disk shows here, not in a destructor
+    }             // closed: every byte handed to the OS
+    write_frame(tmp, r.key);
   } catch (const std::exception& e) {
     std::error_code ec;
     fs::remove(tmp, ec);
     throw H5Error("cannot save task " + r.key + ": " + e.what());
-  }  // closed: every byte handed to the OS
+  }
   fsync_path(tmp.string());
   std::error_code ec;
   fs::rename(tmp, final, ec);
@@ -107,18 +193,7 @@ TaskRecord TaskStore::load(const std::string& key) const {
     if (it == index_.end()) throw H5Error(dir_.string() + ": no committed task " + key);
     p = it->second;
   }
-  H5File f = H5File::open_read(p.string());
-  TaskRecord r = read_record(f, "/r");
-  r.text.erase("record_checksum");  // written beside the record, not part of it
-  if (f.has_attr("/r", "record_checksum") &&
-      f.attr_string("/r", "record_checksum") != record_checksum(r)) {
-    std::error_code ec;
-    fs::remove(p, ec);  // a rerun computes the task again
-    throw H5Error("task " + key + ": its committed file " + p.string() +
-                  " is corrupted (checksum mismatch); it was removed: rerun to compute the task "
-                  "again");
-  }
-  return r;
+  return read_commit(p, key, true);
 }
 
 std::string record_checksum(const TaskRecord& r) {

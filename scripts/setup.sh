@@ -11,6 +11,8 @@ packages=(
   libeigen3-dev libtbb-dev libhdf5-dev libsuitesparse-dev libmujoco-dev
   libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev
   libbenchmark-dev libgtest-dev libgmock-dev
+  # sanitizer builds and the libFuzzer targets (the asan/tsan presets)
+  clang libclang-rt-dev libomp-dev
   # MPI scale-out
   libopenmpi-dev openmpi-bin
   # plots and the PyTorch reference (Debian's /usr/bin/python3 only)

@@ -15,7 +15,7 @@ namespace sirl {
 namespace {
 
 // A byte flipped in a committed task's data (here a weight of a 4096-float array, which HDF5
-// itself never checks) is caught by the record's checksum: refused with the task's name, the
+// itself never checks) is caught by the commit's checksum: refused with the task's name, the
 // file removed so that a rerun computes the task again.
 TEST(TaskStore, ACorruptedCommitIsRefusedByNameAndRemoved) {
   namespace fs = std::filesystem;
@@ -55,6 +55,72 @@ TEST(TaskStore, ACorruptedCommitIsRefusedByNameAndRemoved) {
   }
   EXPECT_FALSE(fs::exists(file));
   EXPECT_FALSE(TaskStore(dir).has(r.key));  // a rerun computes it again
+}
+
+// Any byte of a commit flipped — HDF5's superblock, object headers and heaps included, which the
+// HDF5 library may crash on — is refused before HDF5 opens the file, or (a flip in the frame's
+// padding) harmless: the store never crashes and never returns another record.
+TEST(TaskStore, EveryFlippedByteIsRefusedOrHarmlessNeverACrash) {
+  namespace fs = std::filesystem;
+  const test::ScratchDir scratch;
+  const fs::path dir = scratch.path() / "tasks";
+  TaskRecord r;
+  r.key = "jaco/s1/sirl+vae/N1000/rep";
+  r.kind = "rep";
+  r.text["variant"] = "sirl+vae";
+  r.num["N"] = 1000;
+  r.arrays["params"] = {{3, 2}, {1, 2, 3, 4, 5, 6}};
+  TaskStore(dir).commit(r);
+  fs::path file;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().extension() == ".h5") file = e.path();
+  std::string original;
+  {
+    std::ifstream in(file, std::ios::binary);
+    original.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  ASSERT_GT(original.size(), 1024u);
+  int refused = 0, harmless = 0;
+  for (size_t at = 0; at < original.size(); at += 7) {
+    std::string bytes = original;
+    bytes[at] = char(bytes[at] ^ 0x10);
+    std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+    try {
+      const TaskStore s(dir);  // indexing reads the frame only
+      EXPECT_EQ(s.load(r.key), r) << "byte " << at;
+      ++harmless;
+    } catch (const H5Error&) {
+      ++refused;
+    }
+  }
+  // Only the frame's NUL padding (after the key, before byte 1024) may change harmlessly.
+  const size_t padding = 1024 - (10 + 17 + r.key.size() + 1);
+  EXPECT_LE(harmless, int(padding / 7) + 1);
+  EXPECT_GT(refused, int((original.size() - 1024) / 7));
+}
+
+// A commit of engine 0.2.0 (plain HDF5, no frame) is still read.
+TEST(TaskStore, ACommitWithoutAFrameIsStillRead) {
+  namespace fs = std::filesystem;
+  const test::ScratchDir scratch;
+  const fs::path dir = scratch.path() / "tasks";
+  TaskRecord r;
+  r.key = "grid/s0/vae";
+  r.kind = "vae";
+  r.num["seed"] = 0;
+  TaskStore(dir).commit(r);
+  fs::path file;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().extension() == ".h5") file = e.path();
+  {
+    H5File f = H5File::create(file.string());  // rewritten as engine 0.2.0 wrote it
+    write_record(f, "/r", r);
+    f.set_attr("/r", "record_checksum", record_checksum(r));
+  }
+  const TaskStore s(dir);
+  ASSERT_TRUE(s.has(r.key));
+  EXPECT_EQ(s.load(r.key), r);
+  EXPECT_EQ(TaskStore::load_from(dir, r.key), r);
 }
 
 // (Durability under a crash is batch_engine.py's kill -9 test; this one is the file format.)

@@ -39,7 +39,8 @@ for f in files:
     dst = os.path.join(a.scratch, f)
     os.makedirs(os.path.dirname(dst), exist_ok=True)
     if not os.path.exists(dst) or open(os.path.join(SRC, f), "rb").read() != open(dst, "rb").read():
-        shutil.copy2(os.path.join(SRC, f), dst)
+        # A fresh mtime (not copy2's): objects built from an older content must not look newer.
+        shutil.copy(os.path.join(SRC, f), dst)
 build = os.path.join(a.scratch, "build", "release")
 if not os.path.exists(os.path.join(build, "build.ninja")):
     p = sh(["cmake", "--preset", "release", "-DSIRL_BUILD_BENCH=OFF"], a.scratch)
