@@ -19,6 +19,7 @@
 #include "jobs/task_kinds.h"
 #include "jobs/task_runner.h"
 #include "kernels/rng.h"
+#include "results/durable.h"
 #include "results/file_lock.h"
 #include "results/h5.h"
 #include "results/results_file.h"
@@ -165,14 +166,17 @@ std::map<std::string, TaskRecord> load_prior(const Profile& p, const RunOptions&
 }
 
 // The staging directory of committed tasks: kept when it belongs to this profile and engine (an
-// interrupted run), refused or (--force) discarded otherwise.
+// interrupted run), refused or (--force) discarded otherwise. One without a committed task holds
+// nothing to lose (a run killed while writing its manifests): it is started again.
 std::unique_ptr<TaskStore> open_staging(const Profile& p, const RunOptions& o) {
   const fs::path staging = o.out + ".tasks";
   if (fs::exists(staging)) {
     TaskStore probe(staging);
     const std::string prof = probe.read_manifest("profile.toml"),
                       eng = probe.read_manifest("engine_version");
-    if (prof != p.text || eng != o.engine_version) {
+    if (probe.keys().empty()) {
+      fs::remove_all(staging);
+    } else if (prof != p.text || eng != o.engine_version) {
       if (!o.force) refuse(staging.string(), "by another profile or engine (an interrupted run)");
       fs::remove_all(staging);
     }
@@ -344,6 +348,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
     if (!failure) throw;
   }
   if (failure) std::rethrow_exception(failure);
+  crash_point();                // the results file and its checksum are in place
   fs::remove_all(store.dir());  // everything is in the results file now
   RunSummary s;
   s.tasks = ps.total;

@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -12,7 +14,20 @@
 
 namespace sirl {
 
+void crash_point() {
+  static const long k = [] {
+    const char* v = std::getenv("SIRL_CRASH_AT");
+    return v ? std::strtol(v, nullptr, 10) : 0L;
+  }();
+  static std::atomic<long> points{0};
+  if (k > 0 && ++points == k) std::_Exit(137);
+}
+
 void fsync_path(const std::string& path) {
+  crash_point();
+  struct AfterFsync {
+    ~AfterFsync() { crash_point(); }
+  } after;
   const int fd = ::open(path.c_str(), O_RDONLY);
   if (fd >= 0) {
     ::fsync(fd);
