@@ -94,7 +94,7 @@ void write_study_analysis(const std::string& study_file, const std::string& env,
                           const std::string& out) {
   std::filesystem::create_directories(out);
   const std::string h5 = out + "/study_analysis.h5";
-  {
+  try {
     H5File f = H5File::create(h5 + ".partial");
     auto w = [&](const char* name, const std::vector<double>& v) {
       f.write(std::string("/study_analysis/") + name, v.data(), {uint64_t(v.size())});
@@ -124,6 +124,11 @@ void write_study_analysis(const std::string& study_file, const std::string& env,
     std::vector<int32_t> both(a.both_features.begin(), a.both_features.end());
     f.write("/study_analysis/both_features", both.data(), {uint64_t(both.size())});
     f.write_strings("/study_analysis/participants", a.participants);
+    f.close();  // a full disk shows here, not silently in a destructor
+  } catch (const std::exception&) {
+    std::error_code ec;
+    std::filesystem::remove(h5 + ".partial", ec);
+    throw;
   }
   std::filesystem::rename(h5 + ".partial", h5);
   const std::string cmd = "/usr/bin/python3 " +

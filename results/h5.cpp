@@ -204,6 +204,13 @@ void H5File::flush() {
   errno = 0;
   if (H5Fflush(id_, H5F_SCOPE_GLOBAL) < 0) fail(path_, "cannot write (flush failed)");
 }
+void H5File::close() {
+  flush();
+  errno = 0;
+  const herr_t rc = H5Fclose(id_);
+  id_ = -1;
+  if (rc < 0) fail(path_, "cannot write (close failed)");
+}
 
 bool H5File::exists(const std::string& object) const {
   // Check every prefix: H5Lexists fails on a path whose parent is missing.

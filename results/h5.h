@@ -47,6 +47,9 @@ class H5File {
   const std::string& path() const { return path_; }
   int64_t id() const { return id_; }
   void flush();
+  // Flushes and closes now, throwing H5Error if a byte could not be written (the destructor
+  // closes silently: a writer must close() or flush() to learn that its file is whole).
+  void close();
 
   bool exists(const std::string& object) const;
   // From now on, numeric arrays of ≥ 4096 elements are written chunked with shuffle + deflate

@@ -13,7 +13,7 @@ using u64 = uint64_t;
 
 void write_study(const std::string& path, const Study& s) {
   const std::string tmp = path + ".tmp";
-  {
+  try {
     H5File f = H5File::create(tmp);
     f.group("/study");
     f.set_attr("/study", "format", std::string("sirl-study-1"));
@@ -39,6 +39,11 @@ void write_study(const std::string& path, const Study& s) {
       f.write(g + "/preference_time", p.preference_time.data(), {u64(p.preference_done())});
     }
     f.write_strings("/study/participant_ids", ids);
+    f.close();  // a full disk shows here, not silently in a destructor
+  } catch (const std::exception& e) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);  // nothing half-written stays behind
+    throw H5Error(path + ": the study file could not be written: " + e.what());
   }
   fsync_path(tmp);
   std::error_code ec;

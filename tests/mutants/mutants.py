@@ -124,6 +124,8 @@ MUTANTS = [
      "newer versions accepted"),
     ("results/task_store.cpp", "    if (hex64(file_checksum(p.string(), kFrameBytes)) != frame.checksum)",
      "    if (false)", "TaskStore.*", "a commit read without checking its checksum (HDF5 crashes)"),
+    ("results/study_store.cpp", "    f.close();  // a full disk shows here, not silently in a destructor", "",
+     "ctest:disk_full", "a study file's failed write reported as success"),
     ("results/task_store.cpp", "    if (name.ends_with(\".tmp\")) {", "    if (name.ends_with(\".tmpx\")) {",
      "TaskStore.*", "torn commits not swept"),
 ]
