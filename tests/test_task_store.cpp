@@ -14,6 +14,19 @@
 namespace sirl {
 namespace {
 
+// The one commit file in a staging directory that holds one task.
+std::filesystem::path the_commit(const std::filesystem::path& dir) {
+  std::filesystem::path file;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().extension() == ".h5") file = e.path();
+  return file;
+}
+
+std::string read_bytes(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
 // A byte flipped in a committed task's data (here a weight of a 4096-float array, which HDF5
 // itself never checks) is caught by the commit's checksum: refused with the task's name, the
 // file removed so that a rerun computes the task again.
@@ -32,14 +45,8 @@ TEST(TaskStore, ACorruptedCommitIsRefusedByNameAndRemoved) {
   s.commit(r);
   EXPECT_EQ(s.load(r.key), r);
   // Find weight 2000 (2000.25f) in the file and flip one bit of it.
-  fs::path file;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().extension() == ".h5") file = e.path();
-  std::string bytes;
-  {
-    std::ifstream in(file, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), {});
-  }
+  const fs::path file = the_commit(dir);
+  std::string bytes = read_bytes(file);
   const float target = 2000.25f;
   const size_t at = bytes.find(std::string(reinterpret_cast<const char*>(&target), 4));
   ASSERT_NE(at, std::string::npos);
@@ -71,14 +78,8 @@ TEST(TaskStore, EveryFlippedByteIsRefusedOrHarmlessNeverACrash) {
   r.num["N"] = 1000;
   r.arrays["params"] = {{3, 2}, {1, 2, 3, 4, 5, 6}};
   TaskStore(dir).commit(r);
-  fs::path file;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().extension() == ".h5") file = e.path();
-  std::string original;
-  {
-    std::ifstream in(file, std::ios::binary);
-    original.assign(std::istreambuf_iterator<char>(in), {});
-  }
+  const fs::path file = the_commit(dir);
+  const std::string original = read_bytes(file);
   ASSERT_GT(original.size(), 1024u);
   int refused = 0, harmless = 0;
   for (size_t at = 0; at < original.size(); at += 7) {
@@ -109,9 +110,7 @@ TEST(TaskStore, ACommitWithoutAFrameIsStillRead) {
   r.kind = "vae";
   r.num["seed"] = 0;
   TaskStore(dir).commit(r);
-  fs::path file;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().extension() == ".h5") file = e.path();
+  const fs::path file = the_commit(dir);
   {
     H5File f = H5File::create(file.string());  // rewritten as engine 0.2.0 wrote it
     write_record(f, "/r", r);
