@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <stdexcept>
 #include <string>
@@ -27,8 +28,17 @@ const sirl::Dataset& grid_study_data() {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0) return 0;
-  // One file per process, rewritten each run (the importers read paths).
-  static const std::string path = "/tmp/sirl_fuzz_import_" + std::to_string(::getpid());
+  // One file per process, rewritten each run (the importers read paths), removed at exit.
+  static const struct Scratch {
+    std::string path = (std::filesystem::temp_directory_path() /
+                        ("sirl_fuzz_import_" + std::to_string(::getpid())))
+                           .string();
+    ~Scratch() {
+      std::error_code ec;
+      std::filesystem::remove(path, ec);
+    }
+  } scratch;
+  const std::string& path = scratch.path;
   const bool json = data[0] & 1;
   {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);

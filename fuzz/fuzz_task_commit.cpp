@@ -22,11 +22,16 @@ constexpr const char* kKey = "grid/s0/sirl/N100/rep";
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   namespace fs = std::filesystem;
-  static const fs::path dir = [] {
-    const fs::path d = "/tmp/sirl_fuzz_commit_" + std::to_string(::getpid());
-    fs::create_directories(d);
-    return d;
-  }();
+  // One directory per process, the input rewritten into it each run, removed at exit.
+  static const struct Scratch {
+    fs::path dir = fs::temp_directory_path() / ("sirl_fuzz_commit_" + std::to_string(::getpid()));
+    Scratch() { fs::create_directories(dir); }
+    ~Scratch() {
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+    }
+  } scratch;
+  const fs::path& dir = scratch.dir;
   char name[32];
   std::snprintf(name, sizeof name, "%016llx.h5",
                 static_cast<unsigned long long>(sirl::seed_from_key(kKey, 0)));
