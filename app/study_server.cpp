@@ -12,20 +12,16 @@
 #include <arpa/inet.h>
 #include <httplib.h>
 #include <netinet/in.h>
-#include <nlohmann/json.hpp>
 
 #include <CLI/CLI.hpp>
-#include <charconv>
-#include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <mutex>
 #include <optional>
 #include <sstream>
 
 #include "app/commands.h"
+#include "app/study_service.h"
 #include "datasets/environments.h"
 #include "datasets/study.h"
 #include "datasets/study_import.h"
@@ -55,187 +51,6 @@ struct ImportArgs {
 
 CLI::App* g_serve_cmd = nullptr;
 CLI::App* g_import_cmd = nullptr;
-
-using nlohmann::json;
-
-// Serialised text; invalid UTF-8 (a hostile request echoed in an error) becomes U+FFFD instead of
-// an exception.
-std::string text(const json& j) {
-  return j.dump(-1, ' ', false, json::error_handler_t::replace);
-}
-
-// Rows of Ξ as a JSON array.
-json ids(const int32_t* v, int n) {
-  return json(std::vector<int32_t>(v, v + n));
-}
-
-// Strict request numbers: the whole field, plain decimal, nothing else ("5abc", "1e3" for an
-// integer, " 1", "0x1", "-1" for an index are all refused).
-bool parse_index(const std::string& text, int64_t& out) {
-  if (text.empty() || text.size() > 18) return false;
-  for (char c : text)
-    if (c < '0' || c > '9') return false;
-  out = std::stoll(text);
-  return true;
-}
-bool parse_decimal(const std::string& text, double& out) {
-  if (text.empty() || text.size() > 32) return false;
-  for (char c : text)
-    if (!((c >= '0' && c <= '9') || c == '.' || c == '-' || c == 'e' || c == 'E' || c == '+'))
-      return false;
-  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), out);
-  return ec == std::errc() && ptr == text.data() + text.size() && std::isfinite(out);
-}
-
-double now_unix() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
-
-// The study being served: one participant's answers are appended under a mutex and the file is
-// rewritten atomically before the HTTP reply, so an acknowledged answer is never lost.
-class StudyService {
- public:
-  StudyService(Study s, std::string path, std::string participant, int practice)
-      : study_(std::move(s)), path_(std::move(path)), id_(std::move(participant)) {
-    data_ = study_dataset(study_);
-    view_ = env_spec(study_.env).view;
-    practice_ = plan_participant(data_, "practice", practice, practice, 12345);
-  }
-
-  StudyParticipant& me() { return *study_.find(id_); }
-
-  bool authorised(const httplib::Request& r, httplib::Response& res) {
-    const std::string p = r.get_param_value("p"), t = r.get_param_value("t");
-    const StudyParticipant* who = study_.find(p);
-    if (!who || who->token != t) {
-      error(res, 403, "unknown participant or wrong token");
-      return false;
-    }
-    if (p != id_) {
-      error(res, 403, "this server records participant " + id_ + " only");
-      return false;
-    }
-    return true;
-  }
-
-  static void error(httplib::Response& res, int status, const std::string& msg) {
-    res.status = status;
-    res.set_content(text(json{{"error", msg}}), "application/json");
-  }
-
-  std::string state_json() {
-    std::lock_guard lock(mu_);
-    const StudyParticipant& p = me();
-    const bool sim_left = p.similarity_done() < p.similarity_count();
-    const bool pref_left = p.preference_done() < p.preference_count();
-    json o;
-    o["participant"] = p.id;
-    o["env"] = study_.env;
-    o["view"] = view_ == EnvView::plane ? "plane" : "arm";
-    o["features_gloss"] = env_spec(study_.env).study_features;
-    o["features"] = data_.feature_names;
-    o["scenario"] = p.scenario;
-    o["stage"] = sim_left ? "similarity" : pref_left ? "preference" : "done";
-    o["similarity"] = {{"done", p.similarity_done()}, {"total", p.similarity_count()}};
-    o["preference"] = {{"done", p.preference_done()}, {"total", p.preference_count()}};
-    if (sim_left)
-      o["next"] = {{"kind", "similarity"},
-                   {"index", p.similarity_done()},
-                   {"trajectories", ids(p.similarity.data() + 3 * p.similarity_done(), 3)}};
-    else if (pref_left)
-      o["next"] = {{"kind", "preference"},
-                   {"index", p.preference_done()},
-                   {"trajectories", ids(p.preference.data() + 2 * p.preference_done(), 2)}};
-    else
-      o["next"] = nullptr;
-    json sim = json::array(), pref = json::array();
-    for (int64_t i = 0; i < practice_.similarity_count(); ++i)
-      sim.push_back(ids(practice_.similarity.data() + 3 * i, 3));
-    for (int64_t i = 0; i < practice_.preference_count(); ++i)
-      pref.push_back(ids(practice_.preference.data() + 2 * i, 2));
-    o["practice"] = {{"similarity", sim}, {"preference", pref}};
-    return text(o);
-  }
-
-  // What the page draws (the environment's `draw`): an arm view's end-effector path [21, 3] (m)
-  // and the objects; a plane view's cells [9, 2] and end angle.
-  std::string trajectory_json(int64_t id) const {
-    json objects = json::array();
-    for (size_t k = 0; k < data_.object_names.size(); ++k) {
-      const float* pos = data_.object_positions.data() + k * data_.object_dim;
-      objects.push_back({{"name", data_.object_names[k]},
-                         {"pos", std::vector<float>(pos, pos + data_.object_dim)}});
-    }
-    const TrajectoryView v = env_spec(study_.env).draw(data_, id);
-    json points = json::array();
-    for (const auto& q : v.points)
-      points.push_back(view_ == EnvView::arm ? json{q[0], q[1], q[2]} : json{q[0], q[1]});
-    json o = {{"id", id}, {"objects", objects}, {"points", points}};
-    if (view_ == EnvView::plane) o["angle"] = v.end_angle_deg;
-    return text(o);
-  }
-
-  int64_t trajectory_count() const { return data_.count; }
-
-  // Validates and commits one answer; returns an HTTP status and a message.
-  std::pair<int, std::string> answer(const httplib::Request& r) {
-    for (const char* f : {"kind", "index", "answer", "response_ms"})
-      if (!r.has_param(f)) return {400, std::string("missing field '") + f + "'"};
-    const std::string kind = r.get_param_value("kind");
-    if (kind != "similarity" && kind != "preference")
-      return {400, "kind must be similarity or preference, got '" + kind + "'"};
-    int64_t index = 0;
-    double value = 0, ms = 0;
-    if (!parse_index(r.get_param_value("index"), index))
-      return {400, "index must be a query number (0, 1, 2, ...)"};
-    if (!parse_decimal(r.get_param_value("answer"), value) ||
-        !parse_decimal(r.get_param_value("response_ms"), ms))
-      return {400, "answer and response_ms must be decimal numbers"};
-    if (!std::isfinite(ms) || ms < 0 || ms > 3.6e6)
-      return {400, "response_ms must be a time in [0, 3600000] ms"};
-    std::lock_guard lock(mu_);
-    StudyParticipant& p = me();
-    const bool sim = kind == "similarity";
-    const int64_t done = sim ? p.similarity_done() : p.preference_done();
-    const int64_t total = sim ? p.similarity_count() : p.preference_count();
-    if (!sim && p.similarity_done() < p.similarity_count())
-      return {400, "preference queries come after the similarity queries"};
-    if (index < done)
-      return {400, kind + " query " + std::to_string(index) + " is already answered"};
-    if (index >= total) return {400, kind + " query " + std::to_string(index) + " does not exist"};
-    if (index > done)
-      return {400, "out of order: the next " + kind + " query is " + std::to_string(done)};
-    if (sim && !(value == 0 || value == 1 || value == 2))
-      return {400, "a similarity answer is the position (0, 1 or 2) of the odd one out"};
-    if (!sim && !(value == 0 || value == 0.5 || value == 1))
-      return {400, "a preference answer is 1 (first), 0 (second) or 0.5 (equal)"};
-    const StudyParticipant before = p;
-    if (sim) {
-      p.similarity_answer.push_back(int32_t(value));
-      p.similarity_ms.push_back(float(ms));
-      p.similarity_time.push_back(now_unix());
-    } else {
-      p.preference_answer.push_back(float(value));
-      p.preference_ms.push_back(float(ms));
-      p.preference_time.push_back(now_unix());
-    }
-    try {
-      write_study(path_, study_);
-    } catch (const std::exception& e) {
-      p = before;  // not durable: not accepted
-      return {500, std::string("could not save the answer: ") + e.what()};
-    }
-    return {200, "saved"};
-  }
-
- private:
-  Study study_;
-  std::string path_, id_;
-  Dataset data_;
-  EnvView view_ = EnvView::plane;
-  StudyParticipant practice_;
-  std::mutex mu_;
-};
 
 std::string read_file(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -337,7 +152,22 @@ int run_serve() {
     write_study(a.out, s);
   }
   const std::string token = s.find(a.participant)->token;
-  StudyService service(s, a.out, a.participant, a.practice);
+  const std::string path = a.out;
+  StudyService service(s, std::make_shared<const Dataset>(study_dataset(s)), a.participant,
+                       a.practice, [path](const Study& st) { write_study(path, st); });
+  // Each API call: the service's reply as JSON.
+  const auto api = [&service](Reply (StudyService::*handler)(const RequestParams&)) {
+    return [&service, handler](const httplib::Request& r, httplib::Response& res) {
+      const Reply reply = (service.*handler)(r.params);
+      res.status = reply.status;
+      res.set_content(reply.body, "application/json");
+    };
+  };
+  const auto not_found = [](httplib::Response& res, const std::string& msg) {
+    const Reply reply = error_reply(404, msg);
+    res.status = reply.status;
+    res.set_content(reply.body, "application/json");
+  };
   const fs::path web = fs::path(SIRL_SOURCE_DIR) / "app" / "study_web";
   const fs::path three = web / "node_modules" / "three";
 
@@ -346,34 +176,19 @@ int run_serve() {
   });
   srv.Get(R"(/static/([A-Za-z0-9_.-]+))", [&](const httplib::Request& r, httplib::Response& res) {
     const fs::path f = web / r.matches[1].str();
-    if (!fs::is_regular_file(f)) return StudyService::error(res, 404, "no such file");
+    if (!fs::is_regular_file(f)) return not_found(res, "no such file");
     res.set_content(read_file(f), f.extension() == ".js" ? "text/javascript" : "text/css");
   });
   srv.Get(R"(/vendor/three/((build|examples/jsm/controls)/[A-Za-z0-9_.]+\.js))",
           [&](const httplib::Request& r, httplib::Response& res) {
             const fs::path f = three / r.matches[1].str();
             if (!fs::is_regular_file(f))
-              return StudyService::error(res, 404, "three.js is not installed (scripts/setup.sh)");
+              return not_found(res, "three.js is not installed (scripts/setup.sh)");
             res.set_content(read_file(f), "text/javascript");
           });
-  srv.Get("/api/state", [&](const httplib::Request& r, httplib::Response& res) {
-    if (service.authorised(r, res)) res.set_content(service.state_json(), "application/json");
-  });
-  srv.Get("/api/trajectory", [&](const httplib::Request& r, httplib::Response& res) {
-    if (!service.authorised(r, res)) return;
-    int64_t id = -1;
-    if (!parse_index(r.get_param_value("id"), id) || id >= service.trajectory_count())
-      return StudyService::error(
-          res, 400,
-          "id must be a trajectory row in [0, " + std::to_string(service.trajectory_count()) + ")");
-    res.set_content(service.trajectory_json(id), "application/json");
-  });
-  srv.Post("/api/answer", [&](const httplib::Request& r, httplib::Response& res) {
-    if (!service.authorised(r, res)) return;
-    const auto [status, msg] = service.answer(r);
-    if (status != 200) return StudyService::error(res, status, msg);
-    res.set_content(service.state_json(), "application/json");
-  });
+  srv.Get("/api/state", api(&StudyService::state));
+  srv.Get("/api/trajectory", api(&StudyService::trajectory));
+  srv.Post("/api/answer", api(&StudyService::answer));
   std::printf(
       "sirl study serve: participant %s on %s; answers go to %s\n"
       "open: http://%s:%d/?p=%s&t=%s\n",

@@ -3,9 +3,11 @@
 token, another participant, malformed, duplicate, out of order) gets 400/403 and changes
 nothing; after kill -9 and a restart the study resumes at the next unanswered query.
 With STUDY_BROWSER=1 it also drives the real page in Debian's chromium (playwright-core)."""
+import hashlib
 import json
 import os
 import re
+import resource
 import signal
 import subprocess
 import sys
@@ -20,16 +22,21 @@ SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
 
 
-def serve(study, participant, port=0, n_sim=3, n_pref=2):
+def serve(study, participant, port=0, n_sim=3, n_pref=2, file_size_limit=None):
     """Starts a server (port 0: the OS picks a free one, no check-then-bind race) and returns it
     with its URL and the participant's token once it prints the URL: the socket is listening by
-    then, so requests queue until the accept loop runs."""
+    then, so requests queue until the accept loop runs. `file_size_limit` (bytes) makes every
+    write past it fail with EFBIG, as a full disk fails with ENOSPC."""
+    def limit():
+        if file_size_limit is not None:
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+            resource.setrlimit(resource.RLIMIT_FSIZE, (file_size_limit, file_size_limit))
     p = subprocess.Popen([SIRL, "study", "serve", "--env", "grid", "--participant", participant,
                           "--similarity", str(n_sim), "--preference", str(n_pref), "--practice", "1",
                           "--scenario", "Keep away from the laptop.", "--scenario-features",
                           "laptop_distance", "--out", study, "--port", str(port)],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                         stdin=subprocess.DEVNULL)
+                         stdin=subprocess.DEVNULL, preexec_fn=limit)
     url = None
     for _ in range(2):
         line = p.stdout.readline()
@@ -239,6 +246,45 @@ with tempfile.TemporaryDirectory() as tmp:
     st, body = http("GET", f"{base}/api/trajectory?p=alice&t={token}&id=999999")
     assert st == 400, body
     print("ok: another participant's token is refused; trajectory API checks its id")
+
+    # A full disk while serving: the answer is refused with 500 and the cause, the server keeps
+    # running, the study file is untouched and no temporary file is left; once there is room
+    # (restarted without the limit) the same query is asked again and accepted.
+    full = os.path.join(tmp, "full", "study.h5")
+    os.mkdir(os.path.dirname(full))
+    srv_e, url_e, token_e = serve(full, "erin")
+    base_e = f"http://127.0.0.1:{urllib.parse.urlparse(url_e).port}"
+    erin = dict(p="erin", t=token_e, kind="similarity", response_ms=700)
+    st, _ = http("POST", f"{base_e}/api/answer", dict(erin, index=0, answer=1))
+    assert st == 200
+    srv_e.terminate()
+    srv_e.wait()
+    with open(full, "rb") as f:
+        before = hashlib.sha256(f.read()).hexdigest()
+    srv_e, url_e, _ = serve(full, "erin", file_size_limit=os.path.getsize(full) // 2)
+    base_e = f"http://127.0.0.1:{urllib.parse.urlparse(url_e).port}"
+    st, body = http("POST", f"{base_e}/api/answer", dict(erin, index=1, answer=2))
+    refused = json.loads(body)["error"] if st == 500 else body
+    assert st == 500 and "could not save the answer" in body and "File too large" in body, \
+        (st, body)
+    st, body = http("GET", f"{base_e}/api/state?p=erin&t={token_e}")
+    assert st == 200 and json.loads(body)["next"]["index"] == 1, (st, body)
+    assert srv_e.poll() is None, "the server died on a full disk"
+    with open(full, "rb") as f:
+        assert hashlib.sha256(f.read()).hexdigest() == before, "a failed save changed the file"
+    assert sorted(os.listdir(os.path.dirname(full))) == ["study.h5", "study.h5.lock"], \
+        os.listdir(os.path.dirname(full))
+    srv_e.terminate()
+    srv_e.wait()
+    srv_e, url_e, _ = serve(full, "erin")
+    base_e = f"http://127.0.0.1:{urllib.parse.urlparse(url_e).port}"
+    st, body = http("POST", f"{base_e}/api/answer", dict(erin, index=1, answer=2))
+    assert st == 200, body
+    srv_e.terminate()
+    srv_e.wait()
+    assert answers(full, "erin")[0] == [1, 2]
+    print("ok: a full disk while serving: 500 with the cause, the file untouched, the answer "
+          "accepted once there is room:", refused)
 
     if os.environ.get("STUDY_BROWSER") == "1":
         web = os.path.join(SRC, "app", "study_web")
