@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # README command 2: install what is missing, build (release), run the whole test suite; then the
-# sanitizer build (clang, AddressSanitizer + UndefinedBehaviorSanitizer): the GoogleTest suite
-# and a short run of each libFuzzer target over its seed corpus. SIRL_SANITIZE=0 skips that part.
+# sanitizer builds: clang with AddressSanitizer + UndefinedBehaviorSanitizer (the GoogleTest suite
+# and a short run of each libFuzzer target over its seed corpus), then ThreadSanitizer on the
+# threaded paths (scripts/tsan.sh). SIRL_SANITIZE=0 skips both.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/build.sh release
@@ -10,4 +11,5 @@ if [ "${SIRL_SANITIZE:-1}" != 0 ]; then
   cmake --preset asan >/dev/null
   cmake --build --preset asan
   ctest --preset asan -j 2 -LE python
+  ./scripts/tsan.sh
 fi

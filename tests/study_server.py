@@ -280,11 +280,40 @@ with tempfile.TemporaryDirectory() as tmp:
     base_e = f"http://127.0.0.1:{urllib.parse.urlparse(url_e).port}"
     st, body = http("POST", f"{base_e}/api/answer", dict(erin, index=1, answer=2))
     assert st == 200, body
-    srv_e.terminate()
-    srv_e.wait()
     assert answers(full, "erin")[0] == [1, 2]
     print("ok: a full disk while serving: 500 with the cause, the file untouched, the answer "
           "accepted once there is room:", refused)
+
+    # Readers while answers are written (the server's thread pool; under ThreadSanitizer in
+    # scripts/test.sh): every state a reader sees is whole and progress never goes backwards.
+    seen, broken = [], []
+
+    def reader():
+        last = -1
+        for _ in range(40):
+            st, body = http("GET", f"{base_e}/api/state?p=erin&t={token_e}")
+            s = json.loads(body) if st == 200 else None
+            done = s["similarity"]["done"] + s["preference"]["done"] if s else -2
+            if done < last:
+                broken.append((st, body))
+            last = done
+            seen.append(done)
+    readers = [threading.Thread(target=reader) for _ in range(4)]
+    for r in readers:
+        r.start()
+    for kind, index, answer in (("similarity", 2, 0), ("preference", 0, 1), ("preference", 1, 0.5)):
+        st, body = http("POST", f"{base_e}/api/answer", dict(erin, kind=kind, index=index,
+                                                              answer=answer))
+        assert st == 200, body
+    for r in readers:
+        r.join()
+    srv_e.terminate()
+    srv_e.wait()
+    assert not broken and min(seen) >= 2 and max(seen) <= 5, (broken[:2], set(seen))
+    sim, pref, _, _ = answers(full, "erin")
+    assert sim == [1, 2, 0] and pref == [1.0, 0.5], (sim, pref)
+    print(f"ok: {len(seen)} state reads by 4 threads while 3 answers were written: each whole, "
+          f"progress monotone ({sorted(set(seen))})")
 
     if os.environ.get("STUDY_BROWSER") == "1":
         web = os.path.join(SRC, "app", "study_web")
