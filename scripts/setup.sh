@@ -11,6 +11,8 @@ packages=(
   libeigen3-dev libtbb-dev libhdf5-dev libsuitesparse-dev libmujoco-dev
   libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev
   libbenchmark-dev libgtest-dev libgmock-dev
+  # the GEMM libraries bench/bench_gemm_candidates.cpp measures against our kernels
+  libdnnl-dev libxsmm-dev
   # sanitizer builds and the libFuzzer targets (the asan/tsan presets)
   clang libclang-rt-dev libomp-dev
   # MPI scale-out

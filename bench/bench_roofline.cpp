@@ -1,0 +1,129 @@
+// This CPU's roofline: the peak a kernel could reach, measured, so every kernel benchmark and
+// task kind can report its share of it.
+//   BM_PeakFp32Fma     16 independent chains of `vfmadd231ps` (zmm; ymm without AVX-512):
+//                      2 FLOP per lane per instruction
+//   BM_PeakBf16Dot     16 independent chains of `vdpbf16ps` (zmm): per fp32 lane, 2 bf16
+//                      products summed into it, 4 FLOP per lane per instruction
+//   BM_StreamTriad     a[i] = b[i] + s * c[i] over 3 × 64 MiB (far beyond the caches);
+//                      bytes counted as STREAM counts them (2 reads + 1 write, 12 per element)
+// Each runs on 1 thread and on every core (->Threads): the per-core and the machine roof.
+// The instruction set is chosen at run time (__builtin_cpu_supports), like the engine's kernels.
+#include <benchmark/benchmark.h>
+#include <immintrin.h>
+
+#include <cstdint>
+#include <thread>
+#include <vector>
+
+namespace {
+
+constexpr int kChains = 16;          // > latency (4) × pipes (2): the FMA units never wait
+constexpr int64_t kIters = 1 << 16;  // per benchmark iteration
+
+// The lanes' sum (GCC 12's _mm512_reduce_add_ps trips -Wuninitialized in its own header).
+__attribute__((target("avx512f"))) float lane_sum(__m512 v) {
+  alignas(64) float x[16];
+  _mm512_store_ps(x, v);
+  float t = 0;
+  for (float f : x) t += f;
+  return t;
+}
+
+__attribute__((target("avx512f"))) float fma_loop_avx512(float seed) {
+  __m512 acc[kChains];
+  for (int c = 0; c < kChains; ++c) acc[c] = _mm512_set1_ps(seed + float(c));
+  const __m512 a = _mm512_set1_ps(0.999f), b = _mm512_set1_ps(1e-3f);
+  for (int64_t i = 0; i < kIters; ++i)
+    for (int c = 0; c < kChains; ++c) acc[c] = _mm512_fmadd_ps(acc[c], a, b);
+  __m512 s = acc[0];
+  for (int c = 1; c < kChains; ++c) s = _mm512_add_ps(s, acc[c]);
+  return lane_sum(s);
+}
+
+__attribute__((target("avx2,fma"))) float fma_loop_avx2(float seed) {
+  __m256 acc[kChains];
+  for (int c = 0; c < kChains; ++c) acc[c] = _mm256_set1_ps(seed + float(c));
+  const __m256 a = _mm256_set1_ps(0.999f), b = _mm256_set1_ps(1e-3f);
+  for (int64_t i = 0; i < kIters; ++i)
+    for (int c = 0; c < kChains; ++c) acc[c] = _mm256_fmadd_ps(acc[c], a, b);
+  __m256 s = acc[0];
+  for (int c = 1; c < kChains; ++c) s = _mm256_add_ps(s, acc[c]);
+  alignas(32) float v[8];
+  _mm256_store_ps(v, s);
+  float t = 0;
+  for (float x : v) t += x;
+  return t;
+}
+
+__attribute__((target("avx512f,avx512bf16"))) float bf16_loop(float seed) {
+  __m512 acc[kChains];
+  for (int c = 0; c < kChains; ++c) acc[c] = _mm512_set1_ps(seed + float(c));
+  const __m512bh a = _mm512_cvtne2ps_pbh(_mm512_set1_ps(0.5f), _mm512_set1_ps(0.25f));
+  const __m512bh b = _mm512_cvtne2ps_pbh(_mm512_set1_ps(1e-3f), _mm512_set1_ps(2e-3f));
+  for (int64_t i = 0; i < kIters; ++i)
+    for (int c = 0; c < kChains; ++c) acc[c] = _mm512_dpbf16_ps(acc[c], a, b);
+  __m512 s = acc[0];
+  for (int c = 1; c < kChains; ++c) s = _mm512_add_ps(s, acc[c]);
+  return lane_sum(s);
+}
+
+bool has_avx512() {
+  return __builtin_cpu_supports("avx512f");
+}
+bool has_bf16() {
+  return has_avx512() && __builtin_cpu_supports("avx512bf16");
+}
+
+void BM_PeakFp32Fma(benchmark::State& state) {
+  const bool wide = has_avx512();
+  const int lanes = wide ? 16 : 8;
+  for (auto _ : state)
+    benchmark::DoNotOptimize(wide ? fma_loop_avx512(float(state.thread_index()))
+                                  : fma_loop_avx2(float(state.thread_index())));
+  const double flops = double(kIters) * kChains * lanes * 2;
+  state.counters["GFLOP/s"] =
+      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+  state.SetLabel(wide ? "avx512 zmm" : "avx2 ymm");
+}
+
+void BM_PeakBf16Dot(benchmark::State& state) {
+  if (!has_bf16()) {
+    state.SkipWithError("this CPU has no AVX512_BF16");
+    return;
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(bf16_loop(float(state.thread_index())));
+  const double flops = double(kIters) * kChains * 16 * 4;
+  state.counters["GFLOP/s"] =
+      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+  state.SetLabel("avx512_bf16 vdpbf16ps");
+}
+
+// Each thread streams its own 3 × 64 MiB arrays (first-touched by that thread).
+void BM_StreamTriad(benchmark::State& state) {
+  const size_t n = (size_t(64) << 20) / sizeof(float);
+  std::vector<float> a(n, 0.f), b(n, 1.f), c(n, 2.f);
+  const float s = 3.f;
+  for (auto _ : state) {
+    float* __restrict pa = a.data();
+    const float* __restrict pb = b.data();
+    const float* __restrict pc = c.data();
+    for (size_t i = 0; i < n; ++i) pa[i] = pb[i] + s * pc[i];
+    benchmark::ClobberMemory();
+  }
+  state.counters["GB/s"] =
+      benchmark::Counter(double(n) * 12 * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+const int kCores = int(std::max(1u, std::thread::hardware_concurrency()));
+
+}  // namespace
+
+BENCHMARK(BM_PeakFp32Fma)->Threads(1)->Threads(kCores)->UseRealTime();
+BENCHMARK(BM_PeakBf16Dot)->Threads(1)->Threads(kCores)->UseRealTime();
+BENCHMARK(BM_StreamTriad)
+    ->Threads(1)
+    ->Threads(kCores)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+
+BENCHMARK_MAIN();
