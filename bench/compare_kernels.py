@@ -1,6 +1,13 @@
 #!/usr/bin/python3
-"""Runs the C++ kernel benchmarks and the PyTorch reference in one invocation and prints a
-Markdown table of GFLOP/s and the ratio ours / PyTorch (medians of repeated runs).
+"""Runs the roofline, the C++ kernel benchmarks and the PyTorch reference in one invocation and
+prints a Markdown table: GFLOP/s, % of this CPU's fp32 roof, and the speed-up over the best
+PyTorch form (medians of repeated runs).
+
+The roof is measured here (bench/bench_roofline.cpp: peak fp32 FMA, one core and all cores).
+Rows on 1 thread compare with PyTorch on 1 thread and with one core's roof. Rows on 2 threads
+compare machine throughput: with the better of PyTorch on 2 threads and two PyTorch processes of
+1 thread each run at once (summed), and with the roof of all cores. For the 20 TPA heads the
+PyTorch figure is the faster of its loop over heads and its batched form (torch.baddbmm).
 Usage: /usr/bin/python3 bench/compare_kernels.py [--build build/release] [--repetitions 5]
 """
 import argparse
@@ -10,6 +17,33 @@ import subprocess
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+TORCH = [sys.executable, os.path.join(HERE, "torch_reference.py")]
+
+
+def gbench(exe, repetitions, filt=None):
+    args = [exe, "--benchmark_format=json", f"--benchmark_repetitions={repetitions}",
+            "--benchmark_report_aggregates_only=true", "--benchmark_min_time=0.5"]
+    if filt:
+        args.append(f"--benchmark_filter={filt}")
+    out = json.loads(subprocess.run(args, check=True, capture_output=True, text=True).stdout)
+    want = "median" if repetitions > 1 else None  # one repetition: no aggregates, the run itself
+    return {b["run_name"]: b for b in out["benchmarks"] if b.get("aggregate_name") == want}
+
+
+def roof(build, repetitions):
+    """Peak fp32 GFLOP/s: {threads: value} for 1 thread and all cores."""
+    med = gbench(os.path.join(build, "bench", "sirl_bench_roofline"), repetitions, "BM_PeakFp32Fma")
+    return {int(k.split("threads:")[1]): v["GFLOP/s"] for k, v in med.items()}
+
+
+def torch_two_processes():
+    """Two 1-thread PyTorch processes at once (one per core): per case, the summed GFLOP/s."""
+    procs = [subprocess.Popen(TORCH + ["--threads", "1"], stdout=subprocess.PIPE, text=True)
+             for _ in range(2)]
+    outs = [json.loads(p.communicate()[0]) for p in procs]
+    assert all(p.returncode == 0 for p in procs)
+    return {k: {"gflops": sum(o[k]["gflops"] for o in outs), "ms": max(o[k]["ms"] for o in outs)}
+            for k in outs[0] if isinstance(outs[0][k], dict)}
 
 
 def main():
@@ -20,32 +54,38 @@ def main():
     exe = os.path.join(args.build, "bench", "sirl_bench_kernels")
     if not os.path.exists(exe):
         sys.exit(f"compare_kernels: {exe} not found; build with `cmake --build --preset release`")
-    ours = json.loads(subprocess.run(
-        [exe, "--benchmark_format=json", f"--benchmark_repetitions={args.repetitions}",
-         "--benchmark_report_aggregates_only=true", "--benchmark_min_time=0.5"],
-        check=True, capture_output=True, text=True).stdout)
-    med = {b["run_name"]: b for b in ours["benchmarks"] if b.get("aggregate_name") == "median"}
-    torch1 = json.loads(subprocess.run([sys.executable, os.path.join(HERE, "torch_reference.py"), "--threads", "1"],
-                                       check=True, capture_output=True, text=True).stdout)
-    torch2 = json.loads(subprocess.run([sys.executable, os.path.join(HERE, "torch_reference.py"), "--threads", "2"],
-                                       check=True, capture_output=True, text=True).stdout)
+    peak = roof(args.build, args.repetitions)
+    med = gbench(exe, args.repetitions)
+    run = lambda threads: json.loads(subprocess.run(TORCH + ["--threads", str(threads)], check=True,
+                                                    capture_output=True, text=True).stdout)
+    torch1, torch2, torch1x2 = run(1), run(2), torch_two_processes()
+
+    def best_torch(case, threads):
+        forms = [case] + ([case + "_batched"] if case + "_batched" in torch1 else [])
+        pool = [(torch1[f], f"{f}, 1 thread") for f in forms] if threads == 1 else \
+            [(torch2[f], f"{f}, 2 threads") for f in forms] + \
+            [(torch1x2[f], f"{f}, 2 processes") for f in forms]
+        return max(pool, key=lambda t: t[0]["gflops"])
+
     rows = [
-        ("SIRL step, Grid 19→128→128→6, 64 triplets, 1 thread", "BM_SirlStep/in:19/hidden:128/threads:1/real_time", "sirl_step_grid", 1),
-        ("SIRL step, Grid 19→128→128→6, 64 triplets, 2 threads", "BM_SirlStep/in:19/hidden:128/threads:2/real_time", "sirl_step_grid", 2),
-        ("SIRL step, Jaco 2037→1024→1024→6, 64 triplets, 1 thread", "BM_SirlStep/in:2037/hidden:1024/threads:1/real_time", "sirl_step_jaco", 1),
-        ("SIRL step, Jaco 2037→1024→1024→6, 64 triplets, 2 threads", "BM_SirlStep/in:2037/hidden:1024/threads:2/real_time", "sirl_step_jaco", 2),
-        ("20 TPA heads 6→128→128→1, 64 pairs, 1 thread", "BM_TpaHeadsStep/hidden:128/threads:1/real_time", "tpa_heads_grid", 1),
-        ("20 TPA heads 6→128→128→1, 64 pairs, 2 threads", "BM_TpaHeadsStep/hidden:128/threads:2/real_time", "tpa_heads_grid", 2),
+        ("SIRL step, Grid 19→128→128→6, 64 triplets", "BM_SirlStep/in:19/hidden:128/threads:{}/real_time", "sirl_step_grid"),
+        ("SIRL step, Jaco 2037→1024→1024→6, 64 triplets", "BM_SirlStep/in:2037/hidden:1024/threads:{}/real_time", "sirl_step_jaco"),
+        ("20 TPA heads 6→128→128→1, 64 pairs", "BM_TpaHeadsStep/hidden:128/threads:{}/real_time", "tpa_heads_grid"),
     ]
-    print(f"PyTorch {torch1['torch']} (same machine, same run); medians of {args.repetitions} repetitions\n")
-    print("| case | ours ms | ours GFLOP/s | PyTorch ms | PyTorch GFLOP/s | speed-up |")
-    print("|---|---:|---:|---:|---:|---:|")
-    for label, ours_key, torch_key, threads in rows:
-        o = med[ours_key]
-        t = (torch1 if threads == 1 else torch2)[torch_key]
-        ms = o["real_time"] if o["time_unit"] == "ms" else o["real_time"] * 1e-6
-        print(f"| {label} | {ms:.3f} | {o['GFLOP/s']:.1f} | "
-              f"{t['ms']:.3f} | {t['gflops']:.1f} | {t['ms'] / ms:.2f}x |")
+    cores = max(peak)
+    print(f"Roof (measured, fp32 FMA): {peak[1]:.0f} GFLOP/s on one core, {peak[cores]:.0f} on "
+          f"{cores} cores. PyTorch {torch1['torch']}, same machine, same run; medians of "
+          f"{args.repetitions} repetitions.\n")
+    print("| case | threads | ours ms | ours GFLOP/s | % of roof | best PyTorch form | PyTorch GFLOP/s | speed-up |")
+    print("|---|---:|---:|---:|---:|---|---:|---:|")
+    for threads in (1, 2):
+        for label, key, case in rows:
+            o = med[key.format(threads)]
+            ms = o["real_time"] if o["time_unit"] == "ms" else o["real_time"] * 1e-6
+            t, form = best_torch(case, threads)
+            print(f"| {label} | {threads} | {ms:.3f} | {o['GFLOP/s']:.1f} | "
+                  f"{100 * o['GFLOP/s'] / peak[min(threads, cores)]:.0f} % | {form} | "
+                  f"{t['gflops']:.1f} | {o['GFLOP/s'] / t['gflops']:.2f}x |")
 
 
 if __name__ == "__main__":

@@ -65,6 +65,35 @@ def tpa_heads_case(hidden, M=20, B=64, T=1000):
     return step, flops(widths, 2 * B) * M
 
 
+def tpa_heads_batched_case(hidden, M=20, B=64, T=1000):
+    """The 20 heads as a PyTorch user who cares writes them: weights stacked per layer, one
+    batched product (torch.baddbmm) per layer for all heads, both trajectories of a pair in one pass."""
+    widths = [6, hidden, hidden, 1]
+    params = []
+    for i in range(3):
+        bound = 1 / widths[i] ** 0.5  # as nn.Linear initialises
+        params.append(torch.nn.Parameter(torch.empty(M, widths[i], widths[i + 1]).uniform_(-bound, bound)))
+        params.append(torch.nn.Parameter(torch.empty(M, 1, widths[i + 1]).uniform_(-bound, bound)))
+    x = torch.randn(T, 6)
+    pairs = torch.randint(0, T, (M, B, 2))
+    labels = torch.randint(0, 2, (M, B)).float()
+    opt = torch.optim.Adam(params, lr=0.001)
+
+    def step():
+        h = torch.cat([x[pairs[:, :, 0]], x[pairs[:, :, 1]]], dim=1)  # [M, 2B, 6]
+        for i in range(3):
+            h = torch.baddbmm(params[2 * i + 1], h, params[2 * i])
+            if i < 2:
+                h = torch.relu(h)
+        ra, rb = h[:, :B, 0], h[:, B:, 0]
+        bce = torch.nn.functional.binary_cross_entropy_with_logits(ra - rb, labels, reduction="none")
+        total = bce.mean(1).sum() + 10 * (ra ** 2 + rb ** 2).mean(1).sum()
+        opt.zero_grad()
+        total.backward()
+        opt.step()
+    return step, flops(widths, 2 * B) * M
+
+
 def sirl_run_case(widths, N, epochs, T, B=64):
     """A whole SIRL training run as people write it: shuffled mini-batches, Adam + ExponentialLR."""
     x = torch.randn(T, widths[0])
@@ -155,6 +184,7 @@ def main():
         "sirl_step_grid": sirl_step_case([19, 128, 128, 6]),
         "sirl_step_jaco": sirl_step_case([2037, 1024, 1024, 6]),
         "tpa_heads_grid": tpa_heads_case(128),
+        "tpa_heads_grid_batched": tpa_heads_batched_case(128),
     }
     if args.runs:  # the same units as bench_pipeline.cpp
         cases.update({
