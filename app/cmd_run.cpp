@@ -35,7 +35,7 @@ int default_threads() {
 }  // namespace
 
 int run_command(const std::string& profile_name, const std::string& out, int threads, bool force,
-                const std::string& shard, bool quiet, bool skip_study) {
+                const std::string& shard, bool quiet, bool skip_study, double checkpoint_minutes) {
   Profile p = load_or_usage(profile_name);
   if (skip_study) p.study.enabled = false;
   RunOptions o;
@@ -43,6 +43,7 @@ int run_command(const std::string& profile_name, const std::string& out, int thr
   o.threads = threads;
   o.force = force;
   o.quiet = quiet;
+  o.checkpoint_seconds = checkpoint_minutes * 60;
   o.engine_version = engine_version();
   o.git_commit = git_commit();
   if (!shard.empty()) {
@@ -76,6 +77,7 @@ void register_run(CLI::App& app, Runner& run) {
   static std::string profile, out, shard;
   static int threads = 0;
   static bool force = false, quiet = false;
+  static double checkpoint_minutes = 5;
   cmd->add_option("profile", profile,
                   "Profile: a name in configs/ (smoke, quick, paper) or a .toml path")
       ->required();
@@ -92,7 +94,15 @@ void register_run(CLI::App& app, Runner& run) {
           "i/n"));
   cmd->add_flag("--force", force, "Overwrite results from another profile or engine version");
   cmd->add_flag("--quiet", quiet, "No progress output");
-  run = [] { return run_command(profile, out, threads, force, shard, quiet); };
+  cmd->add_option("--checkpoint-minutes", checkpoint_minutes,
+                  "A training running longer saves its state (weights, Adam, random streams, "
+                  "curves) at the next epoch's end, to OUT.tasks/checkpoints/; a rerun continues "
+                  "it to the same result. 0: after every epoch; -1: never")
+      ->check(CLI::Range(-1.0, 1e6))
+      ->capture_default_str();
+  run = [] {
+    return run_command(profile, out, threads, force, shard, quiet, false, checkpoint_minutes);
+  };
 }
 
 void register_plan(CLI::App& app, Runner& run) {

@@ -5,9 +5,12 @@
 #include <algorithm>
 #include <cstdint>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
+#include "engine/checkpoint.h"
 #include "kernels/rng.h"
 
 namespace sirl {
@@ -19,13 +22,42 @@ inline void shuffle_order(int64_t n, Rng& rng, std::vector<int32_t>& order) {
   for (int64_t i = n - 1; i > 0; --i) std::swap(order[i], order[rng.uniform_int(uint64_t(i + 1))]);
 }
 
+// Checkpoints of an epoch loop: the epoch reached, the curve(s) so far and the order streams,
+// plus what the training adds through `r.save` / `r.restore`.
+namespace epochs_detail {
+inline bool resume(const ResumableState* r, int epochs, TrainingSnapshot& s) {
+  if (!r || !r->checkpointer || !r->checkpointer->load(s)) return false;
+  if (s.epoch < 1 || s.epoch >= epochs)
+    throw std::runtime_error("training checkpoint at epoch " + std::to_string(s.epoch) + " of " +
+                             std::to_string(epochs) + " (another training?)");
+  r->restore(s);
+  return true;
+}
+inline bool due(const ResumableState* r, int done, int epochs) {
+  return r && r->checkpointer && done < epochs && r->checkpointer->due();
+}
+inline void save(const ResumableState* r, TrainingSnapshot& s) {
+  r->save(s);
+  r->checkpointer->save(s);
+}
+}  // namespace epochs_detail
+
 // `epochs` passes over n examples in shuffled mini-batches. step(rows, b) trains on the b example
 // indices rows[0..b) and returns that batch's mean loss. Returns each epoch's mean loss.
+// With `resume`, a saved state is picked up first and the state is saved after epochs when the
+// checkpointer says so; the result is the same bits either way.
 template <typename Step>
-std::vector<float> run_epochs(int64_t n, int epochs, int batch, Rng& rng, Step&& step) {
+std::vector<float> run_epochs(int64_t n, int epochs, int batch, Rng& rng, Step&& step,
+                              const ResumableState* resume = nullptr) {
   std::vector<float> curve;
   std::vector<int32_t> order;
-  for (int e = 0; e < epochs && n > 0; ++e) {
+  int first = 0;
+  if (TrainingSnapshot s; n > 0 && epochs_detail::resume(resume, epochs, s)) {
+    first = s.epoch;
+    curve = s.get("loop/curve", size_t(first));
+    s.get_rng("loop/order", rng);
+  }
+  for (int e = first; e < epochs && n > 0; ++e) {
     shuffle_order(n, rng, order);
     double sum = 0;
     for (int64_t i0 = 0; i0 < n; i0 += batch) {
@@ -33,6 +65,13 @@ std::vector<float> run_epochs(int64_t n, int epochs, int batch, Rng& rng, Step&&
       sum += double(step(order.data() + i0, b)) * b;
     }
     curve.push_back(float(sum / double(n)));
+    if (epochs_detail::due(resume, e + 1, epochs)) {
+      TrainingSnapshot s;
+      s.epoch = e + 1;
+      s.floats["loop/curve"] = curve;
+      s.put_rng("loop/order", rng);
+      epochs_detail::save(resume, s);
+    }
   }
   return curve;
 }
@@ -42,13 +81,19 @@ std::vector<float> run_epochs(int64_t n, int epochs, int batch, Rng& rng, Step&&
 // orders[m][0..b) and returns the R batch losses. Returns the curves [R, epochs].
 template <typename Step>
 std::vector<float> run_epochs_batched(int64_t n, int epochs, int batch, std::vector<Rng>& rngs,
-                                      Step&& step) {
+                                      Step&& step, const ResumableState* resume = nullptr) {
   const size_t R = rngs.size();
   std::vector<float> curves(R * size_t(epochs), 0.f);
   std::vector<std::vector<int32_t>> order(R);
   std::vector<const int32_t*> rows(R);
   std::vector<double> sum(R);
-  for (int e = 0; e < epochs && n > 0; ++e) {
+  int first = 0;
+  if (TrainingSnapshot s; n > 0 && epochs_detail::resume(resume, epochs, s)) {
+    first = s.epoch;
+    curves = s.get("loop/curves", curves.size());
+    for (size_t m = 0; m < R; ++m) s.get_rng("loop/order/" + std::to_string(m), rngs[m]);
+  }
+  for (int e = first; e < epochs && n > 0; ++e) {
     for (size_t m = 0; m < R; ++m) shuffle_order(n, rngs[m], order[m]);
     std::fill(sum.begin(), sum.end(), 0.0);
     for (int64_t i0 = 0; i0 < n; i0 += batch) {
@@ -58,6 +103,13 @@ std::vector<float> run_epochs_batched(int64_t n, int epochs, int batch, std::vec
       for (size_t m = 0; m < R; ++m) sum[m] += double(losses[m]) * b;
     }
     for (size_t m = 0; m < R; ++m) curves[m * epochs + e] = float(sum[m] / double(n));
+    if (epochs_detail::due(resume, e + 1, epochs)) {
+      TrainingSnapshot s;
+      s.epoch = e + 1;
+      s.floats["loop/curves"] = curves;
+      for (size_t m = 0; m < R; ++m) s.put_rng("loop/order/" + std::to_string(m), rngs[m]);
+      epochs_detail::save(resume, s);
+    }
   }
   return curves;
 }

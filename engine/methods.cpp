@@ -34,15 +34,26 @@ void train_sirl(const Dataset& d, const QueryBundle& bundle, const MethodConfig&
   Trainer t(rep.shape, s.adam, rep.params);
   Rng order_rng(seed_from_key("sirl_order", seed));
   std::vector<int32_t> batch;
-  rep.loss_curve =
-      run_epochs(q.count, s.epochs, s.batch, order_rng, [&](const int32_t* rows, int b) {
+  const ResumableState resume{cfg.checkpointer,
+                              [&](TrainingSnapshot& snap) {
+                                put_adam(snap, "sirl", t.params, t.adam);
+                                snap.numbers["train_flops"] = rep.train_flops;
+                              },
+                              [&](const TrainingSnapshot& snap) {
+                                get_adam(snap, "sirl", t.params, t.adam);
+                                rep.train_flops = snap.number("train_flops");
+                              }};
+  rep.loss_curve = run_epochs(
+      q.count, s.epochs, s.batch, order_rng,
+      [&](const int32_t* rows, int b) {
         batch.resize(size_t(3) * b);
         for (int i = 0; i < b; ++i)
           std::copy_n(q.idx.begin() + 3 * rows[i], 3, batch.begin() + 3 * i);
         rep.train_flops += 3 * t.shape.forward_flops(3 * b);
         return triplet_train_step(t, d.inputs.data(), batch.data(), b,
                                   float(cfg.hyper.triplet_margin), cfg.threads);
-      });
+      },
+      &resume);
   rep.params = std::move(t.params);
 }
 
@@ -75,8 +86,18 @@ void train_preference(const Dataset& d, const QueryBundle& bundle, const MethodC
   Rng order_rng(seed_from_key("pref_order", seed));
   std::vector<int32_t> pairs, human;
   std::vector<float> label;
-  rep.loss_curve =
-      run_epochs(q.count, s.epochs, s.batch, order_rng, [&](const int32_t* rows, int b) {
+  const ResumableState resume{cfg.checkpointer,
+                              [&](TrainingSnapshot& snap) {
+                                put_adam(snap, "pref", t.params, t.adam);
+                                snap.numbers["train_flops"] = rep.train_flops;
+                              },
+                              [&](const TrainingSnapshot& snap) {
+                                get_adam(snap, "pref", t.params, t.adam);
+                                rep.train_flops = snap.number("train_flops");
+                              }};
+  rep.loss_curve = run_epochs(
+      q.count, s.epochs, s.batch, order_rng,
+      [&](const int32_t* rows, int b) {
         pairs.resize(size_t(2) * b);
         label.resize(b);
         human.resize(b);
@@ -91,7 +112,8 @@ void train_preference(const Dataset& d, const QueryBundle& bundle, const MethodC
         return multihead_preference_train_step(t, K, d.inputs.data(), pairs.data(), label.data(),
                                                human.data(), b, float(cfg.hyper.pref_l2),
                                                cfg.threads);
-      });
+      },
+      &resume);
   rep.params.assign(t.params.begin(), t.params.begin() + P);  // φ; the heads on the side
   rep.heads.assign(t.params.begin() + P, t.params.end());
 }

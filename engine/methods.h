@@ -5,6 +5,7 @@
 
 #include "datasets/dataset.h"
 #include "datasets/query_bundle.h"
+#include "engine/checkpoint.h"
 #include "engine/hyperparams.h"
 #include "engine/representation.h"
 #include "engine/train_vae.h"
@@ -17,6 +18,7 @@ struct MethodConfig {
   bool vae_pretrain = false;  // start φ from the VAE encoder's mean head
   Hyper hyper;
   int threads = 1;
+  Checkpointer* checkpointer = nullptr;  // saves / resumes the training (engine/checkpoint.h)
 };
 
 // - sirl:        φ trained on the first N triplets of bundle.similarity (symmetric triplet loss).

@@ -7,6 +7,7 @@
 
 #include "datasets/dataset.h"
 #include "datasets/queries.h"
+#include "engine/checkpoint.h"
 #include "engine/hyperparams.h"
 #include "engine/representation.h"
 
@@ -18,6 +19,7 @@ struct TpaConfig {
                        // its own copy of φ (φ + head trained as one network)
   Hyper hyper;  // tpa.* (epochs, batch, Adam, hidden widths, L2)
   int threads = 1;
+  Checkpointer* checkpointer = nullptr;  // saves / resumes the heads' training
 };
 
 struct TpaResult {

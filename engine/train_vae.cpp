@@ -51,7 +51,8 @@ void measure_posterior(const Dataset& d, VaeModel& m, int threads) {
 }
 }  // namespace
 
-VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads) {
+VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads,
+                   Checkpointer* checkpointer) {
   validate(h);
   VaeModel m;
   m.elbo = vae_elbo_form(h);
@@ -71,25 +72,47 @@ VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads)
   VaeLossParts parts;
   double rec_sum = 0, kl_sum = 0;
   int64_t rows_seen = 0;
-  m.loss_curve = run_epochs(T, h.vae.epochs, B, order_rng, [&](const int32_t* rows, int b) {
-    for (int i = 0; i < b; ++i)
-      std::copy(d.input(rows[i]), d.input(rows[i]) + in, x.begin() + size_t(i) * in);
-    for (int i = 0; i < b * L; ++i) eps[i] = float(noise.normal());
-    std::fill(grad.begin(), grad.end(), 0.f);
-    const float loss =
-        vae_loss_and_grad(m.shape, m.params.data(), x.data(), b, eps.data(), float(h.vae_kl_weight),
-                          m.elbo, grad.data(), ws, &parts, threads);
-    adam_step(h.vae.adam, adam, m.params.data(), grad.data(), m.params.size());
-    m.train_flops += 3 * (m.shape.encoder.forward_flops(b) + m.shape.decoder.forward_flops(b));
-    rec_sum += parts.reconstruction * b;
-    kl_sum += parts.kl * b;
-    if ((rows_seen += b) % T == 0) {  // the epoch's last batch
-      m.reconstruction_curve.push_back(float(rec_sum / double(T)));
-      m.kl_curve.push_back(float(kl_sum / double(T)));
-      rec_sum = kl_sum = 0;
-    }
-    return loss;
-  });
+  // At an epoch boundary the per-epoch sums are 0 and rows_seen is epochs × T: the weights, Adam,
+  // the noise stream, the two curves and the FLOP count are the whole state.
+  const ResumableState resume{checkpointer,
+                              [&](TrainingSnapshot& snap) {
+                                put_adam(snap, "vae", m.params, adam);
+                                snap.put_rng("vae/noise", noise);
+                                snap.floats["vae/reconstruction_curve"] = m.reconstruction_curve;
+                                snap.floats["vae/kl_curve"] = m.kl_curve;
+                                snap.numbers["train_flops"] = m.train_flops;
+                              },
+                              [&](const TrainingSnapshot& snap) {
+                                get_adam(snap, "vae", m.params, adam);
+                                snap.get_rng("vae/noise", noise);
+                                m.reconstruction_curve =
+                                    snap.get("vae/reconstruction_curve", size_t(snap.epoch));
+                                m.kl_curve = snap.get("vae/kl_curve", size_t(snap.epoch));
+                                m.train_flops = snap.number("train_flops");
+                                rows_seen = int64_t(snap.epoch) * T;
+                              }};
+  m.loss_curve = run_epochs(
+      T, h.vae.epochs, B, order_rng,
+      [&](const int32_t* rows, int b) {
+        for (int i = 0; i < b; ++i)
+          std::copy(d.input(rows[i]), d.input(rows[i]) + in, x.begin() + size_t(i) * in);
+        for (int i = 0; i < b * L; ++i) eps[i] = float(noise.normal());
+        std::fill(grad.begin(), grad.end(), 0.f);
+        const float loss =
+            vae_loss_and_grad(m.shape, m.params.data(), x.data(), b, eps.data(),
+                              float(h.vae_kl_weight), m.elbo, grad.data(), ws, &parts, threads);
+        adam_step(h.vae.adam, adam, m.params.data(), grad.data(), m.params.size());
+        m.train_flops += 3 * (m.shape.encoder.forward_flops(b) + m.shape.decoder.forward_flops(b));
+        rec_sum += parts.reconstruction * b;
+        kl_sum += parts.kl * b;
+        if ((rows_seen += b) % T == 0) {  // the epoch's last batch
+          m.reconstruction_curve.push_back(float(rec_sum / double(T)));
+          m.kl_curve.push_back(float(kl_sum / double(T)));
+          rec_sum = kl_sum = 0;
+        }
+        return loss;
+      },
+      &resume);
   require_finite(m.loss_curve, "VAE loss");
   require_finite(m.params, "VAE weights");
   measure_posterior(d, m, threads);

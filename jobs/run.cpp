@@ -16,6 +16,7 @@
 #include "jobs/mpi_run.h"
 #include "jobs/progress.h"
 #include "jobs/scheduler.h"
+#include "jobs/task_checkpoints.h"
 #include "jobs/task_kinds.h"
 #include "jobs/task_runner.h"
 #include "kernels/rng.h"
@@ -174,7 +175,9 @@ std::unique_ptr<TaskStore> open_staging(const Profile& p, const RunOptions& o) {
     TaskStore probe(staging);
     const std::string prof = probe.read_manifest("profile.toml"),
                       eng = probe.read_manifest("engine_version");
-    if (probe.keys().empty()) {
+    const bool checkpoints =
+        fs::is_directory(staging / "checkpoints") && !fs::is_empty(staging / "checkpoints");
+    if (probe.keys().empty() && !checkpoints) {
       fs::remove_all(staging);
     } else if (prof != p.text || eng != o.engine_version) {
       if (!o.force) refuse(staging.string(), "by another profile or engine (an interrupted run)");
@@ -230,8 +233,8 @@ PendingSet find_pending(const Plan& plan, const std::vector<char>& mine,
 // Runs the pending tasks (threads, or MPI workers), committing each as it finishes. Returns the
 // first failure instead of throwing, so the caller still writes what finished.
 std::exception_ptr execute(const Plan& plan, const std::vector<char>& pending, RunContext& ctx,
-                           TaskStore& store, int threads, int mpi_size, Progress& progress,
-                           bool quiet) {
+                           TaskStore& store, CheckpointStore* checkpoints, int threads,
+                           int mpi_size, Progress& progress, bool quiet) {
   const int n = int(plan.tasks.size());
   // Cached outputs are released when their last pending dependent finishes.
   std::vector<int> users(n, 0);
@@ -257,6 +260,7 @@ std::exception_ptr execute(const Plan& plan, const std::vector<char>& pending, R
         const Task& t = plan.tasks[i];
         const TaskRecord rec = run_task(t, ctx);
         store.commit(rec);
+        if (checkpoints) checkpoints->remove(t.key);  // the task's commit supersedes it
         progress.task_done(t.key, t.flops, rec.num.at("seconds"));
         std::lock_guard lock(users_mu);
         for (int d : t.deps)
@@ -311,14 +315,22 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
     return it->second;
   });
 
+  // Training checkpoints (not under MPI: its workers may not share this directory).
+  std::unique_ptr<CheckpointStore> checkpoints;
+  if (mpi_size <= 1 && o.checkpoint_seconds >= 0) {
+    checkpoints =
+        std::make_unique<CheckpointStore>(store.dir() / "checkpoints", o.checkpoint_seconds);
+    ctx.set_checkpoints([&cs = *checkpoints](const std::string& key) { return cs.for_task(key); });
+  }
+
   const int to_run = ps.total - ps.reused;
   if (!o.quiet)
     std::fprintf(stderr, "sirl run: profile %s, %d tasks (%d already done), %d %s → %s\n",
                  p.name.c_str(), ps.total, ps.reused, threads,
                  mpi_size > 1 ? "MPI workers" : "threads", o.out.c_str());
   Progress progress(to_run, ps.flops, o.quiet);
-  const std::exception_ptr failure =
-      execute(plan, ps.pending, ctx, store, threads, mpi_size, progress, o.quiet);
+  const std::exception_ptr failure = execute(plan, ps.pending, ctx, store, checkpoints.get(),
+                                             threads, mpi_size, progress, o.quiet);
   progress.finish();
 
   // Assemble whatever is finished (a partial file plots with gaps; a rerun completes it).

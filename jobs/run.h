@@ -13,6 +13,9 @@ struct RunOptions {
   bool force = false;                    // accept an existing file from another profile/engine
   int shard_index = 0, shard_count = 1;  // run only shard i of n (Slurm job arrays)
   bool quiet = false;
+  // Long trainings save their state this often (seconds, at an epoch's end) under
+  // <out>.tasks/checkpoints/, and a rerun continues them; 0: every epoch; negative: never.
+  double checkpoint_seconds = 300;
   std::string engine_version, git_commit;  // recorded in the file
 };
 

@@ -128,8 +128,9 @@ void vae_cost(Task& t, const Profile& p) {
 }
 
 void run_vae(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const VaeModel v =
-      train_vae(ctx.dataset(t.env), ctx.profile().hyper.at(t.env), task_seed(t.env, t.seed, "vae"));
+  const auto checkpoint = ctx.checkpointer(t.key);
+  const VaeModel v = train_vae(ctx.dataset(t.env), ctx.profile().hyper.at(t.env),
+                               task_seed(t.env, t.seed, "vae"), 1, checkpoint.get());
   put_vae(v, r);
   r.num["flops"] = v.train_flops;
   record_convergence(v.loss_curve, r);
@@ -160,7 +161,8 @@ void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
   const Dataset& d = ctx.dataset(t.env);
   std::shared_ptr<const VaeModel> vae;
   if (reads_vae(t.variant)) vae = ctx.vae(vae_key(t.env, t.seed));
-  MethodConfig c{t.variant.method, t.N, t.variant.vae, h, 1};
+  const auto checkpoint = ctx.checkpointer(t.key);
+  MethodConfig c{t.variant.method, t.N, t.variant.vae, h, 1, checkpoint.get()};
   const Representation rep = train_representation(d, ctx.bundle(t.env, t.seed), c,
                                                   task_seed(t.env, t.seed, "phi"), vae.get());
   put_representation(rep, r);
@@ -217,10 +219,12 @@ void record_heads_convergence(const TpaResult& res, TaskRecord& r) {
 }
 
 void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const TpaResult res = evaluate_tpa(*ctx.representation(rep_key(t.env, t.seed, t.variant, t.N)),
-                                     ctx.dataset(t.env), ctx.bundle(t.env, t.seed).tpa,
-                                     TpaConfig{t.M, t.frozen, ctx.profile().hyper.at(t.env), 1},
-                                     task_seed(t.env, t.seed, "tpa"));
+  const auto checkpoint = ctx.checkpointer(t.key);
+  const TpaResult res =
+      evaluate_tpa(*ctx.representation(rep_key(t.env, t.seed, t.variant, t.N)), ctx.dataset(t.env),
+                   ctx.bundle(t.env, t.seed).tpa,
+                   TpaConfig{t.M, t.frozen, ctx.profile().hyper.at(t.env), 1, checkpoint.get()},
+                   task_seed(t.env, t.seed, "tpa"));
   r.num["tpa"] = res.mean;
   r.num["tpa_std"] = res.stddev;
   r.num["flops"] = res.train_flops;

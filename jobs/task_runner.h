@@ -12,6 +12,7 @@
 #include "datasets/dataset.h"
 #include "datasets/query_bundle.h"
 #include "datasets/study.h"
+#include "engine/checkpoint.h"
 #include "engine/representation.h"
 #include "engine/train_vae.h"
 #include "jobs/plan.h"
@@ -36,10 +37,19 @@ class RunContext {
   void keep(const std::string& key, std::shared_ptr<const VaeModel> v);
   // Drops a cached output once no pending task needs it (bounded memory on long runs).
   void release(const std::string& key);
+  // Where a task's training saves and resumes its state (jobs/task_checkpoints.h); without a
+  // source, trainings run without checkpoints.
+  void set_checkpoints(std::function<std::unique_ptr<Checkpointer>(const std::string&)> source) {
+    checkpoints_ = std::move(source);
+  }
+  std::unique_ptr<Checkpointer> checkpointer(const std::string& task_key) const {
+    return checkpoints_ ? checkpoints_(task_key) : nullptr;
+  }
 
  private:
   const Profile& profile_;
   std::function<TaskRecord(const std::string&)> load_;
+  std::function<std::unique_ptr<Checkpointer>(const std::string&)> checkpoints_;
   std::mutex mu_;
   std::map<std::string, std::shared_ptr<const Dataset>> datasets_;
   std::map<std::string, std::shared_ptr<const QueryBundle>> bundles_;

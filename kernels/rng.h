@@ -2,6 +2,7 @@
 // Every stochastic choice in sirl-bench draws from an Rng whose seed derives from a task key
 // (see seed_from_key), so results never depend on thread count, shard or order.
 #pragma once
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <string_view>
@@ -61,6 +62,11 @@ class Rng {
     while (u1 <= 0.0) u1 = uniform();
     const double u2 = uniform();
     return std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2);
+  }
+  // The generator's whole state, to save and restore a stream mid-way (training checkpoints).
+  std::array<uint64_t, 4> state() const { return {s_[0], s_[1], s_[2], s_[3]}; }
+  void set_state(const std::array<uint64_t, 4>& s) {
+    for (int i = 0; i < 4; ++i) s_[i] = s[i];
   }
   // An independent child stream, e.g. one per reward head or per seed.
   Rng split(uint64_t stream) {

@@ -174,6 +174,20 @@ void TaskStore::commit(const TaskRecord& r) {
   crash_point_after_commit();
 }
 
+void TaskStore::remove(const std::string& key) {
+  std::lock_guard lock(mu_);
+  const auto it = index_.find(key);
+  if (it == index_.end()) return;
+  std::error_code ec;
+  fs::remove(it->second, ec);
+  index_.erase(it);
+}
+
+bool TaskStore::empty() const {
+  std::lock_guard lock(mu_);
+  return index_.empty();
+}
+
 void crash_point_after_commit() {
   // Crash-point injection for tests: SIRL_CRASH_AFTER_COMMITS=k ends the process, as kill -9
   // would (no destructors, no flush), right after the k-th durable commit of this process.

@@ -22,6 +22,9 @@ class TaskStore {
   std::vector<std::string> keys() const;
   // Atomic and durable; thread-safe. Overwrites a record of the same key.
   void commit(const TaskRecord& r);
+  // Removes a record (no error if absent); thread-safe.
+  void remove(const std::string& key);
+  bool empty() const;
   TaskRecord load(const std::string& key) const;
   // Reads a record committed (possibly by another process) into `dir`; throws H5Error if absent.
   static TaskRecord load_from(const std::filesystem::path& dir, const std::string& key);

@@ -21,12 +21,16 @@ TIMING = {"seconds", "wall_seconds", "started", "finished"}
 TIMING_COLUMNS = {"seconds", "gflops"}
 
 
-def run(out, crash_at=None, threads="1"):
+def run(out, crash_at=None, threads="1", after_commits=None, checkpoints="5"):
     env = dict(os.environ)
     env.pop("SIRL_CRASH_AT", None)
+    env.pop("SIRL_CRASH_AFTER_COMMITS", None)
     if crash_at is not None:
         env["SIRL_CRASH_AT"] = str(crash_at)
-    return subprocess.run([SIRL, "run", MICRO, "--out", out, "--threads", threads, "--quiet"],
+    if after_commits is not None:
+        env["SIRL_CRASH_AFTER_COMMITS"] = str(after_commits)
+    return subprocess.run([SIRL, "run", MICRO, "--out", out, "--threads", threads, "--quiet",
+                           "--checkpoint-minutes", checkpoints],
                           stdin=subprocess.DEVNULL, capture_output=True, text=True, env=env)
 
 
@@ -89,3 +93,25 @@ with tempfile.TemporaryDirectory() as tmp:
     assert walked >= 30, f"only {walked} crash points: the walk no longer covers every write"
     print(f"ok: crashed at each of {walked} crash points, every rerun resumed to the fresh run's "
           f"file ({len(expected)} columns, datasets and attributes compared)")
+
+    # Training checkpoints after every epoch: a crash right after each durable commit (a task or
+    # a checkpoint) and a rerun that continues the interrupted trainings end in the fresh run's
+    # file, and the crashes did land mid-training (a checkpoint was on disk).
+    k, resumed_mid_training = 1, 0
+    while True:
+        out = os.path.join(tmp, f"c{k}.h5")
+        p = run(out, after_commits=k, checkpoints="0")
+        if p.returncode == 0:
+            break
+        assert p.returncode == 137, f"commit {k}: exit {p.returncode}\n{p.stderr}"
+        ckpt = out + ".tasks/checkpoints"
+        resumed_mid_training += os.path.isdir(ckpt) and any(n.endswith(".h5") for n in os.listdir(ckpt))
+        r = run(out, threads="2", checkpoints="0")
+        assert r.returncode == 0, f"commit {k}: the rerun failed ({r.returncode}):\n{r.stderr}"
+        bad = differences(expected, content(out))
+        assert not bad, f"commit {k}: continuing from the checkpoints differs from a fresh run: {bad[:5]}"
+        assert not os.path.exists(out + ".tasks"), f"commit {k}: staging folder left behind"
+        k += 1
+    assert resumed_mid_training >= 5, resumed_mid_training
+    print(f"ok: with a checkpoint after every epoch, a crash after each of {k - 1} commits resumed "
+          f"to the fresh run's file ({resumed_mid_training} of them with a training checkpoint on disk)")

@@ -1,0 +1,108 @@
+#include "jobs/task_checkpoints.h"
+
+#include <chrono>
+#include <cstdio>
+#include <stdexcept>
+
+#include "results/h5.h"
+
+namespace sirl {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+class FileCheckpointer : public Checkpointer {
+ public:
+  FileCheckpointer(TaskStore& store, std::string key, double interval)
+      : store_(store), key_(std::move(key)), interval_(interval), last_(Clock::now()) {}
+
+  bool load(TrainingSnapshot& out) override {
+    if (!store_.has(key_)) return false;
+    try {
+      out = record_snapshot(store_.load(key_));
+      return true;
+    } catch (const std::exception& e) {  // corrupt (and then removed by load) or not a snapshot
+      std::fprintf(stderr,
+                   "sirl run: the training checkpoint of %s is unusable (%s); training it "
+                   "from the start\n",
+                   key_.c_str(), e.what());
+      store_.remove(key_);
+      return false;
+    }
+  }
+  bool due() override {
+    return std::chrono::duration<double>(Clock::now() - last_).count() >= interval_;
+  }
+  void save(const TrainingSnapshot& s) override {
+    store_.commit(snapshot_record(key_, s));
+    last_ = Clock::now();
+  }
+
+ private:
+  TaskStore& store_;
+  std::string key_;
+  double interval_;
+  Clock::time_point last_;
+};
+
+std::string hex_words(const std::vector<uint64_t>& w) {
+  std::string s;
+  char buf[24];
+  for (size_t i = 0; i < w.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%s%016llx", i ? "," : "",
+                  static_cast<unsigned long long>(w[i]));
+    s += buf;
+  }
+  return s;
+}
+
+std::vector<uint64_t> parse_words(const std::string& s) {
+  std::vector<uint64_t> w;
+  for (size_t at = 0; at < s.size();) {
+    const size_t end = std::min(s.find(',', at), s.size());
+    const std::string word = s.substr(at, end - at);
+    if (word.size() != 16 || word.find_first_not_of("0123456789abcdef") != std::string::npos)
+      throw std::runtime_error("a random-stream state is not 16 hex digits");
+    w.push_back(std::stoull(word, nullptr, 16));
+    at = end + 1;
+  }
+  return w;
+}
+
+}  // namespace
+
+TaskRecord snapshot_record(const std::string& key, const TrainingSnapshot& s) {
+  TaskRecord r;
+  r.key = key;
+  r.kind = "checkpoint";
+  r.num["epoch"] = s.epoch;
+  for (const auto& [name, v] : s.floats) r.arrays["f/" + name] = {{uint64_t(v.size())}, v};
+  for (const auto& [name, x] : s.numbers) r.num["n/" + name] = x;
+  for (const auto& [name, w] : s.words) r.text["w/" + name] = hex_words(w);
+  return r;
+}
+
+TrainingSnapshot record_snapshot(const TaskRecord& r) {
+  if (r.kind != "checkpoint" || !r.num.count("epoch"))
+    throw std::runtime_error("not a training checkpoint");
+  TrainingSnapshot s;
+  s.epoch = int(r.num.at("epoch"));
+  for (const auto& [name, a] : r.arrays)
+    if (name.starts_with("f/")) s.floats[name.substr(2)] = a.data;
+  for (const auto& [name, x] : r.num)
+    if (name.starts_with("n/")) s.numbers[name.substr(2)] = x;
+  for (const auto& [name, t] : r.text)
+    if (name.starts_with("w/")) s.words[name.substr(2)] = parse_words(t);
+  return s;
+}
+
+CheckpointStore::CheckpointStore(std::filesystem::path dir, double interval_seconds)
+    : store_(std::move(dir)), interval_(interval_seconds) {}
+
+std::unique_ptr<Checkpointer> CheckpointStore::for_task(const std::string& key) {
+  if (interval_ < 0) return nullptr;
+  return std::make_unique<FileCheckpointer>(store_, key, interval_);
+}
+
+}  // namespace sirl

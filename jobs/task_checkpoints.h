@@ -1,0 +1,35 @@
+// Training checkpoints of a run's tasks on disk: <out>.tasks/checkpoints/, one file per task in
+// the task-commit format (framed, checksummed, written atomically), saved at the end of an epoch
+// when `interval` seconds have passed since the task's last save, and removed once the task
+// itself is committed. A rerun of an interrupted run continues each training from its file, to
+// the same bits as an uninterrupted run (engine/checkpoint.h).
+#pragma once
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "engine/checkpoint.h"
+#include "results/task_store.h"
+
+namespace sirl {
+
+class CheckpointStore {
+ public:
+  // interval_seconds 0: after every epoch (tests); a negative interval turns checkpoints off.
+  CheckpointStore(std::filesystem::path dir, double interval_seconds);
+  // A checkpointer for one task's training (nullptr when checkpoints are off).
+  std::unique_ptr<Checkpointer> for_task(const std::string& key);
+  // The task is committed: its checkpoint is no longer needed.
+  void remove(const std::string& key) { store_.remove(key); }
+  bool empty() const { return store_.empty(); }
+
+ private:
+  TaskStore store_;
+  double interval_;
+};
+
+// The record a snapshot is stored as, and back (throws std::runtime_error if it is not one).
+TaskRecord snapshot_record(const std::string& key, const TrainingSnapshot& s);
+TrainingSnapshot record_snapshot(const TaskRecord& r);
+
+}  // namespace sirl

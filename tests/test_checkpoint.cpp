@@ -1,0 +1,176 @@
+// Training checkpoints (engine/checkpoint.h): a training interrupted after a saved epoch and
+// resumed from that snapshot ends with the same bits as one never interrupted — weights, curves
+// and FLOP counts — for every kind of training (SIRL, preference pre-training, the VAE, TPA heads
+// frozen and unfrozen). Saving alone changes nothing, and a snapshot that does not fit is refused.
+#include <gtest/gtest.h>
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "engine/checkpoint.h"
+#include "engine/methods.h"
+#include "engine/tpa.h"
+#include "engine/train_vae.h"
+#include "tests/grid_world.h"
+
+namespace sirl {
+namespace {
+
+using namespace test;
+
+struct Interrupted {};
+
+// Keeps the last snapshot in memory; with `stop_after` = k it ends the training (as a kill would)
+// right after saving epoch k.
+struct MemoryCheckpointer : Checkpointer {
+  std::optional<TrainingSnapshot> saved;
+  int stop_after = -1, saves = 0;
+  bool load(TrainingSnapshot& out) override {
+    if (!saved) return false;
+    out = *saved;
+    return true;
+  }
+  bool due() override { return true; }
+  void save(const TrainingSnapshot& s) override {
+    saved = s;
+    ++saves;
+    if (s.epoch == stop_after) throw Interrupted{};
+  }
+};
+
+Hyper short_hyper() {
+  Hyper h = fast_hyper();
+  h.sirl.epochs = h.pref.epochs = h.tpa.epochs = 7;
+  h.vae.epochs = 5;
+  return h;
+}
+
+// Runs `train(ckpt)` three ways: plain; saving after every epoch; stopped after epoch `stop`
+// and resumed from what it saved. Returns the three results.
+template <typename Train>
+auto three_ways(Train&& train, int stop) {
+  auto plain = train(nullptr);
+  MemoryCheckpointer every;
+  auto saving = train(&every);
+  EXPECT_GT(every.saves, 0) << "no epoch was saved";
+  MemoryCheckpointer interrupted;
+  interrupted.stop_after = stop;
+  EXPECT_THROW(train(&interrupted), Interrupted);
+  EXPECT_EQ(interrupted.saved->epoch, stop);
+  interrupted.stop_after = -1;
+  auto resumed = train(&interrupted);
+  return std::make_tuple(plain, saving, resumed);
+}
+
+TEST(Checkpoint, SirlResumesBitIdentical) {
+  const World& w = world();
+  const auto [plain, saving, resumed] = three_ways(
+      [&](Checkpointer* c) {
+        MethodConfig cfg{Method::sirl, 300, false, short_hyper()};
+        cfg.checkpointer = c;
+        return train_representation(w.d, w.bundle, cfg, 5);
+      },
+      3);
+  for (const Representation* r : {&saving, &resumed}) {
+    EXPECT_EQ(r->params, plain.params);
+    EXPECT_EQ(r->loss_curve, plain.loss_curve);
+    EXPECT_EQ(r->train_flops, plain.train_flops);
+  }
+  EXPECT_EQ(plain.loss_curve.size(), 7u);
+}
+
+TEST(Checkpoint, PreferencePretrainingResumesBitIdentical) {
+  const World& w = world();
+  const auto [plain, saving, resumed] = three_ways(
+      [&](Checkpointer* c) {
+        MethodConfig cfg{Method::multipref10, 300, false, short_hyper()};
+        cfg.checkpointer = c;
+        return train_representation(w.d, w.bundle, cfg, 5);
+      },
+      5);
+  for (const Representation* r : {&saving, &resumed}) {
+    EXPECT_EQ(r->params, plain.params);
+    EXPECT_EQ(r->heads, plain.heads);
+    EXPECT_EQ(r->loss_curve, plain.loss_curve);
+    EXPECT_EQ(r->train_flops, plain.train_flops);
+  }
+}
+
+TEST(Checkpoint, VaeResumesBitIdentical) {
+  const World& w = world();
+  const auto [plain, saving, resumed] =
+      three_ways([&](Checkpointer* c) { return train_vae(w.d, short_hyper(), 11, 1, c); }, 2);
+  for (const VaeModel* m : {&saving, &resumed}) {
+    EXPECT_EQ(m->params, plain.params);
+    EXPECT_EQ(m->loss_curve, plain.loss_curve);
+    EXPECT_EQ(m->reconstruction_curve, plain.reconstruction_curve);
+    EXPECT_EQ(m->kl_curve, plain.kl_curve);
+    EXPECT_EQ(m->latent_mean, plain.latent_mean);
+    EXPECT_EQ(m->train_flops, plain.train_flops);
+  }
+  EXPECT_EQ(plain.kl_curve.size(), 5u);
+}
+
+TEST(Checkpoint, TpaHeadsFrozenAndUnfrozenResumeBitIdentical) {
+  const World& w = world();
+  for (bool frozen : {true, false}) {
+    const auto [plain, saving, resumed] = three_ways(
+        [&](Checkpointer* c) {
+          TpaConfig cfg{20, frozen, short_hyper()};
+          cfg.checkpointer = c;
+          return evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, cfg, 3);
+        },
+        4);
+    for (const TpaResult* r : {&saving, &resumed}) {
+      EXPECT_EQ(r->accuracy, plain.accuracy) << "frozen " << frozen;
+      EXPECT_EQ(r->loss_curves, plain.loss_curves) << "frozen " << frozen;
+      EXPECT_EQ(r->phi_drift, plain.phi_drift) << "frozen " << frozen;
+      EXPECT_EQ(r->train_flops, plain.train_flops) << "frozen " << frozen;
+    }
+  }
+}
+
+TEST(Checkpoint, TheLastEpochIsNeverSavedAndResumingChangesTheOutcomeOnlyByTheSavedState) {
+  // Saves come after epochs 1..E−1 (the finished training is the task's commit, not a snapshot).
+  const World& w = world();
+  MemoryCheckpointer c;
+  MethodConfig cfg{Method::sirl, 300, false, short_hyper()};
+  cfg.checkpointer = &c;
+  train_representation(w.d, w.bundle, cfg, 5);
+  EXPECT_EQ(c.saves, 6);
+  EXPECT_EQ(c.saved->epoch, 6);
+  // A snapshot whose weights were perturbed resumes from those weights: the result differs, so
+  // the resume really starts from the snapshot rather than recomputing from scratch.
+  const Representation plain =
+      train_representation(w.d, w.bundle, MethodConfig{Method::sirl, 300, false, short_hyper()}, 5);
+  c.saved->floats["sirl/params"][0] += 0.5f;
+  EXPECT_NE(train_representation(w.d, w.bundle, cfg, 5).params, plain.params);
+}
+
+TEST(Checkpoint, ASnapshotThatDoesNotFitIsRefused) {
+  const World& w = world();
+  MemoryCheckpointer c;
+  MethodConfig cfg{Method::sirl, 300, false, short_hyper()};
+  cfg.checkpointer = &c;
+  c.stop_after = 2;
+  EXPECT_THROW(train_representation(w.d, w.bundle, cfg, 5), Interrupted);
+  c.stop_after = -1;
+  TrainingSnapshot good = *c.saved;
+  c.saved->floats["sirl/adam_m"].pop_back();  // weights of another shape
+  try {
+    train_representation(w.d, w.bundle, cfg, 5);
+    FAIL() << "a snapshot with the wrong shapes was applied";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("sirl/adam_m"), std::string::npos) << e.what();
+  }
+  c.saved = good;
+  c.saved->epoch = 7;  // as many as the training has: not a snapshot this training writes
+  EXPECT_THROW(train_representation(w.d, w.bundle, cfg, 5), std::runtime_error);
+  c.saved = good;
+  c.saved->words.erase("loop/order");
+  EXPECT_THROW(train_representation(w.d, w.bundle, cfg, 5), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace sirl
