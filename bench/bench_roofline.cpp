@@ -6,7 +6,9 @@
 //                      products summed into it, 4 FLOP per lane per instruction
 //   BM_StreamTriad     a[i] = b[i] + s * c[i] over 3 × 64 MiB (far beyond the caches);
 //                      bytes counted as STREAM counts them (2 reads + 1 write, 12 per element)
-// Each runs on 1 thread and on every core (->Threads): the per-core and the machine roof.
+// Each runs on 1 thread and on every core (->Threads): the per-core and the machine roof (with
+// threads, the counter is the machine's total: Google Benchmark sums the threads' rates, each
+// over the shared wall time, so kAvgThreads undoes the double count).
 // The instruction set is chosen at run time (__builtin_cpu_supports), like the engine's kernels.
 #include <benchmark/benchmark.h>
 #include <immintrin.h>
@@ -82,7 +84,8 @@ void BM_PeakFp32Fma(benchmark::State& state) {
                                   : fma_loop_avx2(float(state.thread_index())));
   const double flops = double(kIters) * kChains * lanes * 2;
   state.counters["GFLOP/s"] =
-      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate |
+                                           benchmark::Counter::kAvgThreads);
   state.SetLabel(wide ? "avx512 zmm" : "avx2 ymm");
 }
 
@@ -94,7 +97,8 @@ void BM_PeakBf16Dot(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(bf16_loop(float(state.thread_index())));
   const double flops = double(kIters) * kChains * 16 * 4;
   state.counters["GFLOP/s"] =
-      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate |
+                                           benchmark::Counter::kAvgThreads);
   state.SetLabel("avx512_bf16 vdpbf16ps");
 }
 
@@ -111,7 +115,8 @@ void BM_StreamTriad(benchmark::State& state) {
     benchmark::ClobberMemory();
   }
   state.counters["GB/s"] =
-      benchmark::Counter(double(n) * 12 * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+      benchmark::Counter(double(n) * 12 * 1e-9, benchmark::Counter::kIsIterationInvariantRate |
+                                                    benchmark::Counter::kAvgThreads);
 }
 
 const int kCores = int(std::max(1u, std::thread::hardware_concurrency()));
