@@ -19,6 +19,7 @@
 #include "jobs/task_checkpoints.h"
 #include "jobs/task_kinds.h"
 #include "jobs/task_runner.h"
+#include "kernels/cpu_class.h"
 #include "kernels/rng.h"
 #include "results/durable.h"
 #include "results/file_lock.h"
@@ -341,6 +342,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   info.engine_version = o.engine_version;
   info.git_commit = o.git_commit;
   info.host = hostname();
+  info.cpu_class = cpu_class();
   info.started = started;
   info.finished = now_iso();
   info.shard = shard;

@@ -174,6 +174,7 @@ void write_results_file(const std::string& path, const RunInfo& info,
       f.set_attr("/", "engine_version", info.engine_version);
       f.set_attr("/", "git_commit", info.git_commit);
       f.set_attr("/", "host", info.host);
+      f.set_attr("/", "cpu_class", info.cpu_class);
       f.set_attr("/", "started", info.started);
       f.set_attr("/", "finished", info.finished);
       f.set_attr("/", "shard", info.shard);
@@ -270,6 +271,7 @@ RunInfo read_run_info(const std::string& path) {
   i.engine_version = f.attr_string("/", "engine_version");
   i.git_commit = f.attr_string("/", "git_commit");
   i.host = f.attr_string("/", "host");
+  if (f.has_attr("/", "cpu_class")) i.cpu_class = f.attr_string("/", "cpu_class");
   i.started = f.attr_string("/", "started");
   i.finished = f.attr_string("/", "finished");
   i.shard = f.attr_string("/", "shard");

@@ -32,6 +32,7 @@ int64_t check_results_schema(const H5File& f);
 
 struct RunInfo {
   std::string profile_name, profile_text, engine_version, git_commit, host;
+  std::string cpu_class;          // kernels/cpu_class.h ("" in files of engines before 0.3.0)
   std::string started, finished;  // ISO 8601 UTC
   std::string shard;              // "i/n" for a shard file, "" for a whole run
   int64_t threads = 0, tasks_total = 0, tasks_done = 0;

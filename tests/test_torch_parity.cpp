@@ -134,8 +134,22 @@ void run_parity_case(const std::string& name, std::vector<int> widths, int T) {
         std::abs(double(loss) - torch_losses[s]) / std::abs(double(torch_losses[s]));
     std::vector<float> m_post(post.begin() + P, post.begin() + 2 * P),
         v_post(post.begin() + 2 * P, post.end());
-    const double p_err =
-        relative_error(r.params, std::vector<float>(post.begin(), post.begin() + P), Pc);
+    // Adam's first step moves every weight by ±lr whatever its gradient's size (m̂/√v̂ = ±1), so a
+    // weight whose gradient is rounding noise (0 < |g| < 1e-6 of the largest; at step 0, g is
+    // PyTorch's m / 0.1) moves by ±lr in a direction the noise picks: like the output bias, it
+    // is left out of the step-0 weight comparison (measured: 1 of 19,840 Grid weights, |g| =
+    // 1.4e-9 against 1.9e-2). Such weights must stay rare (≤ 0.1 %): a wrong gradient would make
+    // far more of them disagree, and it would show in the loss and in Adam's moments anyway.
+    std::vector<float> ours_p, torch_p;
+    double g_max = 0;
+    for (size_t i = 0; i < Pc; ++i) g_max = std::max(g_max, std::abs(double(post[P + i])));
+    for (size_t i = 0; i < Pc; ++i) {
+      const double gi = std::abs(double(post[P + i]));
+      if (s > 0 || gi == 0 || gi >= 1e-6 * g_max)
+        ours_p.push_back(r.params[i]), torch_p.push_back(post[i]);
+    }
+    EXPECT_LE(Pc - ours_p.size(), Pc / 1000) << "noise-level gradients at step " << s;
+    const double p_err = relative_error(ours_p, torch_p);
     const double m_err = relative_error(r.adam.m, m_post, Pc),
                  v_err = relative_error(r.adam.v, v_post, Pc);
     EXPECT_LE(l_err, 1e-4) << "loss at step " << s;
