@@ -21,6 +21,7 @@
 #include "jobs/task_runner.h"
 #include "kernels/cpu_class.h"
 #include "kernels/rng.h"
+#include "kernels/roofline.h"
 #include "results/durable.h"
 #include "results/file_lock.h"
 #include "results/h5.h"
@@ -324,6 +325,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
     ctx.set_checkpoints([&cs = *checkpoints](const std::string& key) { return cs.for_task(key); });
   }
 
+  fp32_roof_gflops_per_core();  // measured now, on cores the tasks do not use yet
   const int to_run = ps.total - ps.reused;
   if (!o.quiet)
     std::fprintf(stderr, "sirl run: profile %s, %d tasks (%d already done), %d %s → %s\n",
@@ -343,6 +345,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   info.git_commit = o.git_commit;
   info.host = hostname();
   info.cpu_class = cpu_class();
+  info.roof_fp32_gflops = fp32_roof_gflops_per_core();
   info.started = started;
   info.finished = now_iso();
   info.shard = shard;
@@ -355,7 +358,8 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   for (const auto& env : p.envs)
     datasets.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
   try {
-    write_results_file(o.out, info, datasets, records, result_tables(records));
+    write_results_file(o.out, info, datasets, records,
+                       result_tables(records, info.roof_fp32_gflops));
   } catch (const std::exception&) {
     // A task's failure (a full disk while saving it) is the cause to report; the results file
     // then failed for the same reason. Every committed task stays in the staging folder.

@@ -51,6 +51,7 @@ int add_task(Plan& plan, const Profile& p, Task t);
 void describe_env_and_seed(const Task& t, TaskRecord& r);
 
 // The results file's tables from its records: every kind's table, then the cross-kind ones.
-ResultTables result_tables(const std::vector<TaskRecord>& records);
+// `roof_gflops`: one core's fp32 roof for /tables/timings' roof_percent (0: unknown).
+ResultTables result_tables(const std::vector<TaskRecord>& records, double roof_gflops = 0);
 
 }  // namespace sirl

@@ -486,10 +486,16 @@ def report(f, t, envs, out, notes, fig3_key):
         by = tim.groupby("kind").agg(tasks=("key", "count"), seconds=("seconds", "sum"),
                                      gflop=("flops", lambda x: x.sum() / 1e9))
         by["GFLOP/s"] = by.gflop / by.seconds.where(by.seconds > 0)
-        L += ["", "## Compute by task kind (task-seconds, summed over threads)", "",
-              "| kind | tasks | seconds | GFLOP | GFLOP/s |", "|---|---:|---:|---:|---:|"]
+        roof = float(a.get("roof_fp32_gflops_per_core", 0) or 0)  # one core's, measured by the run
+        L += ["", "## Compute by task kind (task-seconds, summed over threads)", ""]
+        if roof:
+            L.append(f"Each task runs on one core; this machine's fp32 roof is {roof:.0f} GFLOP/s "
+                     "per core (measured at the start of the run).")
+            L.append("")
+        L += ["| kind | tasks | seconds | GFLOP | GFLOP/s | % of roof |", "|---|---:|---:|---:|---:|---:|"]
         for k, r in by.iterrows():
-            L.append(f"| {k} | {int(r.tasks)} | {r.seconds:.1f} | {r.gflop:.1f} | {r['GFLOP/s']:.1f} |")
+            pct = f"{100 * r['GFLOP/s'] / roof:.0f} %" if roof and r["GFLOP/s"] == r["GFLOP/s"] else "—"
+            L.append(f"| {k} | {int(r.tasks)} | {r.seconds:.1f} | {r.gflop:.1f} | {r['GFLOP/s']:.1f} | {pct} |")
     prof = a.get("profile_text", "")
     if prof:
         L += ["", "## Configuration (the profile this file was run with)", "", "```toml",

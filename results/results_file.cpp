@@ -126,11 +126,13 @@ H5Table vae_latents_table(const std::vector<TaskRecord>& records) {
   return t;
 }
 
-H5Table timings_table(const std::vector<TaskRecord>& records) {
+// roof_percent: a task's GFLOP/s as a share of one core's fp32 roof (each task runs on one
+// thread); 0 when the roof is unknown (files of engines before 0.3.0).
+H5Table timings_table(const std::vector<TaskRecord>& records, double roof_gflops) {
   H5Table t;
   auto &kind = t.add("kind", C::String), &key = t.add("key", C::String),
        &sec = t.add("seconds", C::Double), &fl = t.add("flops", C::Double),
-       &gf = t.add("gflops", C::Double);
+       &gf = t.add("gflops", C::Double), &pct = t.add("roof_percent", C::Double);
   for (const auto& r : records) {
     kind.strings.push_back(r.kind);
     key.strings.push_back(r.key);
@@ -138,6 +140,7 @@ H5Table timings_table(const std::vector<TaskRecord>& records) {
     sec.doubles.push_back(s);
     fl.doubles.push_back(f);
     gf.doubles.push_back(s > 0 ? f / s * 1e-9 : 0.0);
+    pct.doubles.push_back(roof_gflops > 0 ? 100 * gf.doubles.back() / roof_gflops : 0.0);
   }
   return t;
 }
@@ -151,10 +154,10 @@ const H5Table& ResultTables::at(const std::string& name) const {
 }
 
 ResultTables build_tables(const std::vector<TaskRecord>& records,
-                          const std::vector<CellTableSpec>& cells) {
+                          const std::vector<CellTableSpec>& cells, double roof_gflops) {
   ResultTables t;
   for (const auto& spec : cells) t.tables.push_back({spec.name, cell_table(records, spec)});
-  t.tables.push_back({"timings", timings_table(records)});
+  t.tables.push_back({"timings", timings_table(records, roof_gflops)});
   t.tables.push_back({"training", training_table(records)});
   t.tables.push_back({"vae_latents", vae_latents_table(records)});
   return t;
@@ -175,6 +178,7 @@ void write_results_file(const std::string& path, const RunInfo& info,
       f.set_attr("/", "git_commit", info.git_commit);
       f.set_attr("/", "host", info.host);
       f.set_attr("/", "cpu_class", info.cpu_class);
+      f.set_attr("/", "roof_fp32_gflops_per_core", info.roof_fp32_gflops);
       f.set_attr("/", "started", info.started);
       f.set_attr("/", "finished", info.finished);
       f.set_attr("/", "shard", info.shard);
@@ -272,6 +276,8 @@ RunInfo read_run_info(const std::string& path) {
   i.git_commit = f.attr_string("/", "git_commit");
   i.host = f.attr_string("/", "host");
   if (f.has_attr("/", "cpu_class")) i.cpu_class = f.attr_string("/", "cpu_class");
+  if (f.has_attr("/", "roof_fp32_gflops_per_core"))
+    i.roof_fp32_gflops = f.attr_double("/", "roof_fp32_gflops_per_core");
   i.started = f.attr_string("/", "started");
   i.finished = f.attr_string("/", "finished");
   i.shard = f.attr_string("/", "shard");

@@ -56,6 +56,20 @@ with tempfile.TemporaryDirectory() as tmp:
     assert "REGRESSION: 2 finding(s)" in p.stdout, p.stdout
     print(f"ok: injected slowdown ({slow}) and drift ({metric}) both caught, exit 1")
 
+    # A task kind running at half its share of the roof is flagged (its wall time untouched).
+    kinds = night["pipeline"]["smoke"]["kinds"]
+    assert all(0 <= k["roof_percent"] < 150 for k in kinds.values()), kinds
+    assert any(k["roof_percent"] > 0 for k in kinds.values()), kinds
+    low = json.loads(json.dumps(night))
+    kind = sorted(k for k, v in kinds.items() if v["roof_percent"] > 0)[0]
+    low["pipeline"]["smoke"]["kinds"][kind]["roof_percent"] /= 2
+    json.dump(low, open(bad_json, "w"))
+    p = nightly("compare", base_json, bad_json)
+    line = [l for l in p.stdout.splitlines() if l.startswith(f"| smoke | {kind} |")]
+    assert p.returncode == 1 and line and "LOWER SHARE OF ROOF" in line[0] and "-50.0%" in line[0], \
+        p.stdout
+    print(f"ok: {kind} at half its share of the roof is caught ({line[0]})")
+
     # A changed deterministic table is caught too; bad input is a usage error.
     bad2 = json.loads(json.dumps(night))
     bad2["pipeline"]["smoke"]["digests"]["tpa"] = "0" * 16
