@@ -15,7 +15,7 @@ archer="$(dirname "$(readlink -f "$(command -v clang)")")/../lib/libarcher.so"
 export OMP_TOOL_LIBRARIES="$archer"
 # Uninstrumented libraries (oneTBB, libomp, Open MPI, cpp-httplib) synchronise in code TSan cannot
 # see; ignore_noninstrumented_modules keeps their internals out of the reports, ours stay in.
-export TSAN_OPTIONS="ignore_noninstrumented_modules=1 halt_on_error=0 log_path=$reports/tsan"
+export TSAN_OPTIONS="ignore_noninstrumented_modules=1 halt_on_error=0 log_path=$reports/tsan suppressions=$PWD/tests/tsan.supp"
 export SIRL_TEST_PROFILE="$PWD/tests/data/micro.toml"
 threaded='^(Scheduler\.|ReadyQueue\.|.*ThreadCount$|.*TwoThreads$|Mlp\.ThreadedGemmIsBitIdentical$'
 threaded+='|StudyRequests\.|study_server$|crash_walk$|mpi_run$)'
