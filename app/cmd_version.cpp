@@ -4,6 +4,8 @@
 
 #include "app/commands.h"
 #include "build_info.h"
+#include "kernels/cpu_class.h"
+#include "kernels/roofline.h"
 #include "results/results_file.h"
 
 namespace sirl::app {
@@ -16,7 +18,9 @@ const char* git_commit() {
 }
 
 void register_version(CLI::App& app, Runner& run) {
-  app.add_subcommand("version", "Print the version, git commit, compiler and flags of this build");
+  app.add_subcommand("version",
+                     "Print the version, git commit, compiler and flags of this build, the CPU "
+                     "class results depend on and this core's measured fp32 roof");
   run = [] {
     std::printf("sirl-bench %s\n", SIRL_VERSION);
     std::printf("commit:    %s\n", SIRL_GIT_COMMIT);
@@ -27,6 +31,10 @@ void register_version(CLI::App& app, Runner& run) {
     std::printf("flags:     %s\n", SIRL_CXX_FLAGS);
     std::printf("eigen:     %d.%d.%d (SIMD: %s)\n", EIGEN_WORLD_VERSION, EIGEN_MAJOR_VERSION,
                 EIGEN_MINOR_VERSION, Eigen::SimdInstructionSetsInUse());
+    // What results depend on besides their inputs, and this core's roof (both in every results
+    // file a run writes).
+    std::printf("cpu class: %s\n", cpu_class().c_str());
+    std::printf("fp32 roof: %.1f GFLOP/s per core (measured now)\n", fp32_roof_gflops_per_core());
     return 0;
   };
 }

@@ -128,6 +128,17 @@ MUTANTS = [
      "ctest:disk_full", "a study file's failed write reported as success"),
     ("results/task_store.cpp", "    if (name.ends_with(\".tmp\")) {", "    if (name.ends_with(\".tmpx\")) {",
      "TaskStore.*", "torn commits not swept"),
+    # engine/ — training checkpoints; kernels/ — the libxsmm GEMM; app/ — the study server
+    ("engine/train_vae.cpp", "                                snap.get_rng(\"vae/noise\", noise);\n", "",
+     "Checkpoint.*", "a resumed VAE restarts its noise stream"),
+    ("engine/epochs.h", "    s.get_rng(\"loop/order\", rng);\n", "", "Checkpoint.*",
+     "a resumed training restarts its batch order"),
+    ("kernels/gemm.cpp", "    kernel(a, b + (trans_b ? n0 : size_t(n0) * ldb), c + size_t(n0) * ldc);",
+     "    kernel(a, b + (trans_b ? n0 : size_t(n0) * ldb), c);", "Gemm.*",
+     "every 256-row block written over the first"),
+    ("app/study_service.cpp",
+     "      p.similarity_answer.pop_back(), p.similarity_ms.pop_back(), p.similarity_time.pop_back();",
+     "", "StudyRequests.*", "an answer whose save failed is kept"),
 ]
 
 # Mutations the suite cannot catch because they do not change behaviour (none so far).
