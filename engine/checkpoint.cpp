@@ -48,4 +48,17 @@ void get_adam(const TrainingSnapshot& s, const std::string& name, std::vector<fl
   adam.step = int64_t(s.number(name + "/adam_step"));
 }
 
+ResumableState adam_resumable(Checkpointer* checkpointer, const std::string& name,
+                              std::vector<float>& params, AdamState& adam, double& flops) {
+  return {checkpointer,
+          [name, &params, &adam, &flops](TrainingSnapshot& snap) {
+            put_adam(snap, name, params, adam);
+            snap.numbers["train_flops"] = flops;
+          },
+          [name, &params, &adam, &flops](const TrainingSnapshot& snap) {
+            get_adam(snap, name, params, adam);
+            flops = snap.number("train_flops");
+          }};
+}
+
 }  // namespace sirl

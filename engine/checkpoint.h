@@ -59,4 +59,8 @@ struct ResumableState {
   std::function<void(const TrainingSnapshot&)> restore;
 };
 
+// The state of most trainings: weights and Adam under `name`/, and the FLOP counter.
+ResumableState adam_resumable(Checkpointer* checkpointer, const std::string& name,
+                              std::vector<float>& params, AdamState& adam, double& flops);
+
 }  // namespace sirl

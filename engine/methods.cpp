@@ -34,15 +34,8 @@ void train_sirl(const Dataset& d, const QueryBundle& bundle, const MethodConfig&
   Trainer t(rep.shape, s.adam, rep.params);
   Rng order_rng(seed_from_key("sirl_order", seed));
   std::vector<int32_t> batch;
-  const ResumableState resume{cfg.checkpointer,
-                              [&](TrainingSnapshot& snap) {
-                                put_adam(snap, "sirl", t.params, t.adam);
-                                snap.numbers["train_flops"] = rep.train_flops;
-                              },
-                              [&](const TrainingSnapshot& snap) {
-                                get_adam(snap, "sirl", t.params, t.adam);
-                                rep.train_flops = snap.number("train_flops");
-                              }};
+  const ResumableState resume =
+      adam_resumable(cfg.checkpointer, "sirl", t.params, t.adam, rep.train_flops);
   rep.loss_curve = run_epochs(
       q.count, s.epochs, s.batch, order_rng,
       [&](const int32_t* rows, int b) {
@@ -86,15 +79,8 @@ void train_preference(const Dataset& d, const QueryBundle& bundle, const MethodC
   Rng order_rng(seed_from_key("pref_order", seed));
   std::vector<int32_t> pairs, human;
   std::vector<float> label;
-  const ResumableState resume{cfg.checkpointer,
-                              [&](TrainingSnapshot& snap) {
-                                put_adam(snap, "pref", t.params, t.adam);
-                                snap.numbers["train_flops"] = rep.train_flops;
-                              },
-                              [&](const TrainingSnapshot& snap) {
-                                get_adam(snap, "pref", t.params, t.adam);
-                                rep.train_flops = snap.number("train_flops");
-                              }};
+  const ResumableState resume =
+      adam_resumable(cfg.checkpointer, "pref", t.params, t.adam, rep.train_flops);
   rep.loss_curve = run_epochs(
       q.count, s.epochs, s.batch, order_rng,
       [&](const int32_t* rows, int b) {

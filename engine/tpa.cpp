@@ -122,15 +122,8 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   res.epochs = h.tpa.epochs;
   std::vector<int32_t> pairs;
   std::vector<float> label;
-  const ResumableState resume{cfg.checkpointer,
-                              [&](TrainingSnapshot& snap) {
-                                put_adam(snap, "tpa", t.params, t.adam);
-                                snap.numbers["train_flops"] = res.train_flops;
-                              },
-                              [&](const TrainingSnapshot& snap) {
-                                get_adam(snap, "tpa", t.params, t.adam);
-                                res.train_flops = snap.number("train_flops");
-                              }};
+  const ResumableState resume =
+      adam_resumable(cfg.checkpointer, "tpa", t.params, t.adam, res.train_flops);
   res.loss_curves = run_epochs_batched(
       M, res.epochs, h.tpa.batch, order_rng,
       [&](const std::vector<const int32_t*>& order, int b) -> const std::vector<float>& {
