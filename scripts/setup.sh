@@ -13,12 +13,15 @@ packages=(
   libbenchmark-dev libgtest-dev libgmock-dev
   # the GEMM libraries bench/bench_gemm_candidates.cpp measures against our kernels
   libdnnl-dev libxsmm-dev
+  # oneDNN's CMake config looks for OpenCL (a Recommends of libdnnl-dev, which we skip)
+  ocl-icd-opencl-dev
   # sanitizer builds and the libFuzzer targets (the asan/tsan presets)
   clang libclang-rt-dev libomp-dev
   # MPI scale-out
   libopenmpi-dev openmpi-bin
   # plots and the PyTorch reference (Debian's /usr/bin/python3 only)
   python3 python3-h5py python3-matplotlib python3-numpy python3-pandas python3-scipy python3-torch
+  python3-markdown  # report.html's tables
   libopenblas0-pthread
   # the user study: web server, browser-side packages from npm, the browser for its e2e test
   libcpp-httplib-dev nodejs chromium
