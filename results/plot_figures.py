@@ -25,6 +25,9 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from scipy import stats  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import claims as claims_stats  # noqa: E402
+
 # One colour and one label per method variant, shared by every figure.
 STYLE = {
     "sirl": ("#d62728", "SIRL"),
@@ -39,6 +42,7 @@ ORDER = list(STYLE)
 # Each environment's registration as the run stored it (attributes of /datasets/<env>: title,
 # in_claims, fig3_rank, vae_weak_claim, view), so no environment name is spelled out here.
 ENV = {}
+ALPHA = claims_stats.ALPHA
 
 
 def load_envs(f):
@@ -51,7 +55,8 @@ def load_envs(f):
 
 def env_title(env):
     return ENV.get(env, {}).get("title", env)
-ALPHA = 0.05
+
+
 # What each figure drew, written to figures.json beside them (tests and users check it).
 DRAWN = {}
 
@@ -441,74 +446,34 @@ def vae_lines(f, t):
     return L
 
 
-def paired(a, b):
-    """Paired t-test over the seeds both have; returns (mean a − b, p, n)."""
-    j = pd.concat([a.rename("a"), b.rename("b")], axis=1).dropna()
-    if len(j) < 2:
-        return (j.a - j.b).mean() if len(j) else np.nan, np.nan, len(j)
-    diff = j.a - j.b
-    if np.allclose(diff, diff.iloc[0]):
-        return diff.mean(), 0.0 if diff.iloc[0] != 0 else 1.0, len(j)
-    return diff.mean(), stats.ttest_rel(j.a, j.b).pvalue, len(j)
+def fmt(x, spec=".4f"):
+    return "—" if x is None or (isinstance(x, float) and not math.isfinite(x)) else format(x, spec)
 
 
-def verdict(lines, claim, comparisons, better):
-    """comparisons: (name, mean diff, p, n) with diff = claimed-better − other; `better` is the
-    sign a holding claim has ("<" lower is better, ">" higher is better)."""
-    if not comparisons:
-        lines.append(f"- **{claim}**: not evaluated (no data)")
-        return
-    good = [c for c in comparisons if (c[1] < 0 if better == "<" else c[1] > 0) and c[2] < ALPHA]
-    bad = [c for c in comparisons if (c[1] > 0 if better == "<" else c[1] < 0) and c[2] < ALPHA]
-    if len(good) == len(comparisons):
-        v = "held"
-    elif bad:
-        v = "not held"
-    else:
-        v = "inconclusive"
-    detail = "; ".join(f"{'vs ' if n in STYLE else ''}{STYLE.get(n, (0, n))[1]}: Δ = {d:+.4f}, p = {p:.3g} (n = {k})"
-                       for n, d, p, k in comparisons)
-    lines.append(f"- **{claim}: {v}** (paired t-test over seeds, α = {ALPHA}). {detail}")
+def comparison_text(c):
+    name = c["name"]
+    label = ("vs " + STYLE[name][1]) if name in STYLE else name
+    return (f"{label}: Δ = {fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, {fmt(c['hi'], '+.4f')}], "
+            f"d_z = {fmt(c['dz'], '+.2f')}, p = {fmt(c['p'], '.3g')}, Holm p = {fmt(c.get('p_holm'), '.3g')} "
+            f"(n = {c['n']})")
 
 
-def report(f, t, envs, out, notes, fig3_key):
-    fpe, tpa, tim = t["fpe"], t["tpa"], t["timings"]
-    envs = [e for e in envs if ENV.get(e, {}).get("in_claims", 1)]  # e.g. Fig. 3's own env
-    a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
-    L = [f"# sirl-bench report: profile `{a.get('profile_name')}`", ""]
-    L.append(f"- engine {a.get('engine_version')} (commit {a.get('git_commit')}), host "
-             f"{a.get('host')}, {a.get('threads')} threads")
-    L.append(f"- started {a.get('started')}, finished {a.get('finished')}, wall time "
-             f"{float(a.get('wall_seconds', 0)):.0f} s")
-    L.append(f"- tasks: {a.get('tasks_done')} of {a.get('tasks_total')} done"
-             + ("" if a.get("complete") else " — **PARTIAL RUN**: figures show gaps"))
-    if len(tim):
-        by = tim.groupby("kind").agg(tasks=("key", "count"), seconds=("seconds", "sum"),
-                                     gflop=("flops", lambda x: x.sum() / 1e9))
-        by["GFLOP/s"] = by.gflop / by.seconds.where(by.seconds > 0)
-        roof = float(a.get("roof_fp32_gflops_per_core", 0) or 0)  # one core's, measured by the run
-        L += ["", "## Compute by task kind (task-seconds, summed over threads)", ""]
-        if roof:
-            L.append(f"Each task runs on one core; this machine's fp32 roof is {roof:.0f} GFLOP/s "
-                     "per core (measured at the start of the run).")
-            L.append("")
-        L += ["| kind | tasks | seconds | GFLOP | GFLOP/s | % of roof |", "|---|---:|---:|---:|---:|---:|"]
-        for k, r in by.iterrows():
-            pct = f"{100 * r['GFLOP/s'] / roof:.0f} %" if roof and r["GFLOP/s"] == r["GFLOP/s"] else "—"
-            L.append(f"| {k} | {int(r.tasks)} | {r.seconds:.1f} | {r.gflop:.1f} | {r['GFLOP/s']:.1f} | {pct} |")
-    prof = a.get("profile_text", "")
-    if prof:
-        L += ["", "## Configuration (the profile this file was run with)", "", "```toml",
-              prof.strip(), "```"]
-    L += ["", "## Figures", ""]
-    for name, cap in [("fig3_grid_similar", "Fig. 3"), ("fig4_fpe", "Fig. 4"),
-                      ("fig5_tpa", "Fig. 5"), ("fig7_ablation", "Fig. 7"),
-                      ("fig_learning_curves", "Learning curves")]:
-        if os.path.exists(os.path.join(out, name + ".png")):
-            L.append(f"![{cap}]({name}.png)")
-    L += ["", "## The paper's claims, checked", ""]
+def claim(claims, env, name, comparisons, better, main=False):
+    """Decides one hypothesis (claims.decide) and keeps it for the summary and the details."""
+    v, deciding = claims_stats.decide(comparisons, better)
+    h = {"env": env, "claim": name, "better": better, "comparisons": comparisons, "verdict": v,
+         "deciding": deciding, "main": main}
+    if comparisons:
+        h["power"] = claims_stats.power(comparisons, better)
+        h["seeds80"] = claims_stats.seeds_for_power(comparisons, better)
+    claims.append(h)
+
+
+def hypotheses(fpe, tpa, envs):
+    """Every claim the report checks, per environment, decided."""
+    H = []
+    baselines = ["vae", "multipref10", "multipref50", "singlepref", "random"]
     for env in envs:
-        L.append(f"### {env_title(env)}")
         d = fpe[fpe.env == env]
         if not d.empty:
             nmax = d.N.max()
@@ -517,10 +482,9 @@ def report(f, t, envs, out, notes, fig3_key):
                 x = d[(d.variant == v) & ((d.N == nmax) | (d.N == 0))]
                 return x.set_index("seed").fpe
 
-            comps = [(v, *paired(fpe_at("sirl"), fpe_at(v))) for v in
-                     ["vae", "multipref10", "multipref50", "singlepref", "random"]
-                     if (d.variant == v).any()]
-            verdict(L, f"H1 — SIRL's FPE is lower than every baseline's at N = {nmax}", comps, "<")
+            claim(H, env, f"H1 — SIRL's FPE is lower than every baseline's at N = {nmax}",
+                  [claims_stats.paired(v, fpe_at("sirl"), fpe_at(v)) for v in baselines
+                   if (d.variant == v).any()], "<", main=True)
         m = main_tpa(tpa[tpa.env == env])
         if not m.empty:
             nmax = m.N.max()
@@ -529,19 +493,19 @@ def report(f, t, envs, out, notes, fig3_key):
                 x = m[(m.variant == v) & ((m.N == nmax) | (m.N == 0))]
                 return x.groupby("seed").tpa.mean()
 
-            comps = [(v, *paired(tpa_at("sirl"), tpa_at(v))) for v in
-                     ["vae", "multipref10", "multipref50", "singlepref", "random"]
-                     if (m.variant == v).any()]
-            verdict(L, f"H2 — SIRL's TPA (frozen, mean over M) is higher than every baseline's "
-                       f"(unfrozen) at N = {nmax}", comps, ">")
-            comps = [(v, *paired(tpa_at("random"), tpa_at(v))) for v in
-                     ["multipref10", "multipref50", "singlepref"] if (m.variant == v).any()]
-            verdict(L, "Secondary — Random beats preference pre-training (TPA)", comps, ">")
+            claim(H, env, f"H2 — SIRL's TPA (frozen, mean over M) is higher than every baseline's "
+                          f"(unfrozen) at N = {nmax}",
+                  [claims_stats.paired(v, tpa_at("sirl"), tpa_at(v)) for v in baselines
+                   if (m.variant == v).any()], ">", main=True)
+            claim(H, env, "Secondary — Random beats preference pre-training (TPA)",
+                  [claims_stats.paired(v, tpa_at("random"), tpa_at(v))
+                   for v in ["multipref10", "multipref50", "singlepref"] if (m.variant == v).any()],
+                  ">")
         ab = tpa[(tpa.env == env) & (tpa.vae == 0)]
-        for meth, claim in [("sirl", "SIRL is better frozen"),
-                            ("multipref10", "MultiPref-10 is better unfrozen"),
-                            ("multipref50", "MultiPref-50 is better unfrozen"),
-                            ("singlepref", "SinglePref is better unfrozen")]:
+        for meth, text in [("sirl", "SIRL is better frozen"),
+                           ("multipref10", "MultiPref-10 is better unfrozen"),
+                           ("multipref50", "MultiPref-50 is better unfrozen"),
+                           ("singlepref", "SinglePref is better unfrozen")]:
             x = ab[ab.method == meth]
             if x.frozen.nunique() < 2:
                 continue
@@ -551,52 +515,164 @@ def report(f, t, envs, out, notes, fig3_key):
             x = x.set_index(keys).loc[cells].reset_index()
             fr = x[x.frozen == 1].groupby("seed").tpa.mean()
             un = x[x.frozen == 0].groupby("seed").tpa.mean()
-            sign = ">" if meth == "sirl" else "<"
-            verdict(L, f"Secondary — {claim} (ablation cells, mean over N, M)",
-                    [("frozen − unfrozen", *paired(fr, un))], sign)
+            claim(H, env, f"Secondary — {text} (ablation cells, mean over N, M)",
+                  [claims_stats.paired("frozen − unfrozen", fr, un)], ">" if meth == "sirl" else "<")
         if ENV.get(env, {}).get("vae_weak_claim"):
             x = fpe[(fpe.env == env)]
             if not x.empty:
                 nmax = x.N.max()
                 v = x[(x.variant == "vae")].set_index("seed").fpe
                 s = x[(x.variant == "sirl") & (x.N == nmax)].set_index("seed").fpe
-                verdict(L, f"Secondary — VAE is weak on {env_title(env)} (FPE above SIRL's)",
-                        [("vae", *paired(v, s))], ">")
+                claim(H, env, f"Secondary — VAE is weak on {env_title(env)} (FPE above SIRL's)",
+                      [claims_stats.paired("vae", v, s)], ">")
+    return H
+
+
+def summary_lines(H):
+    """The report's first table: one row per claim × environment."""
+    L = ["| claim | environment | verdict | deciding comparison: Δ [95 % CI] | Holm p | seeds | "
+         "power | seeds for 80 % |", "|---|---|---|---|---:|---:|---:|---:|"]
+    for h in H:
+        c = h["deciding"]
+        if c is None:
+            L.append(f"| {h['claim']} | {env_title(h['env'])} | not evaluated (no data) | — | — | — | — | — |")
+            continue
+        label = ("vs " + STYLE[c["name"]][1]) if c["name"] in STYLE else c["name"]
+        s80 = h.get("seeds80")
+        claim_text = f"**{h['claim']}**" if h["main"] else h["claim"]
+        L.append(f"| {claim_text} | {env_title(h['env'])} | **{h['verdict']}** | {label}: "
+                 f"{fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, {fmt(c['hi'], '+.4f')}] | "
+                 f"{fmt(c.get('p_holm'), '.3g')} | {c['n']} | {fmt(100 * h.get('power', math.nan), '.0f')} % | "
+                 f"{s80 if s80 else f'> {claims_stats.MAX_SEEDS}' if h.get('power') == h.get('power') else '—'} |")
+    L += ["", f"Verdicts: *held* = every comparison goes the claimed way with Holm-adjusted p < "
+          f"{ALPHA} (paired t-tests over seeds, Holm's correction within each claim); *not held* = "
+          f"at least one goes the other way with adjusted p < {ALPHA}; *inconclusive* otherwise. "
+          f"The deciding comparison is the one the verdict rests on (for *held* the weakest). "
+          f"*Power* = the chance that a run with this many seeds decides (held or not held) if the "
+          f"true effects were the observed ones (simulated noncentral t, Holm applied); *seeds for "
+          f"80 %* = the fewest seeds with power ≥ 80 %. Both are planning numbers computed from this "
+          f"run's effect sizes, which few seeds estimate poorly: they are not evidence."]
+    return L
+
+
+def detail_lines(H, envs):
+    L = ["", "## The paper's claims in detail", ""]
+    for env in envs:
+        rows = [h for h in H if h["env"] == env]
+        if not rows:
+            continue
+        L.append(f"### {env_title(env)}")
+        for h in rows:
+            if h["deciding"] is None:
+                L.append(f"- **{h['claim']}**: not evaluated (no data)")
+                continue
+            L.append(f"- **{h['claim']}: {h['verdict']}** (paired t-test over seeds, α = {ALPHA}, "
+                     f"Holm within the claim; Δ with its 95 % CI). "
+                     + "; ".join(comparison_text(c) for c in h["comparisons"]))
         L.append("")
     if not any(ENV.get(e, {}).get("vae_weak_claim") for e in envs):
         L.append("- *VAE weak on JacoRobot*: not evaluated — this run has no JacoRobot cells.")
+    return L
+
+
+def compute_lines(f, tim):
+    a = f.attrs
+    if not len(tim):
+        return []
+    by = tim.groupby("kind").agg(tasks=("key", "count"), seconds=("seconds", "sum"),
+                                 gflop=("flops", lambda x: x.sum() / 1e9))
+    by["GFLOP/s"] = by.gflop / by.seconds.where(by.seconds > 0)
+    roof = float(a.get("roof_fp32_gflops_per_core", 0) or 0)  # one core's, measured by the run
+    L = ["", "## Compute by task kind (task-seconds, summed over threads)", ""]
+    if roof:
+        L += [f"Each task runs on one core; this machine's fp32 roof is {roof:.0f} GFLOP/s "
+              "per core (measured at the start of the run).", ""]
+    L += ["| kind | tasks | seconds | GFLOP | GFLOP/s | % of roof |", "|---|---:|---:|---:|---:|---:|"]
+    for k, r in by.iterrows():
+        pct = f"{100 * r['GFLOP/s'] / roof:.0f} %" if roof and r["GFLOP/s"] == r["GFLOP/s"] else "—"
+        L.append(f"| {k} | {int(r.tasks)} | {r.seconds:.1f} | {r.gflop:.1f} | {r['GFLOP/s']:.1f} | {pct} |")
+    return L
+
+
+FIGURES = [("fig3_grid_similar", "Fig. 3"), ("fig4_fpe", "Fig. 4"), ("fig5_tpa", "Fig. 5"),
+           ("fig7_ablation", "Fig. 7")]
+
+
+def report(f, t, envs, out, notes, fig3_key):
+    """report.md and report.html: the summary table of claims first, then the figures, the
+    learning curves with their convergence table, the claims in detail, compute, diagnostics,
+    notes, and the profile's text last."""
+    fpe, tpa, tim = t["fpe"], t["tpa"], t["timings"]
+    envs = [e for e in envs if ENV.get(e, {}).get("in_claims", 1)]  # e.g. Fig. 3's own env
+    a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+    H = hypotheses(fpe, tpa, envs)
+    title = f"sirl-bench report: profile `{a.get('profile_name')}`"
+    L = [f"# {title}", ""] + summary_lines(H)
+    L += ["", f"Engine {a.get('engine_version')} (commit {a.get('git_commit')}), host "
+          f"{a.get('host')}, {a.get('threads')} threads; started {a.get('started')}, finished "
+          f"{a.get('finished')}, wall time {float(a.get('wall_seconds', 0)):.0f} s; tasks: "
+          f"{a.get('tasks_done')} of {a.get('tasks_total')} done"
+          + ("." if a.get("complete") else " — **PARTIAL RUN**: figures show gaps.")]
+    L += ["", "## Figures", ""]
+    for name, cap in FIGURES:
+        if os.path.exists(os.path.join(out, name + ".png")):
+            L += [f"![{cap}]({name}.png)", ""]
+    L += ["## Learning curves and convergence", ""]
+    if os.path.exists(os.path.join(out, "fig_learning_curves.png")):
+        L += ["![Learning curves](fig_learning_curves.png)", ""]
     L += convergence_lines(t)
+    L += detail_lines(H, envs)
+    L += compute_lines(f, tim)
     L += vae_lines(f, t)
     if fig3_key:
-        L.append(f"- Fig. 3 uses the representation `{fig3_key}`.")
+        L += ["", f"Fig. 3 uses the representation `{fig3_key}`."]
     if notes:
         L += ["", "## Notes", ""] + [f"- {n}" for n in notes]
-    L += ["", "Verdicts: *held* = the claimed direction for every comparison with p < 0.05; "
-          "*not held* = at least one significant difference the other way; *inconclusive* "
-          "otherwise. Few seeds give little power: read the Δ's, not only the verdict.", ""]
+    prof = a.get("profile_text", "")
+    if prof:
+        L += ["", "## Configuration (the profile this file was run with)", "", "```toml",
+              prof.strip(), "```"]
+    L.append("")
     text = "\n".join(L)
     with open(os.path.join(out, "report.md"), "w") as fh:
         fh.write(text)
-    body = []
-    in_code = False
-    for line in L:
-        if line.startswith("```"):
-            body.append("</pre>" if in_code else "<pre>")
-            in_code = not in_code
-        elif in_code:
-            body.append(html.escape(line))
-        elif line.startswith("!["):
-            src = line.split("(")[1].rstrip(")")
-            body.append(f'<p><img src="{html.escape(src)}" style="max-width:100%"></p>')
-        elif line.startswith("#"):
-            lvl = len(line) - len(line.lstrip("#"))
-            body.append(f"<h{lvl}>{html.escape(line.lstrip('# '))}</h{lvl}>")
-        elif line:
-            body.append(f"<p>{html.escape(line)}</p>")
     with open(os.path.join(out, "report.html"), "w") as fh:
-        fh.write("<!doctype html><meta charset='utf-8'><title>sirl-bench report</title>"
-                 + "\n".join(body))
+        fh.write(report_html(title, "\n".join(L[2:])))
+    with open(os.path.join(out, "claims.json"), "w") as fh:
+        json.dump(json_safe([{k: v for k, v in h.items() if k != "deciding"} for h in H]), fh,
+                  indent=1)
     return text
+
+
+def json_safe(x):
+    """Plain JSON: numpy scalars as Python numbers, nan/inf as null."""
+    if isinstance(x, dict):
+        return {k: json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [json_safe(v) for v in x]
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return float(x) if math.isfinite(x) else None
+    return x
+
+
+CSS = ("body{font-family:system-ui,sans-serif;max-width:1200px;margin:1em auto;padding:0 1em}"
+       "table{border-collapse:collapse;margin:0.5em 0 1em}th,td{border:1px solid #bbb;"
+       "padding:3px 7px;font-size:0.9em;vertical-align:top}th{background:#eee}"
+       "caption{font-size:1.4em;font-weight:bold;text-align:left;padding:0.3em 0}"
+       "img{max-width:100%}pre{background:#f6f6f6;padding:0.6em;overflow-x:auto}")
+
+
+def report_html(title, body_md):
+    """The report's Markdown as HTML (Debian's python3-markdown, tables + fenced code). The
+    first element of the page is the summary table, its caption the report's title."""
+    import markdown
+    body = markdown.markdown(body_md, extensions=["tables", "fenced_code"])
+    t = html.escape(title.replace("`", ""))
+    body = body.replace("<table>", f'<table id="summary"><caption>{t}</caption>', 1)
+    return (f"<!doctype html><html><head><meta charset='utf-8'><title>{t}</title>"
+            f"<style>{CSS}</style></head><body>{body}</body></html>\n")
 
 
 def main():

@@ -11,6 +11,7 @@ import tempfile
 
 import h5py
 import pandas as pd
+from scipy import stats
 
 SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
@@ -43,7 +44,17 @@ with tempfile.TemporaryDirectory() as tmp:
     rep = check_outputs(os.path.join(tmp, "full"))
     for claim in ("H1", "H2", "SIRL is better frozen", "Random beats preference"):
         assert claim in rep, f"report lacks {claim}"
-    assert "paired t-test" in rep and "p = " in rep
+    assert "paired t-test" in rep and "p = " in rep and "Holm p" in rep
+    # The summary table opens the report, before the figures; the profile's text closes it.
+    assert rep.index("| claim | environment | verdict") < rep.index("## Figures") < rep.index(
+        "## Configuration"), "report order: summary, figures, …, profile"
+    # The page a reader opens, in chromium: summary table first, real tables, every image loaded.
+    p = subprocess.run(["node", os.path.join(SRC, "tests", "report_browser.mjs"),
+                        os.path.join(tmp, "full", "report.html")], cwd=os.path.join(SRC, "app", "study_web"),
+                       capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+    if p.returncode != 0:
+        sys.exit(f"FAIL: report_browser\n{p.stdout}\n{p.stderr}")
+    print(p.stdout.strip())
     for section in ("Did every training converge?", "The VAE's posterior", "Dead units"):
         assert section in rep, f"report lacks {section}"
     drawn = json.load(open(os.path.join(tmp, "full", "figures.json")))
@@ -73,6 +84,35 @@ with tempfile.TemporaryDirectory() as tmp:
             checked += 1
     assert checked > 50, checked
     print(f"ok: Figs. 4 and 5 drew the seed means of the tables ({checked} points checked)")
+
+    # H1 per environment recomputed here from /tables/fpe with scipy's paired t-test and Holm by
+    # hand: the verdict and the adjusted p of every comparison equal claims.json's (a report that
+    # compared the wrong N, the wrong column or skipped the correction differs).
+    reported = {(h["env"], h["claim"][:2]): h for h in
+                json.load(open(os.path.join(tmp, "full", "claims.json")))}
+    for env in sorted(fpe.env.unique()):
+        if env == "grid2":
+            continue
+        d = fpe[fpe.env == env]
+        nmax = d.N.max()
+        at = lambda v: d[(d.variant == v) & ((d.N == nmax) | (d.N == 0))].set_index("seed").fpe.sort_index()
+        ps, diffs = [], []
+        for v in ["vae", "multipref10", "multipref50", "singlepref", "random"]:
+            s, o = at("sirl"), at(v)
+            ps.append(stats.ttest_rel(s, o).pvalue)
+            diffs.append((s - o).mean())
+        order = sorted(range(5), key=lambda i: ps[i])
+        adj, run = [0.0] * 5, 0.0
+        for r, i in enumerate(order):
+            run = max(run, min(1.0, (5 - r) * ps[i]))
+            adj[i] = run
+        want = ("held" if all(q < 0.05 and x < 0 for q, x in zip(adj, diffs)) else
+                "not held" if any(q < 0.05 and x > 0 for q, x in zip(adj, diffs)) else "inconclusive")
+        h = reported[(env, "H1")]
+        assert h["verdict"] == want, (env, h["verdict"], want)
+        for c, q in zip(h["comparisons"], adj):
+            assert abs(c["p_holm"] - q) < 1e-9, (env, c, q)
+    print("ok: H1's verdicts and Holm p's equal a recomputation from /tables/fpe")
 
     # JacoRobot runs its ablation at another M than the top-level [ablation]: Fig. 7 must draw
     # the cells the file holds (16 + 4 bars: four methods × 4 configurations, VAE and Random × 2).
