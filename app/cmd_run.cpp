@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
+#include <algorithm>
 #include <map>
 #include <string>
 #include <thread>
@@ -12,6 +13,7 @@
 #include "jobs/profile.h"
 #include "jobs/progress.h"
 #include "jobs/run.h"
+#include "jobs/schedule_sim.h"
 #include "jobs/task_kinds.h"
 #include "jobs/task_runner.h"
 #include "results/results_file.h"
@@ -35,12 +37,14 @@ int default_threads() {
 }  // namespace
 
 int run_command(const std::string& profile_name, const std::string& out, int threads, bool force,
-                const std::string& shard, bool quiet, bool skip_study, double checkpoint_minutes) {
+                const std::string& shard, bool quiet, bool skip_study, double checkpoint_minutes,
+                int max_task_threads) {
   Profile p = load_or_usage(profile_name);
   if (skip_study) p.study.enabled = false;
   RunOptions o;
   o.out = out;
   o.threads = threads;
+  o.max_task_threads = max_task_threads;
   o.force = force;
   o.quiet = quiet;
   o.checkpoint_seconds = checkpoint_minutes * 60;
@@ -78,6 +82,7 @@ void register_run(CLI::App& app, Runner& run) {
   static int threads = 0;
   static bool force = false, quiet = false;
   static double checkpoint_minutes = 5;
+  static int task_threads = 0;
   cmd->add_option("profile", profile,
                   "Profile: a name in configs/ (smoke, quick, paper) or a .toml path")
       ->required();
@@ -94,6 +99,11 @@ void register_run(CLI::App& app, Runner& run) {
           "i/n"));
   cmd->add_flag("--force", force, "Overwrite results from another profile or engine version");
   cmd->add_flag("--quiet", quiet, "No progress output");
+  cmd->add_option("--task-threads", task_threads,
+                  "The most cores one task may use when no other task is ready (the tail of a\n"
+                  "run, a lone chain of big trainings); default: all --threads; 1: one core per\n"
+                  "task. Results are the same bits whatever it is")
+      ->check(CLI::Range(1, 4096));
   cmd->add_option("--checkpoint-minutes", checkpoint_minutes,
                   "A training running longer saves its state (weights, Adam, random streams, "
                   "curves) at the next epoch's end, to OUT.tasks/checkpoints/; a rerun continues "
@@ -101,24 +111,104 @@ void register_run(CLI::App& app, Runner& run) {
       ->check(CLI::Range(-1.0, 1e6))
       ->capture_default_str();
   run = [] {
-    return run_command(profile, out, threads, force, shard, quiet, false, checkpoint_minutes);
+    return run_command(profile, out, threads, force, shard, quiet, false, checkpoint_minutes,
+                       task_threads);
   };
+}
+
+// What `sirl plan` simulates when asked for a cluster (--nodes, --mpi, ...), with the machine's
+// defaults where the user says nothing.
+struct PlanClusterOptions {
+  int nodes = 1, cores_per_node = 0, threads_per_worker = 1, task_threads = 0;
+  bool mpi = false;
+  double node_bandwidth_gbs = 0, serial_fraction = 0.25;
+};
+
+// Main-memory bandwidth per core assumed when --node-bandwidth is not given: this machine's
+// STREAM triad on both cores (30.9 GB/s, docs/roofline.md) per core, up to a 12-channel DDR5-4800
+// socket's 460 GB/s.
+constexpr double kStreamPerCore = 15.5e9, kSocketBandwidth = 460e9;
+
+void print_schedule(const Plan& plan, const PlanEstimate& e, const PlanClusterOptions& o) {
+  ClusterModel m;
+  m.nodes = o.nodes;
+  m.cores_per_node = o.cores_per_node > 0 ? o.cores_per_node : default_threads();
+  m.mpi = o.mpi || o.nodes > 1;
+  m.threads_per_worker = o.threads_per_worker;
+  m.max_task_threads = o.task_threads > 0 ? o.task_threads : m.cores_per_node;
+  m.serial_fraction = o.serial_fraction;
+  m.node_bandwidth = o.node_bandwidth_gbs > 0
+                         ? o.node_bandwidth_gbs * 1e9
+                         : std::min(kSocketBandwidth, kStreamPerCore * m.cores_per_node);
+  ScheduleResult r;
+  try {
+    r = simulate_schedule(plan, e.task_seconds, std::vector<char>(plan.tasks.size(), 1), m);
+  } catch (const std::invalid_argument& x) {
+    throw UsageError(x.what());
+  }
+  std::printf("\nschedule (simulated: the engine's ready queue by upward rank over the calibrated "
+              "task times)\n");
+  if (m.mpi)
+    std::printf("  %d node(s) x %d cores, MPI: rank 0 dispatches and commits, %d worker rank(s) x "
+                "%d thread(s)\n",
+                m.nodes, m.cores_per_node, r.workers, m.threads_per_worker);
+  else
+    std::printf("  1 node x %d cores, threads: a task takes up to %d cores when nothing else is "
+                "ready\n",
+                m.cores_per_node, m.max_task_threads);
+  std::printf("  assumed: speed-up of k cores on one task k/(1 + %.2f(k-1)); main memory %.0f GB/s "
+              "per node; %.0f ms per commit\n",
+              m.serial_fraction, m.node_bandwidth * 1e-9, m.commit_seconds * 1e3);
+  std::printf("  predicted makespan: %s   (cores busy %.0f %% of the time; %s lost to memory "
+              "bandwidth, summed over tasks)\n",
+              format_duration(r.makespan).c_str(), 100 * r.utilisation,
+              format_duration(r.bandwidth_stall).c_str());
+  std::printf("  critical path: %zu task(s), %s on one core each:\n", r.critical_path.size(),
+              format_duration(r.critical_path_seconds).c_str());
+  for (int i : r.critical_path)
+    std::printf("    %-44s %10s  %.1f GFLOP\n", plan.tasks[size_t(i)].key.c_str(),
+                format_duration(e.task_seconds[size_t(i)]).c_str(),
+                plan.tasks[size_t(i)].flops * 1e-9);
 }
 
 void register_plan(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "plan",
-      "Show what a profile will run — tasks per kind, FLOPs, memory and an ETA for this machine\n"
-      "(from a ~1 s calibration of the real training code) — without running it.");
+      "Show what a profile will run — tasks per kind, FLOPs, memory — and predict its wall time\n"
+      "by simulating the engine's scheduler over task times calibrated on this machine (~1 s of\n"
+      "real training), without running it. With --nodes/--mpi: the same for a cluster of this\n"
+      "CPU (MPI ranks pulling tasks from rank 0), with its critical path.");
   static std::string profile;
   static int threads = 0;
   static bool list_tasks = false;
+  static PlanClusterOptions co;
   cmd->add_option("profile", profile, "Profile: a name in configs/ or a .toml path")->required();
   cmd->add_option("--threads", threads, "Worker threads to plan for (default: every core)")
       ->check(CLI::Range(1, 4096));
   cmd->add_flag("--tasks", list_tasks,
                 "List every task instead (one line each: key, kind, estimated GFLOP and MiB, the\n"
                 "keys of the tasks it reads), in the order the plan holds them; no calibration");
+  auto* g = cmd->add_option_group("cluster", "Predict a cluster run (these CPUs, other sizes)");
+  g->add_option("--nodes", co.nodes, "Nodes (more than one implies --mpi)")
+      ->check(CLI::Range(1, 100000));
+  g->add_option("--cores-per-node", co.cores_per_node, "Cores per node (default: this machine's)")
+      ->check(CLI::Range(1, 4096));
+  g->add_flag("--mpi", co.mpi, "Simulate `mpirun ... sirl run` (rank 0 dispatches) on one node");
+  g->add_option("--threads-per-worker", co.threads_per_worker,
+                "MPI: cores each worker rank's tasks use")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
+  g->add_option("--task-threads", co.task_threads,
+                "Threads (one node): the most cores one task may take (default: all, as sirl run)")
+      ->check(CLI::Range(1, 4096));
+  g->add_option("--node-bandwidth", co.node_bandwidth_gbs,
+                "Main-memory bandwidth per node in GB/s that tasks streaming their weights share\n"
+                "(default: 15.5 GB/s per core, at most 460)")
+      ->check(CLI::Range(0.1, 1e6));
+  g->add_option("--serial-fraction", co.serial_fraction,
+                "Amdahl serial fraction of one task on several cores")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   run = [] {
     const Profile p = load_or_usage(profile);
     const Plan plan = make_plan(p);
@@ -131,6 +221,9 @@ void register_plan(CLI::App& app, Runner& run) {
       }
       return 0;
     }
+    const bool cluster = co.nodes > 1 || co.mpi || co.cores_per_node > 0;
+    if (cluster && threads > 0)
+      throw UsageError("--threads plans one machine; for a cluster give --cores-per-node");
     const int th = threads > 0 ? threads : default_threads();
     std::printf("profile %s (%s): %s\n", p.name.c_str(), p.path.c_str(), p.description.c_str());
     std::printf("envs:");
@@ -152,8 +245,12 @@ void register_plan(CLI::App& app, Runner& run) {
     std::printf("\nmeasured single-thread rates:");
     for (const auto& [k, r] : e.gflops_per_s) std::printf("  %s %.1f GFLOP/s", k.c_str(), r);
     std::printf("\nmemory estimate: %.1f MiB\n", e.peak_bytes / (1024.0 * 1024.0));
-    std::printf("ETA: %s on %d thread(s) (%s on one)\n", format_duration(e.seconds).c_str(), th,
-                format_duration(e.seconds_one_thread).c_str());
+    PlanClusterOptions here = co;
+    if (!cluster) here.cores_per_node = th;
+    if (!cluster)
+      std::printf("ETA: %s on %d thread(s) (%s on one)\n", format_duration(e.seconds).c_str(), th,
+                  format_duration(e.seconds_one_thread).c_str());
+    print_schedule(plan, e, here);
     return 0;
   };
 }

@@ -72,7 +72,7 @@ void write_study_analysis(const std::string& study_file, const std::string& env,
 // `skip_study` leaves the profile's [study] tasks out of the plan (`sirl reproduce --no-study`).
 int run_command(const std::string& profile, const std::string& out, int threads, bool force,
                 const std::string& shard, bool quiet, bool skip_study = false,
-                double checkpoint_minutes = 5);
+                double checkpoint_minutes = 5, int max_task_threads = 0);
 
 void register_all(CLI::App& app);
 int run_selected(CLI::App& app);

@@ -7,6 +7,7 @@
 #include "datasets/environments.h"
 #include "engine/methods.h"
 #include "engine/tpa.h"
+#include "jobs/schedule_sim.h"
 #include "jobs/scheduler.h"
 #include "jobs/study_tasks.h"
 #include "jobs/task_kinds.h"
@@ -72,7 +73,8 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
     });
     e.peak_bytes += 4.0 * double(d.inputs.size() + d.features.size() * 2);
   }
-  std::vector<double> secs(plan.tasks.size(), 0);
+  std::vector<double>& secs = e.task_seconds;
+  secs.assign(plan.tasks.size(), 0);
   std::vector<double> sizes;
   for (size_t i = 0; i < plan.tasks.size(); ++i) {
     const Task& t = plan.tasks[i];
@@ -80,20 +82,15 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
     double r = 1e9;
     if (auto it = e.gflops_per_s.find(t.env + "/" + kind); it != e.gflops_per_s.end())
       r = std::max(it->second, 1e-3) * 1e9;
-    secs[i] = t.flops / r + 0.002;  // + a per-task overhead (commit, data gathering)
-    e.seconds_one_thread += secs[i];
+    secs[i] = t.flops / r;
+    e.seconds_one_thread += secs[i] + ClusterModel{}.commit_seconds;
     sizes.push_back(t.bytes);
   }
-  // Parallel time: at best total/threads, at worst the longest dependency chain.
-  double chain = 0;
-  std::vector<double> finish(plan.tasks.size(), 0);
-  for (size_t i = 0; i < plan.tasks.size(); ++i) {
-    double start = 0;
-    for (int d : plan.tasks[i].deps) start = std::max(start, finish[d]);
-    finish[i] = start + secs[i];
-    chain = std::max(chain, finish[i]);
-  }
-  e.seconds = std::max(e.seconds_one_thread / std::max(1, threads), chain);
+  ClusterModel m;
+  m.cores_per_node = std::max(1, threads);
+  m.max_task_threads = m.cores_per_node;
+  e.seconds =
+      simulate_schedule(plan, secs, std::vector<char>(plan.tasks.size(), 1), m).makespan;
   std::sort(sizes.rbegin(), sizes.rend());
   for (int k = 0; k < threads && k < int(sizes.size()); ++k) e.peak_bytes += sizes[k];
   return e;

@@ -3,6 +3,7 @@
 #pragma once
 #include <map>
 #include <string>
+#include <vector>
 
 #include "jobs/plan.h"
 #include "jobs/profile.h"
@@ -11,11 +12,14 @@ namespace sirl {
 
 struct PlanEstimate {
   std::map<std::string, double> gflops_per_s;  // measured rate per "env/kind" on one thread
-  double seconds_one_thread = 0;               // Σ task flops / rate
-  double seconds = 0;                          // with `threads` workers (tasks in parallel)
+  std::vector<double> task_seconds;            // each task alone on one core: flops / rate
+  double seconds_one_thread = 0;               // Σ task_seconds + commits
+  double seconds = 0;  // the thread scheduler on `threads` cores, simulated (schedule_sim.h)
   double peak_bytes = 0;                       // datasets + the `threads` largest working sets
 };
 
+// Calibrates the rates (about a second of real training) and simulates the thread scheduler
+// on `threads` cores (tasks take several cores when nothing else is ready, as `sirl run` does).
 PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads);
 
 }  // namespace sirl

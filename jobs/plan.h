@@ -30,6 +30,8 @@ struct Task {
   std::vector<int> deps;                      // indices into Plan::tasks (set by add_task)
   double flops = 0;                           // estimated floating-point operations (add_task)
   double bytes = 0;                           // estimated peak working set (add_task)
+  double stream_bytes = 0;  // estimated main-memory traffic over the task (add_task; 0: in cache)
+  int threads = 1;          // cores its kernels use: set by the scheduler, not part of its key
 };
 
 struct Plan {

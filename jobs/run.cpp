@@ -236,7 +236,7 @@ PendingSet find_pending(const Plan& plan, const std::vector<char>& mine,
 // first failure instead of throwing, so the caller still writes what finished.
 std::exception_ptr execute(const Plan& plan, const std::vector<char>& pending, RunContext& ctx,
                            TaskStore& store, CheckpointStore* checkpoints, int threads,
-                           int mpi_size, Progress& progress, bool quiet) {
+                           int max_task_threads, int mpi_size, Progress& progress, bool quiet) {
   const int n = int(plan.tasks.size());
   // Cached outputs are released when their last pending dependent finishes.
   std::vector<int> users(n, 0);
@@ -258,8 +258,9 @@ std::exception_ptr execute(const Plan& plan, const std::vector<char>& pending, R
         std::fprintf(stderr, "sirl run: tasks per MPI worker: %s\n", per.c_str());
       }
     } else {
-      run_dag(plan, pending, threads, [&](int i) {
-        const Task& t = plan.tasks[i];
+      run_dag(plan, pending, threads, max_task_threads, [&](int i, int cores) {
+        Task t = plan.tasks[i];
+        t.threads = cores;
         const TaskRecord rec = run_task(t, ctx);
         store.commit(rec);
         if (checkpoints) checkpoints->remove(t.key);  // the task's commit supersedes it
@@ -333,7 +334,9 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
                  mpi_size > 1 ? "MPI workers" : "threads", o.out.c_str());
   Progress progress(to_run, ps.flops, o.quiet);
   const std::exception_ptr failure = execute(plan, ps.pending, ctx, store, checkpoints.get(),
-                                             threads, mpi_size, progress, o.quiet);
+                                             threads,
+                                             o.max_task_threads > 0 ? o.max_task_threads : threads,
+                                             mpi_size, progress, o.quiet);
   progress.finish();
 
   // Assemble whatever is finished (a partial file plots with gaps; a rerun completes it).

@@ -23,43 +23,57 @@ std::vector<double> upward_rank(const Plan& plan) {
   return rank;
 }
 
-void run_dag(const Plan& plan, const std::vector<char>& pending, int threads,
-             const std::function<void(int)>& work) {
+int task_threads(const Task& t, int free_cores, size_t ready_after, int max_task_threads) {
+  if (ready_after > 0 || t.flops < kThreadedTaskFlops) return 1;
+  return std::clamp(free_cores, 1, std::max(1, max_task_threads));
+}
+
+void run_dag(const Plan& plan, const std::vector<char>& pending, int threads, int max_task_threads,
+             const std::function<void(int, int)>& work) {
   ReadyQueue queue(plan, pending);
   std::mutex mu;
   std::exception_ptr error;
   bool stop = false;
-  tbb::task_arena arena(std::max(1, threads));
+  threads = std::max(1, threads);
+  int free_cores = threads;
+  tbb::task_arena arena(threads);
   tbb::task_group group;
-  // Each spawned runner takes the best ready task at the moment it starts.
-  std::function<void()> runner = [&]() {
-    int i;
-    {
-      std::lock_guard lock(mu);
-      if (stop || queue.empty()) return;
-      i = queue.pop();
+  // Under the lock: start ready tasks while cores are free (each decides its own width).
+  std::function<void()> dispatch;
+  dispatch = [&] {
+    while (!stop && free_cores > 0 && !queue.empty()) {
+      const int i = queue.pop();
+      const int k = task_threads(plan.tasks[size_t(i)], free_cores, queue.size(), max_task_threads);
+      free_cores -= k;
+      group.run([&, i, k] {
+        bool failed = false;
+        try {
+          work(i, k);
+        } catch (...) {
+          std::lock_guard lock(mu);
+          if (!error) error = std::current_exception();
+          stop = failed = true;
+        }
+        std::lock_guard lock(mu);
+        free_cores += k;
+        if (!failed) queue.finish(i);
+        dispatch();
+      });
     }
-    try {
-      work(i);
-    } catch (...) {
-      std::lock_guard lock(mu);
-      if (!error) error = std::current_exception();
-      stop = true;
-      return;
-    }
-    int spawn = 0;
-    {
-      std::lock_guard lock(mu);
-      spawn = queue.finish(i);
-    }
-    for (int k = 0; k < spawn; ++k) group.run(runner);
   };
   arena.execute([&] {
-    const size_t initial = queue.size();
-    for (size_t k = 0; k < initial; ++k) group.run(runner);
+    {
+      std::lock_guard lock(mu);
+      dispatch();
+    }
     group.wait();
   });
   if (error) std::rethrow_exception(error);
+}
+
+void run_dag(const Plan& plan, const std::vector<char>& pending, int threads,
+             const std::function<void(int)>& work) {
+  run_dag(plan, pending, threads, 1, [&](int i, int) { work(i); });
 }
 
 }  // namespace sirl

@@ -59,6 +59,18 @@ double working_set(const MlpShape& s, int batch_rows) {
   return 4.0 * (4.0 * double(s.param_count()) + 2 * act);
 }
 
+// Main-memory traffic of an Adam training whose state does not fit a core's share of the caches
+// (kCacheShare: Zen 4's 1 MiB L2 + a 32 MiB L3 shared by 8 cores): every optimizer step reads the
+// weights twice (forward, backward), writes and reads the gradient, reads and writes Adam's m and
+// v and the weights: 9 floats = 36 bytes per parameter per step. `models` trains side by side.
+constexpr double kCacheShare = 5.0 * 1024 * 1024;
+double stream_bytes(const MlpShape& s, int64_t rows_per_epoch, int batch, int epochs, int models = 1) {
+  const double state = 16.0 * double(s.param_count()) * models;
+  if (state <= kCacheShare) return 0;
+  const double steps = double(epochs) * double((rows_per_epoch + batch - 1) / std::max(1, batch));
+  return 36.0 * double(s.param_count()) * models * steps;
+}
+
 // ---- what the runners share ----
 
 TaskRecord::Array array(std::vector<float> data, std::vector<uint64_t> dims = {}) {
@@ -125,12 +137,15 @@ void vae_cost(Task& t, const Profile& p) {
             vs.encoder.forward_flops(int(z.trajectories)) +
             vs.decoder.forward_flops(int(z.trajectories));
   t.bytes = working_set(vs.encoder, z.h.vae.batch) + working_set(vs.decoder, z.h.vae.batch);
+  t.stream_bytes =
+      stream_bytes(vs.encoder, z.trajectories, z.h.vae.batch, z.h.vae.epochs) +
+      stream_bytes(vs.decoder, z.trajectories, z.h.vae.batch, z.h.vae.epochs);
 }
 
 void run_vae(const Task& t, RunContext& ctx, TaskRecord& r) {
   const auto checkpoint = ctx.checkpointer(t.key);
   const VaeModel v = train_vae(ctx.dataset(t.env), ctx.profile().hyper.at(t.env),
-                               task_seed(t.env, t.seed, "vae"), 1, checkpoint.get());
+                               task_seed(t.env, t.seed, "vae"), t.threads, checkpoint.get());
   put_vae(v, r);
   r.num["flops"] = v.train_flops;
   record_convergence(v.loss_curve, r);
@@ -149,9 +164,11 @@ void rep_cost(Task& t, const Profile& p) {
   if (t.variant.method == Method::sirl) {
     t.flops = train_flops(z.phi, 3 * t.N, z.h.sirl.epochs);
     t.bytes = working_set(z.phi, 3 * z.h.sirl.batch);
+    t.stream_bytes = stream_bytes(z.phi, 3 * t.N, 3 * z.h.sirl.batch, z.h.sirl.epochs);
   } else if (uses_queries(t.variant.method)) {
     t.flops = train_flops(z.phi, 2 * t.N, z.h.pref.epochs);
     t.bytes = working_set(z.phi, 2 * z.h.pref.batch);
+    t.stream_bytes = stream_bytes(z.phi, 2 * t.N, 2 * z.h.pref.batch, z.h.pref.epochs);
   }
   t.flops += z.phi.forward_flops(int(z.trajectories));  // the embedding of Ξ it stores
 }
@@ -162,7 +179,7 @@ void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
   std::shared_ptr<const VaeModel> vae;
   if (reads_vae(t.variant)) vae = ctx.vae(vae_key(t.env, t.seed));
   const auto checkpoint = ctx.checkpointer(t.key);
-  MethodConfig c{t.variant.method, t.N, t.variant.vae, h, 1, checkpoint.get()};
+  MethodConfig c{t.variant.method, t.N, t.variant.vae, h, t.threads, checkpoint.get()};
   const Representation rep = train_representation(d, ctx.bundle(t.env, t.seed), c,
                                                   task_seed(t.env, t.seed, "phi"), vae.get());
   put_representation(rep, r);
@@ -198,6 +215,7 @@ void tpa_cost(Task& t, const Profile& p) {
   const MlpShape net = tpa_network(z.phi, z.h, t.frozen);
   t.flops = kTestRewards * train_flops(net, 2 * t.M, z.h.tpa.epochs);
   t.bytes = kTestRewards * working_set(net, 2 * z.h.tpa.batch);
+  t.stream_bytes = stream_bytes(net, 2 * t.M, 2 * z.h.tpa.batch, z.h.tpa.epochs, kTestRewards);
 }
 
 // Converged when every head's loss curve is (the fraction tells how many were); the relative
@@ -223,7 +241,7 @@ void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   const TpaResult res =
       evaluate_tpa(*ctx.representation(rep_key(t.env, t.seed, t.variant, t.N)), ctx.dataset(t.env),
                    ctx.bundle(t.env, t.seed).tpa,
-                   TpaConfig{t.M, t.frozen, ctx.profile().hyper.at(t.env), 1, checkpoint.get()},
+                   TpaConfig{t.M, t.frozen, ctx.profile().hyper.at(t.env), t.threads, checkpoint.get()},
                    task_seed(t.env, t.seed, "tpa"));
   r.num["tpa"] = res.mean;
   r.num["tpa_std"] = res.stddev;

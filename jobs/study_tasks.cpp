@@ -139,8 +139,16 @@ void study_simulated_cost(Task& t, const Profile& p) {
             tpa_flops(z.head_unfrozen, c.simulated_rewards, M, c.hyper.tpa.epochs);
 }
 
+// The study's configuration on the cores the scheduler gave the task (results do not depend on
+// the thread count).
+StudyAnalysisConfig config_for(const Task& t, const Profile& p) {
+  StudyAnalysisConfig c = study_config(p);
+  c.threads = t.threads;
+  return c;
+}
+
 void run_study_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const StudyAnalysisConfig c = study_config(ctx.profile());
+  const StudyAnalysisConfig c = config_for(t, ctx.profile());
   const Dataset& d = ctx.study_dataset();
   const std::vector<int32_t> pooled = study_triplets(ctx.study());
   const Representation phi = t.variant.method == Method::sirl
@@ -155,7 +163,7 @@ void run_study_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
 
 void run_study_heldout(const Task& t, RunContext& ctx, TaskRecord& r) {
   const Representation phi =
-      study_heldout(ctx.study(), ctx.study_dataset(), t.participant, study_config(ctx.profile()));
+      study_heldout(ctx.study(), ctx.study_dataset(), t.participant, config_for(t, ctx.profile()));
   if (phi.params.empty())
     throw std::runtime_error("no other participant answered a similarity query");
   put_representation(phi, r);
@@ -170,7 +178,7 @@ void run_study_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   const ParticipantTpa a = study_participant_tpa(
       *p, ctx.study_dataset(), *ctx.representation(study_rep_key(0, Method::sirl)),
       *ctx.representation(study_rep_key(0, Method::random)),
-      *ctx.representation(heldout_key(t.participant)), study_config(ctx.profile()));
+      *ctx.representation(heldout_key(t.participant)), config_for(t, ctx.profile()));
   r.num["ok"] = a.ok;
   r.num["both_features"] = a.both_features;
   r.num["real_sirl"] = a.real_sirl;
@@ -183,7 +191,7 @@ void run_study_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
 void run_study_simulated(const Task& t, RunContext& ctx, TaskRecord& r) {
   const SimulatedTpa a = study_simulated_tpa(
       ctx.study_dataset(), *ctx.representation(study_rep_key(0, Method::sirl)),
-      *ctx.representation(study_rep_key(0, Method::random)), study_config(ctx.profile()));
+      *ctx.representation(study_rep_key(0, Method::random)), config_for(t, ctx.profile()));
   // Numbers, not float arrays: the accuracies stay exact doubles, as analyze_study returns them.
   auto put = [&](const std::string& name, const std::vector<double>& v) {
     r.num[name + "_count"] = double(v.size());

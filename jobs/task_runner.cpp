@@ -119,6 +119,7 @@ TaskRecord run_task(const Task& t, RunContext& ctx) {
   }
   r.num["seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.num["threads"] = t.threads;  // like seconds, a fact of this run's scheduling, not a result
   return r;
 }
 

@@ -126,13 +126,14 @@ H5Table vae_latents_table(const std::vector<TaskRecord>& records) {
   return t;
 }
 
-// roof_percent: a task's GFLOP/s as a share of one core's fp32 roof (each task runs on one
-// thread); 0 when the roof is unknown (files of engines before 0.3.0).
+// roof_percent: a task's GFLOP/s as a share of the fp32 roof of the cores it ran on (`threads`,
+// 1 unless the scheduler gave it more); 0 when the roof is unknown (engines before 0.3.0).
 H5Table timings_table(const std::vector<TaskRecord>& records, double roof_gflops) {
   H5Table t;
   auto &kind = t.add("kind", C::String), &key = t.add("key", C::String),
        &sec = t.add("seconds", C::Double), &fl = t.add("flops", C::Double),
-       &gf = t.add("gflops", C::Double), &pct = t.add("roof_percent", C::Double);
+       &gf = t.add("gflops", C::Double), &pct = t.add("roof_percent", C::Double),
+       &th = t.add("threads", C::Int);
   for (const auto& r : records) {
     kind.strings.push_back(r.kind);
     key.strings.push_back(r.key);
@@ -140,7 +141,9 @@ H5Table timings_table(const std::vector<TaskRecord>& records, double roof_gflops
     sec.doubles.push_back(s);
     fl.doubles.push_back(f);
     gf.doubles.push_back(s > 0 ? f / s * 1e-9 : 0.0);
-    pct.doubles.push_back(roof_gflops > 0 ? 100 * gf.doubles.back() / roof_gflops : 0.0);
+    const double cores = std::max(1.0, num_or(r, "threads", 1));
+    th.ints.push_back(int64_t(cores));
+    pct.doubles.push_back(roof_gflops > 0 ? 100 * gf.doubles.back() / (roof_gflops * cores) : 0.0);
   }
   return t;
 }

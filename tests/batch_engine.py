@@ -49,7 +49,9 @@ def params(path):
         return {k: f["runs/" + k + "/params"][:] for k in keys if "runs/" + k + "/params" in f}
 
 
-TIMING = {"seconds"}  # the only fields allowed to differ between two runs of one profile
+# The only fields that may differ between two runs of one profile (threads: the cores the
+# scheduler gave a task).
+TIMING = {"seconds", "threads"}
 
 
 def runs_tree(path):
@@ -220,7 +222,7 @@ with tempfile.TemporaryDirectory() as tmp:
             key = key.decode() if isinstance(key, bytes) else key
             if key.startswith("study/"):  # params are dropped from the results file later
                 before[key] = {a: f["r"].attrs[a] for a in f["r"].attrs
-                               if a not in ("seconds", "record_arrays", "record_checksum")}
+                               if a not in ("seconds", "threads", "record_arrays", "record_checksum")}
     assert len(seen) == 200, len(seen)
     assert 0 < len(before) < 13, f"the crash point is not inside the study part: {len(before)} " \
         "of 13 study tasks committed (the smoke plan changed: choose another count)"

@@ -17,8 +17,8 @@ import numpy as np
 SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
 MICRO = os.path.join(SRC, "tests", "data", "micro.toml")
-TIMING = {"seconds", "wall_seconds", "started", "finished", "roof_fp32_gflops_per_core"}
-TIMING_COLUMNS = {"seconds", "gflops", "roof_percent"}
+TIMING = {"seconds", "threads", "wall_seconds", "started", "finished", "roof_fp32_gflops_per_core"}
+TIMING_COLUMNS = {"seconds", "gflops", "roof_percent", "threads"}
 
 
 def run(out, crash_at=None, threads="1", after_commits=None, checkpoints="5"):
