@@ -1,8 +1,8 @@
 // `sirl plan`, `sirl run`, `sirl export`, `sirl merge`: the batch engine's commands.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <algorithm>
 #include <map>
 #include <string>
 #include <thread>
@@ -102,7 +102,8 @@ void register_run(CLI::App& app, Runner& run) {
   cmd->add_option("--task-threads", task_threads,
                   "The most cores one task may use when no other task is ready (the tail of a\n"
                   "run, a lone chain of big trainings); default: all --threads; 1: one core per\n"
-                  "task. Results are the same bits whatever it is")
+                  "task. Under MPI: the cores each worker rank's tasks use (default 1). Results\n"
+                  "are the same bits whatever it is")
       ->check(CLI::Range(1, 4096));
   cmd->add_option("--checkpoint-minutes", checkpoint_minutes,
                   "A training running longer saves its state (weights, Adam, random streams, "
@@ -146,23 +147,28 @@ void print_schedule(const Plan& plan, const PlanEstimate& e, const PlanClusterOp
   } catch (const std::invalid_argument& x) {
     throw UsageError(x.what());
   }
-  std::printf("\nschedule (simulated: the engine's ready queue by upward rank over the calibrated "
-              "task times)\n");
+  std::printf(
+      "\nschedule (simulated: the engine's ready queue by upward rank over the calibrated "
+      "task times)\n");
   if (m.mpi)
-    std::printf("  %d node(s) x %d cores, MPI: rank 0 dispatches and commits, %d worker rank(s) x "
-                "%d thread(s)\n",
-                m.nodes, m.cores_per_node, r.workers, m.threads_per_worker);
+    std::printf(
+        "  %d node(s) x %d cores, MPI: rank 0 dispatches and commits, %d worker rank(s) x "
+        "%d thread(s)\n",
+        m.nodes, m.cores_per_node, r.workers, m.threads_per_worker);
   else
-    std::printf("  1 node x %d cores, threads: a task takes up to %d cores when nothing else is "
-                "ready\n",
-                m.cores_per_node, m.max_task_threads);
-  std::printf("  assumed: speed-up of k cores on one task k/(1 + %.2f(k-1)); main memory %.0f GB/s "
-              "per node; %.0f ms per commit\n",
-              m.serial_fraction, m.node_bandwidth * 1e-9, m.commit_seconds * 1e3);
-  std::printf("  predicted makespan: %s   (cores busy %.0f %% of the time; %s lost to memory "
-              "bandwidth, summed over tasks)\n",
-              format_duration(r.makespan).c_str(), 100 * r.utilisation,
-              format_duration(r.bandwidth_stall).c_str());
+    std::printf(
+        "  1 node x %d cores, threads: a task takes up to %d cores when nothing else is "
+        "ready\n",
+        m.cores_per_node, m.max_task_threads);
+  std::printf(
+      "  assumed: speed-up of k cores on one task k/(1 + %.2f(k-1)); main memory %.0f GB/s "
+      "per node; %.0f ms per commit\n",
+      m.serial_fraction, m.node_bandwidth * 1e-9, m.commit_seconds * 1e3);
+  std::printf(
+      "  predicted makespan: %s (%.0f s)   (cores busy %.0f %% of the time; %s lost to "
+      "memory bandwidth, summed over tasks)\n",
+      format_duration(r.makespan).c_str(), r.makespan, 100 * r.utilisation,
+      format_duration(r.bandwidth_stall).c_str());
   std::printf("  critical path: %zu task(s), %s on one core each:\n", r.critical_path.size(),
               format_duration(r.critical_path_seconds).c_str());
   for (int i : r.critical_path)
@@ -195,7 +201,7 @@ void register_plan(CLI::App& app, Runner& run) {
       ->check(CLI::Range(1, 4096));
   g->add_flag("--mpi", co.mpi, "Simulate `mpirun ... sirl run` (rank 0 dispatches) on one node");
   g->add_option("--threads-per-worker", co.threads_per_worker,
-                "MPI: cores each worker rank's tasks use")
+                "MPI: cores each worker rank's tasks use (sirl run --task-threads under MPI)")
       ->check(CLI::Range(1, 4096))
       ->capture_default_str();
   g->add_option("--task-threads", co.task_threads,

@@ -89,8 +89,7 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
   ClusterModel m;
   m.cores_per_node = std::max(1, threads);
   m.max_task_threads = m.cores_per_node;
-  e.seconds =
-      simulate_schedule(plan, secs, std::vector<char>(plan.tasks.size(), 1), m).makespan;
+  e.seconds = simulate_schedule(plan, secs, std::vector<char>(plan.tasks.size(), 1), m).makespan;
   std::sort(sizes.rbegin(), sizes.rend());
   for (int k = 0; k < threads && k < int(sizes.size()); ++k) e.peak_bytes += sizes[k];
   return e;

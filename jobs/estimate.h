@@ -14,8 +14,8 @@ struct PlanEstimate {
   std::map<std::string, double> gflops_per_s;  // measured rate per "env/kind" on one thread
   std::vector<double> task_seconds;            // each task alone on one core: flops / rate
   double seconds_one_thread = 0;               // Σ task_seconds + commits
-  double seconds = 0;  // the thread scheduler on `threads` cores, simulated (schedule_sim.h)
-  double peak_bytes = 0;                       // datasets + the `threads` largest working sets
+  double seconds = 0;     // the thread scheduler on `threads` cores, simulated (schedule_sim.h)
+  double peak_bytes = 0;  // datasets + the `threads` largest working sets
 };
 
 // Calibrates the rates (about a second of real training) and simulates the thread scheduler

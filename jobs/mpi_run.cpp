@@ -5,6 +5,7 @@
 #define MPICH_SKIP_MPICXX 1
 #include <mpi.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <deque>
 #include <stdexcept>
@@ -120,7 +121,7 @@ std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending
   return ran;
 }
 
-void mpi_work(const Plan& plan, RunContext& ctx) {
+void mpi_work(const Plan& plan, RunContext& ctx, int task_threads) {
   MPI_Send(nullptr, 0, MPI_BYTE, 0, kReady, MPI_COMM_WORLD);
   while (true) {
     MPI_Status st;
@@ -132,7 +133,9 @@ void mpi_work(const Plan& plan, RunContext& ctx) {
     int i = -1;
     MPI_Recv(&i, 1, MPI_INT, 0, kTask, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
     try {
-      send_bytes(serialize(run_task(plan.tasks.at(size_t(i)), ctx)), 0, kResult);
+      Task t = plan.tasks.at(size_t(i));
+      t.threads = std::max(1, task_threads);
+      send_bytes(serialize(run_task(t, ctx)), 0, kResult);
     } catch (const std::exception& e) {
       send_bytes(e.what(), 0, kError);
     }

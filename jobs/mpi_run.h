@@ -29,7 +29,8 @@ void mpi_release_workers();
 // the tasks each rank ran ([size]; rank 0 runs none).
 std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending,
                               const std::function<void(int, const TaskRecord&)>& on_result);
-// Ranks > 0: computes the tasks rank 0 sends until told to stop.
-void mpi_work(const Plan& plan, RunContext& ctx);
+// Ranks > 0: computes the tasks rank 0 sends until told to stop, each on `task_threads` cores
+// (results do not depend on it; give the ranks that many cores each, e.g. mpirun --map-by).
+void mpi_work(const Plan& plan, RunContext& ctx, int task_threads = 1);
 
 }  // namespace sirl

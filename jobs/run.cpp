@@ -113,7 +113,7 @@ RunSummary run_profile(const Profile& p, const RunOptions& o) {
         return read_record(f, "/runs/" + key);
       }
     });
-    mpi_work(plan, ctx);
+    mpi_work(plan, ctx, std::max(1, o.max_task_threads));
     mpi_stop();
     RunSummary s;
     s.worker = true;
@@ -333,10 +333,9 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
                  p.name.c_str(), ps.total, ps.reused, threads,
                  mpi_size > 1 ? "MPI workers" : "threads", o.out.c_str());
   Progress progress(to_run, ps.flops, o.quiet);
-  const std::exception_ptr failure = execute(plan, ps.pending, ctx, store, checkpoints.get(),
-                                             threads,
-                                             o.max_task_threads > 0 ? o.max_task_threads : threads,
-                                             mpi_size, progress, o.quiet);
+  const std::exception_ptr failure =
+      execute(plan, ps.pending, ctx, store, checkpoints.get(), threads,
+              o.max_task_threads > 0 ? o.max_task_threads : threads, mpi_size, progress, o.quiet);
   progress.finish();
 
   // Assemble whatever is finished (a partial file plots with gaps; a rerun completes it).

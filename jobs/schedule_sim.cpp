@@ -42,7 +42,8 @@ void critical_path(const Plan& plan, const std::vector<double>& seconds,
     finish[i] = start + seconds[i];
     if (last < 0 || finish[i] > finish[size_t(last)]) last = int(i);
   }
-  for (int i = last; i >= 0; i = from[size_t(i)]) r.critical_path.insert(r.critical_path.begin(), i);
+  for (int i = last; i >= 0; i = from[size_t(i)])
+    r.critical_path.insert(r.critical_path.begin(), i);
   r.critical_path_seconds = last >= 0 ? finish[size_t(last)] : 0;
 }
 
@@ -54,8 +55,7 @@ ScheduleResult simulate_schedule(const Plan& plan, const std::vector<double>& se
     throw std::invalid_argument("simulate_schedule: one time and one pending flag per task");
   if (m.nodes < 1 || m.cores_per_node < 1)
     throw std::invalid_argument("the cluster needs at least one node with one core");
-  if (!m.mpi && m.nodes > 1)
-    throw std::invalid_argument("more than one node needs MPI (--mpi)");
+  if (!m.mpi && m.nodes > 1) throw std::invalid_argument("more than one node needs MPI (--mpi)");
   ScheduleResult r;
   critical_path(plan, seconds, pending, r);
 
@@ -70,7 +70,8 @@ ScheduleResult simulate_schedule(const Plan& plan, const std::vector<double>& se
       for (int w = 0; w < cores / width; ++w) node_of.push_back(node);
     }
     if (node_of.empty())
-      throw std::invalid_argument("no core is left for a worker rank beside rank 0 (the dispatcher)");
+      throw std::invalid_argument(
+          "no core is left for a worker rank beside rank 0 (the dispatcher)");
   }
   const int task_cores = m.mpi ? int(node_of.size()) * width : m.cores_per_node;
   r.workers = m.mpi ? int(node_of.size()) : m.cores_per_node;
@@ -101,7 +102,8 @@ ScheduleResult simulate_schedule(const Plan& plan, const std::vector<double>& se
     } else {
       while (free_cores > 0 && !queue.empty()) {
         const int i = queue.pop();
-        const int k = task_threads(plan.tasks[size_t(i)], free_cores, queue.size(), m.max_task_threads);
+        const int k =
+            task_threads(plan.tasks[size_t(i)], free_cores, queue.size(), m.max_task_threads);
         free_cores -= k;
         start(i, -1, 0, k);
       }

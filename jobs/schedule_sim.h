@@ -23,18 +23,18 @@ struct ClusterModel {
   int max_task_threads = 1;    // threads only: the most cores one task takes
   // Speed-up of one task on k cores: k / (1 + serial_fraction · (k − 1)) (Amdahl).
   double serial_fraction = 0.25;
-  double commit_seconds = 0.002;   // per task: in the worker (threads), on rank 0 (MPI)
-  double node_bandwidth = 0;       // bytes/s of main memory per node; 0: not a limit
+  double commit_seconds = 0.002;  // per task: in the worker (threads), on rank 0 (MPI)
+  double node_bandwidth = 0;      // bytes/s of main memory per node; 0: not a limit
 };
 
 struct ScheduleResult {
-  double makespan = 0;          // seconds from the first task's start to the last commit
-  double core_seconds = 0;      // Σ over tasks of (cores held × seconds held)
-  double utilisation = 0;       // core_seconds / (makespan × cores that run tasks)
-  double bandwidth_stall = 0;   // seconds lost to the bandwidth limit, summed over tasks
+  double makespan = 0;             // seconds from the first task's start to the last commit
+  double core_seconds = 0;         // Σ over tasks of (cores held × seconds held)
+  double utilisation = 0;          // core_seconds / (makespan × cores that run tasks)
+  double bandwidth_stall = 0;      // seconds lost to the bandwidth limit, summed over tasks
   std::vector<int> critical_path;  // the longest chain of estimated task times, first to last
   double critical_path_seconds = 0;
-  int workers = 0;              // task slots: cores (threads) or worker ranks (MPI)
+  int workers = 0;  // task slots: cores (threads) or worker ranks (MPI)
 };
 
 // seconds[i]: task i alone on one core. Pending tasks only (a dependency not pending is done).

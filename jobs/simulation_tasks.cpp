@@ -64,7 +64,8 @@ double working_set(const MlpShape& s, int batch_rows) {
 // weights twice (forward, backward), writes and reads the gradient, reads and writes Adam's m and
 // v and the weights: 9 floats = 36 bytes per parameter per step. `models` trains side by side.
 constexpr double kCacheShare = 5.0 * 1024 * 1024;
-double stream_bytes(const MlpShape& s, int64_t rows_per_epoch, int batch, int epochs, int models = 1) {
+double stream_bytes(const MlpShape& s, int64_t rows_per_epoch, int batch, int epochs,
+                    int models = 1) {
   const double state = 16.0 * double(s.param_count()) * models;
   if (state <= kCacheShare) return 0;
   const double steps = double(epochs) * double((rows_per_epoch + batch - 1) / std::max(1, batch));
@@ -137,9 +138,8 @@ void vae_cost(Task& t, const Profile& p) {
             vs.encoder.forward_flops(int(z.trajectories)) +
             vs.decoder.forward_flops(int(z.trajectories));
   t.bytes = working_set(vs.encoder, z.h.vae.batch) + working_set(vs.decoder, z.h.vae.batch);
-  t.stream_bytes =
-      stream_bytes(vs.encoder, z.trajectories, z.h.vae.batch, z.h.vae.epochs) +
-      stream_bytes(vs.decoder, z.trajectories, z.h.vae.batch, z.h.vae.epochs);
+  t.stream_bytes = stream_bytes(vs.encoder, z.trajectories, z.h.vae.batch, z.h.vae.epochs) +
+                   stream_bytes(vs.decoder, z.trajectories, z.h.vae.batch, z.h.vae.epochs);
 }
 
 void run_vae(const Task& t, RunContext& ctx, TaskRecord& r) {
@@ -238,11 +238,11 @@ void record_heads_convergence(const TpaResult& res, TaskRecord& r) {
 
 void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   const auto checkpoint = ctx.checkpointer(t.key);
-  const TpaResult res =
-      evaluate_tpa(*ctx.representation(rep_key(t.env, t.seed, t.variant, t.N)), ctx.dataset(t.env),
-                   ctx.bundle(t.env, t.seed).tpa,
-                   TpaConfig{t.M, t.frozen, ctx.profile().hyper.at(t.env), t.threads, checkpoint.get()},
-                   task_seed(t.env, t.seed, "tpa"));
+  const TpaResult res = evaluate_tpa(
+      *ctx.representation(rep_key(t.env, t.seed, t.variant, t.N)), ctx.dataset(t.env),
+      ctx.bundle(t.env, t.seed).tpa,
+      TpaConfig{t.M, t.frozen, ctx.profile().hyper.at(t.env), t.threads, checkpoint.get()},
+      task_seed(t.env, t.seed, "tpa"));
   r.num["tpa"] = res.mean;
   r.num["tpa_std"] = res.stddev;
   r.num["flops"] = res.train_flops;

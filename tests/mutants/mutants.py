@@ -139,6 +139,20 @@ MUTANTS = [
     ("app/study_service.cpp",
      "      p.similarity_answer.pop_back(), p.similarity_ms.pop_back(), p.similarity_time.pop_back();",
      "", "StudyRequests.*", "an answer whose save failed is kept"),
+    # jobs/ — cores per task, the schedule simulator; results/ — the report's statistics
+    ("jobs/scheduler.cpp", "  if (ready_after > 0 || t.flops < kThreadedTaskFlops) return 1;",
+     "  if (t.flops < kThreadedTaskFlops) return 1;", "TaskThreads.*",
+     "a task takes every free core although others are waiting"),
+    ("jobs/schedule_sim.cpp", "    commit_done = now + m.commit_seconds;", "    commit_done = now;",
+     "ScheduleSim.*", "rank 0's commits cost nothing"),
+    ("jobs/schedule_sim.cpp", "        rate[k] = m.node_bandwidth / D;", "        rate[k] = 1;",
+     "ScheduleSim.*", "memory bandwidth never limits"),
+    ("results/claims.py", "        running = max(running, min(1.0, (m - rank) * ps[i]))",
+     "        running = max(running, min(1.0, ps[i]))", "ctest:claims_stats",
+     "Holm's correction dropped"),
+    ("results/claims.py", "    z = rng.standard_normal((POWER_DRAWS, m)) + dz * math.sqrt(n)",
+     "    z = rng.standard_normal((POWER_DRAWS, m)) + dz * n", "ctest:claims_stats",
+     "power's noncentrality d_z·n instead of d_z·√n"),
 ]
 
 # Mutations the suite cannot catch because they do not change behaviour (none so far).
