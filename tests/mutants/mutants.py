@@ -100,7 +100,7 @@ MUTANTS = [
      "dependencies not waited for"),
     ("jobs/scheduler.cpp", "    rank[i] = plan.tasks[i].flops + best_child[i];",
      "    rank[i] = plan.tasks[i].flops;", "ReadyQueue.*", "rank ignores the chain below"),
-    ("jobs/scheduler.cpp", "      stop = true;", "", "Scheduler.*", "stop flag deleted"),
+    ("jobs/scheduler.cpp", "          stop = failed = true;", "          failed = true;", "Scheduler.*", "stop flag deleted"),
     ("jobs/profile.cpp", "  return {v.method == Method::sirl};", "  return {true};", "Plan.*",
      "frozen = best freezes every method"),
     ("jobs/simulation_tasks.cpp", "    t.flops = train_flops(z.phi, 3 * t.N, z.h.sirl.epochs);",
