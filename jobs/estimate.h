@@ -12,8 +12,9 @@ namespace sirl {
 
 struct PlanEstimate {
   std::map<std::string, double> gflops_per_s;  // measured rate per "env/kind" on one thread
-  std::vector<double> task_seconds;            // each task alone on one core: flops / rate
-  double seconds_one_thread = 0;               // Σ task_seconds + commits
+  std::map<std::string, double> call_seconds;  // what one call costs beyond its FLOPs, per kind
+  std::vector<double> task_seconds;  // each task alone on one core: flops / rate + call cost
+  double seconds_one_thread = 0;     // Σ task_seconds + commits
   double seconds = 0;     // the thread scheduler on `threads` cores, simulated (schedule_sim.h)
   double peak_bytes = 0;  // datasets + the `threads` largest working sets
 };

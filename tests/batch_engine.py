@@ -96,6 +96,14 @@ with tempfile.TemporaryDirectory() as tmp:
     ref = tables(one)
     same(ref, tables(two), "--threads 1 and --threads 2 give identical tables")
     same_runs(one, two, "--threads 1 and --threads 2 give identical files")
+    # The 2-thread run's tail gives big tasks both cores (the scheduler's cores-per-task rule): the
+    # equality above covers those tasks only if some did run on 2 cores, and none on more.
+    with h5py.File(two, "r") as f:
+        width = pd.DataFrame(f["tables/timings"][:])["threads"]
+    with h5py.File(one, "r") as f:
+        assert (pd.DataFrame(f["tables/timings"][:])["threads"] == 1).all(), "1 thread, wider tasks"
+    assert (width == 2).sum() >= 1 and width.max() == 2, width.value_counts()
+    print(f"ok: {(width == 2).sum()} of {len(width)} tasks of the 2-thread run ran on 2 cores")
     p1 = params(one)
     with h5py.File(one, "r") as f:
         keys = [k.decode() for k in f["runs_index"][:]]

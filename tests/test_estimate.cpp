@@ -25,10 +25,12 @@ TEST(Estimate, AddsEachTasksFlopsOverItsKindsRate) {
     if (t.kind == TaskKind::tpa) kind = t.frozen ? "tpa_frozen" : "tpa_unfrozen";
     const auto it = e.gflops_per_s.find(t.env + "/" + kind);
     const double rate = it == e.gflops_per_s.end() ? 1e9 : std::max(it->second, 1e-3) * 1e9;
-    total += t.flops / rate + 0.002;
+    const auto once = e.call_seconds.find(t.env + "/" + kind);
+    total += t.flops / rate + (once == e.call_seconds.end() ? 0.0 : once->second) + 0.002;
   }
   for (const char* k : {"grid/rep_sirl", "grid/rep_pref", "grid/vae", "grid/tpa_frozen"})
     EXPECT_GT(e.gflops_per_s.at(k), 0.01) << k;  // measured, not the default
+  for (const auto& [k, c] : e.call_seconds) EXPECT_GE(c, 0) << k;
   EXPECT_NEAR(e.seconds_one_thread, total, 1e-9 * total);
   EXPECT_GE(e.seconds, total / 2 - 1e-9);
   EXPECT_LE(e.seconds, total + 1e-9);
