@@ -96,14 +96,28 @@ with tempfile.TemporaryDirectory() as tmp:
     ref = tables(one)
     same(ref, tables(two), "--threads 1 and --threads 2 give identical tables")
     same_runs(one, two, "--threads 1 and --threads 2 give identical files")
-    # The 2-thread run's tail gives big tasks both cores (the scheduler's cores-per-task rule): the
-    # equality above covers those tasks only if some did run on 2 cores, and none on more.
-    with h5py.File(two, "r") as f:
-        width = pd.DataFrame(f["tables/timings"][:])["threads"]
-    with h5py.File(one, "r") as f:
-        assert (pd.DataFrame(f["tables/timings"][:])["threads"] == 1).all(), "1 thread, wider tasks"
-    assert (width == 2).sum() >= 1 and width.max() == 2, width.value_counts()
-    print(f"ok: {(width == 2).sum()} of {len(width)} tasks of the 2-thread run ran on 2 cores")
+    # A task alone in the ready queue takes both cores (≥ 5 GFLOP: φ here, 7 GFLOP, which FPE and
+    # TPA wait for): the same bits as on one core, and the timings say it ran on 2.
+    wide = os.path.join(tmp, "wide.toml")
+    with open(wide, "w") as f:
+        f.write('name = "wide"\ndescription = "one big task alone"\nenvs = ["grid"]\nseeds = [0]\n'
+                '[queries]\nsimilarity = 200\npreference = 200\ntpa_pairs = 30\nfpe_trajectories = 200\n'
+                '[fpe]\nmethods = ["sirl"]\nN = [200]\n[tpa]\nmethods = ["sirl"]\nN = [200]\nM = [10]\n'
+                'frozen = "best"\n[hyper.grid]\n"sirl.epochs" = 100\n"tpa.epochs" = 5\n')
+    w1, w2 = os.path.join(tmp, "wide1.h5"), os.path.join(tmp, "wide2.h5")
+    run("run", wide, "--out", w1, "--threads", "1", "--quiet")
+    run("run", wide, "--out", w2, "--threads", "2", "--quiet")
+    same(tables(w1), tables(w2), "a task on 2 cores gives the tables it gives on 1")
+    same_runs(w1, w2, "a task on 2 cores gives the file it gives on 1")
+    widths = {}
+    for path in (w1, w2):
+        with h5py.File(path, "r") as f:
+            t = pd.DataFrame(f["tables/timings"][:])
+        widths[path] = dict(zip(t.key.str.decode("utf-8"), t.threads))
+    assert set(widths[w1].values()) == {1}, widths[w1]
+    assert widths[w2]["grid/s0/sirl/N200/rep"] == 2, widths[w2]
+    assert max(widths[w2].values()) == 2, widths[w2]
+    print(f"ok: on 2 threads the lone φ ran on 2 cores ({widths[w2]})")
     p1 = params(one)
     with h5py.File(one, "r") as f:
         keys = [k.decode() for k in f["runs_index"][:]]
