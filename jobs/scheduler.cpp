@@ -24,7 +24,7 @@ std::vector<double> upward_rank(const Plan& plan) {
 }
 
 int task_threads(const Task& t, int free_cores, size_t ready_after, int max_task_threads) {
-  if (ready_after > 0 || t.flops < kThreadedTaskFlops) return 1;
+  if (ready_after > 0 || t.flops < kThreadedTaskFlops || t.bytes < kThreadedTaskBytes) return 1;
   return std::clamp(free_cores, 1, std::max(1, max_task_threads));
 }
 

@@ -96,14 +96,14 @@ with tempfile.TemporaryDirectory() as tmp:
     ref = tables(one)
     same(ref, tables(two), "--threads 1 and --threads 2 give identical tables")
     same_runs(one, two, "--threads 1 and --threads 2 give identical files")
-    # A task alone in the ready queue takes both cores (≥ 5 GFLOP: φ here, 7 GFLOP, which FPE and
-    # TPA wait for): the same bits as on one core, and the timings say it ran on 2.
+    # A big task alone in the ready queue takes both cores (here a frozen TPA cell of 17 GFLOP
+    # and 10 MiB, which waits for its φ): the same bits as on one core, and the timings say so.
     wide = os.path.join(tmp, "wide.toml")
     with open(wide, "w") as f:
         f.write('name = "wide"\ndescription = "one big task alone"\nenvs = ["grid"]\nseeds = [0]\n'
-                '[queries]\nsimilarity = 200\npreference = 200\ntpa_pairs = 30\nfpe_trajectories = 200\n'
-                '[fpe]\nmethods = ["sirl"]\nN = [200]\n[tpa]\nmethods = ["sirl"]\nN = [200]\nM = [10]\n'
-                'frozen = "best"\n[hyper.grid]\n"sirl.epochs" = 100\n"tpa.epochs" = 5\n')
+                '[queries]\nsimilarity = 200\npreference = 200\ntpa_pairs = 60\nfpe_trajectories = 200\n'
+                '[tpa]\nmethods = ["sirl"]\nN = [200]\nM = [40]\nfrozen = "best"\n'
+                '[hyper.grid]\n"sirl.epochs" = 5\n"tpa.epochs" = 100\n')
     w1, w2 = os.path.join(tmp, "wide1.h5"), os.path.join(tmp, "wide2.h5")
     run("run", wide, "--out", w1, "--threads", "1", "--quiet")
     run("run", wide, "--out", w2, "--threads", "2", "--quiet")
@@ -115,9 +115,9 @@ with tempfile.TemporaryDirectory() as tmp:
             t = pd.DataFrame(f["tables/timings"][:])
         widths[path] = dict(zip(t.key.str.decode("utf-8"), t.threads))
     assert set(widths[w1].values()) == {1}, widths[w1]
-    assert widths[w2]["grid/s0/sirl/N200/rep"] == 2, widths[w2]
-    assert max(widths[w2].values()) == 2, widths[w2]
-    print(f"ok: on 2 threads the lone φ ran on 2 cores ({widths[w2]})")
+    assert widths[w2]["grid/s0/sirl/N200/tpa/M40/frozen"] == 2, widths[w2]
+    assert widths[w2]["grid/s0/sirl/N200/rep"] == 1, widths[w2]  # small steps: one core
+    print(f"ok: on 2 threads the lone TPA cell ran on 2 cores ({widths[w2]})")
     p1 = params(one)
     with h5py.File(one, "r") as f:
         keys = [k.decode() for k in f["runs_index"][:]]

@@ -22,6 +22,7 @@ Plan plan_of(const std::vector<double>& seconds, const std::vector<std::vector<i
     Task t;
     t.key = "t" + std::to_string(i);
     t.flops = seconds[i] * 1e10;
+    t.bytes = 2 * kThreadedTaskBytes;  // big steps: worth threads when alone
     t.deps = deps[i];
     p.index[t.key] = int(i);
     p.tasks.push_back(t);
@@ -133,13 +134,16 @@ TEST(ScheduleSim, RefusesImpossibleClusters) {
 }
 
 TEST(TaskThreads, ExtraCoresOnlyWhenNothingElseIsReadyAndTheTaskIsBig) {
-  Task big, small;
-  big.flops = 2 * kThreadedTaskFlops;
+  Task big, small, narrow;
+  big.flops = narrow.flops = 2 * kThreadedTaskFlops;
+  big.bytes = small.bytes = 2 * kThreadedTaskBytes;
   small.flops = kThreadedTaskFlops / 2;
+  narrow.bytes = kThreadedTaskBytes / 2;  // much work in small steps (GridRobot's φ)
   EXPECT_EQ(task_threads(big, 2, 0, 8), 2);
   EXPECT_EQ(task_threads(big, 6, 0, 4), 4);  // capped
   EXPECT_EQ(task_threads(big, 2, 1, 8), 1);  // another task is waiting
   EXPECT_EQ(task_threads(small, 2, 0, 8), 1);
+  EXPECT_EQ(task_threads(narrow, 2, 0, 8), 1);
 }
 
 TEST(TaskThreads, TheSchedulerGivesALoneTaskTheFreeCoresAndNeverOversubscribes) {

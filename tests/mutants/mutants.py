@@ -140,8 +140,9 @@ MUTANTS = [
      "      p.similarity_answer.pop_back(), p.similarity_ms.pop_back(), p.similarity_time.pop_back();",
      "", "StudyRequests.*", "an answer whose save failed is kept"),
     # jobs/ — cores per task, the schedule simulator; results/ — the report's statistics
-    ("jobs/scheduler.cpp", "  if (ready_after > 0 || t.flops < kThreadedTaskFlops) return 1;",
-     "  if (t.flops < kThreadedTaskFlops) return 1;", "TaskThreads.*",
+    ("jobs/scheduler.cpp",
+     "  if (ready_after > 0 || t.flops < kThreadedTaskFlops || t.bytes < kThreadedTaskBytes) return 1;",
+     "  if (t.flops < kThreadedTaskFlops || t.bytes < kThreadedTaskBytes) return 1;", "TaskThreads.*",
      "a task takes every free core although others are waiting"),
     ("jobs/schedule_sim.cpp", "    commit_done = now + m.commit_seconds;", "    commit_done = now;",
      "ScheduleSim.*", "rank 0's commits cost nothing"),
