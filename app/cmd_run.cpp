@@ -248,8 +248,9 @@ void register_plan(CLI::App& app, Runner& run) {
     std::fflush(stdout);
     std::fprintf(stderr, "calibrating on this machine...\n");
     const PlanEstimate e = estimate_plan(plan, p, th);
-    std::printf("\nmeasured single-thread rates:");
-    for (const auto& [k, r] : e.gflops_per_s) std::printf("  %s %.1f GFLOP/s", k.c_str(), r);
+    std::printf("\nmeasured single-thread rates (+ the fixed cost of one call):");
+    for (const auto& [k, r] : e.gflops_per_s)
+      std::printf("  %s %.1f GFLOP/s + %.0f ms", k.c_str(), r, 1e3 * e.call_seconds.at(k));
     std::printf("\nmemory estimate: %.1f MiB\n", e.peak_bytes / (1024.0 * 1024.0));
     PlanClusterOptions here = co;
     if (!cluster) here.cores_per_node = th;

@@ -5,6 +5,7 @@
 #include <functional>
 
 #include "datasets/environments.h"
+#include "engine/fpe.h"
 #include "engine/methods.h"
 #include "engine/tpa.h"
 #include "jobs/schedule_sim.h"
@@ -70,6 +71,14 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
           .train_flops;
     });
     rate("vae", [&](const Hyper& x) { return train_vae(d, x, 1).train_flops; });
+    {  // FPE: φ over the probe's rows, once (no epochs); its fixed part is in the rate
+      const auto t0 = std::chrono::steady_clock::now();
+      evaluate_fpe(phi, d, b.fpe);
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const double f = phi.shape.forward_flops(int(b.fpe.train.size() + b.fpe.test.size()));
+      e.gflops_per_s[env + "/fpe"] = s > 0 ? f / s * 1e-9 : 1;
+      e.call_seconds[env + "/fpe"] = 0;
+    }
     const int64_t M = std::min<int64_t>(100, b.tpa[0].train);
     rate("tpa_frozen", [&](const Hyper& x) {
       return evaluate_tpa(phi, d, b.tpa, TpaConfig{M, true, x}, 1).train_flops;

@@ -205,7 +205,9 @@ void run_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
                                    ctx.dataset(t.env), ctx.bundle(t.env, t.seed).fpe);
   r.num["fpe"] = f.fpe;
   r.num["train_mse"] = f.train_mse;
-  r.num["flops"] = 0;
+  const FpeSplit& split = ctx.bundle(t.env, t.seed).fpe;  // φ over its rows; the probe is tiny
+  r.num["flops"] = ctx.representation(rep_key(t.env, t.seed, t.variant, t.N))
+                       ->shape.forward_flops(int(split.train.size() + split.test.size()));
 }
 
 // ---- tpa ----
