@@ -181,7 +181,7 @@ void register_plan(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "plan",
       "Show what a profile will run — tasks per kind, FLOPs, memory — and predict its wall time\n"
-      "by simulating the engine's scheduler over task times calibrated on this machine (~1 s of\n"
+      "by simulating the engine's scheduler over task times calibrated on this machine (20-40 s of\n"
       "real training), without running it. With --nodes/--mpi: the same for a cluster of this\n"
       "CPU (MPI ranks pulling tasks from rank 0), with its critical path.");
   static std::string profile;

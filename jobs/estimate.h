@@ -1,5 +1,5 @@
 // `sirl plan`: what a profile will cost on this machine, without running it. Rates come from a
-// short calibration run of the real training code for each task kind (about a second).
+// short calibration run of the real training code for each task kind (20-40 s: two lengths each).
 #pragma once
 #include <map>
 #include <string>
@@ -19,7 +19,7 @@ struct PlanEstimate {
   double peak_bytes = 0;  // datasets + the `threads` largest working sets
 };
 
-// Calibrates the rates (about a second of real training) and simulates the thread scheduler
+// Calibrates the rates (20-40 s of real training) and simulates the thread scheduler
 // on `threads` cores (tasks take several cores when nothing else is ready, as `sirl run` does).
 PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads);
 
