@@ -46,6 +46,10 @@ void run_dag(const Plan& plan, const std::vector<char>& pending, int threads, in
       const int k = task_threads(plan.tasks[size_t(i)], free_cores, queue.size(), max_task_threads);
       free_cores -= k;
       group.run([&, i, k] {
+        // Take the lock the dispatcher held while starting this task: it orders everything the
+        // starting thread wrote before this task's reads (oneTBB's own hand-off does too, but
+        // inside uninstrumented libtbb, where ThreadSanitizer cannot see it).
+        { std::lock_guard start(mu); }
         bool failed = false;
         try {
           work(i, k);
