@@ -1,7 +1,6 @@
 #include "jobs/schedule_sim.h"
 
 #include <algorithm>
-#include <cmath>
 #include <deque>
 #include <limits>
 #include <stdexcept>

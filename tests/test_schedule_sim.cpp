@@ -109,13 +109,17 @@ TEST(ScheduleSim, StreamingTasksShareTheirNodesBandwidth) {
   EXPECT_DOUBLE_EQ(r.bandwidth_stall, 2);  // each lost 1 s
   m.node_bandwidth = 0;                    // no limit
   EXPECT_DOUBLE_EQ(sim(p, s, m).makespan, 1);
-  // On two nodes (MPI, 2 cores each: 1 worker on node 0, 2 on node 1) the streaming pair is
-  // split across nodes only if the dispatcher happens to; the simulated makespan stays ≥ 1.
+  // On two nodes (MPI, 2 cores each: worker 0 on node 0 beside rank 0, workers 1 and 2 on node
+  // 1) the equal-rank tasks go out in index order: t0 to node 0, t1 and t2 to node 1. Each node
+  // then has one streaming task, within its bandwidth: nobody slows down.
   m.node_bandwidth = 10e9;
   m.mpi = true;
   m.nodes = 2;
   m.cores_per_node = 2;
-  EXPECT_GE(sim(p, s, m).makespan, 1);
+  const ScheduleResult split = sim(p, s, m);
+  EXPECT_EQ(split.workers, 3);
+  EXPECT_DOUBLE_EQ(split.makespan, 1);
+  EXPECT_DOUBLE_EQ(split.bandwidth_stall, 0);
 }
 
 TEST(ScheduleSim, RefusesImpossibleClusters) {
