@@ -69,7 +69,8 @@ void check_attempts(int64_t attempts, int64_t n, const char* what) {
 }
 }  // namespace
 
-TripletSet sample_similarity_queries(const Dataset& d, int64_t N, const Teacher& t, Rng& rng) {
+TripletSet sample_similarity_queries(const Dataset& d, int64_t N, const Teacher& t, Rng& rng,
+                                     Rng* answers) {
   check_sample_size(d, N, 3, "similarity queries");
   validate(t, d.feature_count());
   TripletSet s;
@@ -84,7 +85,7 @@ TripletSet sample_similarity_queries(const Dataset& d, int64_t N, const Teacher&
     do q[2] = int32_t(rng.uniform_int(d.count));
     while (q[2] == q[0] || q[2] == q[1]);
     const auto a = answer_similarity(t, d.feature(q[0]), d.feature(q[1]), d.feature(q[2]),
-                                     d.feature_count(), rng);
+                                     d.feature_count(), answers ? *answers : rng);
     if (!a) {
       ++s.skipped;
       continue;
@@ -97,7 +98,7 @@ TripletSet sample_similarity_queries(const Dataset& d, int64_t N, const Teacher&
 
 namespace {
 void append_pairs(const Dataset& d, int64_t n, const RewardSet& r, int row, const Teacher& t,
-                  Rng& rng, PreferenceSet& s) {
+                  Rng& rng, Rng& answers, PreferenceSet& s) {
   int64_t done = 0, attempts = 0;
   while (done < n) {
     check_attempts(++attempts, n, "preference queries");
@@ -106,7 +107,7 @@ void append_pairs(const Dataset& d, int64_t n, const RewardSet& r, int row, cons
     do b = int32_t(rng.uniform_int(d.count));
     while (b == a);
     const auto l = answer_preference(t, r.weights.data() + size_t(row) * r.dim, d.feature(a),
-                                     d.feature(b), d.feature_count(), rng);
+                                     d.feature(b), d.feature_count(), answers);
     if (!l) {
       ++s.skipped;
       continue;
@@ -121,7 +122,7 @@ void append_pairs(const Dataset& d, int64_t n, const RewardSet& r, int row, cons
 }  // namespace
 
 PreferenceSet sample_preference_queries(const Dataset& d, int64_t N, const RewardSet& r,
-                                        const Teacher& t, Rng& rng) {
+                                        const Teacher& t, Rng& rng, Rng* answers) {
   check_sample_size(d, N, 2, "preference queries");
   validate(t, d.feature_count());
   if (r.dim != d.feature_count())
@@ -130,7 +131,8 @@ PreferenceSet sample_preference_queries(const Dataset& d, int64_t N, const Rewar
                                 " features");
   PreferenceSet s;
   const int K = r.count;
-  for (int k = 0; k < K; ++k) append_pairs(d, N / K + (k < N % K ? 1 : 0), r, k, t, rng, s);
+  for (int k = 0; k < K; ++k)
+    append_pairs(d, N / K + (k < N % K ? 1 : 0), r, k, t, rng, answers ? *answers : rng, s);
   return s;
 }
 
@@ -176,13 +178,15 @@ PreferenceSet take_per_human(const PreferenceSet& s, int64_t N, int K) {
 }
 
 TpaSet sample_tpa_set(const Dataset& d, int64_t total, const RewardSet& r, int row,
-                      const Teacher& t, Rng& rng, double train_fraction) {
+                      const Teacher& t, Rng& rng, double train_fraction, Rng* answers) {
   check_sample_size(d, total, 2, "TPA pairs");
   validate(t, d.feature_count());
   if (row < 0 || row >= r.count) throw std::invalid_argument("TPA reward row out of range");
   TpaSet s;
-  append_pairs(d, total, r, row, t, rng, s.pairs);
-  s.train = int64_t(std::llround(train_fraction * double(total)));  // tpa_train_count at 0.8
+  s.train = std::min<int64_t>(total, std::llround(train_fraction * double(total)));
+  append_pairs(d, s.train, r, row, t, rng, answers ? *answers : rng, s.pairs);
+  const Teacher truth;  // the held-out pairs: the true reward's labels (draws nothing)
+  append_pairs(d, total - s.train, r, row, truth, rng, rng, s.pairs);
   return s;
 }
 

@@ -45,7 +45,11 @@ struct TripletSet {
   std::vector<int32_t> idx;
   int64_t count = 0, skipped = 0;  // skipped: queries the teacher withheld (re-drawn)
 };
-TripletSet sample_similarity_queries(const Dataset& d, int64_t N, const Teacher& t, Rng& rng);
+// `rng` draws the queries; the teacher's own randomness (noise) draws from `answers`, or from
+// `rng` when it is null. With a separate answer stream, teachers that differ only in their
+// noise are asked the very same queries (a paired comparison); a perfect teacher draws nothing.
+TripletSet sample_similarity_queries(const Dataset& d, int64_t N, const Teacher& t, Rng& rng,
+                                     Rng* answers = nullptr);
 
 // N preference pairs [N, 2] (A, B) with labels [N] (1 = A preferred, 0.5 = equal) and the human
 // (row of `rewards`) who answered each. The N queries are split evenly over the K humans:
@@ -57,7 +61,7 @@ struct PreferenceSet {
   int64_t count = 0, skipped = 0;
 };
 PreferenceSet sample_preference_queries(const Dataset& d, int64_t N, const RewardSet& rewards,
-                                        const Teacher& t, Rng& rng);
+                                        const Teacher& t, Rng& rng, Rng* answers = nullptr);
 
 // The first N triplets of a set (a method trained with N queries uses these, so the query sets
 // of smaller N are nested in larger ones). Throws std::invalid_argument if N > s.count.
@@ -67,13 +71,16 @@ TripletSet first_triplets(const TripletSet& s, int64_t N);
 PreferenceSet take_per_human(const PreferenceSet& s, int64_t N, int K);
 
 // One reward's labelled pairs for TPA: the first `train` rows train the head (M ≤ train), the
-// rest are held out (80/20 by default).
+// rest are held out (80/20 by default). The teacher answers the training pairs; the held-out
+// pairs are labelled by the true reward (a perfect oracle on every feature), so accuracy is
+// always measured against the truth.
 struct TpaSet {
   PreferenceSet pairs;
   int64_t train = 0;
 };
 TpaSet sample_tpa_set(const Dataset& d, int64_t total, const RewardSet& rewards, int reward_row,
-                      const Teacher& t, Rng& rng, double train_fraction = kTrainFraction);
+                      const Teacher& t, Rng& rng, double train_fraction = kTrainFraction,
+                      Rng* answers = nullptr);
 
 // FPE's labelled trajectories: `total` distinct rows of Ξ, shuffled; the first 80 % train the
 // probe.

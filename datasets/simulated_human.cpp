@@ -8,7 +8,8 @@
 namespace sirl {
 
 void validate(const Teacher& t, int F) {
-  if (!(t.beta > 0)) throw std::invalid_argument("teacher beta must be > 0 (inf = perfect oracle)");
+  if (!(t.beta >= 0))
+    throw std::invalid_argument("teacher beta must be >= 0 (inf = perfect oracle, 0 = random)");
   if (!(t.mistake >= 0 && t.mistake <= 1))
     throw std::invalid_argument("teacher mistake probability must be in [0, 1]");
   if (!(t.skip >= 0) || !(t.equal >= 0))

@@ -3,7 +3,8 @@
 //
 // A Teacher carries the B-Pref benchmark's noise models (Lee et al. 2021), applied to both
 // query kinds:
-//   beta       Boltzmann rationality; +inf = the paper's perfect oracle.
+//   beta       Boltzmann rationality; +inf = the paper's perfect oracle, 0 = answers uniformly
+//              at random.
 //              similarity: P(pair k are the positives) ∝ exp(−β·d_k), d_k = ‖φ*_i − φ*_j‖²
 //              preference: P(A ≻ B) = σ(β·(R_A − R_B)), R = w·φ*
 //   mistake    probability ε of flipping the answer (similarity: another pair, uniformly)
@@ -35,7 +36,7 @@ struct Teacher {
   }
 };
 
-// Throws std::invalid_argument for β ≤ 0, ε ∉ [0, 1], negative thresholds, or a mask whose
+// Throws std::invalid_argument for β < 0, ε ∉ [0, 1], negative thresholds, or a mask whose
 // length is not F or that hides every feature.
 void validate(const Teacher& t, int feature_count);
 

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "engine/representation.h"
 #include "jobs/simulation_tasks.h"
 #include "jobs/study_tasks.h"
 #include "jobs/task_kinds.h"
@@ -37,6 +38,38 @@ void add_tpa_cell(Plan& plan, const Profile& p, const std::string& env, int64_t 
   (ablation ? added.in_ablation : added.in_main) = true;
 }
 
+// [robustness]: every noisy teacher's cells, and the main teacher's cells of the same sizes
+// (each axis's reference point; a cell the main grid has already is that task).
+void add_robustness_cells(Plan& plan, const Profile& p, const std::string& env, int64_t seed) {
+  const RobustnessGrid& g = p.robustness;
+  if (g.teachers.empty()) return;
+  TpaGrid frozen_rule;
+  frozen_rule.frozen = g.frozen;
+  for (const Variant& v : g.methods)
+    for (int64_t N : g.N) {
+      if (uses_queries(v.method))
+        add_task(plan, p, experiment_cell(TaskKind::fpe, env, seed, v, N));
+      for (int64_t M : g.M)
+        for (bool fr : frozen_settings(frozen_rule, v)) {
+          Task t = experiment_cell(TaskKind::tpa, env, seed, v, N);
+          t.M = M;
+          t.frozen = fr;
+          add_task(plan, p, std::move(t));
+        }
+      for (const TeacherPoint& tp : g.teachers) {
+        if (uses_queries(v.method))
+          add_task(plan, p, experiment_cell(TaskKind::robust_fpe, env, seed, v, N, tp.tag));
+        for (int64_t M : g.M)
+          for (bool fr : frozen_settings(frozen_rule, v)) {
+            Task t = experiment_cell(TaskKind::robust_tpa, env, seed, v, N, tp.tag);
+            t.M = M;
+            t.frozen = fr;
+            add_task(plan, p, std::move(t));
+          }
+      }
+    }
+}
+
 }  // namespace
 
 Plan make_plan(const Profile& p) {
@@ -60,6 +93,7 @@ Plan make_plan(const Profile& p) {
             for (int64_t M : axes.ablation_M)
               for (bool fr : {true, false}) add_tpa_cell(plan, p, env, seed, v, N, M, fr, true);
         }
+      add_robustness_cells(plan, p, env, seed);
     }
   }
   add_study_tasks(plan, p);

@@ -12,7 +12,18 @@
 namespace sirl {
 
 // The kinds of task (jobs/task_kinds.h declares each: key, inputs, cost, runner, table).
-enum class TaskKind { vae, rep, fpe, tpa, study_rep, study_heldout, study_tpa, study_simulated };
+enum class TaskKind {
+  vae,
+  rep,
+  fpe,
+  tpa,
+  study_rep,
+  study_heldout,
+  study_tpa,
+  study_simulated,
+  robust_fpe,
+  robust_tpa
+};
 const char* kind_name(TaskKind k);
 
 struct Task {
@@ -27,9 +38,12 @@ struct Task {
   bool frozen = true;
   bool in_main = false, in_ablation = false;  // tpa: a cell of [tpa] (Fig. 5), [ablation] (Fig. 7)
   std::string participant;                    // study_heldout, study_tpa
-  std::vector<int> deps;                      // indices into Plan::tasks (set by add_task)
-  double flops = 0;                           // estimated floating-point operations (add_task)
-  double bytes = 0;                           // estimated peak working set (add_task)
+  // The teacher who answered the queries: "" = the profile's main teacher, else a noisy
+  // teacher's tag ("beta=1"; Profile::robustness). Only for cells that learn from answers.
+  std::string teacher;
+  std::vector<int> deps;    // indices into Plan::tasks (set by add_task)
+  double flops = 0;         // estimated floating-point operations (add_task)
+  double bytes = 0;         // estimated peak working set (add_task)
   double stream_bytes = 0;  // estimated main-memory traffic over the task (add_task; 0: in cache)
   int threads = 1;          // cores its kernels use: set by the scheduler, not part of its key
 };

@@ -100,23 +100,28 @@ class Reader {
 
   double number(const toml::table& t, const char* key, double def, double lo, double hi) const {
     const toml::node* n = t.get(key);
-    if (!n) return def;
+    return n ? number_of(*n, n, key, lo, hi) : def;
+  }
+
+  // A number (or "inf") in [lo, hi]; `where` is the node errors point at.
+  double number_of(const toml::node& n, const toml::node* where, const char* key, double lo,
+                   double hi) const {
     double v = 0;
-    if (n->is_integer())
-      v = double(*n->value<int64_t>());
-    else if (n->is_floating_point())
-      v = *n->value<double>();
-    else if (n->is_string() && (*n->value<std::string>() == "inf"))
+    if (n.is_integer())
+      v = double(*n.value<int64_t>());
+    else if (n.is_floating_point())
+      v = *n.value<double>();
+    else if (n.is_string() && (*n.value<std::string>() == "inf"))
       v = std::numeric_limits<double>::infinity();
     else
-      fail(n, std::string(key) + " must be a number");
+      fail(where, std::string(key) + " must be a number");
     if (!(v >= lo && v <= hi)) {
       auto g = [](double x) {
         std::ostringstream o;
         o << x;
         return o.str();
       };
-      fail(n, std::string(key) + " = " + g(v) + " is outside [" + g(lo) + ", " + g(hi) + "]");
+      fail(where, std::string(key) + " = " + g(v) + " is outside [" + g(lo) + ", " + g(hi) + "]");
     }
     return v;
   }
@@ -205,8 +210,9 @@ std::string hyper_text(const Reader& r, const toml::node& n, const std::string& 
 }
 
 // [tpa]: methods, N, M and which of frozen/unfrozen to run.
-void parse_tpa(const Reader& r, const toml::table& tpa, TpaGrid& g) {
-  r.only_keys(tpa, "[tpa]", {"methods", "N", "M", "frozen"});
+void parse_tpa(const Reader& r, const toml::table& tpa, TpaGrid& g,
+               const std::string& table = "[tpa]") {
+  r.only_keys(tpa, table, {"methods", "N", "M", "frozen"});
   g.methods = r.variants(tpa, "methods");
   g.N = r.int_list(tpa, "N", 1, 10'000'000, true);
   g.M = r.int_list(tpa, "M", 1, 10'000'000, true);
@@ -277,14 +283,81 @@ void parse_queries(Reader& r, const toml::table& root, Profile& p) {
     p.queries.tpa_pairs = r.integer(*q, "tpa_pairs", 250, 2, 10'000'000);
     p.queries.fpe_trajectories = r.integer(*q, "fpe_trajectories", 1000, 2, 10'000'000);
   }
-  if (const auto* t = r.table(root, "teacher", false)) {
-    r.only_keys(*t, "[teacher]", {"beta", "mistake", "skip", "equal"});
-    const double inf = std::numeric_limits<double>::infinity();
-    p.queries.teacher.beta = r.number(*t, "beta", inf, 0, inf);
-    p.queries.teacher.mistake = r.number(*t, "mistake", 0, 0, 1);
-    p.queries.teacher.skip = r.number(*t, "skip", 0, 0, inf);
-    p.queries.teacher.equal = r.number(*t, "equal", 0, 0, inf);
+  const auto* t = r.table(root, "teacher", false);
+  if (!t) return;
+  r.only_keys(*t, "[teacher]", {"beta", "mistake", "skip", "equal", "attend"});
+  const double inf = std::numeric_limits<double>::infinity();
+  struct Axis {
+    const char* key;
+    double def, lo, hi;
+  };
+  // A scalar sets the main teacher; a list keeps the main teacher's default for that key and
+  // makes each listed value one teacher of a noise axis (its cells: [robustness]).
+  std::vector<std::pair<Axis, std::vector<double>>> lists;
+  std::map<std::string, double> main;
+  for (const Axis& a :
+       {Axis{"beta", inf, 0, inf}, Axis{"mistake", 0, 0, 1}, Axis{"attend", 1, 1e-9, 1}}) {
+    const toml::node* n = t->get(a.key);
+    main[a.key] = a.def;
+    if (!n) continue;
+    if (!n->is_array()) {
+      main[a.key] = r.number_of(*n, n, a.key, a.lo, a.hi);
+      continue;
+    }
+    std::vector<double> values;
+    for (auto&& e : *n->as_array()) {
+      const double v = r.number_of(e, n, a.key, a.lo, a.hi);
+      if (std::find(values.begin(), values.end(), v) != values.end())
+        r.fail(n, std::string(a.key) + ": a value is listed twice");
+      values.push_back(v);
+    }
+    if (values.empty()) r.fail(n, std::string(a.key) + " must not be an empty list");
+    lists.push_back({a, values});
   }
+  p.queries.teacher.beta = main["beta"];
+  p.queries.teacher.mistake = main["mistake"];
+  p.queries.attend = main["attend"];
+  p.queries.teacher.skip = r.number(*t, "skip", 0, 0, inf);
+  p.queries.teacher.equal = r.number(*t, "equal", 0, 0, inf);
+  for (const auto& [a, values] : lists)
+    for (double v : values) {
+      if (v == a.def) continue;  // the main teacher itself: the axis's reference point
+      TeacherPoint tp;
+      tp.axis = a.key;
+      tp.level = v;
+      std::ostringstream o;
+      o << a.key << "=" << v;
+      tp.tag = o.str();
+      tp.queries = p.queries;
+      if (tp.axis == "beta") tp.queries.teacher.beta = v;
+      if (tp.axis == "mistake") tp.queries.teacher.mistake = v;
+      if (tp.axis == "attend") tp.queries.attend = v;
+      p.robustness.teachers.push_back(tp);
+    }
+}
+
+// [robustness]: which cells the noisy teachers of [teacher]'s lists run.
+void parse_robustness(Reader& r, const toml::table& root, Profile& p) {
+  const auto* rb = r.table(root, "robustness", false);
+  const bool lists = !p.robustness.teachers.empty();
+  if (!rb) {
+    if (lists)
+      r.fail(root.get("teacher"),
+             "[teacher] lists noisy teachers but there is no [robustness] table saying which "
+             "cells they run (methods, N, M)");
+    return;
+  }
+  if (!lists)
+    r.fail(rb,
+           "[robustness] needs noisy teachers: give a list for beta, mistake or attend in "
+           "[teacher] (e.g. beta = [10, 1, 0])");
+  r.only_keys(*rb, "[robustness]", {"methods", "N", "M", "frozen"});
+  TpaGrid g;
+  parse_tpa(r, *rb, g, "[robustness]");
+  p.robustness.methods = g.methods;
+  p.robustness.N = g.N;
+  p.robustness.M = g.M;
+  p.robustness.frozen = g.frozen;
 }
 
 // [fpe], [tpa], [ablation]: which cells run.
@@ -293,8 +366,11 @@ void parse_cells(Reader& r, const toml::table& root, Profile& p) {
   // least one must be there.
   const auto* fpe = r.table(root, "fpe", false);
   const auto* tpa = r.table(root, "tpa", false);
-  if (!fpe && !tpa && !r.table(root, "ablation", false) && !r.table(root, "study", false))
-    r.fail(&root, "nothing to run: give at least one of [fpe], [tpa], [ablation] or [study]");
+  if (!fpe && !tpa && !r.table(root, "ablation", false) && !r.table(root, "study", false) &&
+      !r.table(root, "robustness", false))
+    r.fail(&root,
+           "nothing to run: give at least one of [fpe], [tpa], [ablation], [robustness] or "
+           "[study]");
   if (fpe) {
     r.only_keys(*fpe, "[fpe]", {"methods", "N"});
     p.fpe_methods = r.variants(*fpe, "methods");
@@ -442,13 +518,15 @@ void check_budgets(Reader& r, const toml::table& root, const Profile& p) {
     check_n(g.ablation_N, "ablation",
             std::find(p.ablation_methods.begin(), p.ablation_methods.end(), Method::multipref50) !=
                 p.ablation_methods.end());
-    for (const auto* Ms : {&g.tpa_M, &g.ablation_M})
+    check_n(p.robustness.N, "robustness", has_mp50(p.robustness.methods));
+    for (const auto* Ms : {&g.tpa_M, &g.ablation_M, &p.robustness.M})
       for (int64_t M : *Ms)
         if (M > tpa_train)
-          r.fail(root.get(Ms == &g.tpa_M ? "tpa" : "ablation"),
-                 "M = " + std::to_string(M) + " exceeds the " + std::to_string(tpa_train) +
-                     " training pairs per test reward (80 % of [queries] tpa_pairs = " +
-                     std::to_string(p.queries.tpa_pairs) + ")");
+          r.fail(
+              root.get(Ms == &g.tpa_M ? "tpa" : (Ms == &g.ablation_M ? "ablation" : "robustness")),
+              "M = " + std::to_string(M) + " exceeds the " + std::to_string(tpa_train) +
+                  " training pairs per test reward (80 % of [queries] tpa_pairs = " +
+                  std::to_string(p.queries.tpa_pairs) + ")");
   }
 }
 
@@ -464,7 +542,7 @@ Profile parse_profile(const std::string& text, const std::string& path) {
   }
   Reader r(root, path);
   std::set<std::string> top{"name", "description", "envs",     "seeds", "queries", "teacher",
-                            "fpe",  "tpa",         "ablation", "hyper", "study"};
+                            "fpe",  "tpa",         "ablation", "hyper", "study",   "robustness"};
   for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
   r.only_keys(root, "the profile", top);
   Profile p;
@@ -484,11 +562,19 @@ Profile parse_profile(const std::string& text, const std::string& path) {
   p.seeds = r.int_list(root, "seeds", 0, 1'000'000'000, true);
   parse_queries(r, root, p);
   parse_cells(r, root, p);
+  parse_robustness(r, root, p);
   parse_env_axes(r, root, p);
   parse_study(r, root, p);
   parse_hyper(r, root, p);
   check_budgets(r, root, p);
   return p;
+}
+
+const QueryBundleConfig& queries_for(const Profile& p, const std::string& teacher) {
+  if (teacher.empty()) return p.queries;
+  for (const auto& t : p.robustness.teachers)
+    if (t.tag == teacher) return t.queries;
+  throw std::invalid_argument("profile " + p.name + " has no teacher '" + teacher + "'");
 }
 
 Profile load_profile(const std::string& path_or_name) {

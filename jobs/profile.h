@@ -58,6 +58,25 @@ struct StudyPlan {
   bool random_frozen = false;  // random = "unfrozen" (default, the paper's best) or "frozen"
 };
 
+// One teacher of a noise axis: the main teacher ([teacher]'s scalars, or the paper's perfect
+// oracle) with one key changed to a value listed in [teacher] (beta = [10, 1, 0] gives three).
+struct TeacherPoint {
+  std::string tag;            // "beta=1", "mistake=0.2", "attend=0.5": part of its cells' task keys
+  std::string axis;           // "beta", "mistake" or "attend"
+  double level = 0;           // the axis value
+  QueryBundleConfig queries;  // the profile's [queries] answered by this teacher
+};
+
+// [robustness]: the cells every noisy teacher runs, beside the main grid's (Fig. "robustness"):
+// FPE of each query-trained method at each N, TPA of every method at each N × M. The main
+// teacher's cells of the same sizes are the axes' reference points (added to the main grid).
+struct RobustnessGrid {
+  std::vector<TeacherPoint> teachers;
+  std::vector<Variant> methods;
+  std::vector<int64_t> N, M;
+  std::vector<bool> frozen;  // empty = "best" (SIRL frozen, the rest unfrozen), as in [tpa]
+};
+
 struct Profile {
   std::string path, text;  // where it came from, and its exact text (recorded in results)
   std::string name, description;
@@ -75,7 +94,12 @@ struct Profile {
   // Per env: the top-level seeds/N/M unless the env's own table ([grid], [jaco], …) overrides them.
   std::map<std::string, EnvAxes> axes;
   StudyPlan study;
+  RobustnessGrid robustness;
 };
+
+// The queries a cell's teacher answers: the profile's own for "" (the main teacher), else those
+// of the robustness teacher with that tag. Throws std::invalid_argument for an unknown tag.
+const QueryBundleConfig& queries_for(const Profile& p, const std::string& teacher);
 
 Profile parse_profile(const std::string& text, const std::string& path = "<profile>");
 // Reads the file; a bare name ("quick") resolves to configs/<name>.toml beside the binary's

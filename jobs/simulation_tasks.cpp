@@ -17,20 +17,40 @@ std::string vae_key(const std::string& env, int64_t seed) {
   return env + "/s" + std::to_string(seed) + "/vae";
 }
 
-std::string rep_key(const std::string& env, int64_t seed, const Variant& v, int64_t N) {
-  std::string k = env + "/s" + std::to_string(seed) + "/" + v.name();
+namespace {
+// "<env>/s<seed>[/<teacher>]/<variant>[/N<N>]/"
+std::string cell_prefix(const std::string& env, int64_t seed, const std::string& teacher,
+                        const Variant& v, int64_t N) {
+  std::string k = env + "/s" + std::to_string(seed) + "/";
+  if (!teacher.empty()) k += teacher + "/";
+  k += v.name();
   if (uses_queries(v.method)) k += "/N" + std::to_string(N);
-  return k + "/rep";
+  return k + "/";
+}
+std::string cell_prefix(const Task& t) {
+  return cell_prefix(t.env, t.seed, t.teacher, t.variant, t.N);
+}
+// The teacher of the φ a cell reads: none for a method that learns from no answers.
+std::string rep_teacher(const Variant& v, const std::string& teacher) {
+  return uses_queries(v.method) ? teacher : "";
+}
+}  // namespace
+
+std::string rep_key(const std::string& env, int64_t seed, const Variant& v, int64_t N,
+                    const std::string& teacher) {
+  return cell_prefix(env, seed, rep_teacher(v, teacher), v, N) + "rep";
 }
 
 Task experiment_cell(TaskKind kind, const std::string& env, int64_t seed, const Variant& v,
-                     int64_t N) {
+                     int64_t N, const std::string& teacher) {
   Task t;
   t.kind = kind;
   t.env = env;
   t.seed = seed;
   t.variant = v;
   t.N = uses_queries(v.method) ? N : 0;
+  const bool heads_learn = kind == TaskKind::tpa || kind == TaskKind::robust_tpa;
+  t.teacher = heads_learn ? teacher : rep_teacher(v, teacher);
   return t;
 }
 
@@ -103,12 +123,15 @@ Task vae_input(const Task& t) {
   return v;
 }
 Task rep_input(const Task& t) {
-  return experiment_cell(TaskKind::rep, t.env, t.seed, t.variant, t.N);
+  return experiment_cell(TaskKind::rep, t.env, t.seed, t.variant, t.N, t.teacher);
+}
+std::string input_rep_key(const Task& t) {
+  return rep_key(t.env, t.seed, t.variant, t.N, t.teacher);
 }
 
 // Every task of the experiment shards with its φ; a VAE goes to every shard that needs it.
 std::string by_representation(const Task& t) {
-  return t.kind == TaskKind::vae ? "" : rep_key(t.env, t.seed, t.variant, t.N);
+  return t.kind == TaskKind::vae ? "" : input_rep_key(t);
 }
 
 // What a record says about its task: env and seed, and for φ and its cells the method and sizes.
@@ -118,6 +141,19 @@ void describe_variant(const Task& t, TaskRecord& r) {
   r.text["variant"] = t.variant.name();
   r.num["vae"] = t.variant.vae;
   r.num["N"] = double(t.N);
+}
+// A robustness cell also names its teacher, the noise axis and level, and how far the answers
+// it learned from are from the perfect oracle's (AnswerError).
+void record_teacher(const Task& t, RunContext& ctx, TaskRecord& r) {
+  r.text["teacher"] = t.teacher;
+  for (const auto& tp : ctx.profile().robustness.teachers)
+    if (tp.tag == t.teacher) {
+      r.text["axis"] = tp.axis;
+      r.num["level"] = tp.level;
+    }
+  const AnswerError& e = ctx.bundle(t.env, t.seed, t.teacher).answer_error;
+  r.num["similarity_error"] = e.similarity;
+  r.num["preference_error"] = e.preference;
 }
 void describe_tpa(const Task& t, TaskRecord& r) {
   describe_variant(t, r);
@@ -180,13 +216,14 @@ void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
   if (reads_vae(t.variant)) vae = ctx.vae(vae_key(t.env, t.seed));
   const auto checkpoint = ctx.checkpointer(t.key);
   MethodConfig c{t.variant.method, t.N, t.variant.vae, h, t.threads, checkpoint.get()};
-  const Representation rep = train_representation(d, ctx.bundle(t.env, t.seed), c,
+  const Representation rep = train_representation(d, ctx.bundle(t.env, t.seed, t.teacher), c,
                                                   task_seed(t.env, t.seed, "phi"), vae.get());
   put_representation(rep, r);
   r.text["hyper"] = describe(h);
   // FLOPs spent in this task: the VAE method's φ is the VAE task's encoder, trained there.
   r.num["flops"] =
       (t.variant.method == Method::vae ? 0.0 : rep.train_flops) + record_embedding(rep, d, r);
+  if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
   if (t.variant.method != Method::vae && t.variant.method != Method::random)
     record_convergence(rep.loss_curve, r);
   ctx.keep(t.key, std::make_shared<const Representation>(get_representation(r)));
@@ -200,14 +237,21 @@ void fpe_cost(Task& t, const Profile& p) {
   t.bytes = 4.0 * double(p.queries.fpe_trajectories) * (z.input_dim + 16);
 }
 
+// FPE's labelled trajectories are the true features whoever the teacher (its split is drawn
+// from a stream no teacher touches, so every teacher's φ is probed on the same rows).
 void run_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const FpeResult f = evaluate_fpe(*ctx.representation(rep_key(t.env, t.seed, t.variant, t.N)),
-                                   ctx.dataset(t.env), ctx.bundle(t.env, t.seed).fpe);
+  const auto rep = ctx.representation(input_rep_key(t));
+  const FpeSplit& split = ctx.bundle(t.env, t.seed).fpe;
+  const FpeResult f = evaluate_fpe(*rep, ctx.dataset(t.env), split);
   r.num["fpe"] = f.fpe;
   r.num["train_mse"] = f.train_mse;
-  const FpeSplit& split = ctx.bundle(t.env, t.seed).fpe;  // φ over its rows; the probe is tiny
-  r.num["flops"] = ctx.representation(rep_key(t.env, t.seed, t.variant, t.N))
-                       ->shape.forward_flops(int(split.train.size() + split.test.size()));
+  // φ over its rows; the probe is tiny
+  r.num["flops"] = rep->shape.forward_flops(int(split.train.size() + split.test.size()));
+}
+// The same, and what a robustness row says of its teacher's answers.
+void run_robust_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
+  run_fpe(t, ctx, r);
+  record_teacher(t, ctx, r);
 }
 
 // ---- tpa ----
@@ -241,8 +285,8 @@ void record_heads_convergence(const TpaResult& res, TaskRecord& r) {
 void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   const auto checkpoint = ctx.checkpointer(t.key);
   const TpaResult res = evaluate_tpa(
-      *ctx.representation(rep_key(t.env, t.seed, t.variant, t.N)), ctx.dataset(t.env),
-      ctx.bundle(t.env, t.seed).tpa,
+      *ctx.representation(input_rep_key(t)), ctx.dataset(t.env),
+      ctx.bundle(t.env, t.seed, t.teacher).tpa,
       TpaConfig{t.M, t.frozen, ctx.profile().hyper.at(t.env), t.threads, checkpoint.get()},
       task_seed(t.env, t.seed, "tpa"));
   r.num["tpa"] = res.mean;
@@ -258,9 +302,26 @@ void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   r.arrays["loss_curves"] = array(res.loss_curves, {R, uint64_t(res.epochs)});
   r.arrays["phi_drift"] = array(res.phi_drift);
   record_heads_convergence(res, r);
+  if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
+}
+void run_robust_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
+  run_tpa(t, ctx, r);
+  record_teacher(t, ctx, r);
+}
+
+std::string tpa_cell_key(const Task& t) {
+  return cell_prefix(t) + "tpa/M" + std::to_string(t.M) + (t.frozen ? "/frozen" : "/unfrozen");
 }
 
 using C = H5Table::Column;
+
+// The columns a robustness row adds: who taught, on which axis at which level, and how far its
+// answers were from the perfect oracle's.
+const std::vector<TableColumn> kTeacherColumns{{"teacher", C::String, "teacher"},
+                                               {"axis", C::String, "axis"},
+                                               {"level", C::Double, "level"},
+                                               {"similarity_error", C::Double, "similarity_error"},
+                                               {"preference_error", C::Double, "preference_error"}};
 
 }  // namespace
 
@@ -286,7 +347,7 @@ TaskKindSpec rep_kind() {
       .kind = TaskKind::rep,
       .name = "rep",
       .description = "a representation φ per (env, seed, method, N), its embedding of Ξ",
-      .key = [](const Task& t) { return rep_key(t.env, t.seed, t.variant, t.N); },
+      .key = [](const Task& t) { return input_rep_key(t); },
       .inputs =
           [](const Task& t, const Profile&) {
             return reads_vae(t.variant) ? std::vector<Task>{vae_input(t)} : std::vector<Task>{};
@@ -307,11 +368,7 @@ TaskKindSpec fpe_kind() {
       .kind = TaskKind::fpe,
       .name = "fpe",
       .description = "FPE of one φ: a linear probe's held-out error",
-      .key =
-          [](const Task& t) {
-            const std::string k = rep_key(t.env, t.seed, t.variant, t.N);
-            return k.substr(0, k.size() - 3) + "fpe";
-          },
+      .key = [](const Task& t) { return cell_prefix(t) + "fpe"; },
       .inputs = [](const Task& t, const Profile&) { return std::vector<Task>{rep_input(t)}; },
       .cost = fpe_cost,
       .rate = [](const Task&) { return "fpe"; },
@@ -337,12 +394,7 @@ TaskKindSpec tpa_kind() {
       .kind = TaskKind::tpa,
       .name = "tpa",
       .description = "TPA of one φ at M pairs, frozen or unfrozen: 20 reward heads",
-      .key =
-          [](const Task& t) {
-            const std::string k = rep_key(t.env, t.seed, t.variant, t.N);
-            return k.substr(0, k.size() - 3) + "tpa/M" + std::to_string(t.M) +
-                   (t.frozen ? "/frozen" : "/unfrozen");
-          },
+      .key = tpa_cell_key,
       .inputs = [](const Task& t, const Profile&) { return std::vector<Task>{rep_input(t)}; },
       .cost = tpa_cost,
       .rate = [](const Task& t) { return t.frozen ? "tpa_frozen" : "tpa_unfrozen"; },
@@ -366,6 +418,36 @@ TaskKindSpec tpa_kind() {
                  {"in_main", C::Int, "in_main"},
                  {"in_ablation", C::Int, "in_ablation"}}},
   };
+}
+
+// The robustness cells: FPE and TPA cells of a noisy teacher, in tables of their own so the
+// main grid's tables (and their digests) do not change when a profile adds noise axes.
+TaskKindSpec robust_fpe_kind() {
+  TaskKindSpec k = fpe_kind();
+  k.kind = TaskKind::robust_fpe;
+  k.name = "robust_fpe";
+  k.description = "FPE of one φ trained on a noisy teacher's answers ([robustness])";
+  k.run = run_robust_fpe;
+  k.table.kind = "robust_fpe";
+  k.table.name = "robust_fpe";
+  k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
+                         kTeacherColumns.end());
+  return k;
+}
+
+TaskKindSpec robust_tpa_kind() {
+  TaskKindSpec k = tpa_kind();
+  k.kind = TaskKind::robust_tpa;
+  k.name = "robust_tpa";
+  k.description = "TPA of one φ, heads trained on a noisy teacher's labels ([robustness])";
+  k.run = run_robust_tpa;
+  k.table.kind = "robust_tpa";
+  k.table.name = "robust_tpa";
+  // in_main / in_ablation say nothing here
+  k.table.columns.resize(k.table.columns.size() - 2);
+  k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
+                         kTeacherColumns.end());
+  return k;
 }
 
 }  // namespace sirl

@@ -3,6 +3,10 @@
 //   <env>/s<seed>/<variant>[/N<N>]/rep        a representation φ (N only for query methods)
 //   <env>/s<seed>/<variant>[/N<N>]/fpe        FPE of that φ
 //   <env>/s<seed>/<variant>[/N<N>]/tpa/M<M>/{frozen,unfrozen}   TPA of that φ at M pairs
+// and the robustness cells of a noisy teacher (robust_fpe, robust_tpa; its φ is a rep task):
+//   <env>/s<seed>/<teacher>/<variant>[/N<N>]/{rep,fpe,tpa/...}      <teacher> = "beta=1", …
+// (a method that learns from no answers — VAE, Random — has one φ for every teacher, but its
+// TPA heads learn from the teacher's labels).
 // Each function returns a kind's whole declaration (jobs/task_kinds.h).
 #pragma once
 #include <cstdint>
@@ -16,14 +20,18 @@ TaskKindSpec vae_kind();
 TaskKindSpec rep_kind();
 TaskKindSpec fpe_kind();
 TaskKindSpec tpa_kind();
+TaskKindSpec robust_fpe_kind();
+TaskKindSpec robust_tpa_kind();
 
 // The keys other code looks tasks up by (the VAE and φ a cell reads).
 std::string vae_key(const std::string& env, int64_t seed);
-std::string rep_key(const std::string& env, int64_t seed, const Variant& v, int64_t N);
+std::string rep_key(const std::string& env, int64_t seed, const Variant& v, int64_t N,
+                    const std::string& teacher = "");
 
-// A cell of the experiment (an fpe or tpa task) on φ of (env, seed, v, N), fields set: N is
-// dropped for methods that use no queries (their φ is shared by every N).
+// A cell of the experiment (a rep, fpe or tpa task, or a robustness cell) on φ of (env, seed,
+// v, N) with queries answered by `teacher`, fields set: N is dropped for methods that use no
+// queries (their φ is shared by every N), and so is the teacher for their rep and FPE.
 Task experiment_cell(TaskKind kind, const std::string& env, int64_t seed, const Variant& v,
-                     int64_t N);
+                     int64_t N, const std::string& teacher = "");
 
 }  // namespace sirl

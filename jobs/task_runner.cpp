@@ -34,12 +34,16 @@ const Dataset& RunContext::dataset(const std::string& env) {
   return *datasets_.at(env);
 }
 
-const QueryBundle& RunContext::bundle(const std::string& env, int64_t seed) {
-  const std::string key = env + "/s" + std::to_string(seed);
+const QueryBundle& RunContext::bundle(const std::string& env, int64_t seed,
+                                      const std::string& teacher) {
+  const std::string key =
+      env + "/s" + std::to_string(seed) + (teacher.empty() ? "" : "/" + teacher);
   const Dataset& d = dataset(env);
   std::call_once(once("bundle/" + key), [&] {
+    // Every teacher's bundle draws from the same seed: the same rewards, queries and FPE split;
+    // only the answers differ (datasets/query_bundle.h).
     auto b = std::make_shared<const QueryBundle>(
-        make_query_bundle(d, profile_.queries, task_seed(env, seed, "queries")));
+        make_query_bundle(d, queries_for(profile_, teacher), task_seed(env, seed, "queries")));
     std::lock_guard lock(mu_);
     bundles_[key] = std::move(b);
   });

@@ -27,7 +27,8 @@ class RunContext {
   RunContext(const Profile& p, std::function<TaskRecord(const std::string&)> load);
   const Profile& profile() const { return profile_; }
   const Dataset& dataset(const std::string& env);
-  const QueryBundle& bundle(const std::string& env, int64_t seed);
+  // The queries of (env, seed) answered by `teacher` ("" = the profile's main teacher).
+  const QueryBundle& bundle(const std::string& env, int64_t seed, const std::string& teacher = "");
   // The user study's simulated cohort ([study]) and its trajectory space.
   const Study& study();
   const Dataset& study_dataset();

@@ -69,7 +69,8 @@ std::pair<int64_t, double> final_loss_of(const TaskRecord& r) {
 }
 
 // Every training's convergence (engine/convergence.h) and its final loss; dead_fraction is the
-// share of φ's last hidden layer that is 0 on all of Ξ (−1 where not measured). Columns a kind
+// share of φ's last hidden layer that is 0 on all of Ξ (−1 where not measured); teacher is ""
+// for the main teacher, a noisy teacher's tag for robustness cells. Columns a kind
 // does not have (N, M, frozen of a VAE) are 0.
 H5Table training_table(const std::vector<TaskRecord>& records) {
   H5Table t;
@@ -79,7 +80,8 @@ H5Table training_table(const std::vector<TaskRecord>& records) {
        &seed = t.add("seed", C::Int), &epochs = t.add("epochs", C::Int),
        &final_loss = t.add("final_loss", C::Double),
        &rel = t.add("loss_relative_change", C::Double), &conv = t.add("converged", C::Int),
-       &frac = t.add("converged_fraction", C::Double), &dead = t.add("dead_fraction", C::Double);
+       &frac = t.add("converged_fraction", C::Double), &dead = t.add("dead_fraction", C::Double),
+       &teacher = t.add("teacher", C::String);
   for (const auto& r : records) {
     if (!r.num.count("converged")) continue;  // FPE, Random and the VAE method train nothing
     const auto [E, last] = final_loss_of(r);
@@ -99,6 +101,8 @@ H5Table training_table(const std::vector<TaskRecord>& records) {
     auto df = r.arrays.find("dead_fraction");
     dead.doubles.push_back(df != r.arrays.end() && !df->second.data.empty() ? df->second.data.back()
                                                                             : -1.0);
+    auto tt = r.text.find("teacher");  // "" = the main teacher ([robustness] cells name theirs)
+    teacher.strings.push_back(tt == r.text.end() ? "" : tt->second);
   }
   return t;
 }

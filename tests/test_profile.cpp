@@ -71,7 +71,7 @@ TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
                 .find("VAE pre-training applies only"),
             std::string::npos);
   EXPECT_NE(error_of(base).find(
-                "nothing to run: give at least one of [fpe], [tpa], [ablation] or [study]"),
+                "nothing to run: give at least one of [fpe], [tpa], [ablation], [robustness] or [study]"),
             std::string::npos)
       << error_of(base);
   EXPECT_NE(error_of(base + grid + "[grid]\nstore_weights = 1\n").find("store_weights must be"),

@@ -25,7 +25,7 @@ TEST(TaskKinds, EachKindIsRegisteredOnceInOrderWithItsOwnNameAndTable) {
       EXPECT_EQ(k.table.kind, k.name);  // a kind's table reads that kind's records
     }
   }
-  EXPECT_EQ(tables, (std::set<std::string>{"fpe", "tpa"}));
+  EXPECT_EQ(tables, (std::set<std::string>{"fpe", "tpa", "robust_fpe", "robust_tpa"}));
 }
 
 // Two TPA cells that differ in one field are two tasks: a key scheme that dropped a field would
@@ -51,7 +51,10 @@ TEST(TaskKinds, TheKeySchemeTellsApartCellsThatDifferInAnyField) {
   differs([](Task& t) { t.M = 20; });
   differs([](Task& t) { t.frozen = false; });
   differs([](Task& t) { t.kind = TaskKind::fpe; });
+  differs([](Task& t) { t.teacher = "beta=1"; });
   EXPECT_EQ(key(base), "grid/s0/sirl/N100/tpa/M10/frozen");
+  EXPECT_EQ(key(experiment_cell(TaskKind::robust_fpe, "grid", 0, base.variant, 100, "beta=1")),
+            "grid/s0/beta=1/sirl/N100/fpe");
   // Methods without queries share one φ whatever N the cell names.
   EXPECT_EQ(experiment_cell(TaskKind::fpe, "grid", 0, Variant{Method::random, false}, 100).N, 0);
 }
