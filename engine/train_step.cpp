@@ -128,4 +128,26 @@ float preference_train_step_batched(BatchedTrainer& t, const float* X, const int
   return total / M;
 }
 
+float triplet_train_step_batched(BatchedTrainer& t, const float* X, const int32_t* triplets, int B,
+                                 float margin, int threads) {
+  const int in = t.shape.in(), d = t.shape.out(), M = t.models;
+  const size_t per_model = size_t(3) * B * in;
+  t.batch_x.resize(M * per_model);
+  for (int m = 0; m < M; ++m)
+    gather_by_role(X, in, triplets + size_t(m) * B * 3, B, 3, t.batch_x.data() + m * per_model);
+  mlp_forward_batched(t.shape, M, t.params.data(), t.batch_x.data(), 3 * B, t.tapes, threads);
+  t.d_out.resize(size_t(M) * 3 * B * d);
+  float total = 0;
+  for (int m = 0; m < M; ++m) {
+    t.losses[m] = symmetric_triplet_loss(t.tapes[m].output(), B, d, margin,
+                                         t.d_out.data() + size_t(m) * 3 * B * d);
+    total += t.losses[m];
+  }
+  std::fill(t.grad.begin(), t.grad.end(), 0.f);
+  mlp_backward_batched(t.shape, M, t.params.data(), t.tapes, t.d_out.data(), t.grad.data(),
+                       static_cast<float*>(nullptr), threads);
+  adam_step(t.adam_cfg, t.adam, t.params.data(), t.grad.data(), t.params.size());
+  return total / M;
+}
+
 }  // namespace sirl

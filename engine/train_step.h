@@ -60,6 +60,11 @@ struct BatchedTrainer {
   BatchedTrainer(MlpShape s, int models, AdamConfig cfg, std::vector<float> initial_params);
 };
 
+// triplets [M, B, 3] = (P1, P2, N) row indices into X [T, in], each model its own B triplets:
+// the symmetric triplet step of each model at once (an ensemble of φ). Returns the mean loss.
+float triplet_train_step_batched(BatchedTrainer& t, const float* X, const int32_t* triplets, int B,
+                                 float margin, int threads = 1);
+
 // pairs [M, B, 2] row indices into X [T, in]; label [M, B]. Returns the mean loss over heads.
 float preference_train_step_batched(BatchedTrainer& t, const float* X, const int32_t* pairs,
                                     const float* label, int B, float l2_weight, int threads = 1);
