@@ -22,7 +22,8 @@ enum class TaskKind {
   study_tpa,
   study_simulated,
   robust_fpe,
-  robust_tpa
+  robust_tpa,
+  active
 };
 const char* kind_name(TaskKind k);
 

@@ -16,12 +16,21 @@
 namespace sirl {
 
 std::string Variant::name() const {
-  return std::string(method_name(method)) + (vae ? "+vae" : "");
+  return std::string(method_name(method)) + (vae ? "+vae" : "") +
+         (selection == Selection::uniform ? "" : std::string("@") + selection_name(selection));
 }
 
 Variant parse_variant(const std::string& name) {
   Variant v;
   std::string base = name;
+  if (const size_t at = base.find('@'); at != std::string::npos) {
+    v.selection = parse_selection(base.substr(at + 1));
+    base.resize(at);
+    if (base != "sirl" && base != "sirl+vae")
+      throw std::invalid_argument("'" + name +
+                                  "': query selection (@vote, @infogain) applies only to sirl and "
+                                  "sirl+vae, whose triplets it chooses");
+  }
   const std::string suffix = "+vae";
   if (base.size() > suffix.size() &&
       base.compare(base.size() - suffix.size(), suffix.size(), suffix) == 0) {
@@ -336,6 +345,36 @@ void parse_queries(Reader& r, const toml::table& root, Profile& p) {
     }
 }
 
+// [active] and [active.<env>]: the active variants' selection settings.
+void parse_active(Reader& r, const toml::table& root, Profile& p) {
+  for (const auto& env : p.envs) p.active[env] = ActivePlan{};
+  const auto* at = r.table(root, "active", false);
+  if (!at) return;
+  const std::set<std::string> keys{"members", "pool", "batch", "round_epochs", "mu"};
+  auto read = [&](const toml::table& t, const std::string& name, ActivePlan& a) {
+    a.members = int(r.integer(t, "members", a.members, 2, 64));
+    a.pool = r.integer(t, "pool", a.pool, 1, 10'000'000);
+    a.batch = r.integer(t, "batch", a.batch, 1, 10'000'000);
+    a.round_epochs = int(r.integer(t, "round_epochs", a.round_epochs, 1, 1'000'000));
+    a.mu = r.number(t, "mu", a.mu, 1e-9, 1e9);
+    if (a.pool < a.batch)
+      r.fail(&t, name + ": pool = " + std::to_string(a.pool) + " is below batch = " +
+                     std::to_string(a.batch) + " (a round picks its batch from the pool)");
+  };
+  std::set<std::string> allowed = keys;
+  for (const auto& env : p.envs) allowed.insert(env);
+  r.only_keys(*at, "[active]", allowed);
+  ActivePlan all;
+  read(*at, "[active]", all);
+  for (const auto& env : p.envs) {
+    p.active[env] = all;
+    if (const auto* et = r.table(*at, env.c_str(), false)) {
+      r.only_keys(*et, "[active." + env + "]", keys);
+      read(*et, "[active." + env + "]", p.active[env]);
+    }
+  }
+}
+
 // [robustness]: which cells the noisy teachers of [teacher]'s lists run.
 void parse_robustness(Reader& r, const toml::table& root, Profile& p) {
   const auto* rb = r.table(root, "robustness", false);
@@ -541,8 +580,8 @@ Profile parse_profile(const std::string& text, const std::string& path) {
                        std::string(e.description()));
   }
   Reader r(root, path);
-  std::set<std::string> top{"name", "description", "envs",     "seeds", "queries", "teacher",
-                            "fpe",  "tpa",         "ablation", "hyper", "study",   "robustness"};
+  std::set<std::string> top{"name", "description", "envs",  "seeds", "queries",    "teacher", "fpe",
+                            "tpa",  "ablation",    "hyper", "study", "robustness", "active"};
   for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
   r.only_keys(root, "the profile", top);
   Profile p;
@@ -563,6 +602,7 @@ Profile parse_profile(const std::string& text, const std::string& path) {
   parse_queries(r, root, p);
   parse_cells(r, root, p);
   parse_robustness(r, root, p);
+  parse_active(r, root, p);
   parse_env_axes(r, root, p);
   parse_study(r, root, p);
   parse_hyper(r, root, p);

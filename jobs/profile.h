@@ -12,6 +12,7 @@
 #include "datasets/environments.h"
 #include "datasets/query_bundle.h"
 #include "datasets/study.h"
+#include "engine/active_queries.h"
 #include "engine/hyperparams.h"
 #include "engine/representation.h"
 
@@ -21,14 +22,17 @@ struct ProfileError : std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
-// A method with its VAE pre-training switch: "sirl", "sirl+vae", "multipref10+vae", …
+// A method with its VAE pre-training switch and, for SIRL, how its triplets were chosen:
+// "sirl", "sirl+vae", "multipref10+vae", "sirl@vote", "sirl+vae@infogain", …
 struct Variant {
   Method method = Method::sirl;
   bool vae = false;
+  Selection selection = Selection::uniform;  // "@vote", "@infogain": engine/active_queries.h
   std::string name() const;
   bool operator==(const Variant&) const = default;
 };
-// Throws std::invalid_argument for unknown names or "+vae" on vae/random.
+// Throws std::invalid_argument for unknown names, "+vae" on vae/random, or a selection on a
+// method other than SIRL.
 Variant parse_variant(const std::string& name);
 
 struct TpaGrid {
@@ -77,6 +81,15 @@ struct RobustnessGrid {
   std::vector<bool> frozen;  // empty = "best" (SIRL frozen, the rest unfrozen), as in [tpa]
 };
 
+// [active]: how the active variants choose their triplets (ActiveConfig's members, pool, batch,
+// round_epochs and mu), per environment ([active.<env>] overrides [active]).
+struct ActivePlan {
+  int members = 5;
+  int64_t pool = 2000, batch = 100;
+  int round_epochs = 50;
+  double mu = 0.05;
+};
+
 struct Profile {
   std::string path, text;  // where it came from, and its exact text (recorded in results)
   std::string name, description;
@@ -95,6 +108,7 @@ struct Profile {
   std::map<std::string, EnvAxes> axes;
   StudyPlan study;
   RobustnessGrid robustness;
+  std::map<std::string, ActivePlan> active;  // per env (every env has one)
 };
 
 // The queries a cell's teacher answers: the profile's own for "" (the main teacher), else those

@@ -122,6 +122,24 @@ Task vae_input(const Task& t) {
   v.seed = t.seed;
   return v;
 }
+std::string active_key(const std::string& env, int64_t seed, Selection rule,
+                       const std::string& teacher) {
+  return env + "/s" + std::to_string(seed) + "/" + (teacher.empty() ? "" : teacher + "/") +
+         "active/" + selection_name(rule);
+}
+Task active_input(const Task& t) {
+  Task a;
+  a.kind = TaskKind::active;
+  a.env = t.env;
+  a.seed = t.seed;
+  a.teacher = t.teacher;
+  a.variant = Variant{Method::sirl, false, t.variant.selection};
+  return a;
+}
+bool reads_active(const Variant& v) {
+  return v.selection != Selection::uniform;
+}
+
 Task rep_input(const Task& t) {
   return experiment_cell(TaskKind::rep, t.env, t.seed, t.variant, t.N, t.teacher);
 }
@@ -129,9 +147,10 @@ std::string input_rep_key(const Task& t) {
   return rep_key(t.env, t.seed, t.variant, t.N, t.teacher);
 }
 
-// Every task of the experiment shards with its φ; a VAE goes to every shard that needs it.
+// Every task of the experiment shards with its φ; a VAE or an active query set goes to every
+// shard that needs it.
 std::string by_representation(const Task& t) {
-  return t.kind == TaskKind::vae ? "" : input_rep_key(t);
+  return t.kind == TaskKind::vae || t.kind == TaskKind::active ? "" : input_rep_key(t);
 }
 
 // What a record says about its task: env and seed, and for φ and its cells the method and sizes.
@@ -216,8 +235,16 @@ void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
   if (reads_vae(t.variant)) vae = ctx.vae(vae_key(t.env, t.seed));
   const auto checkpoint = ctx.checkpointer(t.key);
   MethodConfig c{t.variant.method, t.N, t.variant.vae, h, t.threads, checkpoint.get()};
-  const Representation rep = train_representation(d, ctx.bundle(t.env, t.seed, t.teacher), c,
-                                                  task_seed(t.env, t.seed, "phi"), vae.get());
+  const QueryBundle* bundle = &ctx.bundle(t.env, t.seed, t.teacher);
+  QueryBundle chosen;  // an active variant: the same bundle with the triplets it chose
+  if (reads_active(t.variant)) {
+    chosen = *bundle;
+    chosen.similarity = *ctx.triplets(active_key(t.env, t.seed, t.variant.selection, t.teacher));
+    bundle = &chosen;
+  }
+  // SIRL's φ starts from the same initialisation whichever way its triplets were chosen.
+  const Representation rep =
+      train_representation(d, *bundle, c, task_seed(t.env, t.seed, "phi"), vae.get());
   put_representation(rep, r);
   r.text["hyper"] = describe(h);
   // FLOPs spent in this task: the VAE method's φ is the VAE task's encoder, trained there.
@@ -309,6 +336,63 @@ void run_robust_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   record_teacher(t, ctx, r);
 }
 
+// ---- active ----
+
+ActiveConfig active_config(const Task& t, const Profile& p) {
+  const ActivePlan& a = p.active.at(t.env);
+  ActiveConfig c;
+  c.rule = t.variant.selection;
+  c.budget = queries_for(p, t.teacher).similarity;  // as many as the uniform set holds
+  c.members = a.members;
+  c.pool = a.pool;
+  c.batch = a.batch;
+  c.round_epochs = a.round_epochs;
+  c.mu = a.mu;
+  c.hyper = p.hyper.at(t.env);
+  return c;
+}
+
+void active_cost(Task& t, const Profile& p) {
+  const EnvSizes z = env_sizes(t, p);
+  const ActiveConfig c = active_config(t, p);
+  // Round r ≥ 1 trains K members for E epochs on the r·batch triplets answered before it, then
+  // embeds its pool's rows (≤ 3·pool) with each member.
+  t.flops = 0;
+  const int64_t rounds = (c.budget + c.batch - 1) / c.batch;
+  for (int64_t r = 1; r < rounds; ++r) {
+    t.flops += c.members * train_flops(z.phi, 3 * std::min(c.budget, r * c.batch), c.round_epochs);
+    t.flops += c.members * z.phi.forward_flops(int(std::min<int64_t>(3 * c.pool, z.trajectories)));
+  }
+  t.bytes = c.members * working_set(z.phi, 3 * z.h.sirl.batch);
+  t.stream_bytes = 0;
+  for (int64_t r = 1; r < rounds; ++r)
+    t.stream_bytes += stream_bytes(z.phi, 3 * std::min(c.budget, r * c.batch), 3 * z.h.sirl.batch,
+                                   c.round_epochs, c.members);
+}
+
+void run_active(const Task& t, RunContext& ctx, TaskRecord& r) {
+  ActiveConfig c = active_config(t, ctx.profile());
+  c.threads = t.threads;
+  const auto checkpoint = ctx.checkpointer(t.key);
+  c.checkpointer = checkpoint.get();
+  // The teacher as the bundle has it (an attend teacher's mask drawn for this seed).
+  const Teacher& teacher = ctx.bundle(t.env, t.seed, t.teacher).config.teacher;
+  const ActiveQueries a =
+      select_active_queries(ctx.dataset(t.env), teacher, c, task_seed(t.env, t.seed, "active"));
+  put_triplets(a.queries, r);
+  r.arrays["batch_score"] = array(a.batch_score);
+  r.arrays["pool_score"] = array(a.pool_score);
+  r.num["rounds"] = a.rounds;
+  r.num["flops"] = a.train_flops;
+  ctx.keep(t.key, std::make_shared<const TripletSet>(get_triplets(r)));
+}
+
+void describe_active(const Task& t, TaskRecord& r) {
+  describe_env_and_seed(t, r);
+  r.text["selection"] = selection_name(t.variant.selection);
+  r.text["teacher"] = t.teacher;
+}
+
 std::string tpa_cell_key(const Task& t) {
   return cell_prefix(t) + "tpa/M" + std::to_string(t.M) + (t.frozen ? "/frozen" : "/unfrozen");
 }
@@ -350,7 +434,10 @@ TaskKindSpec rep_kind() {
       .key = [](const Task& t) { return input_rep_key(t); },
       .inputs =
           [](const Task& t, const Profile&) {
-            return reads_vae(t.variant) ? std::vector<Task>{vae_input(t)} : std::vector<Task>{};
+            std::vector<Task> in;
+            if (reads_vae(t.variant)) in.push_back(vae_input(t));
+            if (reads_active(t.variant)) in.push_back(active_input(t));
+            return in;
           },
       .cost = rep_cost,
       .rate =
@@ -448,6 +535,24 @@ TaskKindSpec robust_tpa_kind() {
   k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
                          kTeacherColumns.end());
   return k;
+}
+
+TaskKindSpec active_kind() {
+  return {
+      .kind = TaskKind::active,
+      .name = "active",
+      .description = "the triplets an active SIRL variant asks, chosen round by round",
+      .key =
+          [](const Task& t) { return active_key(t.env, t.seed, t.variant.selection, t.teacher); },
+      .inputs = [](const Task&, const Profile&) { return std::vector<Task>{}; },
+      .cost = active_cost,
+      .rate = [](const Task&) { return "rep_sirl"; },
+      .shard_group = by_representation,
+      .stores_weights = true,
+      .describe = describe_active,
+      .run = run_active,
+      .table = {},
+  };
 }
 
 }  // namespace sirl

@@ -22,6 +22,9 @@ TaskKindSpec fpe_kind();
 TaskKindSpec tpa_kind();
 TaskKindSpec robust_fpe_kind();
 TaskKindSpec robust_tpa_kind();
+// <env>/s<seed>[/<teacher>]/active/<rule>: the triplets an active variant of SIRL learns from
+// (engine/active_queries.h), [queries] similarity of them, in the order asked.
+TaskKindSpec active_kind();
 
 // The keys other code looks tasks up by (the VAE and φ a cell reads).
 std::string vae_key(const std::string& env, int64_t seed);

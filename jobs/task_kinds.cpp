@@ -12,7 +12,7 @@ const std::vector<TaskKindSpec>& task_kinds() {
     std::vector<TaskKindSpec> k{
         vae_kind(),        rep_kind(),           fpe_kind(),       tpa_kind(),
         study_rep_kind(),  study_heldout_kind(), study_tpa_kind(), study_simulated_kind(),
-        robust_fpe_kind(), robust_tpa_kind()};
+        robust_fpe_kind(), robust_tpa_kind(),    active_kind()};
     for (size_t i = 0; i < k.size(); ++i)
       if (int(k[i].kind) != int(i) || !k[i].key || !k[i].inputs || !k[i].cost || !k[i].rate ||
           !k[i].shard_group || !k[i].describe || !k[i].run)

@@ -1,6 +1,7 @@
 #include "jobs/task_outputs.h"
 
 #include <charconv>
+#include <cmath>
 #include <stdexcept>
 
 namespace sirl {
@@ -146,6 +147,28 @@ VaeModel get_vae(const TaskRecord& rec) {
   v.reconstruction_mse = need_num(rec, "reconstruction_mse");
   v.train_flops = need_num(rec, "train_flops");
   return v;
+}
+
+void put_triplets(const TripletSet& q, TaskRecord& rec) {
+  rec.arrays["queries"] =
+      TaskRecord::Array{{uint64_t(q.count), 3}, std::vector<float>(q.idx.begin(), q.idx.end())};
+  rec.num["skipped"] = double(q.skipped);
+}
+
+TripletSet get_triplets(const TaskRecord& rec) {
+  const std::vector<float>& a = need_array(rec, "queries");
+  if (a.size() % 3 != 0)
+    throw std::runtime_error(rec.key + ": its 'queries' do not come in triplets");
+  TripletSet q;
+  q.count = int64_t(a.size() / 3);
+  q.skipped = int64_t(need_num(rec, "skipped"));
+  q.idx.reserve(a.size());
+  for (float v : a) {
+    if (!(v >= 0) || v != std::floor(v) || v > float(1 << 24))
+      throw std::runtime_error(rec.key + ": its 'queries' hold a value that is not a row index");
+    q.idx.push_back(int32_t(v));
+  }
+  return q;
 }
 
 }  // namespace sirl

@@ -4,6 +4,7 @@
 #pragma once
 #include <string>
 
+#include "datasets/queries.h"
 #include "engine/representation.h"
 #include "engine/train_vae.h"
 #include "results/task_record.h"
@@ -20,6 +21,11 @@ Representation get_representation(const TaskRecord& rec);
 // per-latent KL and the reconstruction error.
 void put_vae(const VaeModel& v, TaskRecord& rec);
 VaeModel get_vae(const TaskRecord& rec);
+
+// Similarity triplets: "queries" [count, 3] row indices (exact in float up to 2^24 rows) and the
+// skipped count. Throws std::runtime_error naming the record if malformed.
+void put_triplets(const TripletSet& q, TaskRecord& rec);
+TripletSet get_triplets(const TaskRecord& rec);
 
 // "19,128,128,6" and back (throws std::runtime_error on a malformed list).
 std::string int_list_text(const std::vector<int>& v);

@@ -80,10 +80,26 @@ void RunContext::keep(const std::string& key, std::shared_ptr<const VaeModel> v)
   std::lock_guard lock(mu_);
   vaes_[key] = std::move(v);
 }
+void RunContext::keep(const std::string& key, std::shared_ptr<const TripletSet> q) {
+  std::lock_guard lock(mu_);
+  triplets_[key] = std::move(q);
+}
 void RunContext::release(const std::string& key) {
   std::lock_guard lock(mu_);
   reps_.erase(key);
   vaes_.erase(key);
+  triplets_.erase(key);
+}
+
+std::shared_ptr<const TripletSet> RunContext::triplets(const std::string& key) {
+  {
+    std::lock_guard lock(mu_);
+    auto it = triplets_.find(key);
+    if (it != triplets_.end()) return it->second;
+  }
+  auto q = std::make_shared<const TripletSet>(get_triplets(load_(key)));
+  keep(key, q);
+  return q;
 }
 
 std::shared_ptr<const Representation> RunContext::representation(const std::string& key) {

@@ -36,6 +36,9 @@ class RunContext {
   std::shared_ptr<const VaeModel> vae(const std::string& key);
   void keep(const std::string& key, std::shared_ptr<const Representation> r);
   void keep(const std::string& key, std::shared_ptr<const VaeModel> v);
+  // The triplets an `active` task chose, in the order asked.
+  std::shared_ptr<const TripletSet> triplets(const std::string& key);
+  void keep(const std::string& key, std::shared_ptr<const TripletSet> q);
   // Drops a cached output once no pending task needs it (bounded memory on long runs).
   void release(const std::string& key);
   // Where a task's training saves and resumes its state (jobs/task_checkpoints.h); without a
@@ -56,6 +59,7 @@ class RunContext {
   std::map<std::string, std::shared_ptr<const QueryBundle>> bundles_;
   std::map<std::string, std::shared_ptr<const Representation>> reps_;
   std::map<std::string, std::shared_ptr<const VaeModel>> vaes_;
+  std::map<std::string, std::shared_ptr<const TripletSet>> triplets_;
   std::shared_ptr<const Study> study_;
   std::shared_ptr<const Dataset> study_dataset_;
   std::map<std::string, std::unique_ptr<std::once_flag>> once_;

@@ -230,3 +230,69 @@ TEST(NoisyTeacher, InconsistentRobustnessProfilesAreRejected) {
 
 }  // namespace
 }  // namespace sirl
+
+namespace sirl {
+namespace {
+
+constexpr const char* kActive = R"(
+name = "a"
+envs = ["grid", "jaco"]
+seeds = [0]
+[queries]
+similarity = 300
+preference = 300
+tpa_pairs = 100
+[fpe]
+methods = ["sirl", "sirl@vote", "sirl+vae@infogain"]
+N = [100, 300]
+[active]
+members = 4
+batch = 50
+pool = 500
+[active.jaco]
+members = 3
+round_epochs = 5
+)";
+
+TEST(ActiveVariants, ParseNameAndPlanTheirQueryTasks) {
+  EXPECT_EQ(parse_variant("sirl+vae@infogain").name(), "sirl+vae@infogain");
+  EXPECT_EQ(parse_variant("sirl@vote").selection, Selection::vote);
+  EXPECT_EQ(parse_variant("sirl").selection, Selection::uniform);
+  EXPECT_THROW(parse_variant("multipref10@vote"), std::invalid_argument);
+  EXPECT_THROW(parse_variant("sirl@bald"), std::invalid_argument);
+
+  const Profile p = parse_profile(kActive, "a.toml");
+  EXPECT_EQ(p.active.at("grid").members, 4);
+  EXPECT_EQ(p.active.at("grid").round_epochs, 50);  // the default
+  EXPECT_EQ(p.active.at("jaco").members, 3);        // [active.jaco] over [active]
+  EXPECT_EQ(p.active.at("jaco").batch, 50);         // [active]'s, not overridden
+  EXPECT_EQ(p.active.at("jaco").round_epochs, 5);
+
+  const Plan plan = make_plan(p);
+  EXPECT_EQ(plan.count(TaskKind::active), 2 * 2);  // per env: one query set per rule
+  // Both N of an active variant read the one query set (nested, like the uniform set).
+  for (const char* rep : {"grid/s0/sirl@vote/N100/rep", "grid/s0/sirl@vote/N300/rep"}) {
+    const Task& t = plan.tasks[size_t(plan.index.at(rep))];
+    ASSERT_EQ(t.deps.size(), 1u) << rep;
+    EXPECT_EQ(plan.tasks[size_t(t.deps[0])].key, "grid/s0/active/vote");
+  }
+  const Task& v = plan.tasks[size_t(plan.index.at("jaco/s0/sirl+vae@infogain/N300/rep"))];
+  ASSERT_EQ(v.deps.size(), 2u);  // the VAE it starts from and the triplets it learns from
+  EXPECT_EQ(plan.tasks[size_t(v.deps[0])].key, "jaco/s0/vae");
+  EXPECT_EQ(plan.tasks[size_t(v.deps[1])].key, "jaco/s0/active/infogain");
+  EXPECT_GT(plan.tasks[size_t(plan.index.at("jaco/s0/active/infogain"))].flops,
+            plan.tasks[size_t(plan.index.at("grid/s0/active/infogain"))].flops);
+
+  const std::string base =
+      "name = \"x\"\nenvs = [\"grid\"]\nseeds = [0]\n[fpe]\nmethods = "
+      "[\"sirl@vote\"]\nN = [100]\n";
+  std::string m = error_of(base + "[active]\npool = 10\nbatch = 20\n");
+  EXPECT_NE(m.find("pool = 10 is below batch = 20"), std::string::npos) << m;
+  m = error_of(base + "[active]\nmembers = 1\n");
+  EXPECT_NE(m.find("members = 1 is outside [2, 64]"), std::string::npos) << m;
+  m = error_of(base + "[active.jaco]\nmembers = 3\n");
+  EXPECT_NE(m.find("unknown key 'jaco' in [active]"), std::string::npos) << m;
+}
+
+}  // namespace
+}  // namespace sirl
