@@ -27,6 +27,7 @@ from scipy import stats  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import claims as claims_stats  # noqa: E402
+import plot_beyond  # noqa: E402
 
 # One colour and one label per method variant, shared by every figure.
 STYLE = {
@@ -68,7 +69,7 @@ def decode(df):
     return df
 
 
-TABLES = ("fpe", "tpa", "timings", "training", "vae_latents")
+TABLES = ("fpe", "tpa", "timings", "training", "vae_latents", "robust_fpe", "robust_tpa")
 
 
 def load(path):
@@ -408,6 +409,8 @@ def convergence_lines(t):
          f"Per-task values: /tables/training.", "",
          "| env | training | variant | epochs | converged | median Δ over the last 10 % |",
          "|---|---|---|---:|---:|---:|"]
+    if "teacher" in tr:  # the [robustness] cells' trainings, one line per method
+        tr = tr.assign(variant=tr.variant.where(tr.teacher == "", tr.variant + " (noisy teachers)"))
     for (env, kind, v), d in tr.groupby(["env", "kind", "variant"]):
         L.append(f"| {env} | {kind} | {v} | {int(d.epochs.median())} | {int(d.converged.sum())} of "
                  f"{len(d)} | {100 * d.loss_relative_change.median():+.2f} % |")
@@ -607,11 +610,12 @@ FIGURES = [("fig3_grid_similar", "Fig. 3"), ("fig4_fpe", "Fig. 4"), ("fig5_tpa",
            ("fig7_ablation", "Fig. 7")]
 
 
-def report(f, t, envs, out, notes, fig3_key):
+def report(f, t, envs, out, notes, fig3_key, beyond=None):
     """report.md and report.html: the summary table of claims first, then the figures, the
     learning curves with their convergence table, the claims in detail, compute, diagnostics,
     notes, and the profile's text last."""
     fpe, tpa, tim = t["fpe"], t["tpa"], t["timings"]
+    beyond = beyond or {}
     envs = [e for e in envs if ENV.get(e, {}).get("in_claims", 1)]  # e.g. Fig. 3's own env
     a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
     H = hypotheses(fpe, tpa, envs)
@@ -626,7 +630,10 @@ def report(f, t, envs, out, notes, fig3_key):
     for name, cap in FIGURES:
         if os.path.exists(os.path.join(out, name + ".png")):
             L += [f"![{cap}]({name}.png)", ""]
-    L += ["## Learning curves and convergence", ""]
+    L += plot_beyond.active_lines(fpe, tim, beyond.get("active", []))
+    L += plot_beyond.robustness_lines(fpe, tpa, t["robust_fpe"], t["robust_tpa"],
+                                      beyond.get("robustness", []))
+    L += ["", "## Learning curves and convergence", ""]
     if os.path.exists(os.path.join(out, "fig_learning_curves.png")):
         L += ["![Learning curves](fig_learning_curves.png)", ""]
     L += convergence_lines(t)
@@ -710,7 +717,10 @@ def main():
     plot_fig5(t["tpa"], envs, a.out, notes)
     plot_fig7(t["tpa"], envs, a.out, notes)
     plot_learning_curves(f, t, envs, a.out, notes)
-    report(f, t, envs, a.out, notes, fig3_key)
+    beyond = {"active": plot_beyond.plot_active(t["fpe"], t["tpa"], a.out, notes, DRAWN),
+              "robustness": plot_beyond.plot_robustness(t["fpe"], t["tpa"], t["robust_fpe"],
+                                                        t["robust_tpa"], a.out, notes, DRAWN)}
+    report(f, t, envs, a.out, notes, fig3_key, beyond)
     with open(os.path.join(a.out, "figures.json"), "w") as fh:
         json.dump(DRAWN, fh, indent=1)
     print(f"plot_figures: wrote figures and report.md to {a.out}/")

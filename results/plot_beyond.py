@@ -1,0 +1,343 @@
+"""The figures and report sections of the questions beyond the paper (profile `beyond`):
+
+  fig_active      SIRL on actively chosen triplets (sirl@vote, sirl@infogain) against the
+                  paper's uniform triplets: FPE vs N, TPA at each N (frozen, as SIRL in Fig. 5);
+                  the report estimates N*, the fewest active queries whose FPE matches uniform
+                  selection's at the largest N, with a bootstrap CI over seeds, and the compute.
+  fig_robustness  every method's FPE and TPA against the noise of its teacher, one column per
+                  noise axis (Boltzmann β, mistake rate, attended features); the report gives each
+                  method's degradation from the perfect teacher to the noisiest, with a CI.
+
+Imported by plot_figures.py; reads the DataFrames of /tables/fpe, tpa, robust_fpe, robust_tpa
+and timings. Draws nothing (and says so) when a file has none of these cells.
+"""
+import math
+import os
+
+import matplotlib.pyplot as plt
+import numpy as np
+from scipy import stats
+
+# The selection rules: colour and label (uniform = the paper's SIRL).
+SELECTION = {"sirl": ("#d62728", "uniform (the paper)"),
+             "sirl@vote": ("#1f77b4", "active: vote entropy"),
+             "sirl@infogain": ("#2ca02c", "active: information gain")}
+METHOD_STYLE = {"sirl": ("#d62728", "SIRL"), "vae": ("#2ca02c", "VAE"),
+                "multipref10": ("#1f77b4", "MultiPref-10"),
+                "multipref50": ("#17becf", "MultiPref-50"),
+                "singlepref": ("#9467bd", "SinglePref"), "random": ("#7f7f7f", "Random")}
+AXES = {"beta": ("Boltzmann β", True), "mistake": ("mistake rate", False),
+        "attend": ("share of features attended", True)}  # True: noisier as the value falls
+BOOTSTRAP = 2000
+
+
+def mean_ci(v):
+    v = np.asarray(v, dtype=float)
+    v = v[np.isfinite(v)]
+    if len(v) == 0:
+        return np.nan, np.nan
+    if len(v) == 1:
+        return float(v[0]), np.nan
+    return float(v.mean()), float(stats.t.ppf(0.975, len(v) - 1) * v.std(ddof=1) / math.sqrt(len(v)))
+
+
+def save(fig, out, name):
+    for ext in ("png", "pdf"):
+        fig.savefig(os.path.join(out, f"{name}.{ext}"), dpi=150, bbox_inches="tight")
+    plt.close(fig)
+
+
+# ---------------------------------------------------------------- active selection
+
+def active_envs(fpe):
+    if fpe.empty:
+        return []
+    has = fpe[fpe.variant.isin(["sirl@vote", "sirl@infogain"])]
+    return [e for e in dict.fromkeys(has.env)]
+
+
+def fpe_curves(d, variant):
+    """{seed: {N: fpe}} of one variant."""
+    out = {}
+    for _, r in d[d.variant == variant].iterrows():
+        out.setdefault(int(r.seed), {})[int(r.N)] = float(r.fpe)
+    return out
+
+
+def n_star(curve_ns, active_means, target):
+    """The smallest N (interpolated linearly between grid points) at which the active mean FPE
+    is at or below `target`; inf when it never is on the grid."""
+    for i, (n, m) in enumerate(zip(curve_ns, active_means)):
+        if m <= target:
+            if i == 0:
+                return float(n)
+            n0, m0 = curve_ns[i - 1], active_means[i - 1]
+            return float(n0 + (n - n0) * (m0 - target) / (m0 - m)) if m0 != m else float(n)
+    return math.inf
+
+
+def n_star_estimate(d, variant, seed=0):
+    """N* of `variant` against uniform SIRL's FPE at the largest N, and a 95 % percentile CI from
+    resampling seeds (the same seeds for both curves: the design is paired by seed)."""
+    uni, act = fpe_curves(d, "sirl"), fpe_curves(d, variant)
+    Ns = sorted(set.intersection(*[set(c) for c in list(uni.values()) + list(act.values())]))
+    seeds = sorted(set(uni) & set(act))
+    if len(Ns) < 2 or not seeds:
+        return None
+    top = Ns[-1]
+    U = np.array([[uni[s][n] for n in Ns] for s in seeds])
+    A = np.array([[act[s][n] for n in Ns] for s in seeds])
+
+    def est(idx):
+        return n_star(Ns, A[idx].mean(axis=0), U[idx, -1].mean())
+
+    point = est(np.arange(len(seeds)))
+    rng = np.random.default_rng(seed)
+    boots = np.array([est(rng.integers(0, len(seeds), len(seeds))) for _ in range(BOOTSTRAP)])
+    finite = boots[np.isfinite(boots)]
+    lo = float(np.percentile(boots, 2.5)) if len(seeds) > 1 else math.nan
+    hi = float(np.percentile(boots, 97.5)) if len(seeds) > 1 else math.nan
+    return {"variant": variant, "N_top": top, "N_star": point, "ci": (lo, hi),
+            "share_reached": float(len(finite) / len(boots)), "seeds": len(seeds), "Ns": Ns,
+            "uniform_at_top": float(U[:, -1].mean()), "active_at_top": float(A[:, -1].mean())}
+
+
+def plot_active(fpe, tpa, out, notes, drawn):
+    envs = active_envs(fpe)
+    if not envs:
+        return []
+    fig, axes = plt.subplots(2, len(envs), figsize=(5.2 * len(envs), 7.0), squeeze=False,
+                             constrained_layout=True)
+    for c, env in enumerate(envs):
+        ax = axes[0][c]
+        d = fpe[fpe.env == env]
+        for v, (colour, label) in SELECTION.items():
+            dv = d[d.variant == v]
+            if dv.empty:
+                continue
+            Ns = sorted(dv.N.unique())
+            st = [mean_ci(dv[dv.N == n].fpe) for n in Ns]
+            ms, cis = np.array([s[0] for s in st]), np.array([s[1] for s in st])
+            drawn.setdefault("fig_active", {}).setdefault(env, {})[v] = {
+                str(int(n)): m for n, m in zip(Ns, ms)}
+            ax.plot(Ns, ms, "o-", color=colour, label=label, ms=4)
+            ok = np.isfinite(cis)
+            ax.fill_between(np.array(Ns)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour,
+                            alpha=0.15)
+        ax.set_title(env)
+        ax.set_xlabel("similarity queries N")
+        ax.set_ylabel("FPE (test MSE)")
+        ax.set_ylim(bottom=0)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        ax = axes[1][c]
+        t = tpa[(tpa.env == env) & (tpa.frozen == 1)] if not tpa.empty else tpa
+        Ms = sorted(t.M.unique()) if not t.empty else []
+        if t.empty or not t.variant.isin(["sirl@vote", "sirl@infogain"]).any():
+            ax.set_axis_off()
+            continue
+        Ns = sorted(t[t.variant.isin(list(SELECTION))].N.unique())
+        styles = ["--", "-", ":", "-."]
+        for i, n in enumerate(Ns):
+            for v, (colour, label) in SELECTION.items():
+                dv = t[(t.variant == v) & (t.N == n)]
+                if dv.empty:
+                    continue
+                st = [mean_ci(dv[dv.M == m].tpa) for m in Ms]
+                ms, cis = np.array([x[0] for x in st]), np.array([x[1] for x in st])
+                drawn.setdefault("fig_active_tpa", {}).setdefault(env, {}).setdefault(
+                    str(int(n)), {})[v] = {str(int(m)): x for m, x in zip(Ms, ms)}
+                ax.errorbar(np.array(Ms) + 2 * (list(SELECTION).index(v) - 1), ms,
+                            yerr=np.where(np.isfinite(cis), cis, 0), color=colour,
+                            ls=styles[i % len(styles)], marker="o", ms=4, capsize=2,
+                            label=f"{label}, N = {int(n)}")
+        ax.set_xlabel("preference queries per test reward M")
+        ax.set_ylim(0.4, 1.0)
+        ax.set_ylabel("TPA (SIRL frozen)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle("Active vs uniform similarity queries (mean ± 95 % CI over seeds)", fontsize=11)
+    save(fig, out, "fig_active")
+    return envs
+
+
+def active_lines(fpe, tim, envs):
+    if not envs:
+        return []
+    L = ["", "## Beyond the paper: active similarity queries", "",
+         "SIRL trained on triplets chosen round by round from an ensemble's disagreement "
+         "(*vote*: vote entropy; *infogain*: the crowd-kernel information gain, the mutual "
+         "information between the answer and the ensemble member) against the paper's uniform "
+         "triplets; every φ starts from the same initialisation and sees the same teacher. "
+         "**N\\*** = the fewest active queries whose mean FPE is at or below uniform selection's "
+         "at the largest N (linear between grid points); its 95 % CI resamples seeds "
+         f"({BOOTSTRAP} draws, paired by seed); *reached* = share of draws in which N\\* is on "
+         "the grid at all.", "",
+         "![Active vs uniform](fig_active.png)", "",
+         "| env | selection | FPE at top N (uniform → active) | N\\* | 95 % CI | reached | seeds |",
+         "|---|---|---|---:|---|---:|---:|"]
+    for env in envs:
+        d = fpe[fpe.env == env]
+        for v in ("sirl@vote", "sirl@infogain"):
+            e = n_star_estimate(d, v)
+            if not e:
+                continue
+            ns = "> " + str(e["N_top"]) if not math.isfinite(e["N_star"]) else f"{e['N_star']:.0f}"
+            lo, hi = e["ci"]
+            ci = "—" if not math.isfinite(lo) and not math.isfinite(hi) and len(d.seed.unique()) < 2 \
+                else f"[{lo:.0f}, {'> ' + str(e['N_top']) if not math.isfinite(hi) else f'{hi:.0f}'}]"
+            L.append(f"| {env} | {v.split('@')[1]} | {e['uniform_at_top']:.4f} → "
+                     f"{e['active_at_top']:.4f} (N = {e['N_top']}) | {ns} | {ci} | "
+                     f"{100 * e['share_reached']:.0f} % | {e['seeds']} |")
+    if len(tim):
+        L += ["", "What choosing costs (task-seconds on this machine, summed over seeds): the "
+              "ensemble's training and pool scoring (`active` tasks) against training SIRL's φ "
+              "on the chosen triplets at every N (`rep`).", "",
+              "| env | selection | choosing: s | GFLOP | SIRL φ of that selection: s |",
+              "|---|---|---:|---:|---:|"]
+        for env in envs:
+            for v in ("sirl", "sirl@vote", "sirl@infogain"):
+                rule = v.split("@")[1] if "@" in v else None
+                act = tim[(tim.kind == "active") & tim.key.str.startswith(env + "/") &
+                          tim.key.str.endswith("/active/" + str(rule))] if rule else tim.iloc[0:0]
+                reps = tim[(tim.kind == "rep") & tim.key.str.startswith(env + "/") &
+                           tim.key.str.contains("/" + v.replace("+", r"\+") + "/N", regex=True)]
+                L.append(f"| {env} | {rule or 'uniform'} | {act.seconds.sum():.1f} | "
+                         f"{act.flops.sum() / 1e9:.0f} | {reps.seconds.sum():.1f} |")
+    return L
+
+
+# ---------------------------------------------------------------- noisy teachers
+
+def reference_rows(main, d_robust, metric):
+    """The main teacher's cells of the sizes the robustness cells have (the axes' reference)."""
+    if main.empty or d_robust.empty:
+        return main.iloc[0:0]
+    keys = ["env", "variant", "seed"] + (["M", "frozen"] if metric == "tpa" else [])
+    sizes = d_robust[keys + ["N"]].drop_duplicates()
+    m = main.merge(sizes, on=keys + ["N"])
+    return m
+
+
+def axis_points(d, axis):
+    """The axis's levels, perfect first then noisier, with their mean answer errors."""
+    lv = sorted(d[d.axis == axis].level.unique(), reverse=AXES[axis][1])
+    return lv
+
+
+def robustness_frames(fpe, tpa, rfpe, rtpa):
+    """Long frames of (env, variant, seed, axis, level, value, error) per metric, the perfect
+    teacher's rows added to every axis at level 'perfect'."""
+    out = {}
+    for metric, main, rob in (("fpe", fpe, rfpe), ("tpa", tpa, rtpa)):
+        if rob.empty:
+            continue
+        r = rob.copy()
+        if metric == "tpa":  # the paper's best mode per method, as in [robustness]
+            best = r.variant.isin(["sirl", "sirl+vae"]).astype(int)
+            r = r[r.frozen == best]
+        ref = reference_rows(main, r, metric)
+        if metric == "tpa" and not ref.empty:
+            ref = ref[ref.frozen == ref.variant.isin(["sirl", "sirl+vae"]).astype(int)]
+        frames = [r.assign(perfect=0)]
+        for axis in r.axis.unique():
+            if not ref.empty:
+                frames.append(ref.assign(axis=axis, level=np.nan, perfect=1, similarity_error=0.0,
+                                         preference_error=0.0))
+        import pandas as pd
+        out[metric] = pd.concat(frames, ignore_index=True)
+    return out
+
+
+def plot_robustness(fpe, tpa, rfpe, rtpa, out, notes, drawn):
+    F = robustness_frames(fpe, tpa, rfpe, rtpa)
+    if not F:
+        return []
+    envs = list(dict.fromkeys(list(rfpe.env) + list(rtpa.env)))
+    axes_present = [a for a in AXES if any((f.axis == a).any() for f in F.values())]
+    for env in envs:
+        metrics = [m for m in ("fpe", "tpa") if m in F and (F[m].env == env).any()]
+        fig, axs = plt.subplots(len(metrics), len(axes_present),
+                                figsize=(4.4 * len(axes_present), 3.4 * len(metrics)),
+                                squeeze=False, constrained_layout=True)
+        for r, metric in enumerate(metrics):
+            d = F[metric][F[metric].env == env]
+            for c, axis in enumerate(axes_present):
+                ax = axs[r][c]
+                da = d[d.axis == axis]
+                levels = axis_points(da[da.perfect == 0], axis)
+                ticks = ["perfect"] + [f"{lv:g}" for lv in levels]
+                errs = [0.0] + [float(da[(da.perfect == 0) & (da.level == lv)][
+                    "similarity_error" if metric == "fpe" else "preference_error"].mean())
+                    for lv in levels]
+                for v, (colour, label) in METHOD_STYLE.items():
+                    dv = da[da.variant == v]
+                    if dv.empty:
+                        continue
+                    st = [mean_ci(dv[dv.perfect == 1][metric])] + \
+                         [mean_ci(dv[(dv.perfect == 0) & (dv.level == lv)][metric]) for lv in levels]
+                    ms = np.array([s[0] for s in st])
+                    cis = np.array([s[1] for s in st])
+                    xs = np.arange(len(ticks))
+                    drawn.setdefault("fig_robustness", {}).setdefault(env, {}).setdefault(
+                        metric, {}).setdefault(axis, {})[v] = {t: m for t, m in zip(ticks, ms)}
+                    ax.plot(xs, ms, "o-", color=colour, label=label, ms=4)
+                    ok = np.isfinite(cis)
+                    ax.fill_between(xs[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour, alpha=0.12)
+                ax.set_xticks(range(len(ticks)))
+                ax.set_xticklabels([f"{t}\n{100 * e:.0f} %" for t, e in zip(ticks, errs)],
+                                   fontsize=8)
+                ax.set_xlabel(f"{AXES[axis][0]} (below: share of answers wrong)", fontsize=8)
+                if c == 0:
+                    ax.set_ylabel("FPE (test MSE)" if metric == "fpe" else "TPA (held-out)")
+                ax.grid(alpha=0.3)
+        axs[-1][-1].legend(fontsize=7)  # the TPA row holds every method
+        fig.suptitle(f"{env}: robustness to noisy teachers (FPE at N = {int(F['fpe'].N.max()) if 'fpe' in F else '—'}"
+                     f"; TPA at M = {int(F['tpa'].M.max()) if 'tpa' in F else '—'}; mean ± 95 % CI)",
+                     fontsize=11)
+        save(fig, out, f"fig_robustness_{env}")
+    return envs
+
+
+def robustness_lines(fpe, tpa, rfpe, rtpa, envs):
+    if not envs:
+        return []
+    F = robustness_frames(fpe, tpa, rfpe, rtpa)
+    L = ["", "## Beyond the paper: robustness to noisy teachers", "",
+         "Each noisy teacher answers the very queries the perfect one was asked (its noise has "
+         "random streams of its own); TPA's held-out pairs are labelled by the true reward, so "
+         "accuracy is measured against the truth. Below each level: the measured share of its "
+         "answers that differ from the perfect oracle's (similarity answers for FPE, preference "
+         "labels for TPA). *Degradation* = the metric at the noisiest level of an axis minus at "
+         "the perfect teacher, mean over seeds with a paired 95 % CI (FPE: + is worse; TPA: − is "
+         "worse). FPE of VAE and Random does not depend on the teacher (their φ learns from no "
+         "answers), so they have no FPE rows.", ""]
+    for env in envs:
+        L += [f"![Robustness: {env}](fig_robustness_{env}.png)", ""]
+    L += ["| env | metric | axis (noisiest level) | method | perfect | noisiest | degradation [95 % CI] | seeds |",
+          "|---|---|---|---|---:|---:|---|---:|"]
+    for env in envs:
+        for metric in ("fpe", "tpa"):
+            if metric not in F:
+                continue
+            d = F[metric][F[metric].env == env]
+            for axis in AXES:
+                da = d[d.axis == axis]
+                if da.empty:
+                    continue
+                levels = axis_points(da[da.perfect == 0], axis)
+                worst = levels[-1]
+                for v in METHOD_STYLE:
+                    dv = da[da.variant == v]
+                    p = dv[dv.perfect == 1].set_index("seed")[metric]
+                    w = dv[(dv.perfect == 0) & (dv.level == worst)].set_index("seed")[metric]
+                    s = sorted(set(p.index) & set(w.index))
+                    if not s:
+                        continue
+                    diff = (w.loc[s] - p.loc[s]).values
+                    m, ci = mean_ci(diff)
+                    cit = f"{m:+.4f} [{m - ci:+.4f}, {m + ci:+.4f}]" if np.isfinite(ci) else f"{m:+.4f}"
+                    L.append(f"| {env} | {metric.upper()} | {AXES[axis][0]} = {worst:g} | "
+                             f"{METHOD_STYLE[v][1]} | {p.loc[s].mean():.4f} | {w.loc[s].mean():.4f} | "
+                             f"{cit} | {len(s)} |")
+    return L
