@@ -132,8 +132,8 @@ Reply StudyService::state(const RequestParams& r) {
   return {200, state_json()};
 }
 
-// An arm view's end-effector path [21, 3] (m) and the objects; a plane view's cells [9, 2] and
-// end angle.
+// An arm view's end-effector path [21, 3] (m), the arm's pose at each waypoint [21, 8, 3] and
+// the objects; a plane view's cells [9, 2] and end angle.
 Reply StudyService::trajectory(const RequestParams& r) {
   Reply reply;
   if (!authorised(r, reply)) return reply;
@@ -154,6 +154,15 @@ Reply StudyService::trajectory(const RequestParams& r) {
     points.push_back(view_ == EnvView::arm ? json{q[0], q[1], q[2]} : json{q[0], q[1]});
   json o = {{"id", id}, {"objects", objects}, {"points", points}};
   if (view_ == EnvView::plane) o["angle"] = v.end_angle_deg;
+  if (!v.links.empty()) {  // [waypoints][base + links][3]: the arm posed at each waypoint
+    json arm = json::array();
+    for (const auto& pose : v.links) {
+      json p = json::array();
+      for (const auto& q : pose) p.push_back({q[0], q[1], q[2]});
+      arm.push_back(p);
+    }
+    o["arm"] = arm;
+  }
   return {200, text(o)};
 }
 

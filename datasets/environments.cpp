@@ -41,6 +41,13 @@ TrajectoryView jaco_draw(const Dataset& d, int64_t row) {
   for (int t = 0; t < d.input_dim / kJacoStateDim; ++t) {
     const float* ee = x + t * kJacoStateDim + kJacoEndEffector;
     v.points.push_back({ee[0], ee[1], ee[2]});
+    // The base (the world origin: the arm stands on the table there) and frames 1..7.
+    std::vector<std::array<float, 3>> pose{{0.f, 0.f, 0.f}};
+    for (int j = 0; j < kJacoDofs; ++j) {
+      const float* f = x + t * kJacoStateDim + kJacoPositions + 3 * j;
+      pose.push_back({f[0], f[1], f[2]});
+    }
+    v.links.push_back(std::move(pose));
   }
   return v;
 }

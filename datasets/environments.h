@@ -27,6 +27,9 @@ struct EnvConfig {
 struct TrajectoryView {
   std::vector<std::array<float, 3>> points;
   float end_angle_deg = 0;
+  // An arm's pose at each waypoint: its base then every link frame, world positions (m), as the
+  // compiled MJCF's forward kinematics placed them (empty for environments without an arm).
+  std::vector<std::vector<std::array<float, 3>>> links;
 };
 
 enum class EnvView { plane, arm };

@@ -340,7 +340,7 @@ with tempfile.TemporaryDirectory() as tmp:
             if not line:
                 sys.exit(f"FAIL: jaco2 server did not start: {pj.stderr.read()}")
         p = subprocess.run(["node", os.path.join(SRC, "tests", "study_browser.mjs"),
-                            line.split("open: ")[1].strip()], cwd=web, capture_output=True,
+                            line.split("open: ")[1].strip(), "arm"], cwd=web, capture_output=True,
                            text=True, timeout=300)
         pj.kill()
         if p.returncode != 0:
@@ -348,6 +348,7 @@ with tempfile.TemporaryDirectory() as tmp:
         with h5py.File(jaco, "r") as f:
             g = f["study/participants/carol"]
             assert len(g["similarity_answer"]) == 2 and len(g["preference_answer"]) == 1
-        print("ok: the JacoRobot page (3-D views) ran to the end in chromium")
+        print(p.stdout.strip())
+        print("ok: the JacoRobot page (3-D arm views, shared camera, keys) ran to the end in chromium")
     srv.kill()
 print("PASS")

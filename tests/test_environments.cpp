@@ -107,6 +107,39 @@ TEST(Environments, GridDrawingMatchesTheTrajectorysFeatures) {
   }
 }
 
+// JacoRobot's drawing: the arm posed at each waypoint is the base then the 7 link frames; its
+// last frame is the hand the path follows, and every link keeps its length whatever the joint
+// angles (rigid bodies), across waypoints and trajectories. The grid has no arm.
+TEST(Environments, JacoDrawingPosesARigidArmWhoseHandIsThePath) {
+  const EnvSpec& e = env_spec("jaco2");
+  EnvConfig c;
+  c.jaco.trajectories = 30;
+  const Dataset d = e.make(c);
+  std::vector<double> length;
+  for (int64_t row = 0; row < d.count; ++row) {
+    const TrajectoryView v = e.draw(d, row);
+    ASSERT_EQ(v.links.size(), v.points.size());
+    for (size_t t = 0; t < v.links.size(); ++t) {
+      const auto& pose = v.links[t];
+      ASSERT_EQ(pose.size(), 8u);
+      EXPECT_EQ(pose[0], (std::array<float, 3>{0, 0, 0}));
+      EXPECT_EQ(pose.back(), v.points[t]) << row << " " << t;
+      for (size_t j = 1; j < pose.size(); ++j) {
+        const double l = std::sqrt(std::pow(pose[j][0] - pose[j - 1][0], 2) +
+                                   std::pow(pose[j][1] - pose[j - 1][1], 2) +
+                                   std::pow(pose[j][2] - pose[j - 1][2], 2));
+        if (length.size() < j) length.push_back(l);
+        EXPECT_NEAR(l, length[j - 1], 1e-4) << "link " << j << " of row " << row;
+      }
+    }
+  }
+  // Not a degenerate chain: the Jaco's links add up to about a metre (some DH frames coincide).
+  double reach = 0;
+  for (double l : length) reach += l;
+  EXPECT_GT(reach, 0.6);
+  EXPECT_TRUE(env_spec("grid").draw(env_spec("grid").make(EnvConfig{}), 0).links.empty());
+}
+
 TEST(Environments, PaperHyperAppliesTheRegisteredDefaults) {
   register_toy_once();
   const Hyper toy = paper_hyper("toyline"), grid = paper_hyper("grid");

@@ -49,24 +49,69 @@ function drawGrid(canvas, t, color) {
   ctx.stroke();
 }
 
+// The arm views share one camera: every panel renders the same viewpoint, so a participant
+// compares the trajectories as seen from one place. Orbiting any panel moves them all; the view
+// buttons put the camera at fixed top and side views (or back to the default).
+const VIEWS = {
+  default: { pos: [2.0, 1.5, 1.55], target: [0, -0.3, 0.35] },
+  top: { pos: [0.0, -0.3001, 2.4], target: [0, -0.3, 0.0] },
+  side: { pos: [2.3, -0.3, 0.45], target: [0, -0.3, 0.35] },
+};
+const shared = { camera: null, panels: [], loop: false };
+
+function panelSize() {  // three panels side by side on a laptop screen
+  const w = Math.max(220, Math.min(340, Math.floor((window.innerWidth - 90) / 3)));
+  return [w, Math.round(w * 0.85)];
+}
+
+function sharedCamera() {
+  if (!shared.camera) {
+    const [w, h] = panelSize();
+    shared.camera = new THREE.PerspectiveCamera(45, w / h, 0.01, 20);
+    shared.camera.up.set(0, 0, 1);
+    setView("default");
+  }
+  return shared.camera;
+}
+
+function setView(name) {
+  const v = VIEWS[name], cam = shared.camera;
+  cam.position.set(...v.pos);
+  for (const p of shared.panels) { p.controls.target.set(...v.target); p.controls.update(); }
+  cam.lookAt(...v.target);
+  shared.view = name;
+}
+
+// One link of the arm: a cylinder from a to b (re-posed every frame of a replay).
+function poseLink(mesh, a, b) {
+  const dir = new THREE.Vector3().subVectors(b, a), len = dir.length();
+  mesh.visible = len > 1e-4;
+  if (!mesh.visible) return;
+  mesh.position.copy(a).addScaledVector(dir, 0.5);
+  mesh.scale.set(1, len, 1);
+  mesh.quaternion.setFromUnitVectors(new THREE.Vector3(0, 1, 0), dir.normalize());
+}
+
 function drawJaco3D(container, t, color) {
-  const w = 300, h = 260;
+  const [w, h] = panelSize();
   const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
   renderer.setSize(w, h);
   container.appendChild(renderer.domElement);
   const scene = new THREE.Scene();
   scene.background = new THREE.Color(0xffffff);
-  const camera = new THREE.PerspectiveCamera(45, w / h, 0.01, 20);
-  camera.up.set(0, 0, 1);
-  camera.position.set(1.6, 1.2, 1.3);
-  const controls = new OrbitControls(camera, renderer.domElement);  // click and drag to orbit
-  controls.target.set(0, -0.3, 0.3);
-  controls.update();
-  const table = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), new THREE.MeshBasicMaterial({ color: 0xd8c3a5, side: THREE.DoubleSide }));
+  scene.add(new THREE.AmbientLight(0xffffff, 0.7));
+  const sun = new THREE.DirectionalLight(0xffffff, 0.8);
+  sun.position.set(1, 1, 2);
+  scene.add(sun);
+  const camera = sharedCamera();
+  const controls = new OrbitControls(camera, renderer.domElement);  // drag to orbit: all panels
+  controls.target.set(...VIEWS[shared.view || "default"].target);
+  controls.addEventListener("change", () => { shared.view = "free"; });
+  const table = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), new THREE.MeshLambertMaterial({ color: 0xd8c3a5, side: THREE.DoubleSide }));
   table.position.set(0, -0.4, 0);
   scene.add(table);
   for (const o of t.objects) {
-    const box = new THREE.Mesh(new THREE.BoxGeometry(0.34, 0.24, 0.02), new THREE.MeshBasicMaterial({ color: 0x333333 }));
+    const box = new THREE.Mesh(new THREE.BoxGeometry(0.34, 0.24, 0.02), new THREE.MeshLambertMaterial({ color: 0x333333 }));
     box.position.set(...o.pos);
     scene.add(box);
   }
@@ -75,19 +120,63 @@ function drawJaco3D(container, t, color) {
   const ball = new THREE.Mesh(new THREE.SphereGeometry(0.03), new THREE.MeshBasicMaterial({ color }));
   ball.position.copy(pts[0]);
   scene.add(ball);
-  let replayStart = null;
-  function frame(now) {
-    if (replayStart !== null) {
-      const k = Math.min((now - replayStart) / 3000, 1) * (pts.length - 1), i = Math.floor(k);
+  // The arm: its base and links as the server's forward kinematics posed them per waypoint.
+  const poses = (t.arm || []).map((pose) => pose.map((q) => new THREE.Vector3(...q)));
+  const links = [], joints = [];
+  if (poses.length) {
+    const linkMat = new THREE.MeshLambertMaterial({ color: 0x8a8f98 });
+    const jointMat = new THREE.MeshLambertMaterial({ color: 0x3b3f46 });
+    for (let j = 1; j < poses[0].length; j++) {
+      const m = new THREE.Mesh(new THREE.CylinderGeometry(0.035, 0.035, 1, 12), linkMat);
+      scene.add(m); links.push(m);
+    }
+    for (let j = 0; j < poses[0].length; j++) {
+      const m = new THREE.Mesh(new THREE.SphereGeometry(0.045, 12, 8), jointMat);
+      scene.add(m); joints.push(m);
+    }
+  }
+  function poseArm(k) {  // k ∈ [0, waypoints − 1], fractional between waypoints
+    if (!poses.length) return;
+    const i = Math.min(Math.floor(k), poses.length - 1), i1 = Math.min(i + 1, poses.length - 1), f = k - i;
+    const at = poses[i].map((p, j) => p.clone().lerp(poses[i1][j], f));
+    at.forEach((p, j) => joints[j].position.copy(p));
+    for (let j = 1; j < at.length; j++) poseLink(links[j - 1], at[j - 1], at[j]);
+  }
+  poseArm(0);
+  const panel = { renderer, scene, controls, links, replayStart: null };
+  panel.frame = (now) => {
+    if (panel.replayStart !== null) {
+      // rAF's time stamp is the frame's start, which may precede the click's performance.now()
+      const k = Math.min(Math.max(now - panel.replayStart, 0) / 3000, 1) * (pts.length - 1), i = Math.floor(k);
       ball.position.copy(pts[Math.min(i + 1, pts.length - 1)]).lerp(pts[i], 1 - (k - i));
-      if (k >= pts.length - 1) replayStart = null;
+      poseArm(k);
+      if (k >= pts.length - 1) panel.replayStart = null;
     }
     renderer.render(scene, camera);
-    requestAnimationFrame(frame);
+  };
+  shared.panels.push(panel);
+  if (!shared.loop) {
+    shared.loop = true;
+    const loop = (now) => { for (const p of shared.panels) p.frame(now); requestAnimationFrame(loop); };
+    requestAnimationFrame(loop);
   }
-  requestAnimationFrame(frame);
-  return () => { replayStart = performance.now(); };
+  return () => { panel.replayStart = performance.now(); };
 }
+
+function replayAll() {
+  const now = performance.now();
+  for (const p of shared.panels) p.replayStart = now;
+}
+
+for (const v of ["default", "top", "side"]) $(`view-${v}`).onclick = () => shared.camera && setView(v);
+$("replay-all").onclick = replayAll;
+
+// Tests and curious users: the shared camera and what each panel draws.
+window.__study = {
+  camera: () => (shared.camera ? shared.camera.position.toArray() : null),
+  view: () => shared.view,
+  panels: () => shared.panels.map((p) => ({ links: p.links.length })),
+};
 
 function drawJaco2D(canvas, t, color) {  // fallback: top view
   const ctx = canvas.getContext("2d"), sc = canvas.width / 2.2;
@@ -103,6 +192,10 @@ async function showOptions(view, ids) {
   const views = $("views");
   views.innerHTML = "";
   animators.length = 0;
+  for (const p of shared.panels) { p.controls.dispose(); p.renderer.dispose(); }
+  shared.panels.length = 0;
+  const arm = view !== "plane" && THREE;
+  $("viewbar").hidden = !arm;
   for (let i = 0; i < ids.length; i++) {
     const t = await trajectory(ids[i]);
     const div = document.createElement("div");
@@ -116,6 +209,7 @@ async function showOptions(view, ids) {
       const replay = drawJaco3D(div, t, COLORS[i]);
       const b = document.createElement("button");
       b.textContent = "Replay"; b.onclick = replay; div.appendChild(b);
+      animators.push(replay);
     } else {
       const c = document.createElement("canvas"); c.width = 300; c.height = 260; div.appendChild(c);
       drawJaco2D(c, t, COLORS[i]);
@@ -123,26 +217,46 @@ async function showOptions(view, ids) {
   }
 }
 
+// Answer buttons, each with a key: [label, value, key]. The promise resolves with the value of
+// the button clicked or the key pressed (keys of other controls — r, t, s, f — are not answers).
+let keyHandler = null;
 function buttons(list) {
   const b = $("buttons");
   b.innerHTML = "";
   return new Promise((resolve) => {
-    for (const [label, value] of list) {
+    const done = (value) => { keyHandler = null; resolve(value); };
+    for (const [label, value, key] of list) {
       const el = document.createElement("button");
-      el.textContent = label;
+      el.innerHTML = `${label} <kbd>${key === "Enter" ? "↵" : key}</kbd>`;
       el.dataset.answer = value;
-      el.onclick = () => resolve(value);
+      el.dataset.key = key;
+      el.onclick = () => done(value);
       b.appendChild(el);
     }
+    keyHandler = (e) => {
+      const hit = list.find(([, , key]) => key === e.key);
+      if (hit) { e.preventDefault(); done(hit[1]); }
+    };
   });
 }
+document.addEventListener("keydown", (e) => {
+  if (e.target && e.target.tagName === "INPUT") return;
+  if (e.key === "r" && shared.panels.length) return replayAll();
+  const views = { t: "top", s: "side", f: "default" };
+  if (views[e.key] && shared.panels.length) return setView(views[e.key]);
+  if (keyHandler) keyHandler(e);
+});
 
-const SIM_CHOICES = [["1 and 2 are most similar", 2], ["1 and 3 are most similar", 1], ["2 and 3 are most similar", 0]];
-const PREF_CHOICES = [["I prefer 1", 1], ["I prefer 2", 0], ["Equally good", 0.5]];
+const SIM_CHOICES = [["1 and 2 are most similar", 2, "1"], ["1 and 3 are most similar", 1, "2"], ["2 and 3 are most similar", 0, "3"]];
+const PREF_CHOICES = [["I prefer 1", 1, "1"], ["I prefer 2", 0, "2"], ["Equally good", 0.5, "0"]];
 
 function text(html) { $("text").innerHTML = html; }
 function progress(s) {
+  const done = s.similarity.done + s.preference.done, total = s.similarity.total + s.preference.total;
   $("progress").textContent = `similarity ${s.similarity.done}/${s.similarity.total} · preference ${s.preference.done}/${s.preference.total}`;
+  $("bar").max = total;
+  $("bar").value = done;
+  $("bar").title = `${done} of ${total} questions answered`;
 }
 
 async function practice(view, list, kind) {
@@ -153,7 +267,7 @@ async function practice(view, list, kind) {
   }
 }
 
-async function continueButton(label) { await buttons([[label, "go"]]); }
+async function continueButton(label) { await buttons([[label, "go", "Enter"]]); }
 
 async function run() {
   if (!P || !T) { text("<p>This link is incomplete: it needs ?p=…&t=… from the study organiser.</p>"); return; }
@@ -161,7 +275,7 @@ async function run() {
   progress(s);
   const feats = s.features.join(" and ");
   if (s.stage === "similarity" && s.similarity.done === 0) {
-    text(`<h2>Welcome</h2><p>A robot arm carries objects over a table. Each picture shows the path of its hand. People care about how a trajectory relates to: <b>${feats}</b> (${s.features_gloss}).</p><p>First you will see groups of three trajectories and tell us which two are <b>most similar</b>.${s.view === "plane" ? "" : " Drag a 3-D view to turn it; press Replay to watch the motion."} A few practice questions come first.</p>`);
+    text(`<h2>Welcome</h2><p>A robot arm carries objects over a table. Each picture shows the path of its hand. People care about how a trajectory relates to: <b>${feats}</b> (${s.features_gloss}).</p><p>First you will see groups of three trajectories and tell us which two are <b>most similar</b>.${s.view === "plane" ? "" : " All three views share one camera: drag any of them to turn it, or pick the top or side view (keys t, s; f for the default). Replay (key r) shows the arm moving."} Answer with the buttons or the keys shown on them. A few practice questions come first.</p>`);
     $("views").innerHTML = "";
     await continueButton("Start practice");
     await practice(s.view, s.practice.similarity, "similarity");
