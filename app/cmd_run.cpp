@@ -264,7 +264,7 @@ void register_plan(CLI::App& app, Runner& run) {
 
 void register_export(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
-      "export", "Write a results file's tables (fpe, tpa, timings) as CSV files into a directory.");
+      "export", "Write a results file's tables (fpe, tpa, robust_fpe, robust_tpa, timings, training, vae_latents) as CSV files into a directory.");
   static std::string file, dir;
   cmd->add_option("file", file, "Results file (HDF5)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--csv", dir, "Directory for fpe.csv, tpa.csv, timings.csv")->required();
