@@ -233,7 +233,14 @@ ActiveQueries select_active_queries(const Dataset& d, const Teacher& teacher,
   }
 
   std::vector<int32_t> batch;
+  // A teacher who withholds every answer of a round would make the loop spin forever.
+  auto check_answered = [&](int64_t before) {
+    if (out.queries.count == before)
+      throw std::runtime_error("active selection: the teacher skipped every query of round " +
+                               std::to_string(out.rounds) + "; lower its skip threshold");
+  };
   while (out.queries.count < cfg.budget) {
+    const int64_t before = out.queries.count;
     const int64_t want = std::min(cfg.batch, cfg.budget - out.queries.count);
     std::vector<Triple> pool;
     std::set<Triple> in_pool;
@@ -243,6 +250,7 @@ ActiveQueries select_active_queries(const Dataset& d, const Teacher& teacher,
     }
     if (out.rounds == 0) {  // nothing learned yet: a uniform first batch
       for (const Triple& q : pool) ask(q);
+      check_answered(before);
       out.batch_score.push_back(0.f);
       out.pool_score.push_back(0.f);
     } else {
@@ -290,6 +298,7 @@ ActiveQueries select_active_queries(const Dataset& d, const Teacher& teacher,
         }
       double pool_mean = 0;
       for (double v : score) pool_mean += v / double(score.size());
+      check_answered(before);
       out.batch_score.push_back(float(got ? picked / double(got) : 0.0));
       out.pool_score.push_back(float(pool_mean));
     }

@@ -139,6 +139,10 @@ TEST(ActiveSelection, RejectsConfigsThatCannotWork) {
   c.pool = 10;  // < batch
   EXPECT_THROW(select_active_queries(d, Teacher{}, c, 1), std::invalid_argument);
   EXPECT_THROW(parse_selection("bald"), std::invalid_argument);
+  // A teacher who skips everything ends the selection with a message, not an endless loop.
+  Teacher mute;
+  mute.skip = 1e9;
+  EXPECT_THROW(select_active_queries(d, mute, small(Selection::vote), 1), std::runtime_error);
   EXPECT_EQ(parse_selection("infogain"), Selection::infogain);
 }
 
