@@ -13,6 +13,7 @@ and timings. Draws nothing (and says so) when a file has none of these cells.
 """
 import math
 import os
+import re
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -147,11 +148,14 @@ def plot_active(fpe, tpa, out, notes, drawn):
                 ms, cis = np.array([x[0] for x in st]), np.array([x[1] for x in st])
                 drawn.setdefault("fig_active_tpa", {}).setdefault(env, {}).setdefault(
                     str(int(n)), {})[v] = {str(int(m)): x for m, x in zip(Ms, ms)}
-                ax.errorbar(np.array(Ms) + 2 * (list(SELECTION).index(v) - 1), ms,
+                shift = 0.015 * max(Ms) * (list(SELECTION).index(v) - 1)  # side by side
+                ax.errorbar(np.array(Ms) + shift, ms,
                             yerr=np.where(np.isfinite(cis), cis, 0), color=colour,
                             ls=styles[i % len(styles)], marker="o", ms=4, capsize=2,
                             label=f"{label}, N = {int(n)}")
         ax.set_xlabel("preference queries per test reward M")
+        if len(Ms) == 1:
+            ax.set_xlim(0.8 * Ms[0], 1.2 * Ms[0])
         ax.set_ylim(0.4, 1.0)
         ax.set_ylabel("TPA (SIRL frozen)")
         ax.grid(alpha=0.3)
@@ -200,8 +204,9 @@ def active_lines(fpe, tim, envs):
                 rule = v.split("@")[1] if "@" in v else None
                 act = tim[(tim.kind == "active") & tim.key.str.startswith(env + "/") &
                           tim.key.str.endswith("/active/" + str(rule))] if rule else tim.iloc[0:0]
-                reps = tim[(tim.kind == "rep") & tim.key.str.startswith(env + "/") &
-                           tim.key.str.contains("/" + v.replace("+", r"\+") + "/N", regex=True)]
+                # the main teacher's φ of this selection only (not the robustness cells' φ)
+                reps = tim[(tim.kind == "rep") & tim.key.str.match(
+                    "^" + re.escape(env) + r"/s\d+/" + re.escape(v) + "/N")]
                 L.append(f"| {env} | {rule or 'uniform'} | {act.seconds.sum():.1f} | "
                          f"{act.flops.sum() / 1e9:.0f} | {reps.seconds.sum():.1f} |")
     return L
