@@ -522,7 +522,7 @@ def hypotheses(fpe, tpa, envs):
                   [claims_stats.paired("frozen − unfrozen", fr, un)], ">" if meth == "sirl" else "<")
         if ENV.get(env, {}).get("vae_weak_claim"):
             x = fpe[(fpe.env == env)]
-            if not x.empty:
+            if not x.empty and (x.variant == "vae").any():  # a profile may run no VAE FPE
                 nmax = x.N.max()
                 v = x[(x.variant == "vae")].set_index("seed").fpe
                 s = x[(x.variant == "sirl") & (x.N == nmax)].set_index("seed").fpe
