@@ -35,7 +35,7 @@ struct ActiveConfig {
   Selection rule = Selection::vote;
   int64_t budget = 1000;  // triplets asked in all (the largest N of the cells that read them)
   int members = 5;        // K, the ensemble
-  int64_t pool = 2000;    // candidate triplets drawn per round
+  int64_t pool = 8000;    // candidate triplets drawn per round (docs/active.md)
   int64_t batch = 100;    // triplets asked per round
   int round_epochs = 50;  // epochs each member trains per round (warm start)
   double mu = 0.05;       // crowd-kernel μ, in units of the member's median pair distance

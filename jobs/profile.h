@@ -85,7 +85,7 @@ struct RobustnessGrid {
 // round_epochs and mu), per environment ([active.<env>] overrides [active]).
 struct ActivePlan {
   int members = 5;
-  int64_t pool = 2000, batch = 100;
+  int64_t pool = 8000, batch = 100;  // defaults measured in docs/active.md
   int round_epochs = 50;
   double mu = 0.05;
 };

@@ -346,7 +346,9 @@ with tempfile.TemporaryDirectory() as tmp:
         # Every CSV: the same rows and every numeric column equal to the table's (17 digits).
         for name in ("fpe", "tpa", "timings", "training", "vae_latents"):
             t = pd.DataFrame(f["tables/" + name][:])
-            c = pd.read_csv(os.path.join(csv, name + ".csv"), float_precision="round_trip")
+            # keep_default_na=False: an empty text field (the main teacher's "") stays "", not NaN
+            c = pd.read_csv(os.path.join(csv, name + ".csv"), float_precision="round_trip",
+                            keep_default_na=False)
             assert len(t) > 0 and len(c) == len(t), (name, len(c), len(t))
             assert list(c.columns) == list(t.columns), (name, list(c.columns))
             for col in t.columns:

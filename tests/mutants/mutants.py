@@ -154,6 +154,26 @@ MUTANTS = [
     ("results/claims.py", "    z = rng.standard_normal((POWER_DRAWS, m)) + dz * math.sqrt(n)",
      "    z = rng.standard_normal((POWER_DRAWS, m)) + dz * n", "ctest:claims_stats",
      "power's noncentrality d_z·n instead of d_z·√n"),
+    # engine 0.5.0 — active selection, noisy teachers as an axis
+    ("engine/active_queries.cpp",
+     "          if (pass == 0 && (used.count(q[0]) || used.count(q[1]) || used.count(q[2]))) continue;\n",
+     "", "ActiveSelection.*", "no diversity rule: a batch may reuse a trajectory"),
+    ("engine/active_queries.cpp", "    if (c > 0) h -= double(c) / K * std::log(double(c) / K);",
+     "    if (c > 0) h -= double(c) / K * std::log(double(c));", "ActiveScores.*",
+     "vote entropy of counts instead of shares"),
+    ("datasets/queries.cpp", "  append_pairs(d, total - s.train, r, row, truth, rng, rng, s.pairs);",
+     "  append_pairs(d, total - s.train, r, row, t, rng, answers ? *answers : rng, s.pairs);",
+     "NoisyTeacher.*", "TPA's held-out pairs labelled by the noisy teacher, not the truth"),
+    ("datasets/query_bundle.cpp",
+     "      sample_similarity_queries(d, cfg.similarity, teacher, sim, noisy ? &sim_a : nullptr);",
+     "      sample_similarity_queries(d, cfg.similarity, teacher, sim, nullptr);", "NoisyTeacher.*",
+     "a noisy teacher's answers drawn from the query stream: other queries than the perfect one's"),
+    ("datasets/query_bundle.cpp",
+     "    b.config.teacher.mask = draw_mask(d.feature_count(), cfg.attend, mr);",
+     "    (void)draw_mask(d.feature_count(), cfg.attend, mr);", "NoisyTeacher.*",
+     "the attend teacher's mask drawn but not applied"),
+    ("jobs/plan.cpp", "      if (uses_queries(v.method))\n        add_task(plan, p, experiment_cell(TaskKind::fpe, env, seed, v, N));\n",
+     "", "NoisyTeacher.*", "robustness axes without the perfect teacher's reference cells"),
 ]
 
 # Mutations the suite cannot catch because they do not change behaviour (none so far).
