@@ -224,7 +224,8 @@ function buttons(list) {
   const b = $("buttons");
   b.innerHTML = "";
   return new Promise((resolve) => {
-    const done = (value) => { keyHandler = null; resolve(value); };
+    // The buttons go at once: no second answer while this one is saved and the next loads.
+    const done = (value) => { keyHandler = null; b.innerHTML = ""; resolve(value); };
     for (const [label, value, key] of list) {
       const el = document.createElement("button");
       el.innerHTML = `${label} <kbd>${key === "Enter" ? "↵" : key}</kbd>`;
