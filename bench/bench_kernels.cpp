@@ -1,5 +1,6 @@
 // Kernel micro-benchmarks (Google Benchmark). Every case reports GFLOP/s through a counter:
-// FLOPs = 2·in·out per layer per sample forward, ×3 for forward + backward (docs/ARCHITECTURE.md §6).
+// FLOPs = 2·in·out per layer per sample forward, ×3 for forward + backward (docs/ARCHITECTURE.md
+// §6).
 //   sirl_bench_kernels --benchmark_format=json > kernels.json
 #include <benchmark/benchmark.h>
 
@@ -78,6 +79,44 @@ BENCHMARK(BM_TpaHeadsStep)
     ->Args({128, 1})
     ->Args({128, 2})
     ->Args({1024, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// An unfrozen TPA cell's step: 20 copies of φ (in→h→h→6, linear output) each with its own head
+// (6→h→h→1), all fine-tuned side by side on B pairs each (2B trajectories). For JacoRobot
+// (in 2037, h 1024) that is 20 × 4.2 M weights, Adam moments included 1 GB, streamed every step.
+// Args: {input width, hidden width, pairs B, threads}.
+void BM_TpaUnfrozenStep(benchmark::State& state) {
+  const int in = int(state.range(0)), hidden = int(state.range(1)), B = int(state.range(2)),
+            threads = int(state.range(3));
+  const int M = 20, T = 400;
+  MlpShape s{{in, hidden, hidden, 6, hidden, hidden, 1}};
+  s.linear_layers = {2};
+  Rng rng(5);
+  auto X = random_inputs(T, in, rng);
+  BatchedTrainer t(s, M, AdamConfig{0.001, 1.0}, init_params(s, M, rng));
+  std::vector<int32_t> pairs(size_t(M) * B * 2);
+  std::vector<float> label(size_t(M) * B);
+  for (auto& v : pairs) v = int32_t(rng.uniform_int(T));
+  for (auto& v : label) v = float(rng.uniform_int(2));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(
+        preference_train_step_batched(t, X.data(), pairs.data(), label.data(), B, 10.f, threads));
+  const double flops = 3 * s.forward_flops(2 * B) * M;
+  state.counters["GFLOP/s"] =
+      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+  // Bytes a step must move at least: weights read forward and backward, Adam's p, m, v read and
+  // written once (the fused pass; before it, also a gradient written, zeroed and re-read).
+  const double bytes = 8.0 * 4 * double(s.param_count()) * M;
+  state.counters["GB/s"] =
+      benchmark::Counter(bytes * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_TpaUnfrozenStep)
+    ->ArgNames({"in", "hidden", "B", "threads"})
+    ->Args({19, 128, 32, 1})
+    ->Args({2037, 1024, 10, 1})
+    ->Args({2037, 1024, 32, 1})
+    ->Args({2037, 1024, 32, 2})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -20,6 +20,31 @@ Trainer::Trainer(MlpShape s, AdamConfig cfg, std::vector<float> initial_params)
     throw std::invalid_argument("Trainer: fewer parameters than the network has");
 }
 
+namespace {
+
+// The backward pass from t.d_out fused with Adam (mlp_backward_adam); parameters past the
+// network's (none for these steps' callers) get the zero gradient they would have had.
+void backward_and_update(Trainer& t, int threads) {
+  const AdamStepScalars step = adam_begin_step(t.adam_cfg, t.adam);
+  mlp_backward_adam(t.shape, t.params.data(), t.tape, t.d_out.data(), step, t.adam.m.data(),
+                    t.adam.v.data(), threads);
+  const size_t P = t.shape.param_count(), rest = t.params.size() - P;
+  if (rest > 0) {
+    const std::vector<float> zero(rest, 0.f);
+    adam_apply(step, t.params.data() + P, zero.data(), t.adam.m.data() + P, t.adam.v.data() + P,
+               rest);
+  }
+}
+
+// The same for every model of a BatchedTrainer, from t.d_out [M, rows, out].
+void backward_and_update(BatchedTrainer& t, int threads) {
+  const AdamStepScalars step = adam_begin_step(t.adam_cfg, t.adam);
+  mlp_backward_adam_batched(t.shape, t.models, t.params.data(), t.tapes, t.d_out.data(), step,
+                            t.adam.m.data(), t.adam.v.data(), threads);
+}
+
+}  // namespace
+
 void gather_by_role(const float* X, int in, const int32_t* idx, int B, int roles, float* out) {
   for (int role = 0; role < roles; ++role)
     for (int i = 0; i < B; ++i)
@@ -35,10 +60,7 @@ float triplet_train_step(Trainer& t, const float* X, const int32_t* triplets, in
   mlp_forward(t.shape, t.params.data(), t.batch_x.data(), 3 * B, t.tape, threads);
   t.d_out.resize(size_t(3) * B * d);
   const float loss = symmetric_triplet_loss(t.tape.output(), B, d, margin, t.d_out.data());
-  std::fill(t.grad.begin(), t.grad.end(), 0.f);
-  mlp_backward(t.shape, t.params.data(), t.tape, t.d_out.data(), t.grad.data(),
-               static_cast<float*>(nullptr), threads);
-  adam_step(t.adam_cfg, t.adam, t.params.data(), t.grad.data(), t.params.size());
+  backward_and_update(t, threads);
   return loss;
 }
 
@@ -50,10 +72,7 @@ float preference_train_step(Trainer& t, const float* X, const int32_t* pairs, co
   mlp_forward(t.shape, t.params.data(), t.batch_x.data(), 2 * B, t.tape, threads);
   t.d_out.resize(size_t(2) * B);
   const float loss = bradley_terry_loss(t.tape.output(), label, B, l2_weight, t.d_out.data());
-  std::fill(t.grad.begin(), t.grad.end(), 0.f);
-  mlp_backward(t.shape, t.params.data(), t.tape, t.d_out.data(), t.grad.data(),
-               static_cast<float*>(nullptr), threads);
-  adam_step(t.adam_cfg, t.adam, t.params.data(), t.grad.data(), t.params.size());
+  backward_and_update(t, threads);
   return loss;
 }
 
@@ -100,10 +119,11 @@ BatchedTrainer::BatchedTrainer(MlpShape s, int m, AdamConfig cfg, std::vector<fl
       models(m),
       adam_cfg(cfg),
       params(std::move(initial)),
-      grad(params.size(), 0.f),
       adam(params.size()),
       losses(m, 0.f) {
   validate(shape);
+  if (params.size() != size_t(models) * shape.param_count())
+    throw std::invalid_argument("BatchedTrainer: parameters are not models × the network's");
 }
 
 float preference_train_step_batched(BatchedTrainer& t, const float* X, const int32_t* pairs,
@@ -121,10 +141,7 @@ float preference_train_step_batched(BatchedTrainer& t, const float* X, const int
                                      t.d_out.data() + size_t(m) * 2 * B);
     total += t.losses[m];
   }
-  std::fill(t.grad.begin(), t.grad.end(), 0.f);
-  mlp_backward_batched(t.shape, M, t.params.data(), t.tapes, t.d_out.data(), t.grad.data(),
-                       static_cast<float*>(nullptr), threads);
-  adam_step(t.adam_cfg, t.adam, t.params.data(), t.grad.data(), t.params.size());
+  backward_and_update(t, threads);
   return total / M;
 }
 
@@ -143,10 +160,7 @@ float triplet_train_step_batched(BatchedTrainer& t, const float* X, const int32_
                                          t.d_out.data() + size_t(m) * 3 * B * d);
     total += t.losses[m];
   }
-  std::fill(t.grad.begin(), t.grad.end(), 0.f);
-  mlp_backward_batched(t.shape, M, t.params.data(), t.tapes, t.d_out.data(), t.grad.data(),
-                       static_cast<float*>(nullptr), threads);
-  adam_step(t.adam_cfg, t.adam, t.params.data(), t.grad.data(), t.params.size());
+  backward_and_update(t, threads);
   return total / M;
 }
 

@@ -51,7 +51,7 @@ struct BatchedTrainer {
   MlpShape shape;
   int models = 0;
   AdamConfig adam_cfg;
-  std::vector<float> params, grad;  // [M, P]
+  std::vector<float> params;  // [M, P]; the gradient is never stored (mlp_backward_adam)
   AdamState adam;
   std::vector<MlpTape<float>> tapes;
   std::vector<float> batch_x, d_out;  // [M, 2B, in], [M, 2B]

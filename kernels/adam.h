@@ -22,8 +22,23 @@ struct AdamState {
   explicit AdamState(size_t n = 0) : m(n, 0.f), v(n, 0.f) {}
 };
 
+// The float scalars of one optimizer step (learning rate, bias corrections): what every
+// element's update needs, computed once per step.
+struct AdamStepScalars {
+  float step_size = 0, bc2_sqrt = 1, b1 = 0, b2 = 0, eps = 0, one_minus_b1 = 0, one_minus_b2 = 0;
+};
+
 // Learning rate used by step number `t` (1-based): lr·decay^(t−1).
 double adam_lr(const AdamConfig& cfg, int64_t t);
+
+// Starts a step: counts it in `state` and returns its scalars.
+AdamStepScalars adam_begin_step(const AdamConfig& cfg, AdamState& state);
+
+// The element-wise update of one step on a range: p [n], g [n], m [n], v [n]. Updating a
+// vector in pieces gives the same bits as one call over the whole (each element is independent):
+// the fused backward pass (mlp_backward_adam) updates each slice of weights as soon as its
+// gradient exists.
+void adam_apply(const AdamStepScalars& s, float* p, const float* g, float* m, float* v, size_t n);
 
 // One step over params [n] with gradient grad [n] (PyTorch's arithmetic, in float).
 void adam_step(const AdamConfig& cfg, AdamState& state, float* params, const float* grad, size_t n);

@@ -18,8 +18,6 @@ template <typename T>
 using RowMat = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 template <typename T>
 using MapC = Eigen::Map<const RowMat<T>>;
-template <typename T>
-using Map = Eigen::Map<RowMat<T>>;
 
 // C's columns are cut into fixed slices whatever the thread count (64 wide when N ≤ 256, e.g.
 // the Grid nets' 128 units, so two threads still find work; 256 otherwise), and, for the libxsmm
@@ -30,7 +28,7 @@ constexpr int kRowBlock = 256;
 
 template <typename Fn>
 void for_column_slices(int N, int threads, Fn&& fn) {
-  const int kSlice = N <= 256 ? 64 : 256;
+  const int kSlice = gemm_column_slice(N);
   const int slices = (N + kSlice - 1) / kSlice;
   if (threads <= 1 || slices <= 1) {
     for (int p = 0; p < slices; ++p) fn(p * kSlice, std::min(kSlice, N - p * kSlice));
@@ -42,28 +40,35 @@ void for_column_slices(int N, int threads, Fn&& fn) {
 
 // ---- Eigen: the generic path (any CPU; SIRL_KERNELS=generic forces it) ----
 
+// Each writes C's columns [j0, j0+nj) at Cs with row stride ldc (Cs = C + j0, ldc = N in place).
 template <typename T>
-void eigen_nt(T* C, const T* A, const T* B, int M, int N, int K, bool acc, int j0, int nj) {
+using SliceMap = Eigen::Map<RowMat<T>, 0, Eigen::OuterStride<>>;
+
+template <typename T>
+void eigen_nt(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K, bool acc, int j0,
+              int nj) {
   MapC<T> a(A, M, K), b(B, N, K);
-  auto cs = Map<T>(C, M, N).middleCols(j0, nj);
+  SliceMap<T> cs(Cs, M, nj, Eigen::OuterStride<>(ldc));
   if (acc)
     cs.noalias() += a * b.middleRows(j0, nj).transpose();
   else
     cs.noalias() = a * b.middleRows(j0, nj).transpose();
 }
 template <typename T>
-void eigen_tn(T* C, const T* A, const T* B, int M, int N, int K, bool acc, int j0, int nj) {
+void eigen_tn(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K, bool acc, int j0,
+              int nj) {
   MapC<T> a(A, K, M), b(B, K, N);
-  auto cs = Map<T>(C, M, N).middleCols(j0, nj);
+  SliceMap<T> cs(Cs, M, nj, Eigen::OuterStride<>(ldc));
   if (acc)
     cs.noalias() += a.transpose() * b.middleCols(j0, nj);
   else
     cs.noalias() = a.transpose() * b.middleCols(j0, nj);
 }
 template <typename T>
-void eigen_nn(T* C, const T* A, const T* B, int M, int N, int K, bool acc, int j0, int nj) {
+void eigen_nn(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K, bool acc, int j0,
+              int nj) {
   MapC<T> a(A, M, K), b(B, K, N);
-  auto cs = Map<T>(C, M, N).middleCols(j0, nj);
+  SliceMap<T> cs(Cs, M, nj, Eigen::OuterStride<>(ldc));
   if (acc)
     cs.noalias() += a * b.middleCols(j0, nj);
   else
@@ -112,73 +117,109 @@ bool xsmm_colmajor(const float* a, const float* b, float* c, int m, int n, int k
   return true;
 }
 
-thread_local std::vector<float> t_scratch;  // nt's transposed slice of B
+thread_local std::vector<float> t_scratch;  // nt's transposed operand (and result)
 #endif
 
 template <typename T>
-bool fast_nt(T*, const T*, const T*, int, int, int, bool, int, int) {
+bool fast_nt(T*, int, const T*, const T*, int, int, int, bool, int, int) {
   return false;
 }
 template <typename T>
-bool fast_tn(T*, const T*, const T*, int, int, int, bool, int, int) {
+bool fast_tn(T*, int, const T*, const T*, int, int, int, bool, int, int) {
   return false;
 }
 template <typename T>
-bool fast_nn(T*, const T*, const T*, int, int, int, bool, int, int) {
+bool fast_nn(T*, int, const T*, const T*, int, int, int, bool, int, int) {
   return false;
 }
 
 #ifdef SIRL_HAVE_XSMM
-// C[M,N] (+)= A[M,K]·B[N,K]ᵀ, columns [j0, j0+nj): Bt[K, nj] = B[j0.., :]ᵀ, then Cᶜ = Btᶜ·Aᶜ.
+// C[M,N] (+)= A[M,K]·B[N,K]ᵀ, columns [j0, j0+nj). libxsmm 1.17 cannot read its first operand
+// transposed, so one operand is transposed first, whichever is smaller (a choice that depends on
+// the shape only). Either way each element of C is the same FMA chain over k = 0..K−1, so both
+// give the same bits:
+//  (a) the slice of B:  Bt [nj, K] (column-major) = B[j0.., :], then Cᶜ [nj, M] = Bt · Aᶜ;
+//  (b) A and the result: At [M, K] (column-major) = A, E [M, nj] = At · Bᶜ[:, j0..], C = Eᵀ.
+// (b) moves M·(K + nj) floats instead of nj·K: far less for a training batch of 20–192 rows
+// through a 1024 × 2037 JacoRobot layer, whose weights (a) copied at every forward pass.
 template <>
-bool fast_nt<float>(float* C, const float* A, const float* B, int M, int N, int K, bool acc, int j0,
-                    int nj) {
-  std::vector<float>& bt = t_scratch;
-  bt.resize(size_t(K) * nj);
-  for (int j = 0; j < nj; ++j)
-    for (int k = 0; k < K; ++k) bt[size_t(k) * nj + j] = B[size_t(j0 + j) * K + k];
-  return xsmm_colmajor(bt.data(), A, C + j0, nj, M, K, nj, K, N, false, acc);
+bool fast_nt<float>(float* Cs, int ldc, const float* A, const float* B, int M, int N, int K,
+                    bool acc, int j0, int nj) {
+  std::vector<float>& scratch = t_scratch;
+  if (M <= kRowBlock && size_t(M) * (K + nj) < size_t(nj) * K) {
+    scratch.resize(size_t(M) * (K + nj));
+    float* at = scratch.data();
+    float* e = at + size_t(M) * K;
+    libxsmm_otrans(at, A, sizeof(float), K, M, K, M);  // col-major [K, M] → [M, K]
+    if (acc)
+      for (int j = 0; j < nj; ++j)
+        for (int i = 0; i < M; ++i) e[i + size_t(j) * M] = Cs[size_t(i) * ldc + j];
+    if (!xsmm_colmajor(at, B + size_t(j0) * K, e, M, nj, K, M, K, M, false, acc)) return false;
+    for (int i = 0; i < M; ++i)
+      for (int j = 0; j < nj; ++j) Cs[size_t(i) * ldc + j] = e[i + size_t(j) * M];
+    return true;
+  }
+  scratch.resize(size_t(K) * nj);
+  libxsmm_otrans(scratch.data(), B + size_t(j0) * K, sizeof(float), K, nj, K, nj);
+  return xsmm_colmajor(scratch.data(), A, Cs, nj, M, K, nj, K, ldc, false, acc);
 }
 // C[M,N] (+)= A[K,M]ᵀ·B[K,N]: Cᶜ = Bᶜ·(Aᶜ)ᵀ with Aᶜ = [M, K] column-major.
 template <>
-bool fast_tn<float>(float* C, const float* A, const float* B, int M, int N, int K, bool acc, int j0,
-                    int nj) {
-  return xsmm_colmajor(B + j0, A, C + j0, nj, M, K, N, M, N, true, acc);
+bool fast_tn<float>(float* Cs, int ldc, const float* A, const float* B, int M, int N, int K,
+                    bool acc, int j0, int nj) {
+  return xsmm_colmajor(B + j0, A, Cs, nj, M, K, N, M, ldc, true, acc);
 }
 // C[M,N] (+)= A[M,K]·B[K,N]: Cᶜ = Bᶜ·Aᶜ.
 template <>
-bool fast_nn<float>(float* C, const float* A, const float* B, int M, int N, int K, bool acc, int j0,
-                    int nj) {
-  return xsmm_colmajor(B + j0, A, C + j0, nj, M, K, N, K, N, false, acc);
+bool fast_nn<float>(float* Cs, int ldc, const float* A, const float* B, int M, int N, int K,
+                    bool acc, int j0, int nj) {
+  return xsmm_colmajor(B + j0, A, Cs, nj, M, K, N, K, ldc, false, acc);
 }
 #endif
 
 }  // namespace
 
+int gemm_column_slice(int N) {
+  return N <= 256 ? 64 : 256;
+}
+
+template <typename T>
+void matmul_nt_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K, bool accumulate,
+                    int j0, int nj) {
+  if (!(use_xsmm() && fast_nt<T>(Cs, ldc, A, B, M, N, K, accumulate, j0, nj)))
+    eigen_nt<T>(Cs, ldc, A, B, M, N, K, accumulate, j0, nj);
+}
+template <typename T>
+void matmul_tn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K, bool accumulate,
+                    int j0, int nj) {
+  if (!(use_xsmm() && fast_tn<T>(Cs, ldc, A, B, M, N, K, accumulate, j0, nj)))
+    eigen_tn<T>(Cs, ldc, A, B, M, N, K, accumulate, j0, nj);
+}
+template <typename T>
+void matmul_nn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K, bool accumulate,
+                    int j0, int nj) {
+  if (!(use_xsmm() && fast_nn<T>(Cs, ldc, A, B, M, N, K, accumulate, j0, nj)))
+    eigen_nn<T>(Cs, ldc, A, B, M, N, K, accumulate, j0, nj);
+}
+
 template <typename T>
 void matmul_nt(T* C, const T* A, const T* B, int M, int N, int K, bool accumulate, int threads) {
-  const bool fast = use_xsmm();
   for_column_slices(N, threads, [&](int j0, int nj) {
-    if (!(fast && fast_nt<T>(C, A, B, M, N, K, accumulate, j0, nj)))
-      eigen_nt<T>(C, A, B, M, N, K, accumulate, j0, nj);
+    matmul_nt_cols<T>(C + j0, N, A, B, M, N, K, accumulate, j0, nj);
   });
 }
 
 template <typename T>
 void matmul_tn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulate, int threads) {
-  const bool fast = use_xsmm();
   for_column_slices(N, threads, [&](int j0, int nj) {
-    if (!(fast && fast_tn<T>(C, A, B, M, N, K, accumulate, j0, nj)))
-      eigen_tn<T>(C, A, B, M, N, K, accumulate, j0, nj);
+    matmul_tn_cols<T>(C + j0, N, A, B, M, N, K, accumulate, j0, nj);
   });
 }
 
 template <typename T>
 void matmul_nn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulate, int threads) {
-  const bool fast = use_xsmm();
   for_column_slices(N, threads, [&](int j0, int nj) {
-    if (!(fast && fast_nn<T>(C, A, B, M, N, K, accumulate, j0, nj)))
-      eigen_nn<T>(C, A, B, M, N, K, accumulate, j0, nj);
+    matmul_nn_cols<T>(C + j0, N, A, B, M, N, K, accumulate, j0, nj);
   });
 }
 
@@ -186,10 +227,13 @@ const char* gemm_backend() {
   return use_xsmm() ? "libxsmm" : "eigen";
 }
 
-#define SIRL_INSTANTIATE(T)                                                     \
-  template void matmul_nt<T>(T*, const T*, const T*, int, int, int, bool, int); \
-  template void matmul_tn<T>(T*, const T*, const T*, int, int, int, bool, int); \
-  template void matmul_nn<T>(T*, const T*, const T*, int, int, int, bool, int);
+#define SIRL_INSTANTIATE(T)                                                                    \
+  template void matmul_nt<T>(T*, const T*, const T*, int, int, int, bool, int);                \
+  template void matmul_tn<T>(T*, const T*, const T*, int, int, int, bool, int);                \
+  template void matmul_nn<T>(T*, const T*, const T*, int, int, int, bool, int);                \
+  template void matmul_nt_cols<T>(T*, int, const T*, const T*, int, int, int, bool, int, int); \
+  template void matmul_tn_cols<T>(T*, int, const T*, const T*, int, int, int, bool, int, int); \
+  template void matmul_nn_cols<T>(T*, int, const T*, const T*, int, int, int, bool, int, int);
 SIRL_INSTANTIATE(float)
 SIRL_INSTANTIATE(double)
 #undef SIRL_INSTANTIATE

@@ -20,6 +20,22 @@ void matmul_tn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulat
 template <typename T>
 void matmul_nn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulate, int threads = 1);
 
+// Every product above cuts C's N columns into fixed slices [j0, j0 + nj), j0 = 0, w, 2w, …, with
+// w = gemm_column_slice(N), whatever the thread count. The *_cols forms compute one such slice and
+// write it at Cs with row stride ldc (Cs = C + j0, ldc = N gives the whole product's bits; a
+// compact scratch, Cs[i·nj + j − j0] with ldc = nj, gives the same values elsewhere). The fused
+// backward pass (mlp_backward_adam) uses them to finish a slice of the weights at a time.
+int gemm_column_slice(int N);
+template <typename T>
+void matmul_nt_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K, bool accumulate,
+                    int j0, int nj);
+template <typename T>
+void matmul_tn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K, bool accumulate,
+                    int j0, int nj);
+template <typename T>
+void matmul_nn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K, bool accumulate,
+                    int j0, int nj);
+
 // "libxsmm" or "eigen": what float products run on in this process.
 const char* gemm_backend();
 

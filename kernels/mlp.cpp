@@ -127,6 +127,72 @@ void mlp_backward_batched(const MlpShape& s, int models, const T* params,
   }
 }
 
+void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, const float* dout,
+                       const AdamStepScalars& step, float* m, float* v, int threads) {
+  const int L = s.layers(), batch = tape.batch;
+  const int maxw = *std::max_element(s.widths.begin(), s.widths.end());
+  tape.grad.resize(size_t(batch) * maxw);
+  tape.grad_next.resize(size_t(batch) * maxw);
+  std::copy(dout, dout + size_t(batch) * s.out(), tape.grad.data());
+  for (int l = L - 1; l >= 0; --l) {
+    const int ni = s.widths[l], no = s.widths[l + 1];
+    float* g = tape.grad.data();  // [batch, no] ∂L/∂(pre-activation)
+    if (s.relu_after(l)) {
+      const float* y = tape.act[l].data();
+      for (size_t i = 0; i < size_t(batch) * no; ++i)
+        if (y[i] <= 0.f) g[i] = 0.f;
+    }
+    const float* in = l == 0 ? tape.input : tape.act[l - 1].data();  // [batch, ni]
+    const size_t w_off = s.weight_offset(l), b_off = s.bias_offset(l);
+    float* W = params + w_off;  // [no, ni]
+    {
+      // db [no] = Σ_rows g, rows in order (as mlp_backward), then the biases' update.
+      thread_local std::vector<float> db;
+      db.assign(no, 0.f);
+      for (int r = 0; r < batch; ++r)
+        for (int j = 0; j < no; ++j) db[j] += g[size_t(r) * no + j];
+      adam_apply(step, params + b_off, db.data(), m + b_off, v + b_off, no);
+    }
+    float* d_in = l > 0 ? tape.grad_next.data() : nullptr;  // [batch, ni]
+    const int width = gemm_column_slice(ni), slices = (ni + width - 1) / width;
+    const auto slice = [&](int p) {
+      const int j0 = p * width, nj = std::min(width, ni - j0);
+      // d_in[:, j0..] [batch, nj] = g [batch, no] · W[:, j0..] [no, nj], with W before its update
+      if (d_in) matmul_nn_cols(d_in + j0, ni, g, W, batch, ni, no, false, j0, nj);
+      // dW[:, j0..] [no, nj] = gᵀ [no, batch] · in[:, j0..] [batch, nj], into a zeroed scratch
+      thread_local std::vector<float> dw;
+      dw.assign(size_t(no) * nj, 0.f);
+      matmul_tn_cols(dw.data(), nj, g, in, no, ni, batch, true, j0, nj);
+      if (nj == ni) {  // one slice: W and its scratch gradient are both contiguous [no, ni]
+        adam_apply(step, W, dw.data(), m + w_off, v + w_off, size_t(no) * ni);
+      } else {
+        for (int i = 0; i < no; ++i) {
+          const size_t at = w_off + size_t(i) * ni + j0;
+          adam_apply(step, params + at, dw.data() + size_t(i) * nj, m + at, v + at, nj);
+        }
+      }
+    };
+    if (threads > 1 && slices > 1) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+      for (int p = 0; p < slices; ++p) slice(p);
+    } else {
+      for (int p = 0; p < slices; ++p) slice(p);
+    }
+    if (l > 0) std::swap(tape.grad, tape.grad_next);
+  }
+}
+
+void mlp_backward_adam_batched(const MlpShape& s, int models, float* params,
+                               std::vector<MlpTape<float>>& tapes, const float* dout,
+                               const AdamStepScalars& step, float* m, float* v, int threads) {
+  const size_t P = s.param_count();
+#pragma omp parallel for num_threads(std::max(1, threads)) schedule(static) if (threads > 1)
+  for (int k = 0; k < models; ++k) {
+    const size_t O = size_t(tapes[k].batch) * s.out();
+    mlp_backward_adam(s, params + k * P, tapes[k], dout + k * O, step, m + k * P, v + k * P, 1);
+  }
+}
+
 void mlp_init(const MlpShape& s, float* params, Rng& rng) {
   validate(s);
   for (int l = 0; l < s.layers(); ++l) {

@@ -9,6 +9,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "kernels/adam.h"
 #include "kernels/rng.h"
 
 namespace sirl {
@@ -59,6 +60,18 @@ void mlp_backward(const MlpShape& shape, const T* params, MlpTape<T>& tape,
                   const std::type_identity_t<T>* dout, std::type_identity_t<T>* dparams,
                   std::type_identity_t<T>* dx, int threads = 1);
 
+// The backward pass fused with the optimizer step: dout [batch, out] = ∂L/∂output, and every
+// weight and bias is updated by Adam (scalars `step` of adam_begin_step; moments m [P], v [P])
+// as soon as its gradient exists, one fixed column slice of a layer's weights at a time (the
+// slices of gemm_column_slice), after that slice has served the layer's ∂L/∂input. The whole
+// gradient is never stored: for networks larger than the cache this saves writing, zeroing and
+// re-reading a gradient buffer as large as the weights every step. The result is bit-identical
+// to mlp_backward into a zeroed gradient followed by adam_apply over [P] (a test checks it), for
+// any thread count.
+void mlp_backward_adam(const MlpShape& shape, float* params, MlpTape<float>& tape,
+                       const float* dout, const AdamStepScalars& step, float* m, float* v,
+                       int threads = 1);
+
 // B models of one shape at once, each with its own weights and its own mini-batch:
 //   params [B, P], x [B, batch, in], tapes[b] holds model b's activations.
 // `threads` > 1 spreads the models over OpenMP threads (results identical for any count).
@@ -71,6 +84,11 @@ void mlp_backward_batched(const MlpShape& shape, int models, const T* params,
                           std::vector<MlpTape<T>>& tapes, const std::type_identity_t<T>* dout,
                           std::type_identity_t<T>* dparams, std::type_identity_t<T>* dx,
                           int threads = 1);
+
+// mlp_backward_adam for each of B models: params, m, v [B, P]; dout [B, batch, out].
+void mlp_backward_adam_batched(const MlpShape& shape, int models, float* params,
+                               std::vector<MlpTape<float>>& tapes, const float* dout,
+                               const AdamStepScalars& step, float* m, float* v, int threads = 1);
 
 // PyTorch's nn.Linear default: W ~ U(±1/√fan_in) (Kaiming-uniform with a = √5), b ~ U(±1/√fan_in).
 // Draws layer by layer, W row-major then b, from `rng`.

@@ -59,13 +59,33 @@ void check(Op op, Case c, bool accumulate, int threads) {
 TEST(Gemm, MatchesADoubleReferenceOnEveryEdgeOfTheBlocking) {
   RecordProperty("backend", gemm_backend());
   const Case cases[] = {
-      {192, 128, 19},  {192, 6, 128}, {128, 1, 128}, {128, 128, 6},  // the engine's layers
-      {300, 130, 7},   {257, 65, 33}, {5, 300, 1},   {1, 1, 1},      // blocking edges
-      {192, 64, 2037},                                               // a long K
+      {192, 128, 19},  {192, 6, 128},  {128, 1, 128}, {128, 128, 6},  // the engine's layers
+      {300, 130, 7},   {257, 65, 33},  {5, 300, 1},   {1, 1, 1},      // blocking edges
+      {192, 64, 2037},                                                // a long K
+      {10, 128, 128},  {20, 300, 700},                                // nt transposing A
   };
   for (const Case& c : cases)
     for (Op op : {kNT, kTN, kNN})
       for (bool acc : {false, true}) check(op, c, acc, c.N > 64 ? 2 : 1);
+}
+
+// matmul_nt transposes whichever operand is smaller (A for a few rows through a wide layer, else
+// the slice of B); both must give the bits of matmul_nn on an explicitly transposed B, so that a
+// forward pass computes the same numbers whatever the batch and layer sizes.
+TEST(Gemm, NtGivesTheBitsOfNnOnTheTransposedMatrix) {
+  for (const Case c : {Case{10, 128, 128}, Case{64, 128, 128}, Case{20, 1024, 2037},
+                       Case{192, 1024, 2037}, Case{7, 6, 128}, Case{300, 130, 7}}) {
+    Rng rng(uint64_t(c.M + c.N + c.K));
+    std::vector<float> A(size_t(c.M) * c.K), B(size_t(c.N) * c.K), Bt(B.size());
+    for (auto& x : A) x = float(rng.uniform(-1, 1));
+    for (auto& x : B) x = float(rng.uniform(-1, 1));
+    for (int j = 0; j < c.N; ++j)
+      for (int k = 0; k < c.K; ++k) Bt[size_t(k) * c.N + j] = B[size_t(j) * c.K + k];
+    std::vector<float> nt(size_t(c.M) * c.N), nn(nt.size());
+    matmul_nt(nt.data(), A.data(), B.data(), c.M, c.N, c.K, false, 1);
+    matmul_nn(nn.data(), A.data(), Bt.data(), c.M, c.N, c.K, false, 1);
+    EXPECT_EQ(nt, nn) << "M" << c.M << " N" << c.N << " K" << c.K << " on " << gemm_backend();
+  }
 }
 
 TEST(Gemm, TheBackendIsTheOneTheEnvironmentAsksFor) {

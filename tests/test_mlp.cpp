@@ -121,6 +121,88 @@ TEST(Mlp, BatchedEqualsOneModelAtATime) {
   }
 }
 
+// Three optimizer steps two ways: mlp_backward into a zeroed gradient then adam_step over all
+// parameters (the reference, gradient-checked above), and mlp_backward_adam. Weights and both
+// moments must agree to the bit, for every thread count.
+void expect_fused_backward_adam_matches(const MlpShape& s, int batch) {
+  Rng rng(11);
+  const size_t P = s.param_count(), O = size_t(batch) * s.out();
+  const int steps = 3;
+  std::vector<float> p0(P), x(size_t(batch) * s.in()), dout(steps * O);
+  mlp_init(s, p0.data(), rng);
+  for (auto& v : x) v = float(rng.normal());
+  for (auto& v : dout) v = float(rng.normal());
+  const AdamConfig cfg{0.01, 0.999};
+  std::vector<float> ref = p0;
+  AdamState ref_adam(P);
+  for (int step = 0; step < steps; ++step) {
+    MlpTape<float> t;
+    mlp_forward(s, ref.data(), x.data(), batch, t);
+    std::vector<float> g(P, 0.f);
+    mlp_backward(s, ref.data(), t, dout.data() + step * O, g.data(), static_cast<float*>(nullptr));
+    adam_step(cfg, ref_adam, ref.data(), g.data(), P);
+  }
+  for (int threads : {1, 2}) {
+    std::vector<float> p = p0;
+    AdamState adam(P);
+    for (int step = 0; step < steps; ++step) {
+      MlpTape<float> t;
+      mlp_forward(s, p.data(), x.data(), batch, t, threads);
+      const AdamStepScalars sc = adam_begin_step(cfg, adam);
+      mlp_backward_adam(s, p.data(), t, dout.data() + step * O, sc, adam.m.data(), adam.v.data(),
+                        threads);
+    }
+    ASSERT_EQ(adam.step, ref_adam.step);
+    for (size_t i = 0; i < P; ++i) {
+      ASSERT_EQ(p[i], ref[i]) << "weight " << i << ", threads " << threads;
+      ASSERT_EQ(adam.m[i], ref_adam.m[i]) << "m " << i;
+      ASSERT_EQ(adam.v[i], ref_adam.v[i]) << "v " << i;
+    }
+    ASSERT_NE(p, p0);
+  }
+}
+
+TEST(Mlp, FusedBackwardAdamEqualsBackwardThenAdam) {
+  expect_fused_backward_adam_matches(MlpShape{{19, 128, 128, 6}}, 64);  // 64-wide slices
+  expect_fused_backward_adam_matches(MlpShape{{700, 300, 7}}, 20);      // 256-wide, ragged
+  MlpShape unfrozen{{19, 40, 6, 40, 1}};                                // φ + head, linear φ out
+  unfrozen.linear_layers = {1};
+  expect_fused_backward_adam_matches(unfrozen, 33);
+  expect_fused_backward_adam_matches(MlpShape{{3, 5, 2}, true}, 1);  // ReLU output, one row
+}
+
+TEST(Mlp, FusedBatchedEqualsOneModelAtATime) {
+  MlpShape s{{6, 70, 1}};
+  const int models = 4, batch = 10;
+  const size_t P = s.param_count();
+  Rng rng(5);
+  std::vector<float> p0(models * P), x(models * batch * 6), dout(models * batch);
+  for (int m = 0; m < models; ++m) mlp_init(s, p0.data() + m * P, rng);
+  for (auto& v : x) v = float(rng.normal());
+  for (auto& v : dout) v = float(rng.normal());
+  AdamState one(models * P);
+  const AdamStepScalars sc = adam_begin_step(AdamConfig{0.05}, one);
+  std::vector<float> ref = p0;
+  for (int m = 0; m < models; ++m) {
+    MlpTape<float> t;
+    mlp_forward(s, ref.data() + m * P, x.data() + m * batch * 6, batch, t);
+    mlp_backward_adam(s, ref.data() + m * P, t, dout.data() + m * batch, sc, one.m.data() + m * P,
+                      one.v.data() + m * P);
+  }
+  for (int threads : {1, 2}) {
+    std::vector<float> p = p0;
+    AdamState adam(models * P);
+    std::vector<MlpTape<float>> tapes;
+    mlp_forward_batched(s, models, p.data(), x.data(), batch, tapes, threads);
+    mlp_backward_adam_batched(s, models, p.data(), tapes, dout.data(), sc, adam.m.data(),
+                              adam.v.data(), threads);
+    EXPECT_EQ(p, ref);
+    EXPECT_EQ(adam.m, one.m);
+    EXPECT_EQ(adam.v, one.v);
+    EXPECT_NE(p, p0);
+  }
+}
+
 TEST(Mlp, InitFollowsPyTorchLinearBounds) {
   MlpShape s{{100, 400, 1}};
   std::vector<float> p(s.param_count());
