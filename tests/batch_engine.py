@@ -1,7 +1,9 @@
 #!/usr/bin/python3
-"""End-to-end checks of `sirl run` on the smoke profile (ctest; Debian's python3 + h5py + pandas).
+"""End-to-end checks of `sirl run` (ctest; Debian's python3 + h5py + pandas), on the smoke
+profile's plan with narrow networks (tests/data/engine-test.toml: the same tasks and keys, a
+fraction of the arithmetic), and once on smoke itself:
 
-- the result tables are bit-identical for --threads 1 and --threads 2;
+- the result tables are bit-identical for --threads 1 and --threads 2 (smoke and engine-test);
 - a run killed with SIGKILL mid-way, then rerun, ends with the same file as a fresh run (every
   dataset and attribute under /runs, timing fields excepted) and recomputes nothing committed;
 - a results file missing some cells (and JacoRobot's weights, which are not stored by default)
@@ -27,7 +29,8 @@ import pandas as pd
 
 SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
-SMOKE = os.path.join(SRC, "configs", "smoke.toml")
+REAL_SMOKE = os.path.join(SRC, "configs", "smoke.toml")
+SMOKE = os.path.join(SRC, "tests", "data", "engine-test.toml")
 
 
 def run(*args, check=True):
@@ -89,6 +92,13 @@ def same(a, b, what):
 
 
 with tempfile.TemporaryDirectory() as tmp:
+    # smoke's real widths (Grid's 128-wide layers: several GEMM slices per product).
+    s1, s2 = os.path.join(tmp, "smoke1.h5"), os.path.join(tmp, "smoke2.h5")
+    run("run", REAL_SMOKE, "--out", s1, "--threads", "1", "--quiet")
+    run("run", REAL_SMOKE, "--out", s2, "--threads", "2", "--quiet")
+    same(tables(s1), tables(s2), "smoke: --threads 1 and --threads 2 give identical tables")
+    same_runs(s1, s2, "smoke: --threads 1 and --threads 2 give identical files")
+
     one = os.path.join(tmp, "one.h5")
     two = os.path.join(tmp, "two.h5")
     run("run", SMOKE, "--out", one, "--threads", "1", "--quiet")
@@ -302,17 +312,18 @@ with tempfile.TemporaryDirectory() as tmp:
 
     # One writer per output: a second run on an --out that is being written is refused, naming
     # the first one's pid; the first finishes undisturbed.
+    # (On smoke itself: engine-test can finish before the second run starts.)
     busy = os.path.join(tmp, "busy.h5")
-    first = subprocess.Popen([SIRL, "run", SMOKE, "--out", busy, "--threads", "1", "--quiet"],
+    first = subprocess.Popen([SIRL, "run", REAL_SMOKE, "--out", busy, "--threads", "1", "--quiet"],
                              stdin=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 30
     while time.time() < deadline and not (os.path.exists(busy + ".lock")
                                           and os.path.getsize(busy + ".lock") > 0):
         time.sleep(0.02)
-    p = run("run", SMOKE, "--out", busy, "--quiet", check=False)
+    p = run("run", REAL_SMOKE, "--out", busy, "--quiet", check=False)
     assert p.returncode == 2 and f"another sirl run (pid {first.pid})" in p.stderr, p.stderr
     assert first.wait() == 0, first.stderr.read()
-    same(ref, tables(busy), f"a second writer refused ({p.stderr.strip()}); the first run")
+    same(tables(s1), tables(busy), f"a second writer refused ({p.stderr.strip()}); the first run")
 
     # Shards + merge.
     shards = [os.path.join(tmp, f"shard{i}.h5") for i in range(2)]

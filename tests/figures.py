@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""The plotting tool on the smoke profile's output (ctest): every figure and the report exist;
+"""The plotting tool on the output of the smoke profile's plan with narrow networks
+(tests/data/engine-test.toml) (ctest): every figure and the report exist;
 Fig. 7 draws the cells the file holds even when an environment overrides the ablation's M;
 Fig. 3 is drawn on the simplified GridRobot; a partial file (one shard of two) still plots, with
 the missing cells reported as gaps."""
@@ -15,7 +16,7 @@ from scipy import stats
 
 SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
-SMOKE = os.path.join(SRC, "configs", "smoke.toml")
+SMOKE = os.path.join(SRC, "tests", "data", "engine-test.toml")  # smoke's plan, narrow nets
 PLOT = os.path.join(SRC, "results", "plot_figures.py")
 FILES = [f"{n}.{e}" for n in ("fig3_grid_similar", "fig4_fpe", "fig5_tpa", "fig7_ablation",
                                "fig_learning_curves")

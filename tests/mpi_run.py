@@ -13,10 +13,10 @@ import numpy as np
 import pandas as pd
 
 SIRL = os.environ["SIRL"]
-# The smoke profile; the ThreadSanitizer stage of scripts/test.sh runs the micro one (a tenth of
-# the time: instrumented code is slow).
-SMOKE = os.environ.get("SIRL_TEST_PROFILE",
-                       os.path.join(os.environ["SIRL_SOURCE_DIR"], "configs", "smoke.toml"))
+# The smoke profile's plan with narrow networks; the ThreadSanitizer stage of scripts/test.sh runs
+# the micro one (a tenth of the time: instrumented code is slow).
+SMOKE = os.environ.get("SIRL_TEST_PROFILE", os.path.join(os.environ["SIRL_SOURCE_DIR"], "tests",
+                                                         "data", "engine-test.toml"))
 env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_btl="self,tcp", OMPI_MCA_btl_tcp_if_include="lo", OMPI_MCA_oob_tcp_if_include="lo",
            OMPI_MCA_rmaps_base_oversubscribe="1")
