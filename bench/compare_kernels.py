@@ -71,6 +71,8 @@ def main():
         ("SIRL step, Grid 19→128→128→6, 64 triplets", "BM_SirlStep/in:19/hidden:128/threads:{}/real_time", "sirl_step_grid"),
         ("SIRL step, Jaco 2037→1024→1024→6, 64 triplets", "BM_SirlStep/in:2037/hidden:1024/threads:{}/real_time", "sirl_step_jaco"),
         ("20 TPA heads 6→128→128→1, 64 pairs", "BM_TpaHeadsStep/hidden:128/threads:{}/real_time", "tpa_heads_grid"),
+        ("Jaco unfrozen TPA cell: 20 × (φ 2037→1024→1024→6 + head 6→1024→1024→1), 32 pairs",
+         "BM_TpaUnfrozenStep/in:2037/hidden:1024/B:32/threads:{}/real_time", "tpa_unfrozen_jaco"),
     ]
     cores = max(peak)
     print(f"Roof (measured, fp32 FMA): {peak[1]:.0f} GFLOP/s on one core, {peak[cores]:.0f} on "

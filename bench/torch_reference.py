@@ -13,11 +13,12 @@ import time
 import torch
 
 
-def mlp(widths):
+def mlp(widths, linear=()):
+    """Linear layers with a ReLU after every one but the last and those listed in `linear`."""
     layers = []
     for i in range(len(widths) - 1):
         layers.append(torch.nn.Linear(widths[i], widths[i + 1]))
-        if i + 2 < len(widths):
+        if i + 2 < len(widths) and i not in linear:
             layers.append(torch.nn.ReLU())
     return torch.nn.Sequential(*layers)
 
@@ -84,6 +85,61 @@ def tpa_heads_batched_case(hidden, M=20, B=64, T=1000):
         for i in range(3):
             h = torch.baddbmm(params[2 * i + 1], h, params[2 * i])
             if i < 2:
+                h = torch.relu(h)
+        ra, rb = h[:, :B, 0], h[:, B:, 0]
+        bce = torch.nn.functional.binary_cross_entropy_with_logits(ra - rb, labels, reduction="none")
+        total = bce.mean(1).sum() + 10 * (ra ** 2 + rb ** 2).mean(1).sum()
+        opt.zero_grad()
+        total.backward()
+        opt.step()
+    return step, flops(widths, 2 * B) * M
+
+
+# An unfrozen TPA cell: φ (in→h→h→6, linear output) fine-tuned with a head (6→h→h→1) per reward.
+def unfrozen_widths(phi_in, hidden):
+    return [phi_in, hidden, hidden, 6, hidden, hidden, 1], (2,)
+
+
+def tpa_unfrozen_case(phi_in, hidden, M=20, B=32, T=400):
+    """20 copies of φ + head as people write it: one network per reward, a loop, one Adam."""
+    widths, linear = unfrozen_widths(phi_in, hidden)
+    nets = [mlp(widths, linear) for _ in range(M)]
+    x = torch.randn(T, phi_in)
+    pairs = torch.randint(0, T, (M, B, 2))
+    labels = torch.randint(0, 2, (M, B)).float()
+    opt = torch.optim.Adam([p for n in nets for p in n.parameters()], lr=0.001)
+
+    def step():
+        total = 0
+        for m, n in enumerate(nets):
+            r = n(torch.cat([x[pairs[m, :, 0]], x[pairs[m, :, 1]]])).squeeze(1)
+            ra, rb = r[:B], r[B:]
+            loss = torch.nn.functional.binary_cross_entropy_with_logits(ra - rb, labels[m])
+            total = total + loss + 10 * (ra ** 2 + rb ** 2).mean()
+        opt.zero_grad()
+        total.backward()
+        opt.step()
+    return step, flops(widths, 2 * B) * M
+
+
+def tpa_unfrozen_batched_case(phi_in, hidden, M=20, B=32, T=400):
+    """The same cell batched: each layer's 20 weight matrices stacked, one torch.baddbmm."""
+    widths, linear = unfrozen_widths(phi_in, hidden)
+    params = []
+    for i in range(len(widths) - 1):
+        bound = 1 / widths[i] ** 0.5
+        params.append(torch.nn.Parameter(torch.empty(M, widths[i], widths[i + 1]).uniform_(-bound, bound)))
+        params.append(torch.nn.Parameter(torch.empty(M, 1, widths[i + 1]).uniform_(-bound, bound)))
+    x = torch.randn(T, phi_in)
+    pairs = torch.randint(0, T, (M, B, 2))
+    labels = torch.randint(0, 2, (M, B)).float()
+    opt = torch.optim.Adam(params, lr=0.001)
+
+    def step():
+        h = torch.cat([x[pairs[:, :, 0]], x[pairs[:, :, 1]]], dim=1)  # [M, 2B, in]
+        for i in range(len(widths) - 1):
+            h = torch.baddbmm(params[2 * i + 1], h, params[2 * i])
+            if i + 2 < len(widths) and i not in linear:
                 h = torch.relu(h)
         ra, rb = h[:, :B, 0], h[:, B:, 0]
         bce = torch.nn.functional.binary_cross_entropy_with_logits(ra - rb, labels, reduction="none")
@@ -185,6 +241,8 @@ def main():
         "sirl_step_jaco": sirl_step_case([2037, 1024, 1024, 6]),
         "tpa_heads_grid": tpa_heads_case(128),
         "tpa_heads_grid_batched": tpa_heads_batched_case(128),
+        "tpa_unfrozen_jaco": tpa_unfrozen_case(2037, 1024),
+        "tpa_unfrozen_jaco_batched": tpa_unfrozen_batched_case(2037, 1024),
     }
     if args.runs:  # the same units as bench_pipeline.cpp
         cases.update({

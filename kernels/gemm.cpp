@@ -10,6 +10,11 @@
 #ifdef SIRL_HAVE_XSMM
 #include <libxsmm.h>
 #endif
+#ifdef SIRL_HAVE_DNNL
+#include <omp.h>
+
+#include <oneapi/dnnl/dnnl.h>
+#endif
 
 namespace sirl {
 namespace {
@@ -120,6 +125,35 @@ bool xsmm_colmajor(const float* a, const float* b, float* c, int m, int n, int k
 thread_local std::vector<float> t_scratch;  // nt's transposed operand (and result)
 #endif
 
+#ifdef SIRL_HAVE_DNNL
+// oneDNN's sgemm on one slice (row-major; 'T' reads that operand transposed), on the calling
+// thread only: with more, its summation could depend on the thread count, and the engine already
+// spreads slices and tasks over the cores. Whether a product goes here depends on its shape only.
+// Two dimensions ≥ 512 and none below 32: with fewer rows (a TPA cell of M = 10 trains on 20),
+// oneDNN packs a whole weight slice for little work (one measurement on a noisy VM: 20 rows
+// through the Jaco unfrozen cell, 564 ms a step with oneDNN against 472 without).
+bool dnnl_big(int M, int N, int K) {
+  return (M >= 512) + (N >= 512) + (K >= 512) >= 2 && std::min({M, N, K}) >= 32;
+}
+bool dnnl_slice(char ta, char tb, int M, int nj, int K, const float* A, int lda, const float* B,
+                int ldb, bool acc, float* Cs, int ldc) {
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const dnnl_status_t st =
+      dnnl_sgemm(ta, tb, M, nj, K, 1.f, A, lda, B, ldb, acc ? 1.f : 0.f, Cs, ldc);
+  omp_set_num_threads(saved);
+  return st == dnnl_success;
+}
+#else
+bool dnnl_big(int, int, int) {
+  return false;
+}
+bool dnnl_slice(char, char, int, int, int, const float*, int, const float*, int, bool, float*,
+                int) {
+  return false;
+}
+#endif
+
 template <typename T>
 bool fast_nt(T*, int, const T*, const T*, int, int, int, bool, int, int) {
   return false;
@@ -145,6 +179,8 @@ bool fast_nn(T*, int, const T*, const T*, int, int, int, bool, int, int) {
 template <>
 bool fast_nt<float>(float* Cs, int ldc, const float* A, const float* B, int M, int N, int K,
                     bool acc, int j0, int nj) {
+  if (dnnl_big(M, N, K))  // C[:, j0..] = A[M, K] · (B[j0.., K])ᵀ
+    return dnnl_slice('N', 'T', M, nj, K, A, K, B + size_t(j0) * K, K, acc, Cs, ldc);
   std::vector<float>& scratch = t_scratch;
   if (M <= kRowBlock && size_t(M) * (K + nj) < size_t(nj) * K) {
     scratch.resize(size_t(M) * (K + nj));
@@ -167,12 +203,16 @@ bool fast_nt<float>(float* Cs, int ldc, const float* A, const float* B, int M, i
 template <>
 bool fast_tn<float>(float* Cs, int ldc, const float* A, const float* B, int M, int N, int K,
                     bool acc, int j0, int nj) {
+  if (dnnl_big(M, N, K))  // C[:, j0..] = (A[K, M])ᵀ · B[K, j0..]
+    return dnnl_slice('T', 'N', M, nj, K, A, M, B + j0, N, acc, Cs, ldc);
   return xsmm_colmajor(B + j0, A, Cs, nj, M, K, N, M, ldc, true, acc);
 }
 // C[M,N] (+)= A[M,K]·B[K,N]: Cᶜ = Bᶜ·Aᶜ.
 template <>
 bool fast_nn<float>(float* Cs, int ldc, const float* A, const float* B, int M, int N, int K,
                     bool acc, int j0, int nj) {
+  if (dnnl_big(M, N, K))  // C[:, j0..] = A[M, K] · B[K, j0..]
+    return dnnl_slice('N', 'N', M, nj, K, A, K, B + j0, N, acc, Cs, ldc);
   return xsmm_colmajor(B + j0, A, Cs, nj, M, K, N, K, ldc, false, acc);
 }
 #endif
@@ -224,7 +264,11 @@ void matmul_nn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulat
 }
 
 const char* gemm_backend() {
+#ifdef SIRL_HAVE_DNNL
+  return use_xsmm() ? "libxsmm+onednn" : "eigen";
+#else
   return use_xsmm() ? "libxsmm" : "eigen";
+#endif
 }
 
 #define SIRL_INSTANTIATE(T)                                                                    \

@@ -36,7 +36,7 @@ template <typename T>
 void matmul_nn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K, bool accumulate,
                     int j0, int nj);
 
-// "libxsmm" or "eigen": what float products run on in this process.
+// "libxsmm+onednn", "libxsmm" or "eigen": what float products run on in this process.
 const char* gemm_backend();
 
 }  // namespace sirl

@@ -93,7 +93,8 @@ TEST(Gemm, TheBackendIsTheOneTheEnvironmentAsksFor) {
   if (v && std::strcmp(v, "generic") == 0)
     EXPECT_STREQ(gemm_backend(), "eigen");
   else
-    EXPECT_TRUE(std::string(gemm_backend()) == "libxsmm" || std::string(gemm_backend()) == "eigen");
+    EXPECT_TRUE(std::string(gemm_backend()) == "libxsmm+onednn" ||
+                std::string(gemm_backend()) == "libxsmm" || std::string(gemm_backend()) == "eigen");
 }
 
 }  // namespace
