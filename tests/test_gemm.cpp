@@ -88,6 +88,29 @@ TEST(Gemm, NtGivesTheBitsOfNnOnTheTransposedMatrix) {
   }
 }
 
+// The products oneDNN serves (two dimensions ≥ 512) give the same bits on 1 and 2 threads.
+TEST(Gemm, BigProductsAreTheSameBitsOnOneAndTwoThreads) {
+  const int M = 64, N = 1024, K = 700;
+  Rng rng(9);
+  std::vector<float> A(size_t(M) * K), B(size_t(N) * K);
+  for (auto& x : A) x = float(rng.uniform(-1, 1));
+  for (auto& x : B) x = float(rng.uniform(-1, 1));
+  for (int threads : {1, 2}) {
+    std::vector<float> nt(size_t(M) * N), nn(nt.size()), tn(nt.size());
+    matmul_nt(nt.data(), A.data(), B.data(), M, N, K, false, threads);  // B as [N, K]
+    matmul_nn(nn.data(), A.data(), B.data(), M, N, K, false, threads);  // B as [K, N]
+    matmul_tn(tn.data(), A.data(), B.data(), M, N, K, false, threads);  // A as [K, M]
+    static std::vector<float> one_nt, one_nn, one_tn;
+    if (threads == 1) {
+      one_nt = nt, one_nn = nn, one_tn = tn;
+    } else {
+      EXPECT_EQ(nt, one_nt);
+      EXPECT_EQ(nn, one_nn);
+      EXPECT_EQ(tn, one_tn);
+    }
+  }
+}
+
 TEST(Gemm, TheBackendIsTheOneTheEnvironmentAsksFor) {
   const char* v = std::getenv("SIRL_KERNELS");
   if (v && std::strcmp(v, "generic") == 0)
