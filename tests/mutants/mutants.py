@@ -24,7 +24,7 @@ MUTANTS = [
      "equal rewards counted as a win for A"),
     ("kernels/adam.cpp", "    v[i] = v[i] * b2 + g[i] * g[i] * one_minus_b2;",
      "    v[i] = v[i] * b2 + g[i] * one_minus_b2;", "Adam.*", "second moment of g, not g²"),
-    ("kernels/adam.cpp", "  const float step_size = float(lr / bc1);", "  const float step_size = float(lr);",
+    ("kernels/adam.cpp", "  s.step_size = float(lr / bc1);", "  s.step_size = float(lr);",
      "Adam.*", "first-moment bias correction dropped"),
     ("kernels/adam.cpp", "  return cfg.lr * std::pow(cfg.decay, double(t - 1));",
      "  return cfg.lr * std::pow(cfg.decay, double(t));", "Adam.*", "LR decay off by one step"),
@@ -174,6 +174,14 @@ MUTANTS = [
      "the attend teacher's mask drawn but not applied"),
     ("jobs/plan.cpp", "      if (uses_queries(v.method))\n        add_task(plan, p, experiment_cell(TaskKind::fpe, env, seed, v, N));\n",
      "", "NoisyTeacher.*", "robustness axes without the perfect teacher's reference cells"),
+    # kernels/ — the fused backward + Adam and the oneDNN products (engine 0.6.0)
+    ("kernels/mlp.cpp", "      if (d_in) matmul_nn_cols(d_in + j0, ni, g, W, batch, ni, no, false, j0, nj);\n", "",
+     "Mlp.Fused*", "fused backward: ∂L/∂input of a hidden layer never computed"),
+    ("kernels/mlp.cpp", "      adam_apply(step, params + b_off, db.data(), m + b_off, v + b_off, no);",
+     "", "Mlp.Fused*", "fused backward: biases never updated"),
+    ("kernels/gemm.cpp", "dnnl_sgemm(ta, tb, M, nj, K, 1.f, A, lda, B, ldb, acc ? 1.f : 0.f, Cs, ldc);",
+     "dnnl_sgemm(ta, tb, M, nj, K, 1.f, A, lda, B, ldb, 0.f, Cs, ldc);", "Gemm.*",
+     "oneDNN products drop `accumulate`"),
 ]
 
 # Mutations the suite cannot catch because they do not change behaviour (none so far).
