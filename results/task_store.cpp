@@ -163,6 +163,9 @@ void TaskStore::commit(const TaskRecord& r) {
     throw H5Error("cannot save task " + r.key + ": " + e.what());
   }
   fsync_path(tmp.string());
+  // With the crash hook on, commits are serialised up to the hook, so that exactly k land
+  // before the process ends (two threads renaming at once made k + 1); off, this locks nothing.
+  const std::unique_lock<std::mutex> hook = crash_point_serialise();
   std::error_code ec;
   fs::rename(tmp, final, ec);
   if (ec) throw H5Error(final.string() + ": cannot commit task " + r.key + ": " + ec.message());
@@ -188,14 +191,27 @@ bool TaskStore::empty() const {
   return index_.empty();
 }
 
-void crash_point_after_commit() {
-  // Crash-point injection for tests: SIRL_CRASH_AFTER_COMMITS=k ends the process, as kill -9
-  // would (no destructors, no flush), right after the k-th durable commit of this process.
+namespace {
+long crash_after_commits() {
   static const long k = [] {
     const char* v = std::getenv("SIRL_CRASH_AFTER_COMMITS");
     return v ? std::strtol(v, nullptr, 10) : 0L;
   }();
+  return k;
+}
+}  // namespace
+
+std::unique_lock<std::mutex> crash_point_serialise() {
+  static std::mutex mu;
+  return crash_after_commits() > 0 ? std::unique_lock<std::mutex>(mu)
+                                   : std::unique_lock<std::mutex>();
+}
+
+void crash_point_after_commit() {
+  // Crash-point injection for tests: SIRL_CRASH_AFTER_COMMITS=k ends the process, as kill -9
+  // would (no destructors, no flush), right after the k-th durable commit of this process.
   static std::atomic<long> commits{0};
+  const long k = crash_after_commits();
   if (k > 0 && ++commits == k) std::_Exit(137);
 }
 

@@ -46,5 +46,8 @@ std::string record_checksum(const TaskRecord& r);
 // Test hook: with SIRL_CRASH_AFTER_COMMITS=k in the environment the process ends abruptly (exit
 // code 137, no cleanup) right after its k-th commit, so crash tests kill at an exact point.
 void crash_point_after_commit();
+// Held from a commit's rename to its crash_point_after_commit() call: engaged only when the hook
+// is on, so that commits from several threads count exactly.
+std::unique_lock<std::mutex> crash_point_serialise();
 
 }  // namespace sirl
