@@ -69,25 +69,38 @@ void mlp_forward(const MlpShape& s, const T* params, const T* x, int batch, MlpT
   }
 }
 
+namespace {
+
+// Both backward passes start alike: scratch for ∂L/∂(pre-activation), seeded with dout.
+template <typename T>
+void begin_backward(const MlpShape& s, MlpTape<T>& tape, const T* dout) {
+  const int maxw = *std::max_element(s.widths.begin(), s.widths.end());
+  tape.grad.resize(size_t(tape.batch) * maxw);
+  tape.grad_next.resize(size_t(tape.batch) * maxw);
+  std::copy(dout, dout + size_t(tape.batch) * s.out(), tape.grad.data());
+}
+
+// The ReLU mask of layer l on g [batch, no]: output > 0 ⇔ pre-activation > 0.
+template <typename T>
+void mask_relu(const MlpShape& s, int l, const MlpTape<T>& tape, T* g) {
+  if (!s.relu_after(l)) return;
+  const T* y = tape.act[l].data();
+  for (size_t i = 0; i < size_t(tape.batch) * s.widths[l + 1]; ++i)
+    if (y[i] <= T(0)) g[i] = T(0);
+}
+
+}  // namespace
+
 template <typename T>
 void mlp_backward(const MlpShape& s, const T* params, MlpTape<T>& tape,
                   const std::type_identity_t<T>* dout, std::type_identity_t<T>* dparams,
                   std::type_identity_t<T>* dx, int threads) {
   const int L = s.layers(), batch = tape.batch;
-  const int maxw = *std::max_element(s.widths.begin(), s.widths.end());
-  tape.grad.resize(size_t(batch) * maxw);
-  tape.grad_next.resize(size_t(batch) * maxw);
-  // g holds ∂L/∂(pre-activation) of layer l, [batch, no].
-  std::copy(dout, dout + size_t(batch) * s.out(), tape.grad.data());
+  begin_backward<T>(s, tape, dout);  // g holds ∂L/∂(pre-activation) of layer l, [batch, no]
   for (int l = L - 1; l >= 0; --l) {
     const int ni = s.widths[l], no = s.widths[l + 1];
     T* g = tape.grad.data();
-    const bool relu = s.relu_after(l);
-    if (relu) {  // the ReLU mask: output > 0 ⇔ pre-activation > 0
-      const T* y = tape.act[l].data();
-      for (size_t i = 0; i < size_t(batch) * no; ++i)
-        if (y[i] <= T(0)) g[i] = T(0);
-    }
+    mask_relu<T>(s, l, tape, g);
     const T* in = l == 0 ? tape.input : tape.act[l - 1].data();  // [batch, ni]
     T* dW = dparams + s.weight_offset(l);                        // [no, ni]
     T* db = dparams + s.bias_offset(l);                          // [no]
@@ -130,18 +143,11 @@ void mlp_backward_batched(const MlpShape& s, int models, const T* params,
 void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, const float* dout,
                        const AdamStepScalars& step, float* m, float* v, int threads) {
   const int L = s.layers(), batch = tape.batch;
-  const int maxw = *std::max_element(s.widths.begin(), s.widths.end());
-  tape.grad.resize(size_t(batch) * maxw);
-  tape.grad_next.resize(size_t(batch) * maxw);
-  std::copy(dout, dout + size_t(batch) * s.out(), tape.grad.data());
+  begin_backward<float>(s, tape, dout);
   for (int l = L - 1; l >= 0; --l) {
     const int ni = s.widths[l], no = s.widths[l + 1];
     float* g = tape.grad.data();  // [batch, no] ∂L/∂(pre-activation)
-    if (s.relu_after(l)) {
-      const float* y = tape.act[l].data();
-      for (size_t i = 0; i < size_t(batch) * no; ++i)
-        if (y[i] <= 0.f) g[i] = 0.f;
-    }
+    mask_relu<float>(s, l, tape, g);
     const float* in = l == 0 ? tape.input : tape.act[l - 1].data();  // [batch, ni]
     const size_t w_off = s.weight_offset(l), b_off = s.bias_offset(l);
     float* W = params + w_off;  // [no, ni]
