@@ -43,6 +43,7 @@ void for_each_field(H& h, F&& f) {
   schedule("tpa", h.tpa);
   f("tpa.hidden", h.tpa_hidden);
   f("tpa.l2", h.tpa_l2);
+  f("precision", h.precision);
 }
 
 [[noreturn]] void bad(const std::string& key, const std::string& value, const char* expected) {
@@ -165,6 +166,10 @@ void validate(const Hyper& h) {
         h.vae_elbo + "\"");
   if (h.pref_l2 < 0) fail("pref.l2 must be >= 0");
   if (h.tpa_l2 < 0) fail("tpa.l2 must be >= 0");
+  if (h.precision != "fp32" && h.precision != "bf16")
+    fail(
+        "precision must be \"fp32\" or \"bf16\" (bf16 matrix products, fp32 accumulation), got \"" +
+        h.precision + "\"");
 }
 
 }  // namespace sirl

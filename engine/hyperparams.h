@@ -1,6 +1,6 @@
-// The paper's training hyper-parameters (Appendix B–C; docs/ARCHITECTURE.md §4), one set per environment.
-// Every value is overridable by name ("sirl.epochs", "tpa.lr", …) so profiles can change any of
-// them, and every run records the full set it used (describe()).
+// The paper's training hyper-parameters (Appendix B–C; docs/ARCHITECTURE.md §4), one set per
+// environment. Every value is overridable by name ("sirl.epochs", "tpa.lr", …) so profiles can
+// change any of them, and every run records the full set it used (describe()).
 #pragma once
 #include <string>
 #include <vector>
@@ -40,7 +40,15 @@ struct Hyper {
   TrainSchedule tpa{500, 64, {0.001, 1.0}};  // the TPA reward heads
   std::vector<int> tpa_hidden{128, 128};
   double tpa_l2 = 10;
+  // "fp32" (the paper's) or "bf16": every network's matrix products in bf16 with fp32
+  // accumulation, master weights and Adam state in fp32 (MlpShape::bf16_products).
+  std::string precision = "fp32";
 };
+
+// Whether h asks for bf16 matrix products.
+inline bool bf16_products(const Hyper& h) {
+  return h.precision == "bf16";
+}
 
 // The paper's values for a registered environment (datasets/environments.h: the engine's
 // defaults plus the environment's HyperDefault list); throws std::invalid_argument for an unknown

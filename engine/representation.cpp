@@ -50,6 +50,7 @@ MlpShape phi_shape(int in, const Hyper& h) {
   for (int w : h.phi_hidden) s.widths.push_back(w);
   s.widths.push_back(h.embedding_dim);
   s.relu_on_output = h.phi_relu_output;
+  s.bf16_products = bf16_products(h);
   validate(s);
   return s;
 }

@@ -24,6 +24,7 @@ MlpShape tpa_network(const MlpShape& phi, const Hyper& h, bool frozen) {
   }
   for (int w : h.tpa_hidden) s.widths.push_back(w);
   s.widths.push_back(1);
+  s.bf16_products = bf16_products(h);
   validate(s);
   return s;
 }

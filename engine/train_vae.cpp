@@ -58,6 +58,7 @@ VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads,
   m.elbo = vae_elbo_form(h);
   m.standardize = h.vae_standardize;
   m.shape = make_vae_shape(d.input_dim, h.phi_hidden, h.embedding_dim);
+  m.shape.encoder.bf16_products = m.shape.decoder.bf16_products = bf16_products(h);
   m.params.resize(m.shape.param_count());
   Rng init(seed_from_key("vae_init", seed)), noise(seed_from_key("vae_noise", seed)),
       order_rng(seed_from_key("vae_order", seed));

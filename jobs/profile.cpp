@@ -487,7 +487,10 @@ void parse_study(Reader& r, const toml::table& root, Profile& p) {
 
 // The paper's hyper-parameters per environment, then [hyper.all] and [hyper.<env>] overrides.
 void parse_hyper(Reader& r, const toml::table& root, Profile& p) {
-  for (const auto& env : p.envs) p.hyper[env] = paper_hyper(env);
+  for (const auto& env : p.envs) {
+    p.hyper[env] = paper_hyper(env);
+    p.hyper[env].precision = p.precision;
+  }
   if (const auto* hy = r.table(root, "hyper", false)) {
     std::set<std::string> allowed{"all"};
     for (const auto& e : p.envs) allowed.insert(e);
@@ -580,8 +583,9 @@ Profile parse_profile(const std::string& text, const std::string& path) {
                        std::string(e.description()));
   }
   Reader r(root, path);
-  std::set<std::string> top{"name", "description", "envs",  "seeds", "queries",    "teacher", "fpe",
-                            "tpa",  "ablation",    "hyper", "study", "robustness", "active"};
+  std::set<std::string> top{"name",    "description", "envs",   "seeds",    "queries",
+                            "teacher", "fpe",         "tpa",    "ablation", "hyper",
+                            "study",   "robustness",  "active", "precision"};
   for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
   r.only_keys(root, "the profile", top);
   Profile p;
@@ -598,6 +602,10 @@ Profile parse_profile(const std::string& text, const std::string& path) {
     }
   }
   parse_data_tables(r, root, p.data);
+  p.precision = r.string(root, "precision", "fp32");
+  if (p.precision != "fp32" && p.precision != "bf16")
+    r.fail(root.get("precision"),
+           "precision must be \"fp32\" or \"bf16\" (bf16 matrix products, fp32 accumulation)");
   p.seeds = r.int_list(root, "seeds", 0, 1'000'000'000, true);
   parse_queries(r, root, p);
   parse_cells(r, root, p);

@@ -103,6 +103,9 @@ struct Profile {
   std::vector<Method> ablation_methods;
   std::vector<int64_t> ablation_N, ablation_M;
   std::map<std::string, Hyper> hyper;  // per env: the paper's values with this profile's overrides
+  // Top-level `precision` ("fp32" or "bf16"): every network of the run, the study's included;
+  // [hyper.<env>] precision may still set one environment apart.
+  std::string precision = "fp32";
   EnvConfig data;  // Ξ's settings ([jaco]: trajectories, data_seed, max_deformation)
   // Per env: the top-level seeds/N/M unless the env's own table ([grid], [jaco], …) overrides them.
   std::map<std::string, EnvAxes> axes;

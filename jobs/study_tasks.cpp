@@ -75,6 +75,7 @@ StudyAnalysisConfig study_config(const Profile& p) {
   c.hyper = paper_hyper(sp.cohort.env);
   c.hyper.sirl.epochs = sp.epochs;
   c.hyper.tpa.epochs = sp.tpa_epochs;
+  c.hyper.precision = p.precision;
   c.seeds = sp.seeds;
   c.cv_splits = sp.splits;
   c.threads = 1;

@@ -36,6 +36,7 @@ void put_shape(const MlpShape& s, const std::string& prefix, TaskRecord& rec) {
   rec.text[prefix + "widths"] = int_list_text(s.widths);
   rec.text[prefix + "linear_layers"] = int_list_text(s.linear_layers);
   rec.num[prefix + "relu_output"] = s.relu_on_output;
+  if (s.bf16_products) rec.num[prefix + "bf16_products"] = 1;  // fp32 records stay as before
 }
 MlpShape get_shape(const TaskRecord& rec, const std::string& prefix) {
   MlpShape s;
@@ -43,6 +44,8 @@ MlpShape get_shape(const TaskRecord& rec, const std::string& prefix) {
   s.linear_layers = parse_int_list(need_text(rec, prefix + "linear_layers"),
                                    rec.key + " " + prefix + "linear_layers");
   s.relu_on_output = need_num(rec, prefix + "relu_output") != 0;
+  const auto bf16 = rec.num.find(prefix + "bf16_products");  // absent before engine 0.7.0: fp32
+  s.bf16_products = bf16 != rec.num.end() && bf16->second != 0;
   try {
     validate(s);
   } catch (const std::invalid_argument& e) {

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "kernels/bf16.h"
 #include "kernels/gemm.h"
 
 namespace sirl {
@@ -41,6 +42,36 @@ double MlpShape::forward_flops(int batch) const {
   return f * batch;
 }
 
+namespace {
+
+// One operand of a product in the shape's precision: x itself in fp32; with bf16_products, a
+// bf16-rounded copy of its n values in `scratch` (which the caller keeps alive over the product).
+template <typename T>
+const T* operand(const MlpShape& s, const T* x, size_t n, std::vector<T>& scratch) {
+  if (!s.bf16_products) return x;
+  if constexpr (std::is_same_v<T, float>) {
+    scratch.resize(n);
+    round_to_bf16(x, scratch.data(), n);
+    return scratch.data();
+  } else {
+    throw std::invalid_argument("bf16 products are for float networks only");
+  }
+}
+
+// Scratch for the rounded operands, one set per thread (the batched forms run models on
+// OpenMP threads; the fused pass's slices only read what the calling thread rounded).
+template <typename T>
+struct Bf16Scratch {
+  std::vector<T> in, w, g;
+};
+template <typename T>
+Bf16Scratch<T>& bf16_scratch() {
+  thread_local Bf16Scratch<T> s;
+  return s;
+}
+
+}  // namespace
+
 template <typename T>
 void mlp_forward(const MlpShape& s, const T* params, const T* x, int batch, MlpTape<T>& tape,
                  int threads) {
@@ -56,7 +87,9 @@ void mlp_forward(const MlpShape& s, const T* params, const T* x, int batch, MlpT
     const T* W = params + s.weight_offset(l);  // [no, ni]
     const T* b = params + s.bias_offset(l);    // [no]
     // y [batch, no] = in [batch, ni] · Wᵀ
-    matmul_nt(y.data(), in, W, batch, no, ni, false, threads);
+    Bf16Scratch<T>& r = bf16_scratch<T>();
+    matmul_nt(y.data(), operand(s, in, size_t(batch) * ni, r.in),
+              operand(s, W, size_t(no) * ni, r.w), batch, no, ni, false, threads);
     const bool relu = s.relu_after(l);
     for (int r = 0; r < batch; ++r) {
       T* row = y.data() + size_t(r) * no;
@@ -104,14 +137,17 @@ void mlp_backward(const MlpShape& s, const T* params, MlpTape<T>& tape,
     const T* in = l == 0 ? tape.input : tape.act[l - 1].data();  // [batch, ni]
     T* dW = dparams + s.weight_offset(l);                        // [no, ni]
     T* db = dparams + s.bias_offset(l);                          // [no]
+    Bf16Scratch<T>& rs = bf16_scratch<T>();
+    const T* gp = operand(s, static_cast<const T*>(g), size_t(batch) * no, rs.g);
     // dW [no, ni] += gᵀ [no, batch] · in [batch, ni]
-    matmul_tn(dW, g, in, no, ni, batch, true, threads);
+    matmul_tn(dW, gp, operand(s, in, size_t(batch) * ni, rs.in), no, ni, batch, true, threads);
     for (int r = 0; r < batch; ++r)
       for (int j = 0; j < no; ++j) db[j] += g[size_t(r) * no + j];
     if (l > 0 || dx) {
       // d_in [batch, ni] = g [batch, no] · W [no, ni]
       T* d_in = l > 0 ? tape.grad_next.data() : dx;
-      matmul_nn(d_in, g, params + s.weight_offset(l), batch, ni, no, false, threads);
+      matmul_nn(d_in, gp, operand(s, params + s.weight_offset(l), size_t(no) * ni, rs.w), batch, ni,
+                no, false, threads);
       if (l > 0) std::swap(tape.grad, tape.grad_next);
     }
   }
@@ -160,15 +196,21 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
       adam_apply(step, params + b_off, db.data(), m + b_off, v + b_off, no);
     }
     float* d_in = l > 0 ? tape.grad_next.data() : nullptr;  // [batch, ni]
+    // The products' operands (bf16-rounded copies with bf16_products; W's copy is taken before
+    // any slice updates W, as ∂L/∂input needs the old weights).
+    Bf16Scratch<float>& rs = bf16_scratch<float>();
+    const float* gp = operand(s, static_cast<const float*>(g), size_t(batch) * no, rs.g);
+    const float* inp = operand(s, in, size_t(batch) * ni, rs.in);
+    const float* Wp = d_in ? operand(s, static_cast<const float*>(W), size_t(no) * ni, rs.w) : W;
     const int width = gemm_column_slice(ni), slices = (ni + width - 1) / width;
     const auto slice = [&](int p) {
       const int j0 = p * width, nj = std::min(width, ni - j0);
       // d_in[:, j0..] [batch, nj] = g [batch, no] · W[:, j0..] [no, nj], with W before its update
-      if (d_in) matmul_nn_cols(d_in + j0, ni, g, W, batch, ni, no, false, j0, nj);
+      if (d_in) matmul_nn_cols(d_in + j0, ni, gp, Wp, batch, ni, no, false, j0, nj);
       // dW[:, j0..] [no, nj] = gᵀ [no, batch] · in[:, j0..] [batch, nj], into a zeroed scratch
       thread_local std::vector<float> dw;
       dw.assign(size_t(no) * nj, 0.f);
-      matmul_tn_cols(dw.data(), nj, g, in, no, ni, batch, true, j0, nj);
+      matmul_tn_cols(dw.data(), nj, gp, inp, no, ni, batch, true, j0, nj);
       if (nj == ni) {  // one slice: W and its scratch gradient are both contiguous [no, ni]
         adam_apply(step, W, dw.data(), m + w_off, v + w_off, size_t(no) * ni);
       } else {

@@ -20,6 +20,10 @@ struct MlpShape {
   // Hidden layers whose output skips the ReLU. Used when φ (linear output) and a reward head are
   // stacked into one network for unfrozen training: the embedding layer stays linear.
   std::vector<int> linear_layers;
+  // Precision "bf16": every matrix product (forward, ∂L/∂input, ∂L/∂W) takes bf16-rounded
+  // operands and accumulates in fp32 (kernels/bf16.h); weights, biases, activations, gradients
+  // and Adam's state stay fp32. Float only (the double instantiations refuse it).
+  bool bf16_products = false;
   bool relu_after(int layer) const;
 
   int layers() const { return static_cast<int>(widths.size()) - 1; }

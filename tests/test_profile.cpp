@@ -5,8 +5,11 @@
 #include <string>
 #include <vector>
 
+#include "engine/representation.h"
+#include "engine/tpa.h"
 #include "jobs/plan.h"
 #include "jobs/profile.h"
+#include "jobs/study_tasks.h"
 #include "tests/small_profile.h"
 
 namespace sirl {
@@ -70,9 +73,10 @@ TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
                      "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n")
                 .find("VAE pre-training applies only"),
             std::string::npos);
-  EXPECT_NE(error_of(base).find(
-                "nothing to run: give at least one of [fpe], [tpa], [ablation], [robustness] or [study]"),
-            std::string::npos)
+  EXPECT_NE(
+      error_of(base).find(
+          "nothing to run: give at least one of [fpe], [tpa], [ablation], [robustness] or [study]"),
+      std::string::npos)
       << error_of(base);
   EXPECT_NE(error_of(base + grid + "[grid]\nstore_weights = 1\n").find("store_weights must be"),
             std::string::npos);
@@ -91,6 +95,30 @@ TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
   m = error_of(base + grid + "[hyper.grid]\n\"phi.hidden\" = [1e8, 1e8]\n");
   EXPECT_EQ(m.find("bad.toml", 1), std::string::npos) << m;
   EXPECT_NE(m.find("must be an array of integers"), std::string::npos) << m;
+}
+
+// precision: fp32 by default; "bf16" at the top reaches every environment's networks and the
+// study's; [hyper.<env>] can set one environment apart; anything else is refused with file:line.
+TEST(Profile, PrecisionReachesEveryNetwork) {
+  const std::string base = "name = \"x\"\nenvs = [\"grid\", \"grid2\"]\nseeds = [0]\n";
+  const std::string grid = "[fpe]\nmethods = [\"sirl\"]\nN = [100]\n";
+  Profile p = parse_profile(base + grid, "p.toml");
+  EXPECT_EQ(p.hyper.at("grid").precision, "fp32");
+  EXPECT_FALSE(phi_shape(19, p.hyper.at("grid")).bf16_products);
+  p = parse_profile(
+      "precision = \"bf16\"\n" + base + grid + "[hyper.grid2]\nprecision = \"fp32\"\n", "p.toml");
+  EXPECT_EQ(p.precision, "bf16");
+  EXPECT_TRUE(phi_shape(19, p.hyper.at("grid")).bf16_products);
+  EXPECT_TRUE(
+      tpa_network(phi_shape(19, p.hyper.at("grid")), p.hyper.at("grid"), false).bf16_products);
+  EXPECT_FALSE(phi_shape(19, p.hyper.at("grid2")).bf16_products);
+  EXPECT_EQ(study_config(p).hyper.precision, "bf16");
+  EXPECT_NE(describe(p.hyper.at("grid")).find("precision = bf16\n"), std::string::npos);
+  std::string m = error_of("precision = \"fp16\"\n" + base + grid);
+  EXPECT_EQ(m.rfind("bad.toml:1:", 0), 0u) << m;
+  EXPECT_NE(m.find("precision must be \"fp32\" or \"bf16\""), std::string::npos) << m;
+  m = error_of(base + grid + "[hyper.grid]\nprecision = \"int8\"\n");
+  EXPECT_NE(m.find("precision must be \"fp32\" or \"bf16\""), std::string::npos) << m;
 }
 
 // A profile may run any part of the grid: FPE only, TPA only, or the ablation only.
