@@ -148,33 +148,43 @@ BENCHMARK(BM_MlpForwardBackward)
     ->UseRealTime();
 
 // One VAE step (ELBO forward + backward + Adam), the paper's batch of 32, one thread.
-// Args: {input width, hidden width}.
+// Args: {input width, hidden width, fused}: fused = 1 is what training runs
+// (vae_loss_and_adam_step: Adam inside the backward pass, no gradient buffer); fused = 0 the
+// gradient into a zeroed buffer, then Adam over it (the same bits; kept to measure the fusion).
 void BM_VaeStep(benchmark::State& state) {
   const int in = int(state.range(0)), hidden = int(state.range(1)), B = 32, L = 6;
+  const bool fused = state.range(2) != 0;
   const VaeShape s = make_vae_shape(in, {hidden, hidden}, L);
   Rng rng(4);
   auto X = random_inputs(B, in, rng);
   auto eps = random_inputs(B, L, rng);
-  std::vector<float> p(s.param_count()), g(s.param_count());
+  std::vector<float> p(s.param_count()), g(fused ? 0 : s.param_count());
   mlp_init(s.encoder, p.data(), rng);
   mlp_init(s.decoder, p.data() + s.encoder.param_count(), rng);
   AdamConfig cfg{0.01, 0.99999};
   AdamState adam(p.size());
   VaeWorkspace<float> ws;
   for (auto _ : state) {
-    std::fill(g.begin(), g.end(), 0.f);
-    benchmark::DoNotOptimize(vae_loss_and_grad(s, p.data(), X.data(), B, eps.data(), 0.01f,
-                                               VaeElbo::sum_over_inputs, g.data(), ws));
-    adam_step(cfg, adam, p.data(), g.data(), p.size());
+    if (fused) {
+      const AdamStepScalars step = adam_begin_step(cfg, adam);
+      benchmark::DoNotOptimize(vae_loss_and_adam_step(s, p.data(), X.data(), B, eps.data(), 0.01f,
+                                                      VaeElbo::sum_over_inputs, step, adam.m.data(),
+                                                      adam.v.data(), ws));
+    } else {
+      std::fill(g.begin(), g.end(), 0.f);
+      benchmark::DoNotOptimize(vae_loss_and_grad(s, p.data(), X.data(), B, eps.data(), 0.01f,
+                                                 VaeElbo::sum_over_inputs, g.data(), ws));
+      adam_step(cfg, adam, p.data(), g.data(), p.size());
+    }
   }
   const double flops = 3 * (s.encoder.forward_flops(B) + s.decoder.forward_flops(B));
   state.counters["GFLOP/s"] =
       benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_VaeStep)
-    ->ArgNames({"in", "hidden"})
-    ->Args({19, 128})
-    ->Args({2037, 1024})
+    ->ArgNames({"in", "hidden", "fused"})
+    ->ArgsProduct({{19}, {128}, {0, 1}})
+    ->ArgsProduct({{2037}, {1024}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

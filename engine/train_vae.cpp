@@ -67,7 +67,7 @@ VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads,
 
   const int B = h.vae.batch, in = d.input_dim, L = h.embedding_dim;
   const int64_t T = d.count;
-  std::vector<float> grad(m.params.size()), x(size_t(B) * in), eps(size_t(B) * L);
+  std::vector<float> x(size_t(B) * in), eps(size_t(B) * L);
   AdamState adam(m.params.size());
   VaeWorkspace<float> ws;
   VaeLossParts parts;
@@ -98,11 +98,11 @@ VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads,
         for (int i = 0; i < b; ++i)
           std::copy(d.input(rows[i]), d.input(rows[i]) + in, x.begin() + size_t(i) * in);
         for (int i = 0; i < b * L; ++i) eps[i] = float(noise.normal());
-        std::fill(grad.begin(), grad.end(), 0.f);
-        const float loss =
-            vae_loss_and_grad(m.shape, m.params.data(), x.data(), b, eps.data(),
-                              float(h.vae_kl_weight), m.elbo, grad.data(), ws, &parts, threads);
-        adam_step(h.vae.adam, adam, m.params.data(), grad.data(), m.params.size());
+        // The backward pass updates the weights as it goes (the gradient is never stored).
+        const AdamStepScalars step = adam_begin_step(h.vae.adam, adam);
+        const float loss = vae_loss_and_adam_step(
+            m.shape, m.params.data(), x.data(), b, eps.data(), float(h.vae_kl_weight), m.elbo, step,
+            adam.m.data(), adam.v.data(), ws, &parts, threads);
         m.train_flops += 3 * (m.shape.encoder.forward_flops(b) + m.shape.decoder.forward_flops(b));
         rec_sum += parts.reconstruction * b;
         kl_sum += parts.kl * b;

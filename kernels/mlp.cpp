@@ -177,7 +177,7 @@ void mlp_backward_batched(const MlpShape& s, int models, const T* params,
 }
 
 void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, const float* dout,
-                       const AdamStepScalars& step, float* m, float* v, int threads) {
+                       const AdamStepScalars& step, float* m, float* v, int threads, float* dx) {
   const int L = s.layers(), batch = tape.batch;
   begin_backward<float>(s, tape, dout);
   for (int l = L - 1; l >= 0; --l) {
@@ -195,7 +195,7 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
         for (int j = 0; j < no; ++j) db[j] += g[size_t(r) * no + j];
       adam_apply(step, params + b_off, db.data(), m + b_off, v + b_off, no);
     }
-    float* d_in = l > 0 ? tape.grad_next.data() : nullptr;  // [batch, ni]
+    float* d_in = l > 0 ? tape.grad_next.data() : dx;  // [batch, ni]
     // The products' operands (bf16-rounded copies with bf16_products; W's copy is taken before
     // any slice updates W, as ∂L/∂input needs the old weights).
     Bf16Scratch<float>& rs = bf16_scratch<float>();

@@ -71,10 +71,11 @@ void mlp_backward(const MlpShape& shape, const T* params, MlpTape<T>& tape,
 // gradient is never stored: for networks larger than the cache this saves writing, zeroing and
 // re-reading a gradient buffer as large as the weights every step. The result is bit-identical
 // to mlp_backward into a zeroed gradient followed by adam_apply over [P] (a test checks it), for
-// any thread count.
+// any thread count. dx [batch, in], when not null, receives ∂L/∂x (from the weights before
+// the update, as mlp_backward's).
 void mlp_backward_adam(const MlpShape& shape, float* params, MlpTape<float>& tape,
                        const float* dout, const AdamStepScalars& step, float* m, float* v,
-                       int threads = 1);
+                       int threads = 1, float* dx = nullptr);
 
 // B models of one shape at once, each with its own weights and its own mini-batch:
 //   params [B, P], x [B, batch, in], tapes[b] holds model b's activations.

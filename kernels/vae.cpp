@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 namespace sirl {
 
@@ -30,10 +31,22 @@ VaeShape make_vae_shape(int in, const std::vector<int>& hidden, int latent) {
   return s;
 }
 
+namespace {
+
+// The loss and its backward pass, shared by both entry points. `backward_decoder(d_recon, d_z)`
+// runs the decoder's backward pass from ∂L/∂x̂ and must write ∂L/∂z; `backward_encoder(d_out)`
+// runs the encoder's from ∂L/∂(μ | log σ²). Both are skipped when `grad` is false. Each reads
+// only its own network's weights, so the decoder's may already be updated when the encoder's
+// pass runs. The passes are std::functions, not template parameters, and the body is never
+// inlined or specialised (noipa), so that the loss's own arithmetic is compiled once per scalar
+// type: specialised for the fused caller (which passes grad = true), GCC vectorised and fused
+// multiply-adds differently and the gradients differed in the last bit.
 template <typename T>
-T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const T* eps,
-                    T kl_weight, VaeElbo elbo, T* dparams, VaeWorkspace<T>& ws, VaeLossParts* parts,
-                    int threads) {
+[[gnu::noipa]] T vae_loss(const VaeShape& s, const T* params, const T* x, int B, const T* eps,
+                          T kl_weight, VaeElbo elbo, bool grad,
+                          const std::function<void(const T*, T*)>& backward_decoder,
+                          const std::function<void(const T*)>& backward_encoder,
+                          VaeWorkspace<T>& ws, VaeLossParts* parts, int threads) {
   const int in = s.encoder.in(), d = s.latent;
   const T* enc_p = params;
   const T* dec_p = params + s.encoder.param_count();
@@ -62,9 +75,7 @@ T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const
   rec *= inv_n;
   if (parts) parts->kl_per_dim.assign(d, 0.0);
   ws.d_z.resize(size_t(B) * d);
-  if (dparams)
-    mlp_backward(s.decoder, dec_p, ws.dec, ws.d_recon.data(), dparams + s.encoder.param_count(),
-                 ws.d_z.data(), threads);
+  if (grad) backward_decoder(ws.d_recon.data(), ws.d_z.data());
   ws.d_enc_out.resize(size_t(B) * 2 * d);
   for (int i = 0; i < B; ++i)
     for (int k = 0; k < d; ++k) {
@@ -73,7 +84,7 @@ T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const
       const T kl_ik = T(-0.5) * (1 + lv - mu * mu - sd * sd);
       kl += kl_ik;
       if (parts) parts->kl_per_dim[k] += double(kl_ik) / B;
-      if (!dparams) continue;
+      if (!grad) continue;
       // through z = μ + σ·ε, plus the KL term's own gradient
       ws.d_enc_out[im] = ws.d_z[iz] + kl_weight * mu * inv_b;
       // The sample path has no gradient outside the clamp (as torch.clamp), but the KL's does
@@ -84,15 +95,47 @@ T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const
                          kl_weight * T(0.5) * (sd * sd - 1) * inv_b;
     }
   kl *= inv_b;
-  if (dparams)
-    mlp_backward(s.encoder, enc_p, ws.enc, ws.d_enc_out.data(), dparams, static_cast<T*>(nullptr),
-                 threads);
+  if (grad) backward_encoder(ws.d_enc_out.data());
   if (parts) {
     parts->reconstruction = double(rec);
     parts->squared_error = double(sq_error);
     parts->kl = double(kl);
   }
   return rec + kl_weight * kl;
+}
+
+}  // namespace
+
+template <typename T>
+T vae_loss_and_grad(const VaeShape& s, const T* params, const T* x, int B, const T* eps,
+                    T kl_weight, VaeElbo elbo, T* dparams, VaeWorkspace<T>& ws, VaeLossParts* parts,
+                    int threads) {
+  const size_t E = s.encoder.param_count();
+  return vae_loss<T>(
+      s, params, x, B, eps, kl_weight, elbo, dparams != nullptr,
+      [&](const T* d_recon, T* d_z) {
+        mlp_backward(s.decoder, params + E, ws.dec, d_recon, dparams + E, d_z, threads);
+      },
+      [&](const T* d_out) {
+        mlp_backward(s.encoder, params, ws.enc, d_out, dparams, static_cast<T*>(nullptr), threads);
+      },
+      ws, parts, threads);
+}
+
+float vae_loss_and_adam_step(const VaeShape& s, float* params, const float* x, int B,
+                             const float* eps, float kl_weight, VaeElbo elbo,
+                             const AdamStepScalars& step, float* m, float* v,
+                             VaeWorkspace<float>& ws, VaeLossParts* parts, int threads) {
+  const size_t E = s.encoder.param_count();
+  return vae_loss<float>(
+      s, params, x, B, eps, kl_weight, elbo, true,
+      [&](const float* d_recon, float* d_z) {
+        mlp_backward_adam(s.decoder, params + E, ws.dec, d_recon, step, m + E, v + E, threads, d_z);
+      },
+      [&](const float* d_out) {
+        mlp_backward_adam(s.encoder, params, ws.enc, d_out, step, m, v, threads);
+      },
+      ws, parts, threads);
 }
 
 template float vae_loss_and_grad<float>(const VaeShape&, const float*, const float*, int,

@@ -51,4 +51,15 @@ T vae_loss_and_grad(const VaeShape& shape, const T* params, const T* x, int B, c
                     T kl_weight, VaeElbo elbo, T* dparams, VaeWorkspace<T>& ws,
                     VaeLossParts* parts = nullptr, int threads = 1);
 
+// The same loss, and Adam's step on params (scalars of adam_begin_step; moments m, v [P]) fused
+// into the backward pass: each network's weights are updated as their gradients appear
+// (mlp_backward_adam; the decoder's before the encoder's pass, which reads none of them), so the
+// gradient [P] is never stored. The same bits as vae_loss_and_grad into a zeroed gradient
+// followed by adam_apply over [P] (a test checks it).
+float vae_loss_and_adam_step(const VaeShape& shape, float* params, const float* x, int B,
+                             const float* eps, float kl_weight, VaeElbo elbo,
+                             const AdamStepScalars& step, float* m, float* v,
+                             VaeWorkspace<float>& ws, VaeLossParts* parts = nullptr,
+                             int threads = 1);
+
 }  // namespace sirl

@@ -17,6 +17,7 @@ export OMP_TOOL_LIBRARIES="$archer"
 # see; ignore_noninstrumented_modules keeps their internals out of the reports, ours stay in.
 export TSAN_OPTIONS="ignore_noninstrumented_modules=1 halt_on_error=0 log_path=$reports/tsan suppressions=$PWD/tests/tsan.supp"
 export SIRL_TEST_PROFILE="$PWD/tests/data/micro.toml"
+export SIRL_CRASH_WALK_STRIDE=5  # every fifth crash point (the release suite walks them all)
 threaded='^(Scheduler\.|TaskThreads\.|ReadyQueue\.|.*ThreadCount$|.*TwoThreads$|Mlp\.ThreadedGemmIsBitIdentical$'
 threaded+='|StudyRequests\.|study_server$|crash_walk$|mpi_run$)'
 status=0

@@ -312,18 +312,21 @@ with tempfile.TemporaryDirectory() as tmp:
 
     # One writer per output: a second run on an --out that is being written is refused, naming
     # the first one's pid; the first finishes undisturbed.
-    # (On smoke itself: engine-test can finish before the second run starts.)
+    # The first run is stopped (SIGSTOP) while it holds the lock, so the second always meets it.
     busy = os.path.join(tmp, "busy.h5")
-    first = subprocess.Popen([SIRL, "run", REAL_SMOKE, "--out", busy, "--threads", "1", "--quiet"],
+    first = subprocess.Popen([SIRL, "run", SMOKE, "--out", busy, "--threads", "1", "--quiet"],
                              stdin=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 30
     while time.time() < deadline and not (os.path.exists(busy + ".lock")
                                           and os.path.getsize(busy + ".lock") > 0):
         time.sleep(0.02)
-    p = run("run", REAL_SMOKE, "--out", busy, "--quiet", check=False)
+    os.kill(first.pid, signal.SIGSTOP)
+    assert first.poll() is None, "the first run ended before the second could meet its lock"
+    p = run("run", SMOKE, "--out", busy, "--quiet", check=False)
+    os.kill(first.pid, signal.SIGCONT)
     assert p.returncode == 2 and f"another sirl run (pid {first.pid})" in p.stderr, p.stderr
     assert first.wait() == 0, first.stderr.read()
-    same(tables(s1), tables(busy), f"a second writer refused ({p.stderr.strip()}); the first run")
+    same(tables(one), tables(busy), f"a second writer refused ({p.stderr.strip()}); the first run")
 
     # Shards + merge.
     shards = [os.path.join(tmp, f"shard{i}.h5") for i in range(2)]

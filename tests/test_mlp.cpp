@@ -169,6 +169,7 @@ TEST(Mlp, FusedBackwardAdamEqualsBackwardThenAdam) {
   unfrozen.linear_layers = {1};
   expect_fused_backward_adam_matches(unfrozen, 33);
   expect_fused_backward_adam_matches(MlpShape{{3, 5, 2}, true}, 1);  // ReLU output, one row
+  expect_fused_backward_adam_matches(MlpShape{{300, 260, 70, 8}}, 9);
   MlpShape bf16{{700, 300, 7}};  // bf16 products: the same bits both ways too
   bf16.bf16_products = true;
   expect_fused_backward_adam_matches(bf16, 20);
