@@ -41,8 +41,13 @@ namespace {
 // inlined or specialised (noipa), so that the loss's own arithmetic is compiled once per scalar
 // type: specialised for the fused caller (which passes grad = true), GCC vectorised and fused
 // multiply-adds differently and the gradients differed in the last bit.
+#if defined(__clang__)  // clang has no noipa (and does not clone on constant arguments)
+#define SIRL_NOT_SPECIALISED [[gnu::noinline]]
+#else
+#define SIRL_NOT_SPECIALISED [[gnu::noipa]]
+#endif
 template <typename T>
-[[gnu::noipa]] T vae_loss(const VaeShape& s, const T* params, const T* x, int B, const T* eps,
+SIRL_NOT_SPECIALISED T vae_loss(const VaeShape& s, const T* params, const T* x, int B, const T* eps,
                           T kl_weight, VaeElbo elbo, bool grad,
                           const std::function<void(const T*, T*)>& backward_decoder,
                           const std::function<void(const T*)>& backward_encoder,
