@@ -175,13 +175,22 @@ MUTANTS = [
     ("jobs/plan.cpp", "      if (uses_queries(v.method))\n        add_task(plan, p, experiment_cell(TaskKind::fpe, env, seed, v, N));\n",
      "", "NoisyTeacher.*", "robustness axes without the perfect teacher's reference cells"),
     # kernels/ — the fused backward + Adam and the oneDNN products (engine 0.6.0)
-    ("kernels/mlp.cpp", "      if (d_in) matmul_nn_cols(d_in + j0, ni, g, W, batch, ni, no, false, j0, nj);\n", "",
+    ("kernels/mlp.cpp", "      if (d_in) matmul_nn_cols(d_in + j0, ni, gp, Wp, batch, ni, no, false, j0, nj);\n", "",
      "Mlp.Fused*", "fused backward: ∂L/∂input of a hidden layer never computed"),
     ("kernels/mlp.cpp", "      adam_apply(step, params + b_off, db.data(), m + b_off, v + b_off, no);",
      "", "Mlp.Fused*", "fused backward: biases never updated"),
     ("kernels/gemm.cpp", "dnnl_sgemm(ta, tb, M, nj, K, 1.f, A, lda, B, ldb, acc ? 1.f : 0.f, Cs, ldc);",
      "dnnl_sgemm(ta, tb, M, nj, K, 1.f, A, lda, B, ldb, 0.f, Cs, ldc);", "Gemm.*",
      "oneDNN products drop `accumulate`"),
+    # bf16 products and the fused VAE step (engine 0.7.0)
+    ("kernels/bf16.cpp", "  u += 0x7fffu + ((u >> 16) & 1u);\n", "", "Bf16.*",
+     "bf16 truncates instead of rounding to nearest even"),
+    ("kernels/mlp.cpp", "operand(s, W, size_t(no) * ni, r.w), batch, no, ni, false, threads);",
+     "W, batch, no, ni, false, threads);", "Bf16.*", "bf16 forward: the weights not rounded"),
+    ("kernels/vae.cpp", "step, m + E, v + E, threads, d_z);", "step, m + E, v + E, threads);",
+     "Vae.Fused*", "fused VAE step: the decoder's pass does not return ∂L/∂z"),
+    ("engine/representation.cpp", "  s.bf16_products = bf16_products(h);\n", "",
+     "Profile.PrecisionReachesEveryNetwork", "precision = bf16 never reaches φ"),
 ]
 
 # Mutations the suite cannot catch because they do not change behaviour (none so far).
