@@ -4,8 +4,8 @@
 For every training in the file (the VAE, each representation φ, each TPA cell's 20 heads) it
 takes the loss curve (a TPA cell: the mean of its heads' curves) and finds
 
-  e95: the first epoch from which the curve, averaged over a trailing window of a tenth of its
-       epochs, stays within 5 % of its total decrease from its final value:
+  e95: the first epoch from which the curve, averaged over a trailing window of a fiftieth of its
+       epochs (mini-batch noise), stays within 5 % of its total decrease from its final value:
          |mean(curve[e−w+1 .. e]) − final| ≤ 0.05 · |curve[0] − final|   for every later e,
        final = the mean over the last tenth. "95 % of the way down, for good."
 
@@ -34,8 +34,8 @@ def e95(curve):
     n = len(curve)
     if n < 2:
         return None
-    w = max(1, n // 10)
-    final = curve[-w:].mean()
+    final = curve[-max(1, n // 10):].mean()
+    w = max(1, n // 50)
     drop = abs(curve[0] - final)
     smooth = np.convolve(curve, np.ones(w) / w, mode="full")[:n]  # trailing means
     smooth[: w - 1] = [curve[: i + 1].mean() for i in range(w - 1)]
