@@ -20,6 +20,7 @@ the long run.
   /usr/bin/python3 bench/convergence_epochs.py out/grid-paper-epochs.h5 [--against short.h5]
 """
 import argparse
+import os
 import sys
 
 import h5py
@@ -99,6 +100,9 @@ def main():
     ap.add_argument("results")
     ap.add_argument("--against", help="the same grid with fewer epochs: compare final metrics")
     a = ap.parse_args()
+    for p in filter(None, (a.results, a.against)):
+        if not os.path.isfile(p):
+            sys.exit(f"convergence_epochs: {p}: no such results file")
     d = curves(a.results)
     if d.empty:
         sys.exit(f"convergence_epochs: no learning curves in {a.results}")
