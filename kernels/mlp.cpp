@@ -87,9 +87,9 @@ void mlp_forward(const MlpShape& s, const T* params, const T* x, int batch, MlpT
     const T* W = params + s.weight_offset(l);  // [no, ni]
     const T* b = params + s.bias_offset(l);    // [no]
     // y [batch, no] = in [batch, ni] · Wᵀ
-    Bf16Scratch<T>& r = bf16_scratch<T>();
-    matmul_nt(y.data(), operand(s, in, size_t(batch) * ni, r.in),
-              operand(s, W, size_t(no) * ni, r.w), batch, no, ni, false, threads);
+    Bf16Scratch<T>& rs = bf16_scratch<T>();
+    matmul_nt(y.data(), operand(s, in, size_t(batch) * ni, rs.in),
+              operand(s, W, size_t(no) * ni, rs.w), batch, no, ni, false, threads);
     const bool relu = s.relu_after(l);
     for (int r = 0; r < batch; ++r) {
       T* row = y.data() + size_t(r) * no;

@@ -185,7 +185,7 @@ MUTANTS = [
     # bf16 products and the fused VAE step (engine 0.7.0)
     ("kernels/bf16.cpp", "  u += 0x7fffu + ((u >> 16) & 1u);\n", "", "Bf16.*",
      "bf16 truncates instead of rounding to nearest even"),
-    ("kernels/mlp.cpp", "operand(s, W, size_t(no) * ni, r.w), batch, no, ni, false, threads);",
+    ("kernels/mlp.cpp", "operand(s, W, size_t(no) * ni, rs.w), batch, no, ni, false, threads);",
      "W, batch, no, ni, false, threads);", "Bf16.*", "bf16 forward: the weights not rounded"),
     ("kernels/vae.cpp", "step, m + E, v + E, threads, d_z);", "step, m + E, v + E, threads);",
      "Vae.Fused*", "fused VAE step: the decoder's pass does not return ∂L/∂z"),
