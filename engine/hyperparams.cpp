@@ -136,6 +136,13 @@ std::string describe(const Hyper& h) {
   return s;
 }
 
+void validate_precision(const std::string& precision) {
+  if (precision != "fp32" && precision != "bf16")
+    throw std::invalid_argument(
+        "precision must be \"fp32\" or \"bf16\" (bf16 matrix products, fp32 accumulation), got \"" +
+        precision + "\"");
+}
+
 void validate(const Hyper& h) {
   auto fail = [](const std::string& what) {
     throw std::invalid_argument("hyper-parameter " + what);
@@ -166,10 +173,11 @@ void validate(const Hyper& h) {
         h.vae_elbo + "\"");
   if (h.pref_l2 < 0) fail("pref.l2 must be >= 0");
   if (h.tpa_l2 < 0) fail("tpa.l2 must be >= 0");
-  if (h.precision != "fp32" && h.precision != "bf16")
-    fail(
-        "precision must be \"fp32\" or \"bf16\" (bf16 matrix products, fp32 accumulation), got \"" +
-        h.precision + "\"");
+  try {
+    validate_precision(h.precision);
+  } catch (const std::invalid_argument& e) {
+    fail(e.what());
+  }
 }
 
 }  // namespace sirl

@@ -45,6 +45,9 @@ struct Hyper {
   std::string precision = "fp32";
 };
 
+// Throws std::invalid_argument unless precision is "fp32" or "bf16".
+void validate_precision(const std::string& precision);
+
 // Whether h asks for bf16 matrix products.
 inline bool bf16_products(const Hyper& h) {
   return h.precision == "bf16";

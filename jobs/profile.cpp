@@ -603,9 +603,11 @@ Profile parse_profile(const std::string& text, const std::string& path) {
   }
   parse_data_tables(r, root, p.data);
   p.precision = r.string(root, "precision", "fp32");
-  if (p.precision != "fp32" && p.precision != "bf16")
-    r.fail(root.get("precision"),
-           "precision must be \"fp32\" or \"bf16\" (bf16 matrix products, fp32 accumulation)");
+  try {
+    validate_precision(p.precision);
+  } catch (const std::invalid_argument& e) {
+    r.fail(root.get("precision"), e.what());
+  }
   p.seeds = r.int_list(root, "seeds", 0, 1'000'000'000, true);
   parse_queries(r, root, p);
   parse_cells(r, root, p);

@@ -63,6 +63,7 @@ TEST(Gemm, MatchesADoubleReferenceOnEveryEdgeOfTheBlocking) {
       {300, 130, 7},   {257, 65, 33},  {5, 300, 1},   {1, 1, 1},      // blocking edges
       {192, 64, 2037},                                                // a long K
       {10, 128, 128},  {20, 300, 700},                                // nt transposing A
+      {64, 520, 600},  // oneDNN's (two dimensions >= 512, none below 32), a ragged last slice
   };
   for (const Case& c : cases)
     for (Op op : {kNT, kTN, kNN})
