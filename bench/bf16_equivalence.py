@@ -55,7 +55,8 @@ def profile_text(base_text, precision, seeds, name):
 def run(sirl, profile, out, threads):
     cmd = [sirl, "run", profile, "--out", out, "--threads", str(threads)]
     print("+", " ".join(cmd), flush=True)
-    subprocess.run(cmd, check=True)
+    if subprocess.run(cmd).returncode != 0:  # sirl said why (e.g. another --seeds in that --out)
+        sys.exit(f"bf16_equivalence: `{' '.join(cmd)}` failed")
 
 
 def per_seed_means(path, kind):
@@ -137,7 +138,7 @@ def main():
     a = ap.parse_args()
     if a.seeds < 2:
         sys.exit("bf16_equivalence: a paired test needs at least 2 seeds")
-    if not os.access(a.sirl, os.X_OK):
+    if not a.analyse_only and not os.access(a.sirl, os.X_OK):
         sys.exit(f"bf16_equivalence: no sirl binary at {a.sirl} (./scripts/build.sh release)")
     os.makedirs(a.out, exist_ok=True)
     base = open(a.profile, encoding="utf-8").read()
@@ -150,6 +151,9 @@ def main():
         paths[precision] = os.path.join(a.out, precision + ".h5")
         if not a.analyse_only:
             run(a.sirl, prof, paths[precision], a.threads)
+    for path in paths.values():
+        if not os.path.isfile(path):
+            sys.exit(f"bf16_equivalence: {path}: no results file (run without --analyse-only)")
     rows = compare(paths["fp32"], paths["bf16"])
     text, ok = report(rows, a.seeds, os.path.relpath(a.profile, ROOT))
     with open(os.path.join(a.out, "bf16-equivalence.md"), "w", encoding="utf-8") as f:
