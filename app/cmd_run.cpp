@@ -100,9 +100,10 @@ void register_run(CLI::App& app, Runner& run) {
   cmd->add_flag("--force", force, "Overwrite results from another profile or engine version");
   cmd->add_flag("--quiet", quiet, "No progress output");
   cmd->add_option("--task-threads", task_threads,
-                  "The most cores one task may use when no other task is ready (the tail of a\n"
-                  "run, a lone chain of big trainings); default: all --threads; 1: one core per\n"
-                  "task. Under MPI: the cores each worker rank's tasks use (default 1). Results\n"
+                  "The most cores one big task may use when no other task is ready (the tail\n"
+                  "of a run) or its chain would outlast the rest of the work spread over the\n"
+                  "cores (a critical chain); default: all --threads; 1: one core per task. Under "
+                  "MPI: the cores each worker rank's tasks use (default 1). Results\n"
                   "are the same bits whatever it is")
       ->check(CLI::Range(1, 4096));
   cmd->add_option("--checkpoint-minutes", checkpoint_minutes,
@@ -157,8 +158,8 @@ void print_schedule(const Plan& plan, const PlanEstimate& e, const PlanClusterOp
         m.nodes, m.cores_per_node, r.workers, m.threads_per_worker);
   else
     std::printf(
-        "  1 node x %d cores, threads: a task takes up to %d cores when nothing else is "
-        "ready\n",
+        "  1 node x %d cores, threads: a big task takes up to %d cores when nothing else is "
+        "ready or its chain outlasts the rest of the work per core\n",
         m.cores_per_node, m.max_task_threads);
   std::printf(
       "  assumed: speed-up of k cores on one task k/(1 + %.2f(k-1)); main memory %.0f GB/s "
@@ -181,7 +182,8 @@ void register_plan(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "plan",
       "Show what a profile will run — tasks per kind, FLOPs, memory — and predict its wall time\n"
-      "by simulating the engine's scheduler over task times calibrated on this machine (20-40 s of\n"
+      "by simulating the engine's scheduler over task times calibrated on this machine (20-40 s "
+      "of\n"
       "real training), without running it. With --nodes/--mpi: the same for a cluster of this\n"
       "CPU (MPI ranks pulling tasks from rank 0), with its critical path.");
   static std::string profile;
@@ -263,8 +265,9 @@ void register_plan(CLI::App& app, Runner& run) {
 }
 
 void register_export(CLI::App& app, Runner& run) {
-  auto* cmd = app.add_subcommand(
-      "export", "Write a results file's tables (fpe, tpa, robust_fpe, robust_tpa, timings, training, vae_latents) as CSV files into a directory.");
+  auto* cmd = app.add_subcommand("export",
+                                 "Write a results file's tables (fpe, tpa, robust_fpe, robust_tpa, "
+                                 "timings, training, vae_latents) as CSV files into a directory.");
   static std::string file, dir;
   cmd->add_option("file", file, "Results file (HDF5)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--csv", dir, "Directory for fpe.csv, tpa.csv, timings.csv")->required();

@@ -8,11 +8,13 @@ ReadyQueue::ReadyQueue(const Plan& plan, const std::vector<char>& pending)
     : rank_(upward_rank(plan)),
       waiting_(plan.tasks.size(), 0),
       dependents_(plan.tasks.size()),
-      ready_(ByRank{&rank_}) {
+      ready_(ByRank{&rank_}),
+      plan_(&plan) {
   const int n = int(plan.tasks.size());
   for (int i = 0; i < n; ++i) {
     if (!pending[i]) continue;
     ++remaining_;
+    remaining_flops_ += plan.tasks[size_t(i)].flops;
     for (int d : plan.tasks[i].deps)
       if (pending[d]) {
         ++waiting_[i];
@@ -31,6 +33,7 @@ int ReadyQueue::pop() {
 
 int ReadyQueue::finish(int i) {
   --remaining_;
+  remaining_flops_ -= plan_->tasks[size_t(i)].flops;
   int n = 0;
   for (int j : dependents_[i])
     if (--waiting_[j] == 0) {

@@ -15,8 +15,10 @@ class ReadyQueue {
   ReadyQueue(const Plan& plan, const std::vector<char>& pending);
   bool empty() const { return ready_.empty(); }
   size_t size() const { return ready_.size(); }
-  int remaining() const { return remaining_; }  // pending tasks not yet finished
-  int pop();                                    // the ready task of highest rank
+  int remaining() const { return remaining_; }                 // pending tasks not yet finished
+  double remaining_flops() const { return remaining_flops_; }  // their Σ FLOPs
+  double rank(int i) const { return rank_[size_t(i)]; }        // upward rank (FLOPs)
+  int pop();                                                   // the ready task of highest rank
   // Task i finished: returns how many tasks became ready.
   int finish(int i);
 
@@ -32,6 +34,8 @@ class ReadyQueue {
   };
   std::priority_queue<int, std::vector<int>, ByRank> ready_;
   int remaining_ = 0;
+  double remaining_flops_ = 0;
+  const Plan* plan_;
 };
 
 }  // namespace sirl

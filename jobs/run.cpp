@@ -11,7 +11,6 @@
 #include <map>
 #include <memory>
 #include <stdexcept>
-#include <thread>
 
 #include "jobs/mpi_run.h"
 #include "jobs/progress.h"
@@ -300,9 +299,17 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   const std::string started = now_iso();
   const Plan plan = make_plan(p);
   const std::vector<char> mine = shard_tasks(plan, o.shard_index, o.shard_count);
-  const int threads = mpi_size > 1    ? mpi_size - 1
-                      : o.threads > 0 ? o.threads
-                                      : std::max(1, int(std::thread::hardware_concurrency()));
+  // More threads than cores would not run more tasks at once (oneTBB has no more workers),
+  // only claim so in the progress line and the file's metadata: say so and use the cores.
+  const int cores = usable_cores();
+  int threads = mpi_size > 1 ? mpi_size - 1 : o.threads > 0 ? o.threads : cores;
+  if (mpi_size <= 1 && threads > cores) {
+    std::fprintf(stderr,
+                 "sirl run: --threads %d is more than the %d core(s) this process may use; "
+                 "running %d threads (results do not depend on it)\n",
+                 threads, cores, cores);
+    threads = cores;
+  }
   const std::string shard =
       o.shard_count > 1 ? std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count) : "";
 

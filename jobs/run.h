@@ -11,7 +11,8 @@ struct RunOptions {
   std::string out;  // results file (HDF5)
   int threads = 0;  // 0 = every core
   // The most cores one task's kernels may use when nothing else is ready to run (the tail of a
-  // run, a lone chain); 0 = all `threads`, 1 = one core per task. Under MPI: the cores every
+  // run) or its chain would outlast the rest of the work (jobs/scheduler.h); 0 = all
+  // `threads`, 1 = one core per task. Under MPI: the cores every
   // worker rank's tasks use (0 = 1). Results do not depend on it.
   int max_task_threads = 0;
   bool force = false;                    // accept an existing file from another profile/engine

@@ -10,10 +10,6 @@
 
 namespace sirl {
 
-double task_speedup(int k, double serial_fraction) {
-  return k <= 1 ? 1.0 : double(k) / (1.0 + serial_fraction * double(k - 1));
-}
-
 namespace {
 
 struct Running {
@@ -101,8 +97,9 @@ ScheduleResult simulate_schedule(const Plan& plan, const std::vector<double>& se
     } else {
       while (free_cores > 0 && !queue.empty()) {
         const int i = queue.pop();
-        const int k =
-            task_threads(plan.tasks[size_t(i)], free_cores, queue.size(), m.max_task_threads);
+        const int k = task_threads(plan.tasks[size_t(i)],
+                                   {free_cores, m.cores_per_node, m.max_task_threads, queue.size(),
+                                    queue.rank(i), queue.remaining_flops()});
         free_cores -= k;
         start(i, -1, 0, k);
       }

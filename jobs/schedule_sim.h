@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "jobs/plan.h"
+#include "jobs/scheduler.h"  // task_speedup
 
 namespace sirl {
 
@@ -17,12 +18,14 @@ struct ClusterModel {
   int cores_per_node = 1;
   // MPI: rank 0 dispatches and commits (one core that runs no task), every other core is a
   // worker rank of `threads_per_worker` cores. Without MPI (one node): the thread scheduler,
-  // whose tasks may take several cores when nothing else is ready (max_task_threads).
+  // whose tasks may take several cores (task_threads: nothing else ready, or a critical chain;
+  // at most max_task_threads).
   bool mpi = false;
   int threads_per_worker = 1;  // MPI only
   int max_task_threads = 1;    // threads only: the most cores one task takes
-  // Speed-up of one task on k cores: k / (1 + serial_fraction · (k − 1)) (Amdahl).
-  double serial_fraction = 0.25;
+  // Speed-up of one task on k cores: k / (1 + serial_fraction · (k − 1)) (Amdahl). What the
+  // machine does; the scheduler sizes critical chains with its own kAssumedSerialFraction.
+  double serial_fraction = kAssumedSerialFraction;
   double commit_seconds = 0.002;  // per task: in the worker (threads), on rank 0 (MPI)
   double node_bandwidth = 0;      // bytes/s of main memory per node; 0: not a limit
 };
@@ -41,8 +44,5 @@ struct ScheduleResult {
 // Throws std::invalid_argument for an impossible model (no worker, a worker wider than a node).
 ScheduleResult simulate_schedule(const Plan& plan, const std::vector<double>& seconds,
                                  const std::vector<char>& pending, const ClusterModel& m);
-
-// Speed-up of k cores under the model's serial fraction.
-double task_speedup(int k, double serial_fraction);
 
 }  // namespace sirl

@@ -2,6 +2,7 @@
 
 #include "jobs/ready_queue.h"
 
+#include <tbb/info.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
@@ -23,9 +24,22 @@ std::vector<double> upward_rank(const Plan& plan) {
   return rank;
 }
 
-int task_threads(const Task& t, int free_cores, size_t ready_after, int max_task_threads) {
-  if (ready_after > 0 || t.flops < kThreadedTaskFlops || t.bytes < kThreadedTaskBytes) return 1;
-  return std::clamp(free_cores, 1, std::max(1, max_task_threads));
+double task_speedup(int k, double serial_fraction) {
+  return k <= 1 ? 1.0 : double(k) / (1.0 + serial_fraction * double(k - 1));
+}
+
+int usable_cores() {
+  return std::max(1, tbb::info::default_concurrency());
+}
+
+int task_threads(const Task& t, const CoreOffer& o) {
+  const int cap = std::max(1, std::min(o.free_cores, o.max_task_threads));
+  if (cap == 1 || t.flops < kThreadedTaskFlops || t.bytes < kThreadedTaskBytes) return 1;
+  if (o.ready_after == 0) return cap;
+  const double share = o.remaining_flops / double(std::max(1, o.total_cores));
+  int k = 1;
+  while (k < cap && o.chain_flops / task_speedup(k, kAssumedSerialFraction) > share) ++k;
+  return k;
 }
 
 void run_dag(const Plan& plan, const std::vector<char>& pending, int threads, int max_task_threads,
@@ -43,7 +57,9 @@ void run_dag(const Plan& plan, const std::vector<char>& pending, int threads, in
   dispatch = [&] {
     while (!stop && free_cores > 0 && !queue.empty()) {
       const int i = queue.pop();
-      const int k = task_threads(plan.tasks[size_t(i)], free_cores, queue.size(), max_task_threads);
+      const int k =
+          task_threads(plan.tasks[size_t(i)], {free_cores, threads, max_task_threads, queue.size(),
+                                               queue.rank(i), queue.remaining_flops()});
       free_cores -= k;
       group.run([&, i, k] {
         // Take the lock the dispatcher held while starting this task: it orders everything the

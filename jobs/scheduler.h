@@ -1,8 +1,10 @@
 // Runs a plan's pending tasks over a oneTBB arena, honouring dependencies. Ready tasks start in
 // order of their "upward rank" (own cost + the costliest chain of tasks waiting on them), so long
 // chains start early and the run does not end on one straggler. A task normally takes one core;
-// when nothing else is ready (the tail of a run, a lone critical-path chain) a big task takes
-// every free core (task_threads), since every kernel gives the same bits on any thread count.
+// a big task takes more (task_threads) when nothing else is ready (the tail of a run), or when
+// its chain would outlast the rest of the work spread over the cores (a critical chain, such as
+// a long VAE → representation → TPA chain on a many-core node). Every kernel gives the same
+// bits on any thread count, so widths change timing only.
 #pragma once
 #include <functional>
 #include <vector>
@@ -18,9 +20,27 @@ namespace sirl {
 inline constexpr double kThreadedTaskFlops = 5e9;
 inline constexpr double kThreadedTaskBytes = 4.0 * 1024 * 1024;
 
-// Cores for the ready task just popped, given the free cores (including the one it will take),
-// how many tasks are still ready after it, and the most one task may take.
-int task_threads(const Task& t, int free_cores, size_t ready_after, int max_task_threads);
+// The speed-up the scheduler assumes for a task on k cores when it sizes a critical chain:
+// Amdahl's k / (1 + s (k − 1)) with s = 0.25, about what the JacoRobot φ and the 20 batched
+// heads measured on 2 cores (1.5–1.7×).
+inline constexpr double kAssumedSerialFraction = 0.25;
+double task_speedup(int k, double serial_fraction);
+
+// What the scheduler knows when it pops a ready task.
+struct CoreOffer {
+  int free_cores = 1;          // including the one the task will take
+  int total_cores = 1;         // the scheduler's cores
+  int max_task_threads = 1;    // the most one task may take
+  size_t ready_after = 0;      // tasks still ready after this one
+  double chain_flops = 0;      // the task's upward rank: its costliest chain to the end
+  double remaining_flops = 0;  // Σ FLOPs of the pending tasks not yet finished (this one too)
+};
+
+// Cores for the ready task just popped. One, unless the task is big (kThreadedTaskFlops, Bytes)
+// and either nothing else is ready (it takes every free core) or its chain is longer than the
+// remaining work's share per core: then the fewest cores that bring the chain within that share
+// (at kAssumedSerialFraction), as far as free cores allow.
+int task_threads(const Task& t, const CoreOffer& o);
 
 // pending[i] = task i still has to run (a task whose dependency is not pending counts that
 // dependency as done). `work(i, cores)` runs task i on some worker thread with `cores` threads
@@ -31,6 +51,10 @@ void run_dag(const Plan& plan, const std::vector<char>& pending, int threads, in
 // One core per task.
 void run_dag(const Plan& plan, const std::vector<char>& pending, int threads,
              const std::function<void(int)>& work);
+
+// The cores this process may run threads on (its CPU affinity and cgroup limits, as oneTBB
+// counts them): run_dag never gets more working threads than this, whatever it is asked for.
+int usable_cores();
 
 // The priority used above, exposed for `sirl plan` and tests.
 std::vector<double> upward_rank(const Plan& plan);

@@ -594,7 +594,8 @@ def compute_lines(f, tim):
     roof = float(a.get("roof_fp32_gflops_per_core", 0) or 0)  # one core's, measured by the run
     L = ["", "## Compute by task kind (task-seconds, summed over tasks)", ""]
     if roof:
-        L += [f"A task runs on one core, or on several when nothing else was ready (column "
+        L += [f"A task runs on one core, or on several when nothing else was ready or its chain "
+              f"was critical (column "
               f"*on > 1 core*); this machine's fp32 roof is {roof:.0f} GFLOP/s per core (measured "
               "at the start of the run), and % of roof is per core held.", ""]
     L += ["| kind | tasks | on > 1 core | seconds | GFLOP | GFLOP/s | % of roof |",

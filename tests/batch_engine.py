@@ -128,6 +128,17 @@ with tempfile.TemporaryDirectory() as tmp:
     assert widths[w2]["grid/s0/sirl/N200/tpa/M40/frozen"] == 2, widths[w2]
     assert widths[w2]["grid/s0/sirl/N200/rep"] == 1, widths[w2]  # small steps: one core
     print(f"ok: on 2 threads the lone TPA cell ran on 2 cores ({widths[w2]})")
+    # More threads than the process may use: one line says so, the run uses the cores it has.
+    cores = len(os.sched_getaffinity(0))
+    w3 = os.path.join(tmp, "wide3.h5")
+    err = run("run", wide, "--out", w3, "--threads", "4096", "--quiet").stderr
+    assert f"--threads 4096 is more than the {cores} core(s)" in err, err
+    same(tables(w1), tables(w3), "--threads 4096 gives the tables --threads 1 gives")
+    with h5py.File(w3, "r") as f:
+        t = pd.DataFrame(f["tables/timings"][:])
+        assert int(f.attrs["threads"]) == cores, dict(f.attrs)
+    assert t.threads.max() <= cores, t
+    print(f"ok: --threads 4096 ran on this machine's {cores} cores, with one line saying so")
     p1 = params(one)
     with h5py.File(one, "r") as f:
         keys = [k.decode() for k in f["runs_index"][:]]

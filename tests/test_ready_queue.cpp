@@ -47,6 +47,17 @@ TEST(ReadyQueue, PopsByRankAndReleasesDependentsWhenTheirLastDependencyFinishes)
   EXPECT_EQ(q.remaining(), 0);
 }
 
+TEST(ReadyQueue, TracksTheFlopsOfTheUnfinishedTasksAndExposesRanks) {
+  const Plan p = plan_of({{1, {}}, {10, {0}}, {5, {}}, {2, {1, 2}}});
+  ReadyQueue q(p, {0, 1, 1, 1});  // t0 is done already
+  EXPECT_DOUBLE_EQ(q.remaining_flops(), 17);
+  EXPECT_DOUBLE_EQ(q.rank(1), 12);
+  EXPECT_EQ(q.pop(), 1);
+  EXPECT_DOUBLE_EQ(q.remaining_flops(), 17);  // started is not finished
+  q.finish(1);
+  EXPECT_DOUBLE_EQ(q.remaining_flops(), 7);
+}
+
 TEST(ReadyQueue, ADependencyThatIsNotPendingCountsAsDone) {
   const Plan p = plan_of({{1, {}}, {10, {0}}, {5, {}}, {2, {1, 2}}});
   // A resumed run: t0 and t2 were committed earlier.

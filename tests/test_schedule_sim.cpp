@@ -137,17 +137,55 @@ TEST(ScheduleSim, RefusesImpossibleClusters) {
   EXPECT_THROW(sim(p, s, m), std::invalid_argument);
 }
 
+// An offer of `free` of `total` cores with `ready_after` tasks still ready, for a task whose chain
+// is `chain` FLOPs with `remaining` FLOPs of work left in all.
+CoreOffer offer(int free, int total, int max_task_threads, size_t ready_after, double chain = 0,
+                double remaining = 0) {
+  return {free, total, max_task_threads, ready_after, chain, remaining};
+}
+
 TEST(TaskThreads, ExtraCoresOnlyWhenNothingElseIsReadyAndTheTaskIsBig) {
   Task big, small, narrow;
   big.flops = narrow.flops = 2 * kThreadedTaskFlops;
   big.bytes = small.bytes = 2 * kThreadedTaskBytes;
   small.flops = kThreadedTaskFlops / 2;
   narrow.bytes = kThreadedTaskBytes / 2;  // much work in small steps (GridRobot's φ)
-  EXPECT_EQ(task_threads(big, 2, 0, 8), 2);
-  EXPECT_EQ(task_threads(big, 6, 0, 4), 4);  // capped
-  EXPECT_EQ(task_threads(big, 2, 1, 8), 1);  // another task is waiting
-  EXPECT_EQ(task_threads(small, 2, 0, 8), 1);
-  EXPECT_EQ(task_threads(narrow, 2, 0, 8), 1);
+  EXPECT_EQ(task_threads(big, offer(2, 2, 8, 0)), 2);
+  EXPECT_EQ(task_threads(big, offer(6, 8, 4, 0)), 4);  // capped
+  EXPECT_EQ(task_threads(big, offer(2, 2, 8, 1)), 1);  // another task is waiting
+  EXPECT_EQ(task_threads(small, offer(2, 2, 8, 0)), 1);
+  EXPECT_EQ(task_threads(narrow, offer(2, 2, 8, 0)), 1);
+}
+
+TEST(TaskThreads, ACriticalChainGetsTheFewestCoresThatFitItInItsShareOfTheWork) {
+  Task big, narrow;
+  big.flops = narrow.flops = 2 * kThreadedTaskFlops;
+  big.bytes = 2 * kThreadedTaskBytes;
+  narrow.bytes = kThreadedTaskBytes / 2;
+  // 8 cores, 80 units of work left: a core's share is 10. A chain of 10 fits on one core.
+  EXPECT_EQ(task_threads(big, offer(8, 8, 8, 3, 10, 80)), 1);
+  // A chain of 20 needs a speed-up of 2: k / (1 + (k − 1)/4) is 1.6 at k = 2, 2 at k = 3.
+  EXPECT_EQ(task_threads(big, offer(8, 8, 8, 3, 20, 80)), 3);
+  EXPECT_DOUBLE_EQ(task_speedup(3, kAssumedSerialFraction), 2.0);
+  // As many as are free or allowed, when that falls short.
+  EXPECT_EQ(task_threads(big, offer(2, 8, 8, 3, 20, 80)), 2);
+  EXPECT_EQ(task_threads(big, offer(8, 8, 1, 3, 20, 80)), 1);
+  EXPECT_EQ(task_threads(big, offer(8, 8, 8, 3, 1000, 80)), 8);
+  // Work in small steps stays on one core, critical or not.
+  EXPECT_EQ(task_threads(narrow, offer(8, 8, 8, 3, 20, 80)), 1);
+}
+
+TEST(ScheduleSim, ACriticalChainIsWidenedWhileOtherTasksFillTheRestOfTheCores) {
+  // 4 cores; t0 (6 s, big) and ten 1 s tasks in small steps (one core each). Work 16, a core's
+  // share 4: t0 takes 2 cores (speed-up 1.6 at the model's serial fraction 0.25: 3.75 s). The
+  // other two cores run small tasks at 0, 1, 2, 3 (eight of them, until 4); at 3.75 t0's two
+  // cores take the last two, which end at 4.75. One core per task: t0 alone takes 6 s.
+  std::vector<double> s(11, 1.0);
+  s[0] = 6;
+  Plan p = plan_of(s, std::vector<std::vector<int>>(11));
+  for (size_t i = 1; i < s.size(); ++i) p.tasks[i].bytes = kThreadedTaskBytes / 2;
+  EXPECT_DOUBLE_EQ(sim(p, s, cores(4, 4)).makespan, 4.75);
+  EXPECT_DOUBLE_EQ(sim(p, s, cores(4, 1)).makespan, 6);
 }
 
 TEST(TaskThreads, TheSchedulerGivesALoneTaskTheFreeCoresAndNeverOversubscribes) {
@@ -170,6 +208,23 @@ TEST(TaskThreads, TheSchedulerGivesALoneTaskTheFreeCoresAndNeverOversubscribes) 
   });
   EXPECT_EQ(got, (std::vector<int>{2, 1, 1}));
   EXPECT_LE(peak.load(), 2);
+}
+
+TEST(TaskThreads, TheSchedulerWidensACriticalChainAsTheSimulatorDoes) {
+  // The plan of ACriticalChainIsWidened...: t0 gets 2 of 4 cores, every other task one.
+  std::vector<double> s(11, 1.0);
+  s[0] = 6;
+  Plan p = plan_of(s, std::vector<std::vector<int>>(11));
+  for (size_t i = 1; i < s.size(); ++i) p.tasks[i].bytes = kThreadedTaskBytes / 2;
+  std::mutex mu;
+  std::vector<int> got(s.size(), 0);
+  run_dag(p, std::vector<char>(s.size(), 1), 4, 4, [&](int i, int k) {
+    std::lock_guard lock(mu);
+    got[size_t(i)] = k;
+  });
+  std::vector<int> want(s.size(), 1);
+  want[0] = 2;
+  EXPECT_EQ(got, want);
 }
 
 }  // namespace
