@@ -103,8 +103,10 @@ void register_run(CLI::App& app, Runner& run) {
                   "The most cores one big task may use when no other task is ready (the tail\n"
                   "of a run) or its chain would outlast the rest of the work spread over the\n"
                   "cores (a critical chain); default: all --threads; 1: one core per task. Under "
-                  "MPI: the cores each worker rank's tasks use (default 1). Results\n"
-                  "are the same bits whatever it is")
+                  "MPI: the cores each worker rank's tasks use (default 1), times the idle\n"
+                  "workers of its node a big task borrows by the same rules (ranks must not be\n"
+                  "bound to single cores for that: mpirun --bind-to none). Results are the same\n"
+                  "bits whatever it is")
       ->check(CLI::Range(1, 4096));
   cmd->add_option("--checkpoint-minutes", checkpoint_minutes,
                   "A training running longer saves its state (weights, Adam, random streams, "
@@ -142,19 +144,30 @@ void print_schedule(const Plan& plan, const PlanEstimate& e, const PlanClusterOp
   m.node_bandwidth = o.node_bandwidth_gbs > 0
                          ? o.node_bandwidth_gbs * 1e9
                          : std::min(kSocketBandwidth, kStreamPerCore * m.cores_per_node);
-  ScheduleResult r;
+  ScheduleResult r, narrow;
+  const std::vector<char> all(plan.tasks.size(), 1);
   try {
-    r = simulate_schedule(plan, e.task_seconds, std::vector<char>(plan.tasks.size(), 1), m);
+    r = simulate_schedule(plan, e.task_seconds, all, m);
+    ClusterModel one = m;
+    one.widen = false;
+    narrow = simulate_schedule(plan, e.task_seconds, all, one);
   } catch (const std::invalid_argument& x) {
     throw UsageError(x.what());
   }
+  // Lower bounds on any schedule: every core busy on the work as measured on one core, and the
+  // critical path with each of its tasks on the widest a task can be.
+  const int widest = m.mpi ? std::max(1, m.cores_per_node - 1) : m.max_task_threads;
+  double work = 0;
+  for (double s : e.task_seconds) work += s;
+  const int task_cores = m.mpi ? r.workers * m.threads_per_worker : m.cores_per_node;
   std::printf(
       "\nschedule (simulated: the engine's ready queue by upward rank over the calibrated "
       "task times)\n");
   if (m.mpi)
     std::printf(
         "  %d node(s) x %d cores, MPI: rank 0 dispatches and commits, %d worker rank(s) x "
-        "%d thread(s)\n",
+        "%d thread(s); a big task alone or on a critical chain borrows idle workers of its "
+        "node\n",
         m.nodes, m.cores_per_node, r.workers, m.threads_per_worker);
   else
     std::printf(
@@ -170,6 +183,12 @@ void print_schedule(const Plan& plan, const PlanEstimate& e, const PlanClusterOp
       "memory bandwidth, summed over tasks)\n",
       format_duration(r.makespan).c_str(), r.makespan, 100 * r.utilisation,
       format_duration(r.bandwidth_stall).c_str());
+  std::printf(
+      "  without widening (every task on %s): %s;  lower bounds: the work over every core %s, "
+      "the critical path on %d cores %s\n",
+      m.mpi ? "its worker rank" : "one core", format_duration(narrow.makespan).c_str(),
+      format_duration(work / task_cores).c_str(), widest,
+      format_duration(r.critical_path_seconds / task_speedup(widest, m.serial_fraction)).c_str());
   std::printf("  critical path: %zu task(s), %s on one core each:\n", r.critical_path.size(),
               format_duration(r.critical_path_seconds).c_str());
   for (int i : r.critical_path)

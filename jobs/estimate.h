@@ -20,8 +20,8 @@ struct PlanEstimate {
 };
 
 // Calibrates the rates (20-40 s of real training) and simulates the thread scheduler
-// on `threads` cores (a big task takes several cores when nothing else is ready or its chain is critical, as
-// `sirl run` does).
+// on `threads` cores (a big task takes several cores when nothing else is ready or its chain is
+// critical, as `sirl run` does).
 PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads);
 
 }  // namespace sirl

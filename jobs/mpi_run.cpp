@@ -6,18 +6,43 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <deque>
+#include <map>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "jobs/ready_queue.h"
+#include "jobs/scheduler.h"
 
 namespace sirl {
 
 namespace {
-enum Tag { kReady = 1, kTask = 2, kResult = 3, kError = 4, kStop = 5 };
+// kReady: a worker's first message ("node name\tusable cores"); kTask: {task, threads};
+// kHold / kRelease: lend this worker's core to a task of its node, and take it back.
+enum Tag { kReady = 1, kTask = 2, kResult = 3, kError = 4, kStop = 5, kHold = 6, kRelease = 7 };
 bool g_released = false;
+
+// A worker's wait for rank 0's next message. It sleeps between polls (20 µs, doubling up to
+// 1 ms) instead of spinning in MPI_Probe, so that an idle or lending worker leaves its core to
+// the threads of a task that borrowed it.
+MPI_Status wait_for_rank0() {
+  auto pause = std::chrono::microseconds(20);
+  while (true) {
+    int flag = 0;
+    MPI_Status st;
+    MPI_Iprobe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &st);
+    if (flag) return st;
+    std::this_thread::sleep_for(pause);
+    pause = std::min(pause * 2, std::chrono::microseconds(1000));
+  }
+}
+
+void recv_empty(int tag) {
+  MPI_Recv(nullptr, 0, MPI_BYTE, 0, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+}
 
 void send_bytes(const std::string& s, int dest, int tag) {
   MPI_Send(s.data(), int(s.size()), MPI_BYTE, dest, tag, MPI_COMM_WORLD);
@@ -74,20 +99,47 @@ void mpi_abort(int code) {
 }
 
 std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending,
+                              int threads_per_worker,
                               const std::function<void(int, const TaskRecord&)>& on_result) {
   int size = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &size);
+  const int width = std::max(1, threads_per_worker);
   std::vector<int> ran(size, 0);  // results received per rank
   ReadyQueue queue(plan, pending);
   std::deque<int> idle;
   std::vector<int> running(size, -1);
-  int busy = 0;
+  // Each worker's node (by processor name), how many cores its process may use, and the idle
+  // workers of its node it borrowed for its current task.
+  std::map<std::string, int> node_ids;
+  std::vector<int> node(size, -1), usable(size, 1), node_workers;
+  std::vector<std::vector<int>> gang(size);
+  int busy = 0, reported = 0;
   std::string error;
   while (true) {
-    while (error.empty() && !idle.empty() && !queue.empty()) {
-      const int w = idle.front(), i = queue.pop();
+    // The first task waits for every worker's report: a task borrows only workers it knows of.
+    while (error.empty() && reported == size - 1 && !idle.empty() && !queue.empty()) {
+      const int w = idle.front();
       idle.pop_front();
-      MPI_Send(&i, 1, MPI_INT, w, kTask, MPI_COMM_WORLD);
+      const int i = queue.pop();
+      // As the thread scheduler, counting in workers: a big task alone or on a critical chain
+      // takes idle workers of its node too, as far as its process may run threads on their
+      // cores (a rank bound to its own core lends nothing). The simulator does the same.
+      std::vector<int> same;
+      for (int x : idle)
+        if (node[x] == node[w]) same.push_back(x);
+      const int k = task_threads(
+          plan.tasks[size_t(i)],
+          {1 + int(same.size()), size - 1,
+           std::min(node_workers[size_t(node[w])], std::max(1, usable[w] / width)), queue.size(),
+           queue.rank(i), queue.remaining_flops(), queue.longest_chain()});
+      same.resize(size_t(k - 1));
+      for (int x : same) {
+        idle.erase(std::find(idle.begin(), idle.end(), x));
+        MPI_Send(nullptr, 0, MPI_BYTE, x, kHold, MPI_COMM_WORLD);
+      }
+      gang[w] = same;
+      const int msg[2] = {i, k * width};
+      MPI_Send(msg, 2, MPI_INT, w, kTask, MPI_COMM_WORLD);
       running[w] = i;
       ++busy;
     }
@@ -97,12 +149,24 @@ std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending
     const std::string msg = recv_bytes(st);
     const int w = st.MPI_SOURCE;
     if (st.MPI_TAG == kReady) {
+      const size_t tab = msg.find('\t');
+      const auto [it, added] = node_ids.emplace(msg.substr(0, tab), int(node_ids.size()));
+      if (added) node_workers.push_back(0);
+      node[w] = it->second;
+      ++node_workers[size_t(node[w])];
+      usable[w] = tab == std::string::npos ? 1 : std::max(1, std::atoi(msg.c_str() + tab + 1));
       idle.push_back(w);
+      ++reported;
     } else if (st.MPI_TAG == kResult || st.MPI_TAG == kError) {
       const int i = running[w];
       running[w] = -1;
       --busy;
       idle.push_back(w);
+      for (int x : gang[w]) {
+        MPI_Send(nullptr, 0, MPI_BYTE, x, kRelease, MPI_COMM_WORLD);
+        idle.push_back(x);
+      }
+      gang[w].clear();
       if (st.MPI_TAG == kError) {
         if (error.empty()) error = "rank " + std::to_string(w) + ": " + msg;
         continue;
@@ -121,20 +185,29 @@ std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending
   return ran;
 }
 
-void mpi_work(const Plan& plan, RunContext& ctx, int task_threads) {
-  MPI_Send(nullptr, 0, MPI_BYTE, 0, kReady, MPI_COMM_WORLD);
+void mpi_work(const Plan& plan, RunContext& ctx) {
+  char name[MPI_MAX_PROCESSOR_NAME] = {};
+  int len = 0;
+  MPI_Get_processor_name(name, &len);
+  send_bytes(std::string(name, size_t(len)) + "\t" + std::to_string(usable_cores()), 0, kReady);
   while (true) {
-    MPI_Status st;
-    MPI_Probe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &st);
+    MPI_Status st = wait_for_rank0();
     if (st.MPI_TAG == kStop) {
-      MPI_Recv(nullptr, 0, MPI_BYTE, 0, kStop, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+      recv_empty(kStop);
       return;
     }
-    int i = -1;
-    MPI_Recv(&i, 1, MPI_INT, 0, kTask, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    if (st.MPI_TAG == kHold) {  // lend this core until the borrowing task ends (or the run)
+      recv_empty(kHold);
+      st = wait_for_rank0();
+      recv_empty(st.MPI_TAG);
+      if (st.MPI_TAG == kStop) return;
+      continue;
+    }
+    int msg[2] = {-1, 1};
+    MPI_Recv(msg, 2, MPI_INT, 0, kTask, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
     try {
-      Task t = plan.tasks.at(size_t(i));
-      t.threads = std::max(1, task_threads);
+      Task t = plan.tasks.at(size_t(msg[0]));
+      t.threads = std::max(1, msg[1]);
       send_bytes(serialize(run_task(t, ctx)), 0, kResult);
     } catch (const std::exception& e) {
       send_bytes(e.what(), 0, kError);

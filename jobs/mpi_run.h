@@ -27,10 +27,15 @@ void mpi_release_workers();
 // Rank 0: runs the pending tasks on the workers; `on_result` (called on rank 0, one at a time)
 // commits each record. Rethrows the first worker error after the running tasks finish. Returns
 // the tasks each rank ran ([size]; rank 0 runs none).
+// Each worker's task runs on `threads_per_worker` cores, times the workers it borrows: a big
+// task alone in the ready queue or on a critical chain (task_threads, counted in workers) also
+// takes idle workers of its node, which sleep until it ends, when its process may run threads
+// on their cores (ranks not bound to single cores: `mpirun --bind-to none`).
 std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending,
+                              int threads_per_worker,
                               const std::function<void(int, const TaskRecord&)>& on_result);
-// Ranks > 0: computes the tasks rank 0 sends until told to stop, each on `task_threads` cores
-// (results do not depend on it; give the ranks that many cores each, e.g. mpirun --map-by).
-void mpi_work(const Plan& plan, RunContext& ctx, int task_threads = 1);
+// Ranks > 0: computes the tasks rank 0 sends, on the cores it says (results do not depend on
+// them), or lends its core to another worker's task, until told to stop.
+void mpi_work(const Plan& plan, RunContext& ctx);
 
 }  // namespace sirl

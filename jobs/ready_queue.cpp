@@ -22,7 +22,10 @@ ReadyQueue::ReadyQueue(const Plan& plan, const std::vector<char>& pending)
       }
   }
   for (int i = 0; i < n; ++i)
-    if (pending[i] && waiting_[i] == 0) ready_.push(i);
+    if (pending[i] && waiting_[i] == 0) {
+      ready_.push(i);
+      active_.insert(rank_[size_t(i)]);
+    }
 }
 
 int ReadyQueue::pop() {
@@ -34,10 +37,12 @@ int ReadyQueue::pop() {
 int ReadyQueue::finish(int i) {
   --remaining_;
   remaining_flops_ -= plan_->tasks[size_t(i)].flops;
+  active_.erase(active_.find(rank_[size_t(i)]));
   int n = 0;
   for (int j : dependents_[i])
     if (--waiting_[j] == 0) {
       ready_.push(j);
+      active_.insert(rank_[size_t(j)]);
       ++n;
     }
   return n;

@@ -3,6 +3,7 @@
 // ready when one finishes. Not thread-safe: callers hold their own lock.
 #pragma once
 #include <queue>
+#include <set>
 #include <vector>
 
 #include "jobs/plan.h"
@@ -17,8 +18,11 @@ class ReadyQueue {
   size_t size() const { return ready_.size(); }
   int remaining() const { return remaining_; }                 // pending tasks not yet finished
   double remaining_flops() const { return remaining_flops_; }  // their Σ FLOPs
-  double rank(int i) const { return rank_[size_t(i)]; }        // upward rank (FLOPs)
-  int pop();                                                   // the ready task of highest rank
+  // The largest upward rank among the ready and the started, unfinished tasks: the longest
+  // chain of work still ahead, in FLOPs.
+  double longest_chain() const { return active_.empty() ? 0.0 : *active_.rbegin(); }
+  double rank(int i) const { return rank_[size_t(i)]; }  // upward rank (FLOPs)
+  int pop();                                             // the ready task of highest rank
   // Task i finished: returns how many tasks became ready.
   int finish(int i);
 
@@ -35,6 +39,7 @@ class ReadyQueue {
   std::priority_queue<int, std::vector<int>, ByRank> ready_;
   int remaining_ = 0;
   double remaining_flops_ = 0;
+  std::multiset<double> active_;  // ranks of the ready and running tasks
   const Plan* plan_;
 };
 

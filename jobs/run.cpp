@@ -112,7 +112,7 @@ RunSummary run_profile(const Profile& p, const RunOptions& o) {
         return read_record(f, "/runs/" + key);
       }
     });
-    mpi_work(plan, ctx, std::max(1, o.max_task_threads));
+    mpi_work(plan, ctx);
     mpi_stop();
     RunSummary s;
     s.worker = true;
@@ -245,10 +245,11 @@ std::exception_ptr execute(const Plan& plan, const std::vector<char>& pending, R
   std::mutex users_mu;
   try {
     if (mpi_size > 1) {
-      const std::vector<int> ran = mpi_dispatch(plan, pending, [&](int i, const TaskRecord& rec) {
-        store.commit(rec);
-        progress.task_done(rec.key, plan.tasks[i].flops, rec.num.at("seconds"));
-      });
+      const std::vector<int> ran =
+          mpi_dispatch(plan, pending, max_task_threads, [&](int i, const TaskRecord& rec) {
+            store.commit(rec);
+            progress.task_done(rec.key, plan.tasks[i].flops, rec.num.at("seconds"));
+          });
       if (!quiet) {
         std::string per;
         for (size_t w = 1; w < ran.size(); ++w)
@@ -342,7 +343,11 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   Progress progress(to_run, ps.flops, o.quiet);
   const std::exception_ptr failure =
       execute(plan, ps.pending, ctx, store, checkpoints.get(), threads,
-              o.max_task_threads > 0 ? o.max_task_threads : threads, mpi_size, progress, o.quiet);
+              // Threads: the most cores one task takes; MPI: each worker rank's cores.
+              mpi_size > 1             ? std::max(1, o.max_task_threads)
+              : o.max_task_threads > 0 ? o.max_task_threads
+                                       : threads,
+              mpi_size, progress, o.quiet);
   progress.finish();
 
   // Assemble whatever is finished (a partial file plots with gaps; a rerun completes it).

@@ -74,7 +74,10 @@ ScheduleResult simulate_schedule(const Plan& plan, const std::vector<double>& se
   ReadyQueue queue(plan, pending);
   std::deque<int> idle;  // MPI: workers waiting for a task, in the order they reported
   for (int w = 0; w < int(node_of.size()); ++w) idle.push_back(w);
-  int free_cores = m.cores_per_node;  // threads mode
+  std::vector<int> node_workers(size_t(m.nodes), 0);
+  for (int node : node_of) ++node_workers[size_t(node)];
+  std::vector<std::vector<int>> gang(node_of.size());  // MPI: the idle workers a task borrowed
+  int free_cores = m.cores_per_node;                   // threads mode
   std::vector<Running> running;
   std::deque<std::pair<int, int>> to_commit;  // MPI: (task, worker) waiting for rank 0
   double commit_done = std::numeric_limits<double>::infinity();
@@ -89,17 +92,35 @@ ScheduleResult simulate_schedule(const Plan& plan, const std::vector<double>& se
   };
   auto dispatch = [&] {
     if (m.mpi) {
+      // As mpi_dispatch: the worker that asked first takes the task, and borrows idle workers of
+      // its node when task_threads (counting in workers) says the task is worth their cores.
       while (!idle.empty() && !queue.empty()) {
         const int w = idle.front();
         idle.pop_front();
-        start(queue.pop(), w, node_of[size_t(w)], width);
+        const int i = queue.pop(), node = node_of[size_t(w)];
+        std::vector<int> same;
+        for (int x : idle)
+          if (node_of[size_t(x)] == node) same.push_back(x);
+        const int k = !m.widen
+                          ? 1
+                          : task_threads(plan.tasks[size_t(i)],
+                                         {1 + int(same.size()), r.workers,
+                                          node_workers[size_t(node)], queue.size(), queue.rank(i),
+                                          queue.remaining_flops(), queue.longest_chain()});
+        same.resize(size_t(k - 1));
+        for (int x : same) idle.erase(std::find(idle.begin(), idle.end(), x));
+        gang[size_t(w)] = same;
+        start(i, w, node, k * width);
       }
     } else {
       while (free_cores > 0 && !queue.empty()) {
         const int i = queue.pop();
-        const int k = task_threads(plan.tasks[size_t(i)],
-                                   {free_cores, m.cores_per_node, m.max_task_threads, queue.size(),
-                                    queue.rank(i), queue.remaining_flops()});
+        const int k =
+            !m.widen
+                ? 1
+                : task_threads(plan.tasks[size_t(i)],
+                               {free_cores, m.cores_per_node, m.max_task_threads, queue.size(),
+                                queue.rank(i), queue.remaining_flops(), queue.longest_chain()});
         free_cores -= k;
         start(i, -1, 0, k);
       }
@@ -140,6 +161,8 @@ ScheduleResult simulate_schedule(const Plan& plan, const std::vector<double>& se
     if (next == running.size()) {  // rank 0 finished a commit: dependents become ready
       queue.finish(committing.first);
       idle.push_back(committing.second);
+      for (int x : gang[size_t(committing.second)]) idle.push_back(x);
+      gang[size_t(committing.second)].clear();
       committing = {-1, -1};
       commit_done = std::numeric_limits<double>::infinity();
       begin_commit();

@@ -28,6 +28,9 @@ struct ClusterModel {
   double serial_fraction = kAssumedSerialFraction;
   double commit_seconds = 0.002;  // per task: in the worker (threads), on rank 0 (MPI)
   double node_bandwidth = 0;      // bytes/s of main memory per node; 0: not a limit
+  // The engine's rule (task_threads) widens big tasks; false: every task on one core (threads)
+  // or one worker rank (MPI), to show what widening buys.
+  bool widen = true;
 };
 
 struct ScheduleResult {

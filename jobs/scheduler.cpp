@@ -36,7 +36,9 @@ int task_threads(const Task& t, const CoreOffer& o) {
   const int cap = std::max(1, std::min(o.free_cores, o.max_task_threads));
   if (cap == 1 || t.flops < kThreadedTaskFlops || t.bytes < kThreadedTaskBytes) return 1;
   if (o.ready_after == 0) return cap;
-  const double share = o.remaining_flops / double(std::max(1, o.total_cores));
+  const double share = std::max(
+      o.remaining_flops / double(std::max(1, o.total_cores)),
+      o.longest_chain / task_speedup(std::max(1, o.max_task_threads), kAssumedSerialFraction));
   int k = 1;
   while (k < cap && o.chain_flops / task_speedup(k, kAssumedSerialFraction) > share) ++k;
   return k;
@@ -57,9 +59,9 @@ void run_dag(const Plan& plan, const std::vector<char>& pending, int threads, in
   dispatch = [&] {
     while (!stop && free_cores > 0 && !queue.empty()) {
       const int i = queue.pop();
-      const int k =
-          task_threads(plan.tasks[size_t(i)], {free_cores, threads, max_task_threads, queue.size(),
-                                               queue.rank(i), queue.remaining_flops()});
+      const int k = task_threads(plan.tasks[size_t(i)],
+                                 {free_cores, threads, max_task_threads, queue.size(),
+                                  queue.rank(i), queue.remaining_flops(), queue.longest_chain()});
       free_cores -= k;
       group.run([&, i, k] {
         // Take the lock the dispatcher held while starting this task: it orders everything the

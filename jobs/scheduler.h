@@ -34,12 +34,16 @@ struct CoreOffer {
   size_t ready_after = 0;      // tasks still ready after this one
   double chain_flops = 0;      // the task's upward rank: its costliest chain to the end
   double remaining_flops = 0;  // Σ FLOPs of the pending tasks not yet finished (this one too)
+  double longest_chain = 0;    // the largest upward rank among ready and running tasks
 };
 
 // Cores for the ready task just popped. One, unless the task is big (kThreadedTaskFlops, Bytes)
 // and either nothing else is ready (it takes every free core) or its chain is longer than the
-// remaining work's share per core: then the fewest cores that bring the chain within that share
-// (at kAssumedSerialFraction), as far as free cores allow.
+// run can end: no sooner than the remaining work spread over the cores, nor than the longest
+// chain on max_task_threads cores. Then it takes the fewest cores that bring its chain within
+// that bound (at kAssumedSerialFraction), as far as free cores allow. The second bound keeps a
+// large cluster from widening every chain that its tiny share per core makes look critical:
+// cores given to a task at Amdahl's efficiency are taken from others.
 int task_threads(const Task& t, const CoreOffer& o);
 
 // pending[i] = task i still has to run (a task whose dependency is not pending counts that

@@ -52,10 +52,16 @@ TEST(ReadyQueue, TracksTheFlopsOfTheUnfinishedTasksAndExposesRanks) {
   ReadyQueue q(p, {0, 1, 1, 1});  // t0 is done already
   EXPECT_DOUBLE_EQ(q.remaining_flops(), 17);
   EXPECT_DOUBLE_EQ(q.rank(1), 12);
+  EXPECT_DOUBLE_EQ(q.longest_chain(), 12);  // t1 → t3, ready
   EXPECT_EQ(q.pop(), 1);
   EXPECT_DOUBLE_EQ(q.remaining_flops(), 17);  // started is not finished
+  EXPECT_DOUBLE_EQ(q.longest_chain(), 12);    // running
   q.finish(1);
   EXPECT_DOUBLE_EQ(q.remaining_flops(), 7);
+  EXPECT_DOUBLE_EQ(q.longest_chain(), 7);  // t2 → t3; t3 waits for t2
+  EXPECT_EQ(q.pop(), 2);
+  q.finish(2);
+  EXPECT_DOUBLE_EQ(q.longest_chain(), 2);  // t3, ready
 }
 
 TEST(ReadyQueue, ADependencyThatIsNotPendingCountsAsDone) {

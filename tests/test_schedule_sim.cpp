@@ -96,6 +96,28 @@ TEST(ScheduleSim, MpiWorkersWaitForRankZerosCommits) {
   EXPECT_DOUBLE_EQ(r.makespan, 3.5);
 }
 
+TEST(ScheduleSim, AnMpiWorkerBorrowsIdleWorkersOfItsNodeForACriticalChain) {
+  // The plan of ACriticalChainIsWidened... on 1 node × 5 cores: rank 0 and 4 one-core workers.
+  // t0 takes its worker and one idle worker of the node (2 cores: 3.75 s); the other two
+  // workers run the small tasks as the 2 free cores did there: 4.75 s again, against 6 when
+  // every task has one worker.
+  std::vector<double> s(11, 1.0);
+  s[0] = 6;
+  Plan p = plan_of(s, std::vector<std::vector<int>>(11));
+  for (size_t i = 1; i < s.size(); ++i) p.tasks[i].bytes = kThreadedTaskBytes / 2;
+  ClusterModel m = cores(5);
+  m.mpi = true;
+  const ScheduleResult r = sim(p, s, m);
+  EXPECT_EQ(r.workers, 4);
+  EXPECT_DOUBLE_EQ(r.makespan, 4.75);
+  m.widen = false;  // sirl plan's "without widening" line: one worker per task
+  EXPECT_DOUBLE_EQ(sim(p, s, m).makespan, 6);
+  m.widen = true;
+  for (size_t i = 1; i < s.size(); ++i) p.tasks[i].bytes = 2 * kThreadedTaskBytes;
+  p.tasks[0].bytes = kThreadedTaskBytes / 2;  // t0 in small steps: no worker lends it a core
+  EXPECT_DOUBLE_EQ(sim(p, s, m).makespan, 6);
+}
+
 TEST(ScheduleSim, StreamingTasksShareTheirNodesBandwidth) {
   // Two 1 s tasks that each stream 10 GB alone (10 GB/s) on a 10 GB/s node: both at half speed,
   // 2 s; a third that streams nothing, on a third core, is not slowed.
@@ -138,10 +160,10 @@ TEST(ScheduleSim, RefusesImpossibleClusters) {
 }
 
 // An offer of `free` of `total` cores with `ready_after` tasks still ready, for a task whose chain
-// is `chain` FLOPs with `remaining` FLOPs of work left in all.
+// is `chain` FLOPs with `remaining` FLOPs of work left in all and `longest` the longest chain.
 CoreOffer offer(int free, int total, int max_task_threads, size_t ready_after, double chain = 0,
-                double remaining = 0) {
-  return {free, total, max_task_threads, ready_after, chain, remaining};
+                double remaining = 0, double longest = 0) {
+  return {free, total, max_task_threads, ready_after, chain, remaining, longest};
 }
 
 TEST(TaskThreads, ExtraCoresOnlyWhenNothingElseIsReadyAndTheTaskIsBig) {
@@ -171,6 +193,12 @@ TEST(TaskThreads, ACriticalChainGetsTheFewestCoresThatFitItInItsShareOfTheWork) 
   EXPECT_EQ(task_threads(big, offer(2, 8, 8, 3, 20, 80)), 2);
   EXPECT_EQ(task_threads(big, offer(8, 8, 1, 3, 20, 80)), 1);
   EXPECT_EQ(task_threads(big, offer(8, 8, 8, 3, 1000, 80)), 8);
+  // A run cannot end before its longest chain does, even on max_task_threads cores: 100 on 8
+  // (speed-up 8 / 2.75) takes 34.4, so a chain of 20 fits on one core after all, and the longest
+  // chain itself takes all 8.
+  EXPECT_EQ(task_threads(big, offer(8, 8, 8, 3, 20, 80, 100)), 1);
+  EXPECT_EQ(task_threads(big, offer(8, 8, 8, 3, 100, 80, 100)), 8);
+  EXPECT_EQ(task_threads(big, offer(8, 8, 8, 3, 20, 80, 20)), 3);  // 20 / 2.9 < 10: as above
   // Work in small steps stays on one core, critical or not.
   EXPECT_EQ(task_threads(narrow, offer(8, 8, 8, 3, 20, 80)), 1);
 }
@@ -186,6 +214,9 @@ TEST(ScheduleSim, ACriticalChainIsWidenedWhileOtherTasksFillTheRestOfTheCores) {
   for (size_t i = 1; i < s.size(); ++i) p.tasks[i].bytes = kThreadedTaskBytes / 2;
   EXPECT_DOUBLE_EQ(sim(p, s, cores(4, 4)).makespan, 4.75);
   EXPECT_DOUBLE_EQ(sim(p, s, cores(4, 1)).makespan, 6);
+  ClusterModel narrow = cores(4, 4);
+  narrow.widen = false;
+  EXPECT_DOUBLE_EQ(sim(p, s, narrow).makespan, 6);
 }
 
 TEST(TaskThreads, TheSchedulerGivesALoneTaskTheFreeCoresAndNeverOversubscribes) {
