@@ -27,19 +27,24 @@ MAX_SEEDS = 64      # "seeds for 80 %" searches n = 2 … MAX_SEEDS
 def paired(name, a, b):
     """Paired comparison of a − b over the seeds both have (a, b: Series indexed by seed).
     Returns a dict: name, n, diff (mean), lo/hi (its 95 % t interval), p (two-sided paired t),
-    dz (mean / sd of the differences; ±inf when every seed differs by the same non-zero amount)."""
+    dz (mean / sd of the differences), test ("t", or "sign" below).
+
+    When every seed differs by exactly the same amount the t statistic is not defined (0 / 0 or
+    x / 0). That happens with discrete metrics when a method's outputs do not depend on the seed
+    (TPA heads that did not learn predict one label, whose accuracy is then the test pairs'
+    label balance), so it is no evidence of an effect. The comparison then falls back to the
+    exact two-sided sign test, p = 2 · 0.5ⁿ (1 for no difference), with no interval and no d_z
+    (so no power either)."""
     j = pd.concat([a.rename("a"), b.rename("b")], axis=1).dropna()
     d = (j.a - j.b).to_numpy(dtype=float)
     n = len(d)
     c = {"name": name, "n": n, "diff": d.mean() if n else math.nan, "lo": math.nan,
-         "hi": math.nan, "p": math.nan, "dz": math.nan}
+         "hi": math.nan, "p": math.nan, "dz": math.nan, "test": "t"}
     if n < 2:
         return c
     sd = d.std(ddof=1)
     if sd == 0 or sd < 1e-12 * max(1.0, abs(d.mean())):
-        # No spread: the t statistic is infinite (or undefined when every difference is 0).
-        c.update(lo=d.mean(), hi=d.mean(), p=0.0 if d.mean() != 0 else 1.0,
-                 dz=math.copysign(math.inf, d.mean()) if d.mean() != 0 else 0.0)
+        c.update(test="sign", p=min(1.0, 2 * 0.5 ** n) if d.mean() != 0 else 1.0)
         return c
     half = stats.t.ppf(0.975, n - 1) * sd / math.sqrt(n)
     t = d.mean() / (sd / math.sqrt(n))
@@ -92,7 +97,7 @@ def _simulated_decisions(dzs, n, better, alpha, rng):
     each comparison's t drawn from a noncentral t with df n − 1 and noncentrality d_z √n."""
     df = n - 1
     m = len(dzs)
-    dz = np.clip(np.asarray(dzs, dtype=float), -1e3, 1e3)  # an infinite d_z: no spread seen
+    dz = np.clip(np.asarray(dzs, dtype=float), -1e3, 1e3)  # a tiny spread: a huge d_z
     z = rng.standard_normal((POWER_DRAWS, m)) + dz * math.sqrt(n)
     t = z / np.sqrt(rng.chisquare(df, (POWER_DRAWS, m)) / df)
     p = 2 * stats.t.sf(np.abs(t), df)
@@ -114,14 +119,14 @@ def power(comparisons, better, n=None, alpha=ALPHA):
     d_z's. nan when an effect size is unknown (fewer than 2 seeds)."""
     dzs = [c["dz"] for c in comparisons]
     n = n if n is not None else min((c["n"] for c in comparisons), default=0)
-    if n < 2 or not dzs or not all(np.isfinite(d) or np.isinf(d) for d in dzs):
+    if n < 2 or not dzs or not all(np.isfinite(d) for d in dzs):
         return math.nan
     return _simulated_decisions(dzs, n, better, alpha, np.random.default_rng(20230313 + n))
 
 
 def seeds_for_power(comparisons, better, target=POWER_TARGET, alpha=ALPHA):
     """The smallest seed count (2 … MAX_SEEDS) whose power reaches target; None if none does."""
-    if not comparisons or any(not (np.isfinite(c["dz"]) or np.isinf(c["dz"])) for c in comparisons):
+    if not comparisons or any(not np.isfinite(c["dz"]) for c in comparisons):
         return None
     for n in range(2, MAX_SEEDS + 1):
         if power(comparisons, better, n, alpha) >= target:

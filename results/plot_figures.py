@@ -457,7 +457,9 @@ def comparison_text(c):
     name = c["name"]
     label = ("vs " + STYLE[name][1]) if name in STYLE else name
     return (f"{label}: Δ = {fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, {fmt(c['hi'], '+.4f')}], "
-            f"d_z = {fmt(c['dz'], '+.2f')}, p = {fmt(c['p'], '.3g')}, Holm p = {fmt(c.get('p_holm'), '.3g')} "
+            f"d_z = {fmt(c['dz'], '+.2f')}, p = {fmt(c['p'], '.3g')}"
+            f"{' (every seed differs by the same amount: exact sign test)' if c.get('test') == 'sign' else ''}"
+            f", Holm p = {fmt(c.get('p_holm'), '.3g')} "
             f"(n = {c['n']})")
 
 

@@ -38,8 +38,18 @@ c2 = claims.paired("x", b, a)
 assert c2["diff"] == -2.0 and c2["dz"] == -2.0 and abs(c2["p"] - c["p"]) < 1e-12
 one = claims.paired("x", pd.Series([1.0]), pd.Series([0.0]))
 assert one["n"] == 1 and math.isnan(one["p"]) and math.isnan(one["dz"]), one
+# Every seed differing by the same amount: no t statistic; the exact sign test (2 · 0.5ⁿ), no
+# interval, no d_z, so no power. (It used to give p = 0: "not held" from 2 seeds of untrained
+# heads whose accuracy did not depend on the seed.)
 same = claims.paired("x", pd.Series([1.0, 2.0]), pd.Series([0.5, 1.5]))
-assert same["p"] == 0.0 and math.isinf(same["dz"]) and same["dz"] > 0, same
+assert same["test"] == "sign" and same["p"] == 0.5 and math.isnan(same["dz"]), same
+assert math.isnan(same["lo"]) and math.isnan(same["hi"]), same
+six = claims.paired("x", pd.Series(np.arange(6.0)), pd.Series(np.arange(6.0) + 0.25))
+assert six["p"] == 2 * 0.5 ** 6 and six["diff"] == -0.25, six
+zero = claims.paired("x", pd.Series([1.0, 2.0, 3.0]), pd.Series([1.0, 2.0, 3.0]))
+assert zero["p"] == 1.0 and zero["diff"] == 0.0, zero
+assert math.isnan(claims.power([same], ">")), "no d_z, no power"
+assert claims.decide([dict(same)], ">")[0] == "inconclusive"
 print("ok: paired t-test, CI and d_z equal the df = 2 closed forms")
 
 # --- Holm ------------------------------------------------------------------------------------
