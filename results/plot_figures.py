@@ -544,10 +544,11 @@ def summary_lines(H):
             continue
         label = ("vs " + STYLE[c["name"]][1]) if c["name"] in STYLE else c["name"]
         s80 = h.get("seeds80")
+        pw = h.get("power", math.nan)
         claim_text = f"**{h['claim']}**" if h["main"] else h["claim"]
         L.append(f"| {claim_text} | {env_title(h['env'])} | **{h['verdict']}** | {label}: "
                  f"{fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, {fmt(c['hi'], '+.4f')}] | "
-                 f"{fmt(c.get('p_holm'), '.3g')} | {c['n']} | {fmt(100 * h.get('power', math.nan), '.0f')} % | "
+                 f"{fmt(c.get('p_holm'), '.3g')} | {c['n']} | {fmt(100 * pw, '.0f') + ' %' if pw == pw else '—'} | "
                  f"{s80 if s80 else f'> {claims_stats.MAX_SEEDS}' if h.get('power') == h.get('power') else '—'} |")
     L += ["", f"Verdicts: *held* = every comparison goes the claimed way with Holm-adjusted p < "
           f"{ALPHA} (paired t-tests over seeds, Holm's correction within each claim); *not held* = "
