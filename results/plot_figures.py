@@ -463,21 +463,38 @@ def comparison_text(c):
             f"(n = {c['n']})")
 
 
-def claim(claims, env, name, comparisons, better, main=False):
-    """Decides one hypothesis (claims.decide) and keeps it for the summary and the details."""
+def claim(claims, env, name, comparisons, better, main=False, trainings=None):
+    """Decides one hypothesis (claims.decide) and keeps it for the summary and the details;
+    `trainings`: the /tables/training rows its numbers rest on (for the converged count)."""
     v, deciding = claims_stats.decide(comparisons, better)
     h = {"env": env, "claim": name, "better": better, "comparisons": comparisons, "verdict": v,
          "deciding": deciding, "main": main}
+    if trainings is not None and not trainings.empty:
+        h["converged"] = (int(trainings.converged.sum()), len(trainings))
     if comparisons:
         h["power"] = claims_stats.power(comparisons, better)
         h["seeds80"] = claims_stats.seeds_for_power(comparisons, better)
     claims.append(h)
 
 
-def hypotheses(fpe, tpa, envs):
+def rested_on(tr, env, N, variants, tpa_cells):
+    """The trainings behind a main claim at N: the compared methods' φ at N and the VAE, and for
+    a TPA claim their TPA cells of the main grid (SIRL frozen, the others unfrozen)."""
+    if tr is None or tr.empty:
+        return None
+    t = tr[(tr.env == env) & (tr.teacher == "")] if "teacher" in tr else tr[tr.env == env]
+    use = ((t.kind == "rep") & (t.N == N) & t.variant.isin(variants)) | (t.kind == "vae")
+    if tpa_cells:
+        main = (t.variant == "sirl") == (t.frozen == 1)
+        use |= (t.kind == "tpa") & (t.N.isin([N, 0])) & t.variant.isin(variants) & main
+    return t[use]
+
+
+def hypotheses(fpe, tpa, envs, training=None):
     """Every claim the report checks, per environment, decided."""
     H = []
     baselines = ["vae", "multipref10", "multipref50", "singlepref", "random"]
+    compared = ["sirl"] + baselines
     for env in envs:
         d = fpe[fpe.env == env]
         if not d.empty:
@@ -489,7 +506,8 @@ def hypotheses(fpe, tpa, envs):
 
             claim(H, env, f"H1 — SIRL's FPE is lower than every baseline's at N = {nmax}",
                   [claims_stats.paired(v, fpe_at("sirl"), fpe_at(v)) for v in baselines
-                   if (d.variant == v).any()], "<", main=True)
+                   if (d.variant == v).any()], "<", main=True,
+                  trainings=rested_on(training, env, nmax, compared, False))
         m = main_tpa(tpa[tpa.env == env])
         if not m.empty:
             nmax = m.N.max()
@@ -501,7 +519,8 @@ def hypotheses(fpe, tpa, envs):
             claim(H, env, f"H2 — SIRL's TPA (frozen, mean over M) is higher than every baseline's "
                           f"(unfrozen) at N = {nmax}",
                   [claims_stats.paired(v, tpa_at("sirl"), tpa_at(v)) for v in baselines
-                   if (m.variant == v).any()], ">", main=True)
+                   if (m.variant == v).any()], ">", main=True,
+                  trainings=rested_on(training, env, nmax, compared, True))
             claim(H, env, "Secondary — Random beats preference pre-training (TPA)",
                   [claims_stats.paired(v, tpa_at("random"), tpa_at(v))
                    for v in ["multipref10", "multipref50", "singlepref"] if (m.variant == v).any()],
@@ -536,12 +555,14 @@ def hypotheses(fpe, tpa, envs):
 def summary_lines(H):
     """The report's first table: one row per claim × environment."""
     L = ["| claim | environment | verdict | deciding comparison: Δ [95 % CI] | Holm p | seeds | "
-         "power | seeds for 80 % |", "|---|---|---|---|---:|---:|---:|---:|"]
+         "power | seeds for 80 % | trainings converged |", "|---|---|---|---|---:|---:|---:|---:|---:|"]
     for h in H:
         c = h["deciding"]
         if c is None:
-            L.append(f"| {h['claim']} | {env_title(h['env'])} | not evaluated (no data) | — | — | — | — | — |")
+            L.append(f"| {h['claim']} | {env_title(h['env'])} | not evaluated (no data) | — | — | — | — | — | — |")
             continue
+        conv = h.get("converged")
+        conv_text = (f"{conv[0]} of {conv[1]}" + (" ⚠" if conv[0] < conv[1] else "")) if conv else "—"
         label = ("vs " + STYLE[c["name"]][1]) if c["name"] in STYLE else c["name"]
         s80 = h.get("seeds80")
         pw = h.get("power", math.nan)
@@ -549,7 +570,8 @@ def summary_lines(H):
         L.append(f"| {claim_text} | {env_title(h['env'])} | **{h['verdict']}** | {label}: "
                  f"{fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, {fmt(c['hi'], '+.4f')}] | "
                  f"{fmt(c.get('p_holm'), '.3g')} | {c['n']} | {fmt(100 * pw, '.0f') + ' %' if pw == pw else '—'} | "
-                 f"{s80 if s80 else f'> {claims_stats.MAX_SEEDS}' if h.get('power') == h.get('power') else '—'} |")
+                 f"{s80 if s80 else f'> {claims_stats.MAX_SEEDS}' if h.get('power') == h.get('power') else '—'} | "
+                 f"{conv_text} |")
     L += ["", f"Verdicts: *held* = every comparison goes the claimed way with Holm-adjusted p < "
           f"{ALPHA} (paired t-tests over seeds, Holm's correction within each claim); *not held* = "
           f"at least one goes the other way with adjusted p < {ALPHA}; *inconclusive* otherwise. "
@@ -557,7 +579,11 @@ def summary_lines(H):
           f"*Power* = the chance that a run with this many seeds decides (held or not held) if the "
           f"true effects were the observed ones (simulated noncentral t, Holm applied); *seeds for "
           f"80 %* = the fewest seeds with power ≥ 80 %. Both are planning numbers computed from this "
-          f"run's effect sizes, which few seeds estimate poorly: they are not evidence."]
+          f"run's effect sizes, which few seeds estimate poorly: they are not evidence. "
+          f"*Trainings converged* (main claims): of the trainings the claim's numbers rest on (the "
+          f"compared methods' φ at that N and the VAEs, and for TPA their cells of Fig. 5), how "
+          f"many met the convergence criterion of the table below; ⚠ marks a verdict resting on "
+          f"trainings that were still learning."]
     return L
 
 
@@ -622,7 +648,7 @@ def report(f, t, envs, out, notes, fig3_key, beyond=None):
     beyond = beyond or {}
     envs = [e for e in envs if ENV.get(e, {}).get("in_claims", 1)]  # e.g. Fig. 3's own env
     a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
-    H = hypotheses(fpe, tpa, envs)
+    H = hypotheses(fpe, tpa, envs, t.get("training"))
     title = f"sirl-bench report: profile `{a.get('profile_name')}`"
     L = [f"# {title}", ""] + summary_lines(H)
     L += ["", f"Engine {a.get('engine_version')} (commit {a.get('git_commit')}), host "

@@ -115,6 +115,23 @@ with tempfile.TemporaryDirectory() as tmp:
             assert abs(c["p_holm"] - q) < 1e-9, (env, c, q)
     print("ok: H1's verdicts and Holm p's equal a recomputation from /tables/fpe")
 
+    # H1's "trainings converged" counts, recomputed from /tables/training by task key: the φ of
+    # SIRL and of each preference baseline at the largest N, and every VAE of the environment.
+    with h5py.File(full, "r") as f:
+        tr = pd.DataFrame(f["tables/training"][:])
+    conv = dict(zip(tr.key.str.decode("utf-8"), tr.converged))
+    for env in sorted(fpe.env.unique()):
+        if env == "grid2":
+            continue
+        nmax = fpe[fpe.env == env].N.max()
+        keys = [k for k in conv if k.startswith(env + "/") and (
+            k.endswith("/vae") or any(k.endswith(f"/{v}/N{nmax}/rep") and "/" + v + "/" in k
+                                      for v in ("sirl", "multipref10", "multipref50", "singlepref")))]
+        want = [int(sum(conv[k] for k in keys)), len(keys)]
+        got = reported[(env, "H1")]["converged"]
+        assert list(got) == want and want[1] > 0, (env, got, want, keys)
+    print("ok: H1's trainings-converged counts equal a recount from /tables/training")
+
     # JacoRobot runs its ablation at another M than the top-level [ablation]: Fig. 7 must draw
     # the cells the file holds (16 + 4 bars: four methods × 4 configurations, VAE and Random × 2).
     over = os.path.join(tmp, "override.toml")
