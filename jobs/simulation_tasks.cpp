@@ -94,11 +94,6 @@ double stream_bytes(const MlpShape& s, int64_t rows_per_epoch, int batch, int ep
 
 // ---- what the runners share ----
 
-TaskRecord::Array array(std::vector<float> data, std::vector<uint64_t> dims = {}) {
-  if (dims.empty()) dims = {uint64_t(data.size())};
-  return TaskRecord::Array{std::move(dims), std::move(data)};
-}
-
 // The convergence verdict of a loss curve (engine/convergence.h), as record fields.
 void record_convergence(const std::vector<float>& curve, TaskRecord& r) {
   const Convergence c = check_convergence(curve);
@@ -110,8 +105,9 @@ void record_convergence(const std::vector<float>& curve, TaskRecord& r) {
 // input of FPE/TPA) and the dead-unit fraction of each hidden layer. Returns its FLOPs.
 double record_embedding(const Representation& rep, const Dataset& d, TaskRecord& r) {
   const EmbeddingPass e = embed_all(rep, d.inputs.data(), d.count);
-  r.arrays["embedding"] = array(e.embedding, {uint64_t(d.count), uint64_t(rep.dim())});
-  r.arrays["dead_fraction"] = array(e.dead_fraction);
+  r.arrays["embedding"] =
+      TaskRecord::Array::of(e.embedding, {uint64_t(d.count), uint64_t(rep.dim())});
+  r.arrays["dead_fraction"] = TaskRecord::Array::of(e.dead_fraction);
   return rep.shape.forward_flops(int(d.count));
 }
 
@@ -320,14 +316,15 @@ void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   r.num["tpa_std"] = res.stddev;
   r.num["flops"] = res.train_flops;
   const uint64_t R = res.accuracy.size();
-  r.arrays["accuracy"] = array(std::vector<float>(res.accuracy.begin(), res.accuracy.end()));
-  r.arrays["train_accuracy"] =
-      array(std::vector<float>(res.train_accuracy.begin(), res.train_accuracy.end()));
+  r.arrays["accuracy"] =
+      TaskRecord::Array::of(std::vector<float>(res.accuracy.begin(), res.accuracy.end()));
+  r.arrays["train_accuracy"] = TaskRecord::Array::of(
+      std::vector<float>(res.train_accuracy.begin(), res.train_accuracy.end()));
   double train_mean = 0;
   for (double a : res.train_accuracy) train_mean += a / double(R);
   r.num["tpa_train"] = train_mean;
-  r.arrays["loss_curves"] = array(res.loss_curves, {R, uint64_t(res.epochs)});
-  r.arrays["phi_drift"] = array(res.phi_drift);
+  r.arrays["loss_curves"] = TaskRecord::Array::of(res.loss_curves, {R, uint64_t(res.epochs)});
+  r.arrays["phi_drift"] = TaskRecord::Array::of(res.phi_drift);
   record_heads_convergence(res, r);
   if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
 }
@@ -380,8 +377,8 @@ void run_active(const Task& t, RunContext& ctx, TaskRecord& r) {
   const ActiveQueries a =
       select_active_queries(ctx.dataset(t.env), teacher, c, task_seed(t.env, t.seed, "active"));
   put_triplets(a.queries, r);
-  r.arrays["batch_score"] = array(a.batch_score);
-  r.arrays["pool_score"] = array(a.pool_score);
+  r.arrays["batch_score"] = TaskRecord::Array::of(a.batch_score);
+  r.arrays["pool_score"] = TaskRecord::Array::of(a.pool_score);
   r.num["rounds"] = a.rounds;
   r.num["flops"] = a.train_flops;
   ctx.keep(t.key, std::make_shared<const TripletSet>(get_triplets(r)));

@@ -8,10 +8,6 @@ namespace sirl {
 
 namespace {
 
-TaskRecord::Array array(const std::vector<float>& data) {
-  return TaskRecord::Array{{uint64_t(data.size())}, data};
-}
-
 const std::vector<float>& need_array(const TaskRecord& rec, const std::string& name) {
   auto it = rec.arrays.find(name);
   if (it == rec.arrays.end())
@@ -84,8 +80,8 @@ std::vector<int> parse_int_list(const std::string& text, const std::string& what
 }
 
 void put_representation(const Representation& r, TaskRecord& rec) {
-  rec.arrays["params"] = array(r.params);
-  rec.arrays["loss_curve"] = array(r.loss_curve);
+  rec.arrays["params"] = TaskRecord::Array::of(r.params);
+  rec.arrays["loss_curve"] = TaskRecord::Array::of(r.loss_curve);
   put_shape(r.shape, "", rec);
   rec.text["method"] = method_name(r.method);
   rec.num["vae"] = r.vae_pretrain;
@@ -111,13 +107,13 @@ Representation get_representation(const TaskRecord& rec) {
 }
 
 void put_vae(const VaeModel& v, TaskRecord& rec) {
-  rec.arrays["params"] = array(v.params);
-  rec.arrays["loss_curve"] = array(v.loss_curve);
-  rec.arrays["reconstruction_curve"] = array(v.reconstruction_curve);
-  rec.arrays["kl_curve"] = array(v.kl_curve);
-  rec.arrays["kl_per_dim"] = array(v.kl_per_dim);
-  rec.arrays["latent_mean"] = array(v.latent_mean);
-  rec.arrays["latent_std"] = array(v.latent_std);
+  rec.arrays["params"] = TaskRecord::Array::of(v.params);
+  rec.arrays["loss_curve"] = TaskRecord::Array::of(v.loss_curve);
+  rec.arrays["reconstruction_curve"] = TaskRecord::Array::of(v.reconstruction_curve);
+  rec.arrays["kl_curve"] = TaskRecord::Array::of(v.kl_curve);
+  rec.arrays["kl_per_dim"] = TaskRecord::Array::of(v.kl_per_dim);
+  rec.arrays["latent_mean"] = TaskRecord::Array::of(v.latent_mean);
+  rec.arrays["latent_std"] = TaskRecord::Array::of(v.latent_std);
   rec.num["standardize"] = v.standardize;
   put_shape(v.shape.encoder, "encoder_", rec);
   put_shape(v.shape.decoder, "decoder_", rec);
@@ -154,7 +150,7 @@ VaeModel get_vae(const TaskRecord& rec) {
 
 void put_triplets(const TripletSet& q, TaskRecord& rec) {
   rec.arrays["queries"] =
-      TaskRecord::Array{{uint64_t(q.count), 3}, std::vector<float>(q.idx.begin(), q.idx.end())};
+      TaskRecord::Array::of(std::vector<float>(q.idx.begin(), q.idx.end()), {uint64_t(q.count), 3});
   rec.num["skipped"] = double(q.skipped);
 }
 

@@ -16,6 +16,11 @@ struct TaskRecord {
     std::vector<uint64_t> dims;
     std::vector<float> data;
     bool operator==(const Array&) const = default;
+    // A float array of the given shape; a vector when dims is empty.
+    static Array of(std::vector<float> data, std::vector<uint64_t> dims = {}) {
+      if (dims.empty()) dims = {uint64_t(data.size())};
+      return Array{std::move(dims), std::move(data)};
+    }
   };
   std::string key;   // e.g. "grid/s0/sirl/N100/rep"
   std::string kind;  // "vae", "rep", "fpe", "tpa"

@@ -9,6 +9,7 @@
 
 #include "datasets/grid_robot.h"
 #include "engine/active_queries.h"
+#include "tests/memory_checkpointer.h"
 
 namespace sirl {
 namespace {
@@ -99,21 +100,8 @@ TEST(ActiveSelection, SpendsTheBudgetAsksNothingTwiceAndKeepsTheTeachersAnswers)
   }
 }
 
-struct Interrupted {};
-struct MemoryCheckpointer : Checkpointer {
-  std::optional<TrainingSnapshot> saved;
-  int stop_after = -1;
-  bool load(TrainingSnapshot& out) override {
-    if (!saved) return false;
-    out = *saved;
-    return true;
-  }
-  bool due() override { return true; }
-  void save(const TrainingSnapshot& s) override {
-    saved = s;
-    if (s.epoch == stop_after) throw Interrupted{};
-  }
-};
+using test::Interrupted;
+using test::MemoryCheckpointer;
 
 TEST(ActiveSelection, AKilledSelectionResumesToTheSameQueries) {
   const Dataset d = make_grid_dataset();

@@ -13,31 +13,12 @@
 #include "engine/tpa.h"
 #include "engine/train_vae.h"
 #include "tests/grid_world.h"
+#include "tests/memory_checkpointer.h"
 
 namespace sirl {
 namespace {
 
 using namespace test;
-
-struct Interrupted {};
-
-// Keeps the last snapshot in memory; with `stop_after` = k it ends the training (as a kill would)
-// right after saving epoch k.
-struct MemoryCheckpointer : Checkpointer {
-  std::optional<TrainingSnapshot> saved;
-  int stop_after = -1, saves = 0;
-  bool load(TrainingSnapshot& out) override {
-    if (!saved) return false;
-    out = *saved;
-    return true;
-  }
-  bool due() override { return true; }
-  void save(const TrainingSnapshot& s) override {
-    saved = s;
-    ++saves;
-    if (s.epoch == stop_after) throw Interrupted{};
-  }
-};
 
 Hyper short_hyper() {
   Hyper h = fast_hyper();

@@ -15,6 +15,7 @@
 #include "jobs/plan.h"
 #include "jobs/profile.h"
 #include "jobs/simulation_tasks.h"
+#include "tests/profile_error.h"
 
 namespace sirl {
 namespace {
@@ -194,15 +195,6 @@ TEST(NoisyTeacher, TeacherListsBecomeAxisPointsBesideThePerfectMainTeacher) {
   EXPECT_TRUE(plan.index.count("grid/s0/sirl/N100/fpe"));  // the main grid, untouched
 }
 
-std::string error_of(const std::string& text) {
-  try {
-    parse_profile(text, "bad.toml");
-  } catch (const ProfileError& e) {
-    return e.what();
-  }
-  return "no error";
-}
-
 TEST(NoisyTeacher, InconsistentRobustnessProfilesAreRejected) {
   const std::string base =
       "name = \"x\"\nenvs = [\"grid\"]\nseeds = [0]\n[fpe]\nmethods = [\"sirl\"]\nN = [100]\n";
@@ -210,21 +202,22 @@ TEST(NoisyTeacher, InconsistentRobustnessProfilesAreRejected) {
   auto has = [](const std::string& m, const std::string& what) {
     return m.find(what) != std::string::npos;
   };
-  std::string m = error_of(base + "[teacher]\nbeta = [1, 0]\n");
+  std::string m = test::profile_error_of(base + "[teacher]\nbeta = [1, 0]\n");
   EXPECT_TRUE(has(m, "no [robustness] table")) << m;
-  m = error_of(base + cells);
+  m = test::profile_error_of(base + cells);
   EXPECT_TRUE(has(m, "[robustness] needs noisy teachers")) << m;
-  m = error_of(base + "[teacher]\nbeta = [1, 1]\n" + cells);
+  m = test::profile_error_of(base + "[teacher]\nbeta = [1, 1]\n" + cells);
   EXPECT_TRUE(has(m, "listed twice")) << m;
-  m = error_of(base + "[teacher]\nmistake = [0.1, 1.5]\n" + cells);
+  m = test::profile_error_of(base + "[teacher]\nmistake = [0.1, 1.5]\n" + cells);
   EXPECT_TRUE(has(m, "bad.toml:8: mistake = 1.5 is outside [0, 1]")) << m;
-  m = error_of(base + "[teacher]\nattend = [0]\n" + cells);
+  m = test::profile_error_of(base + "[teacher]\nattend = [0]\n" + cells);
   EXPECT_TRUE(has(m, "attend = 0 is outside")) << m;
-  m = error_of(base +
-               "[teacher]\nbeta = [1]\n[robustness]\nmethods = [\"sirl\"]\nN = [100]\n"
-               "M = [1000]\n");
+  m = test::profile_error_of(
+      base +
+      "[teacher]\nbeta = [1]\n[robustness]\nmethods = [\"sirl\"]\nN = [100]\n"
+      "M = [1000]\n");
   EXPECT_TRUE(has(m, "M = 1000 exceeds")) << m;
-  m = error_of(base + "[teacher]\nbeta = [1]\n" + cells + "seeds = [1]\n");
+  m = test::profile_error_of(base + "[teacher]\nbeta = [1]\n" + cells + "seeds = [1]\n");
   EXPECT_TRUE(has(m, "unknown key 'seeds' in [robustness]")) << m;
 }
 
@@ -286,11 +279,11 @@ TEST(ActiveVariants, ParseNameAndPlanTheirQueryTasks) {
   const std::string base =
       "name = \"x\"\nenvs = [\"grid\"]\nseeds = [0]\n[fpe]\nmethods = "
       "[\"sirl@vote\"]\nN = [100]\n";
-  std::string m = error_of(base + "[active]\npool = 10\nbatch = 20\n");
+  std::string m = test::profile_error_of(base + "[active]\npool = 10\nbatch = 20\n");
   EXPECT_NE(m.find("pool = 10 is below batch = 20"), std::string::npos) << m;
-  m = error_of(base + "[active]\nmembers = 1\n");
+  m = test::profile_error_of(base + "[active]\nmembers = 1\n");
   EXPECT_NE(m.find("members = 1 is outside [2, 64]"), std::string::npos) << m;
-  m = error_of(base + "[active.jaco]\nmembers = 3\n");
+  m = test::profile_error_of(base + "[active.jaco]\nmembers = 3\n");
   EXPECT_NE(m.find("unknown key 'jaco' in [active]"), std::string::npos) << m;
 }
 

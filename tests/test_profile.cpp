@@ -10,6 +10,7 @@
 #include "jobs/plan.h"
 #include "jobs/profile.h"
 #include "jobs/study_tasks.h"
+#include "tests/profile_error.h"
 #include "tests/small_profile.h"
 
 namespace sirl {
@@ -28,71 +29,67 @@ TEST(Profile, ParsesTheGridAndOverrides) {
   EXPECT_EQ(p.queries.similarity, 300);
 }
 
-// The message of the ProfileError thrown for `text`.
-std::string error_of(const std::string& text) {
-  try {
-    parse_profile(text, "bad.toml");
-  } catch (const ProfileError& e) {
-    return e.what();
-  }
-  return "no error";
-}
-
 TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
   const std::string base = "name = \"x\"\nenvs = [\"grid\"]\nseeds = [0]\n";
   const std::string grid =
       "[fpe]\nmethods = [\"sirl\"]\nN = [100]\n[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n";
-  EXPECT_EQ(error_of(base + grid), "no error");
+  EXPECT_EQ(test::profile_error_of(base + grid), "no error");
   // An unknown key, on line 4.
-  EXPECT_EQ(error_of(base + "sedes = [1]\n" + grid).rfind("bad.toml:4: unknown key 'sedes'", 0), 0u)
-      << error_of(base + "sedes = [1]\n" + grid);
+  EXPECT_EQ(test::profile_error_of(base + "sedes = [1]\n" + grid)
+                .rfind("bad.toml:4: unknown key 'sedes'", 0),
+            0u)
+      << test::profile_error_of(base + "sedes = [1]\n" + grid);
   // A wrong type.
-  EXPECT_NE(error_of("name = \"x\"\nenvs = \"grid\"\nseeds = [0]\n" + grid)
+  EXPECT_NE(test::profile_error_of("name = \"x\"\nenvs = \"grid\"\nseeds = [0]\n" + grid)
                 .find("bad.toml:2: envs must be an array of strings"),
             std::string::npos);
   // An unknown method, with the list of valid ones.
-  auto m = error_of(base + "[fpe]\nmethods = [\"sirl\", \"pca\"]\nN = [100]\n" +
-                    "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n");
+  auto m = test::profile_error_of(base + "[fpe]\nmethods = [\"sirl\", \"pca\"]\nN = [100]\n" +
+                                  "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n");
   EXPECT_NE(m.find("bad.toml:5"), std::string::npos) << m;
   EXPECT_NE(m.find("unknown method 'pca'"), std::string::npos) << m;
   EXPECT_NE(m.find("multipref10"), std::string::npos) << m;
   // M beyond the TPA training split.
-  m = error_of(base + grid + "[queries]\ntpa_pairs = 10\n");
+  m = test::profile_error_of(base + grid + "[queries]\ntpa_pairs = 10\n");
   EXPECT_NE(m.find("M = 10 exceeds the 8 training pairs"), std::string::npos) << m;
-  m = error_of(base + "[fpe]\nmethods = [\"sirl\"]\nN = [5000]\n" +
-               "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n");
+  m = test::profile_error_of(base + "[fpe]\nmethods = [\"sirl\"]\nN = [5000]\n" +
+                             "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n");
   EXPECT_NE(m.find("exceeds the query budget"), std::string::npos) << m;
   // A bad hyper-parameter, named.
-  m = error_of(base + grid + "[hyper.grid]\n\"sirl.epoch\" = 3\n");
+  m = test::profile_error_of(base + grid + "[hyper.grid]\n\"sirl.epoch\" = 3\n");
   EXPECT_NE(m.find("bad.toml:12"), std::string::npos) << m;
   EXPECT_NE(m.find("unknown hyper-parameter 'sirl.epoch'"), std::string::npos) << m;
-  m = error_of(base + grid + "[hyper.grid]\n\"sirl.lr\" = -1\n");
+  m = test::profile_error_of(base + grid + "[hyper.grid]\n\"sirl.lr\" = -1\n");
   EXPECT_NE(m.find("sirl.lr must be > 0"), std::string::npos) << m;
   // "+vae" only where it applies; a missing table; TOML syntax errors keep their line.
-  EXPECT_NE(error_of(base + "[fpe]\nmethods = [\"random+vae\"]\nN = [100]\n" +
-                     "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n")
+  EXPECT_NE(test::profile_error_of(base + "[fpe]\nmethods = [\"random+vae\"]\nN = [100]\n" +
+                                   "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n")
                 .find("VAE pre-training applies only"),
             std::string::npos);
   EXPECT_NE(
-      error_of(base).find(
+      test::profile_error_of(base).find(
           "nothing to run: give at least one of [fpe], [tpa], [ablation], [robustness] or [study]"),
       std::string::npos)
-      << error_of(base);
-  EXPECT_NE(error_of(base + grid + "[grid]\nstore_weights = 1\n").find("store_weights must be"),
+      << test::profile_error_of(base);
+  EXPECT_NE(test::profile_error_of(base + grid + "[grid]\nstore_weights = 1\n")
+                .find("store_weights must be"),
             std::string::npos);
-  m = error_of(base + grid + "[hyper.grid]\n\"vae.elbo\" = \"avg\"\n");
+  m = test::profile_error_of(base + grid + "[hyper.grid]\n\"vae.elbo\" = \"avg\"\n");
   EXPECT_NE(m.find("vae.elbo must be \"sum\""), std::string::npos) << m;
-  EXPECT_EQ(error_of(base + "[fpe\n").rfind("bad.toml:4:", 0), 0u) << error_of(base + "[fpe\n");
-  EXPECT_NE(error_of(base + grid + "[teacher]\nmistake = 2\n").find("outside [0, 1]"),
+  EXPECT_EQ(test::profile_error_of(base + "[fpe\n").rfind("bad.toml:4:", 0), 0u)
+      << test::profile_error_of(base + "[fpe\n");
+  EXPECT_NE(test::profile_error_of(base + grid + "[teacher]\nmistake = 2\n").find("outside [0, 1]"),
             std::string::npos);
   // A duplicate method is refused like a duplicate seed (it used to be dropped silently).
-  m = error_of(base + "[fpe]\nmethods = [\"sirl\", \"random\", \"sirl\"]\nN = [100]\n");
+  m = test::profile_error_of(base +
+                             "[fpe]\nmethods = [\"sirl\", \"random\", \"sirl\"]\nN = [100]\n");
   EXPECT_NE(m.find("'sirl' is listed twice"), std::string::npos) << m;
   // A network that cannot fit is refused with its size, before anything allocates it.
-  m = error_of(base + grid + "[hyper.grid]\n\"phi.hidden\" = [100000000, 100000000]\n");
+  m = test::profile_error_of(base + grid +
+                             "[hyper.grid]\n\"phi.hidden\" = [100000000, 100000000]\n");
   EXPECT_NE(m.find("GiB to train, this machine has"), std::string::npos) << m;
   // A float in an integer list: one file:line prefix, not two.
-  m = error_of(base + grid + "[hyper.grid]\n\"phi.hidden\" = [1e8, 1e8]\n");
+  m = test::profile_error_of(base + grid + "[hyper.grid]\n\"phi.hidden\" = [1e8, 1e8]\n");
   EXPECT_EQ(m.find("bad.toml", 1), std::string::npos) << m;
   EXPECT_NE(m.find("must be an array of integers"), std::string::npos) << m;
 }
@@ -114,10 +111,10 @@ TEST(Profile, PrecisionReachesEveryNetwork) {
   EXPECT_FALSE(phi_shape(19, p.hyper.at("grid2")).bf16_products);
   EXPECT_EQ(study_config(p).hyper.precision, "bf16");
   EXPECT_NE(describe(p.hyper.at("grid")).find("precision = bf16\n"), std::string::npos);
-  std::string m = error_of("precision = \"fp16\"\n" + base + grid);
+  std::string m = test::profile_error_of("precision = \"fp16\"\n" + base + grid);
   EXPECT_EQ(m.rfind("bad.toml:1:", 0), 0u) << m;
   EXPECT_NE(m.find("precision must be \"fp32\" or \"bf16\""), std::string::npos) << m;
-  m = error_of(base + grid + "[hyper.grid]\nprecision = \"int8\"\n");
+  m = test::profile_error_of(base + grid + "[hyper.grid]\nprecision = \"int8\"\n");
   EXPECT_NE(m.find("precision must be \"fp32\" or \"bf16\""), std::string::npos) << m;
 }
 
