@@ -25,15 +25,16 @@ namespace {
 enum Tag { kReady = 1, kTask = 2, kResult = 3, kError = 4, kStop = 5, kHold = 6, kRelease = 7 };
 bool g_released = false;
 
-// A worker's wait for rank 0's next message. It sleeps between polls (20 µs, doubling up to
-// 1 ms) instead of spinning in MPI_Probe, so that an idle or lending worker leaves its core to
-// the threads of a task that borrowed it.
-MPI_Status wait_for_rank0() {
+// Waits for the next message from `source` (MPI_ANY_SOURCE: any rank), sleeping between polls
+// (20 µs, doubling up to 1 ms) instead of spinning in MPI_Probe: an idle or lending worker leaves
+// its core to the threads of a task that borrowed it, and rank 0 leaves its core to the workers
+// when ranks share cores (`mpirun --oversubscribe`, or rank 0 beside a full node of workers).
+MPI_Status wait_for_message(int source) {
   auto pause = std::chrono::microseconds(20);
   while (true) {
     int flag = 0;
     MPI_Status st;
-    MPI_Iprobe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &st);
+    MPI_Iprobe(source, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &st);
     if (flag) return st;
     std::this_thread::sleep_for(pause);
     pause = std::min(pause * 2, std::chrono::microseconds(1000));
@@ -144,8 +145,7 @@ std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending
       ++busy;
     }
     if (busy == 0 && (queue.remaining() == 0 || !error.empty())) break;
-    MPI_Status st;
-    MPI_Probe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &st);
+    const MPI_Status st = wait_for_message(MPI_ANY_SOURCE);
     const std::string msg = recv_bytes(st);
     const int w = st.MPI_SOURCE;
     if (st.MPI_TAG == kReady) {
@@ -191,14 +191,14 @@ void mpi_work(const Plan& plan, RunContext& ctx) {
   MPI_Get_processor_name(name, &len);
   send_bytes(std::string(name, size_t(len)) + "\t" + std::to_string(usable_cores()), 0, kReady);
   while (true) {
-    MPI_Status st = wait_for_rank0();
+    MPI_Status st = wait_for_message(0);
     if (st.MPI_TAG == kStop) {
       recv_empty(kStop);
       return;
     }
     if (st.MPI_TAG == kHold) {  // lend this core until the borrowing task ends (or the run)
       recv_empty(kHold);
-      st = wait_for_rank0();
+      st = wait_for_message(0);
       recv_empty(st.MPI_TAG);
       if (st.MPI_TAG == kStop) return;
       continue;
