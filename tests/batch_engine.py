@@ -108,12 +108,7 @@ with tempfile.TemporaryDirectory() as tmp:
     same_runs(one, two, "--threads 1 and --threads 2 give identical files")
     # A big task alone in the ready queue takes both cores (here a frozen TPA cell of 17 GFLOP
     # and 10 MiB, which waits for its φ): the same bits as on one core, and the timings say so.
-    wide = os.path.join(tmp, "wide.toml")
-    with open(wide, "w") as f:
-        f.write('name = "wide"\ndescription = "one big task alone"\nenvs = ["grid"]\nseeds = [0]\n'
-                '[queries]\nsimilarity = 200\npreference = 200\ntpa_pairs = 60\nfpe_trajectories = 200\n'
-                '[tpa]\nmethods = ["sirl"]\nN = [200]\nM = [40]\nfrozen = "best"\n'
-                '[hyper.grid]\n"sirl.epochs" = 5\n"tpa.epochs" = 100\n')
+    wide = os.path.join(SRC, "tests", "data", "wide.toml")
     w1, w2 = os.path.join(tmp, "wide1.h5"), os.path.join(tmp, "wide2.h5")
     run("run", wide, "--out", w1, "--threads", "1", "--quiet")
     run("run", wide, "--out", w2, "--threads", "2", "--quiet")

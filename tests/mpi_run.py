@@ -64,12 +64,7 @@ with tempfile.TemporaryDirectory() as tmp:
     # borrows the idle worker: it runs on 2 cores, to the bits it has on one. (Not under
     # ThreadSanitizer, which runs the micro profile: the cell would take minutes there.)
     if "SIRL_TEST_PROFILE" not in os.environ:
-        wide = os.path.join(tmp, "wide.toml")
-        with open(wide, "w") as f:
-            f.write('name = "wide"\ndescription = "one big task alone"\nenvs = ["grid"]\nseeds = [0]\n'
-                    '[queries]\nsimilarity = 200\npreference = 200\ntpa_pairs = 60\n'
-                    'fpe_trajectories = 200\n[tpa]\nmethods = ["sirl"]\nN = [200]\nM = [40]\n'
-                    'frozen = "best"\n[hyper.grid]\n"sirl.epochs" = 5\n"tpa.epochs" = 100\n')
+        wide = os.path.join(os.environ["SIRL_SOURCE_DIR"], "tests", "data", "wide.toml")
         one, gang = os.path.join(tmp, "wide1.h5"), os.path.join(tmp, "wide-mpi.h5")
         sh([SIRL, "run", wide, "--out", one, "--threads", "1", "--quiet"])
         sh(["mpirun", "--oversubscribe", "--bind-to", "none", "-np", "3", SIRL, "run", wide,
