@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <deque>
+#include <exception>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -115,7 +116,8 @@ std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending
   std::vector<int> node(size, -1), usable(size, 1), node_workers;
   std::vector<std::vector<int>> gang(size);
   int busy = 0, reported = 0;
-  std::string error;
+  std::string error;           // the first failure, which stops dispatching
+  std::exception_ptr failure;  // rank 0's own, rethrown as it was
   while (true) {
     // The first task waits for every worker's report: a task borrows only workers it knows of.
     while (error.empty() && reported == size - 1 && !idle.empty() && !queue.empty()) {
@@ -171,16 +173,31 @@ std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending
         if (error.empty()) error = "rank " + std::to_string(w) + ": " + msg;
         continue;
       }
-      const TaskRecord rec = deserialize(msg);
-      if (rec.key != plan.tasks[i].key)
-        throw std::runtime_error("rank " + std::to_string(w) + " returned " + rec.key +
-                                 " for task " + plan.tasks[i].key);
-      on_result(i, rec);
-      queue.finish(i);
-      ++ran[w];
+      // A result rank 0 cannot take (a commit failing for want of space, a malformed record)
+      // ends the run like a failed task: no new task starts, and the running ones are received
+      // before the workers are released. Leaving now would leave them blocked in MPI_Send of
+      // their results, and mpirun waiting on them.
+      try {
+        const TaskRecord rec = deserialize(msg);
+        if (rec.key != plan.tasks[i].key)
+          throw std::runtime_error("rank " + std::to_string(w) + " returned " + rec.key +
+                                   " for task " + plan.tasks[i].key);
+        on_result(i, rec);
+        queue.finish(i);
+        ++ran[w];
+      } catch (const std::exception& e) {
+        if (!failure) failure = std::current_exception();
+        if (error.empty()) error = e.what();
+      }
     }
   }
+  // Every worker's first message is received, even when there was nothing to run.
+  while (reported < size - 1) {
+    recv_bytes(wait_for_message(MPI_ANY_SOURCE));
+    ++reported;
+  }
   mpi_release_workers();
+  if (failure) std::rethrow_exception(failure);
   if (!error.empty()) throw std::runtime_error(error);
   return ran;
 }
