@@ -186,8 +186,10 @@ std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending
         queue.finish(i);
         ++ran[w];
       } catch (const std::exception& e) {
-        if (!failure) failure = std::current_exception();
-        if (error.empty()) error = e.what();
+        if (error.empty()) {  // the first failure is the one reported
+          failure = std::current_exception();
+          error = e.what();
+        }
       }
     }
   }

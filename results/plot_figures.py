@@ -570,7 +570,7 @@ def summary_lines(H):
         L.append(f"| {claim_text} | {env_title(h['env'])} | **{h['verdict']}** | {label}: "
                  f"{fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, {fmt(c['hi'], '+.4f')}] | "
                  f"{fmt(c.get('p_holm'), '.3g')} | {c['n']} | {fmt(100 * pw, '.0f') + ' %' if pw == pw else '—'} | "
-                 f"{s80 if s80 else f'> {claims_stats.MAX_SEEDS}' if h.get('power') == h.get('power') else '—'} | "
+                 f"{s80 if s80 else f'> {claims_stats.MAX_SEEDS}' if pw == pw else '—'} | "
                  f"{conv_text} |")
     L += ["", f"Verdicts: *held* = every comparison goes the claimed way with Holm-adjusted p < "
           f"{ALPHA} (paired t-tests over seeds, Holm's correction within each claim); *not held* = "
