@@ -5,6 +5,7 @@
 #include "app/commands.h"
 #include "build_info.h"
 #include "kernels/cpu_class.h"
+#include "kernels/gemm_bf16.h"
 #include "kernels/roofline.h"
 #include "results/results_file.h"
 
@@ -34,6 +35,10 @@ void register_version(CLI::App& app, Runner& run) {
     // What results depend on besides their inputs, and this core's roof (both in every results
     // file a run writes).
     std::printf("cpu class: %s\n", cpu_class().c_str());
+    std::printf(
+        "bf16:      %s (precision = \"bf16\" products; SIRL_BF16=emulate forces the "
+        "emulation)\n",
+        bf16_backend());
     std::printf("fp32 roof: %.1f GFLOP/s per core (measured now)\n", fp32_roof_gflops_per_core());
     return 0;
   };

@@ -2,6 +2,9 @@
 //   eigen   kernels/gemm.h as the engine runs it (Eigen 3.4's GEMM in fixed column slices)
 //   xsmm    libxsmm 1.17 JIT small-matrix kernels (libxsmm_smmdispatch), dispatched once
 //   dnnl    oneDNN 2.6 matmul primitive (strides express the transposes), created once
+//   dnnl_bf16  the same primitive on bf16 operands with fp32 output (vdpbf16ps where the CPU has
+//           AVX512-BF16); each iteration also rounds both fp32 operands to bf16 (to_bf16_bits),
+//           as a training step must: its weights change at every step
 // Every op of one dense layer with `rows` inputs, `in` features and `out` units:
 //   fwd  Y[rows,out]  = X[rows,in] · W[out,in]ᵀ    (nt)
 //   dx   dX[rows,in]  = dY[rows,out] · W[out,in]  (nn)
@@ -18,14 +21,15 @@
 #include <string>
 #include <vector>
 
+#include "kernels/bf16.h"
 #include "kernels/gemm.h"
 
 namespace {
 
 enum Op { kFwd, kDx, kDw };
-enum Lib { kEigen, kXsmm, kDnnl };
+enum Lib { kEigen, kXsmm, kDnnl, kDnnlBf16 };
 const char* kOpName[] = {"fwd", "dx", "dw"};
-const char* kLibName[] = {"eigen", "xsmm", "dnnl"};
+const char* kLibName[] = {"eigen", "xsmm", "dnnl", "dnnl_bf16"};
 
 // A product C[M,N] = op(A) · op(B) in row-major terms, with its operands' storage.
 struct Product {
@@ -60,7 +64,8 @@ void BM_Gemm(benchmark::State& state) {
   const std::vector<float> A = random_vec(size_t(p.M) * p.K, 1),
                            B = random_vec(size_t(p.N) * p.K, 2);
   std::vector<float> C(size_t(p.M) * p.N);
-  state.SetLabel(std::string(kLibName[lib]) + " " + kOpName[op]);
+  const std::string label = std::string(kLibName[lib]) + " " + kOpName[op];
+  state.SetLabel(label);
 
   if (lib == kEigen) {
     for (auto _ : state) {
@@ -88,18 +93,27 @@ void BM_Gemm(benchmark::State& state) {
     }
   } else {
     using dt = dnnl::memory::data_type;
+    const dt in_t = lib == kDnnlBf16 ? dt::bf16 : dt::f32;
     dnnl::engine eng(dnnl::engine::kind::cpu, 0);
     dnnl::stream strm(eng);
-    const dnnl::memory::desc a_md({p.M, p.K}, dt::f32,
+    const dnnl::memory::desc a_md({p.M, p.K}, in_t,
                                   p.ta ? dnnl::memory::dims{1, p.M} : dnnl::memory::dims{p.K, 1});
-    const dnnl::memory::desc b_md({p.K, p.N}, dt::f32,
+    const dnnl::memory::desc b_md({p.K, p.N}, in_t,
                                   p.tb ? dnnl::memory::dims{1, p.K} : dnnl::memory::dims{p.N, 1});
     const dnnl::memory::desc c_md({p.M, p.N}, dt::f32, dnnl::memory::dims{p.N, 1});
-    const dnnl::matmul prim(
-        dnnl::matmul::primitive_desc(dnnl::matmul::desc(a_md, b_md, c_md), eng));
-    dnnl::memory a(a_md, eng, const_cast<float*>(A.data())),
-        b(b_md, eng, const_cast<float*>(B.data())), c(c_md, eng, C.data());
+    const dnnl::matmul::primitive_desc pd(dnnl::matmul::desc(a_md, b_md, c_md), eng);
+    const dnnl::matmul prim(pd);
+    std::vector<uint16_t> A16(A.size()), B16(B.size());
+    const bool bf16 = lib == kDnnlBf16;
+    dnnl::memory a(a_md, eng, bf16 ? static_cast<void*>(A16.data()) : (void*)A.data()),
+        b(b_md, eng, bf16 ? static_cast<void*>(B16.data()) : (void*)B.data()),
+        c(c_md, eng, C.data());
+    state.SetLabel(label + " " + pd.impl_info_str());
     for (auto _ : state) {
+      if (bf16) {
+        sirl::to_bf16_bits(A.data(), A16.data(), A.size());
+        sirl::to_bf16_bits(B.data(), B16.data(), B.size());
+      }
       prim.execute(strm, {{DNNL_ARG_SRC, a}, {DNNL_ARG_WEIGHTS, b}, {DNNL_ARG_DST, c}});
       strm.wait();
       benchmark::ClobberMemory();
@@ -117,7 +131,7 @@ void shapes(benchmark::internal::Benchmark* b) {
   };
   for (const auto& l : layers)
     for (int op = 0; op < 3; ++op)
-      for (int lib = 0; lib < 3; ++lib) b->Args({lib, op, l[0], l[1], l[2]});
+      for (int lib = 0; lib < 4; ++lib) b->Args({lib, op, l[0], l[1], l[2]});
   b->ArgNames({"lib", "op", "rows", "in", "out"});
 }
 

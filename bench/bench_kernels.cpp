@@ -28,10 +28,11 @@ std::vector<float> init_params(const MlpShape& s, int models, Rng& rng) {
 
 // One SIRL training step: 64 triplets (192 trajectories) through φ, triplet loss, backward, Adam.
 // Args: {input width, hidden width, threads}.
-void BM_SirlStep(benchmark::State& state) {
+void sirl_step(benchmark::State& state, bool bf16) {
   const int in = int(state.range(0)), hidden = int(state.range(1)), threads = int(state.range(2));
   const int B = 64, T = 1000;
   MlpShape s{{in, hidden, hidden, 6}};
+  s.bf16_products = bf16;
   Rng rng(1);
   auto X = random_inputs(T, in, rng);
   Trainer t(s, AdamConfig{0.004, 0.99999}, init_params(s, 1, rng));
@@ -44,21 +45,32 @@ void BM_SirlStep(benchmark::State& state) {
       benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["steps/s"] = benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_SirlStep)
-    ->ArgNames({"in", "hidden", "threads"})
-    ->Args({19, 128, 1})
-    ->Args({19, 128, 2})
-    ->Args({2037, 1024, 1})
-    ->Args({2037, 1024, 2})
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+void BM_SirlStep(benchmark::State& state) {
+  sirl_step(state, false);
+}
+// The same in precision "bf16" (kernels/gemm_bf16.h; FLOPs counted alike).
+void BM_SirlStepBf16(benchmark::State& state) {
+  sirl_step(state, true);
+}
+void sirl_step_args(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"in", "hidden", "threads"})
+      ->Args({19, 128, 1})
+      ->Args({19, 128, 2})
+      ->Args({2037, 1024, 1})
+      ->Args({2037, 1024, 2})
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime();
+}
+BENCHMARK(BM_SirlStep)->Apply(sirl_step_args);
+BENCHMARK(BM_SirlStepBf16)->Apply(sirl_step_args);
 
 // 20 TPA reward heads (6→h→h→1) trained side by side, 64 pairs (128 trajectories) each.
 // Args: {hidden width, threads}.
-void BM_TpaHeadsStep(benchmark::State& state) {
+void tpa_heads_step(benchmark::State& state, bool bf16) {
   const int hidden = int(state.range(0)), threads = int(state.range(1));
   const int M = 20, B = 64, T = 1000;
   MlpShape s{{6, hidden, hidden, 1}};
+  s.bf16_products = bf16;
   Rng rng(2);
   auto X = random_inputs(T, 6, rng);
   BatchedTrainer t(s, M, AdamConfig{0.001, 1.0}, init_params(s, M, rng));
@@ -74,24 +86,35 @@ void BM_TpaHeadsStep(benchmark::State& state) {
       benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["steps/s"] = benchmark::Counter(1, benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_TpaHeadsStep)
-    ->ArgNames({"hidden", "threads"})
-    ->Args({128, 1})
-    ->Args({128, 2})
-    ->Args({1024, 1})
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+void BM_TpaHeadsStep(benchmark::State& state) {
+  tpa_heads_step(state, false);
+}
+void BM_TpaHeadsStepBf16(benchmark::State& state) {
+  tpa_heads_step(state, true);
+}
+void tpa_heads_args(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"hidden", "threads"})
+      ->Args({128, 1})
+      ->Args({128, 2})
+      ->Args({1024, 1})
+      ->Args({1024, 2})
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime();
+}
+BENCHMARK(BM_TpaHeadsStep)->Apply(tpa_heads_args);
+BENCHMARK(BM_TpaHeadsStepBf16)->Apply(tpa_heads_args);
 
 // An unfrozen TPA cell's step: 20 copies of φ (in→h→h→6, linear output) each with its own head
 // (6→h→h→1), all fine-tuned side by side on B pairs each (2B trajectories). For JacoRobot
 // (in 2037, h 1024) that is 20 × 4.2 M weights, Adam moments included 1 GB, streamed every step.
 // Args: {input width, hidden width, pairs B, threads}.
-void BM_TpaUnfrozenStep(benchmark::State& state) {
+void tpa_unfrozen_step(benchmark::State& state, bool bf16) {
   const int in = int(state.range(0)), hidden = int(state.range(1)), B = int(state.range(2)),
             threads = int(state.range(3));
   const int M = 20, T = 400;
   MlpShape s{{in, hidden, hidden, 6, hidden, hidden, 1}};
   s.linear_layers = {2};
+  s.bf16_products = bf16;
   Rng rng(5);
   auto X = random_inputs(T, in, rng);
   BatchedTrainer t(s, M, AdamConfig{0.001, 1.0}, init_params(s, M, rng));
@@ -111,14 +134,23 @@ void BM_TpaUnfrozenStep(benchmark::State& state) {
   state.counters["GB/s"] =
       benchmark::Counter(bytes * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_TpaUnfrozenStep)
-    ->ArgNames({"in", "hidden", "B", "threads"})
-    ->Args({19, 128, 32, 1})
-    ->Args({2037, 1024, 10, 1})
-    ->Args({2037, 1024, 32, 1})
-    ->Args({2037, 1024, 32, 2})
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+void BM_TpaUnfrozenStep(benchmark::State& state) {
+  tpa_unfrozen_step(state, false);
+}
+void BM_TpaUnfrozenStepBf16(benchmark::State& state) {
+  tpa_unfrozen_step(state, true);
+}
+void tpa_unfrozen_args(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"in", "hidden", "B", "threads"})
+      ->Args({19, 128, 32, 1})
+      ->Args({2037, 1024, 10, 1})
+      ->Args({2037, 1024, 32, 1})
+      ->Args({2037, 1024, 32, 2})
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime();
+}
+BENCHMARK(BM_TpaUnfrozenStep)->Apply(tpa_unfrozen_args);
+BENCHMARK(BM_TpaUnfrozenStepBf16)->Apply(tpa_unfrozen_args);
 
 // φ forward + backward alone (no loss, no optimizer) on `batch` rows, one thread.
 // Args: {input width, hidden width, batch}.

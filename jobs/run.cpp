@@ -19,6 +19,7 @@
 #include "jobs/task_kinds.h"
 #include "jobs/task_runner.h"
 #include "kernels/cpu_class.h"
+#include "kernels/gemm_bf16.h"
 #include "kernels/rng.h"
 #include "kernels/roofline.h"
 #include "results/durable.h"
@@ -359,6 +360,12 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   info.git_commit = o.git_commit;
   info.host = hostname();
   info.cpu_class = cpu_class();
+  // bf16 products run natively or emulated: different bits, so a different class.
+  for (const auto& [env, h] : p.hyper)
+    if (bf16_products(h)) {
+      info.cpu_class += std::string(", bf16 ") + bf16_backend();
+      break;
+    }
   info.roof_fp32_gflops = fp32_roof_gflops_per_core();
   info.started = started;
   info.finished = now_iso();

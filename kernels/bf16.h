@@ -6,6 +6,7 @@
 // differ from the native instruction).
 #pragma once
 #include <cstddef>
+#include <cstdint>
 
 namespace sirl {
 
@@ -15,5 +16,9 @@ float round_to_bf16(float x);
 
 // y[i] = round_to_bf16(x[i]) for i < n (y may equal x).
 void round_to_bf16(const float* x, float* y, size_t n);
+
+// The same rounding stored as bf16 bit patterns (the upper 16 bits of round_to_bf16(x[i])), the
+// operand format of vdpbf16ps and of oneDNN's bf16 matmul.
+void to_bf16_bits(const float* x, uint16_t* y, size_t n);
 
 }  // namespace sirl

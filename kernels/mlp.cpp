@@ -7,6 +7,7 @@
 
 #include "kernels/bf16.h"
 #include "kernels/gemm.h"
+#include "kernels/gemm_bf16.h"
 
 namespace sirl {
 
@@ -44,30 +45,24 @@ double MlpShape::forward_flops(int batch) const {
 
 namespace {
 
-// One operand of a product in the shape's precision: x itself in fp32; with bf16_products, a
-// bf16-rounded copy of its n values in `scratch` (which the caller keeps alive over the product).
-template <typename T>
-const T* operand(const MlpShape& s, const T* x, size_t n, std::vector<T>& scratch) {
-  if (!s.bf16_products) return x;
-  if constexpr (std::is_same_v<T, float>) {
-    scratch.resize(n);
-    round_to_bf16(x, scratch.data(), n);
-    return scratch.data();
-  } else {
-    throw std::invalid_argument("bf16 products are for float networks only");
-  }
+// The products of a layer in the shape's precision. fp32: gemm.h on the operands themselves.
+// bf16 (bf16_products): each operand is rounded once into a bf16 copy, then gemm_bf16.h
+// multiplies the copies. The forward pass keeps its copies of each layer's input and weights in
+// the tape for the backward pass; ∂L/∂(pre-activation) is rounded into a scratch per thread (the
+// batched forms run models on OpenMP threads).
+std::vector<uint16_t>& bf16_scratch() {
+  thread_local std::vector<uint16_t> g;
+  return g;
 }
-
-// Scratch for the rounded operands, one set per thread (the batched forms run models on
-// OpenMP threads; the fused pass's slices only read what the calling thread rounded).
+const uint16_t* bf16_copy(const float* x, size_t n, std::vector<uint16_t>& scratch) {
+  scratch.resize(n);
+  to_bf16_bits(x, scratch.data(), n);
+  return scratch.data();
+}
 template <typename T>
-struct Bf16Scratch {
-  std::vector<T> in, w, g;
-};
-template <typename T>
-Bf16Scratch<T>& bf16_scratch() {
-  thread_local Bf16Scratch<T> s;
-  return s;
+void require_float(const MlpShape& s) {
+  if (s.bf16_products && !std::is_same_v<T, float>)
+    throw std::invalid_argument("bf16 products are for float networks only");
 }
 
 }  // namespace
@@ -75,10 +70,15 @@ Bf16Scratch<T>& bf16_scratch() {
 template <typename T>
 void mlp_forward(const MlpShape& s, const T* params, const T* x, int batch, MlpTape<T>& tape,
                  int threads) {
+  require_float<T>(s);
   const int L = s.layers();
   tape.batch = batch;
   tape.input = x;
   tape.act.resize(L);
+  if (!s.bf16_products) {  // no stale copies for a backward pass to pick up
+    tape.in16.clear();
+    tape.w16.clear();
+  }
   const T* in = x;
   for (int l = 0; l < L; ++l) {
     const int ni = s.widths[l], no = s.widths[l + 1];
@@ -87,9 +87,18 @@ void mlp_forward(const MlpShape& s, const T* params, const T* x, int batch, MlpT
     const T* W = params + s.weight_offset(l);  // [no, ni]
     const T* b = params + s.bias_offset(l);    // [no]
     // y [batch, no] = in [batch, ni] · Wᵀ
-    Bf16Scratch<T>& rs = bf16_scratch<T>();
-    matmul_nt(y.data(), operand(s, in, size_t(batch) * ni, rs.in),
-              operand(s, W, size_t(no) * ni, rs.w), batch, no, ni, false, threads);
+    if constexpr (std::is_same_v<T, float>) {
+      if (s.bf16_products) {
+        tape.in16.resize(L);
+        tape.w16.resize(L);
+        matmul_bf16_nt(y.data(), bf16_copy(in, size_t(batch) * ni, tape.in16[l]),
+                       bf16_copy(W, size_t(no) * ni, tape.w16[l]), batch, no, ni, false, threads);
+      } else {
+        matmul_nt(y.data(), in, W, batch, no, ni, false, threads);
+      }
+    } else {
+      matmul_nt(y.data(), in, W, batch, no, ni, false, threads);
+    }
     const bool relu = s.relu_after(l);
     for (int r = 0; r < batch; ++r) {
       T* row = y.data() + size_t(r) * no;
@@ -128,6 +137,7 @@ template <typename T>
 void mlp_backward(const MlpShape& s, const T* params, MlpTape<T>& tape,
                   const std::type_identity_t<T>* dout, std::type_identity_t<T>* dparams,
                   std::type_identity_t<T>* dx, int threads) {
+  require_float<T>(s);
   const int L = s.layers(), batch = tape.batch;
   begin_backward<T>(s, tape, dout);  // g holds ∂L/∂(pre-activation) of layer l, [batch, no]
   for (int l = L - 1; l >= 0; --l) {
@@ -137,19 +147,26 @@ void mlp_backward(const MlpShape& s, const T* params, MlpTape<T>& tape,
     const T* in = l == 0 ? tape.input : tape.act[l - 1].data();  // [batch, ni]
     T* dW = dparams + s.weight_offset(l);                        // [no, ni]
     T* db = dparams + s.bias_offset(l);                          // [no]
-    Bf16Scratch<T>& rs = bf16_scratch<T>();
-    const T* gp = operand(s, static_cast<const T*>(g), size_t(batch) * no, rs.g);
-    // dW [no, ni] += gᵀ [no, batch] · in [batch, ni]
-    matmul_tn(dW, gp, operand(s, in, size_t(batch) * ni, rs.in), no, ni, batch, true, threads);
+    const T* W = params + s.weight_offset(l);                    // [no, ni]
+    T* d_in = l > 0 ? tape.grad_next.data() : dx;                // [batch, ni] or none
+    // dW [no, ni] += gᵀ [no, batch] · in [batch, ni];  d_in [batch, ni] = g [batch, no] · W [no,
+    // ni]
+    if constexpr (std::is_same_v<T, float>) {
+      if (s.bf16_products) {
+        const uint16_t* gh = bf16_copy(g, size_t(batch) * no, bf16_scratch());
+        matmul_bf16_tn(dW, gh, tape.in16.at(l).data(), no, ni, batch, true, threads);
+        if (d_in) matmul_bf16_nn(d_in, gh, tape.w16.at(l).data(), batch, ni, no, false, threads);
+      } else {
+        matmul_tn(dW, g, in, no, ni, batch, true, threads);
+        if (d_in) matmul_nn(d_in, g, W, batch, ni, no, false, threads);
+      }
+    } else {
+      matmul_tn(dW, g, in, no, ni, batch, true, threads);
+      if (d_in) matmul_nn(d_in, g, W, batch, ni, no, false, threads);
+    }
     for (int r = 0; r < batch; ++r)
       for (int j = 0; j < no; ++j) db[j] += g[size_t(r) * no + j];
-    if (l > 0 || dx) {
-      // d_in [batch, ni] = g [batch, no] · W [no, ni]
-      T* d_in = l > 0 ? tape.grad_next.data() : dx;
-      matmul_nn(d_in, gp, operand(s, params + s.weight_offset(l), size_t(no) * ni, rs.w), batch, ni,
-                no, false, threads);
-      if (l > 0) std::swap(tape.grad, tape.grad_next);
-    }
+    if (l > 0) std::swap(tape.grad, tape.grad_next);
   }
 }
 
@@ -196,21 +213,26 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
       adam_apply(step, params + b_off, db.data(), m + b_off, v + b_off, no);
     }
     float* d_in = l > 0 ? tape.grad_next.data() : dx;  // [batch, ni]
-    // The products' operands (bf16-rounded copies with bf16_products; W's copy is taken before
-    // any slice updates W, as ∂L/∂input needs the old weights).
-    Bf16Scratch<float>& rs = bf16_scratch<float>();
-    const float* gp = operand(s, static_cast<const float*>(g), size_t(batch) * no, rs.g);
-    const float* inp = operand(s, in, size_t(batch) * ni, rs.in);
-    const float* Wp = d_in ? operand(s, static_cast<const float*>(W), size_t(no) * ni, rs.w) : W;
+    // The products' operands; with bf16_products, bf16 copies: g's rounded now, the input's and
+    // W's from the forward pass (taken before any slice updates W, as ∂L/∂input needs the old
+    // weights).
+    const bool h = s.bf16_products;
+    const uint16_t* gh = h ? bf16_copy(g, size_t(batch) * no, bf16_scratch()) : nullptr;
+    const uint16_t* inh = h ? tape.in16.at(l).data() : nullptr;
+    const uint16_t* Wh = h ? tape.w16.at(l).data() : nullptr;
     const int width = gemm_column_slice(ni), slices = (ni + width - 1) / width;
     const auto slice = [&](int p) {
       const int j0 = p * width, nj = std::min(width, ni - j0);
       // d_in[:, j0..] [batch, nj] = g [batch, no] · W[:, j0..] [no, nj], with W before its update
-      if (d_in) matmul_nn_cols(d_in + j0, ni, gp, Wp, batch, ni, no, false, j0, nj);
+      if (d_in && h) matmul_bf16_nn_cols(d_in + j0, ni, gh, Wh, batch, ni, no, false, j0, nj);
+      if (d_in && !h) matmul_nn_cols(d_in + j0, ni, g, W, batch, ni, no, false, j0, nj);
       // dW[:, j0..] [no, nj] = gᵀ [no, batch] · in[:, j0..] [batch, nj], into a zeroed scratch
       thread_local std::vector<float> dw;
       dw.assign(size_t(no) * nj, 0.f);
-      matmul_tn_cols(dw.data(), nj, gp, inp, no, ni, batch, true, j0, nj);
+      if (h)
+        matmul_bf16_tn_cols(dw.data(), nj, gh, inh, no, ni, batch, true, j0, nj);
+      else
+        matmul_tn_cols(dw.data(), nj, g, in, no, ni, batch, true, j0, nj);
       if (nj == ni) {  // one slice: W and its scratch gradient are both contiguous [no, ni]
         adam_apply(step, W, dw.data(), m + w_off, v + w_off, size_t(no) * ni);
       } else {

@@ -48,6 +48,10 @@ struct MlpTape {
   const T* input = nullptr;         // [batch, in], not owned: must outlive the backward call
   std::vector<std::vector<T>> act;  // act[l]: [batch, widths[l+1]] output of layer l (post-ReLU)
   std::vector<T> grad, grad_next;   // backward scratch, [batch, max width]
+  // With bf16_products, the forward pass's bf16 operands of layer l: its input [batch, ni] and
+  // its weights [no, ni], which the backward pass's products reuse (the weights are the ones the
+  // forward pass saw, as the gradient of that pass must).
+  std::vector<std::vector<uint16_t>> in16, w16;
   const T* output() const { return act.back().data(); }
   T* output() { return act.back().data(); }
 };

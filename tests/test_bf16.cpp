@@ -55,6 +55,27 @@ TEST(Bf16, RoundsToNearestTiesToEven) {
   }
 }
 
+// The packed form (the native kernels' operand) is round_to_bf16's upper half, for every upper
+// half with the lower halves that matter: exact, just below, at and above a tie, and the largest
+// (NaNs, infinities and denormals included).
+TEST(Bf16, BitsAreTheRoundedValuesUpperHalf) {
+  std::vector<float> x;
+  for (uint32_t hi = 0; hi < 0x10000u; ++hi)
+    for (uint32_t lo : {0x0000u, 0x0001u, 0x7fffu, 0x8000u, 0x8001u, 0xffffu})
+      x.push_back(from_bits(hi << 16 | lo));
+  std::vector<uint16_t> y(x.size());
+  to_bf16_bits(x.data(), y.data(), x.size());
+  for (size_t i = 0; i < x.size(); ++i) {
+    const float r = round_to_bf16(x[i]);
+    if (std::isnan(r)) {
+      ASSERT_TRUE(std::isnan(from_bits(uint32_t(y[i]) << 16))) << std::hex << bits(x[i]);
+      ASSERT_EQ(y[i] & 0x0040u, 0x0040u) << "quiet";
+    } else {
+      ASSERT_EQ(uint32_t(y[i]) << 16, bits(r)) << std::hex << bits(x[i]);
+    }
+  }
+}
+
 std::vector<double> rounded(const float* x, size_t n) {
   std::vector<double> r(n);
   for (size_t i = 0; i < n; ++i) r[i] = round_to_bf16(x[i]);
