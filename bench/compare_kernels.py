@@ -30,10 +30,12 @@ def gbench(exe, repetitions, filt=None):
     return {b["run_name"]: b for b in out["benchmarks"] if b.get("aggregate_name") == want}
 
 
-def roof(build, repetitions):
-    """Peak fp32 GFLOP/s: {threads: value} for 1 thread and all cores."""
-    med = gbench(os.path.join(build, "bench", "sirl_bench_roofline"), repetitions, "BM_PeakFp32Fma")
-    return {int(k.split("threads:")[1]): v["GFLOP/s"] for k, v in med.items()}
+def roof(build, repetitions, probe="BM_PeakFp32Fma"):
+    """Peak GFLOP/s of one probe: {threads: value} for 1 thread and all cores ({} when the CPU
+    lacks the instruction: the probe then reports an error and no rate)."""
+    med = gbench(os.path.join(build, "bench", "sirl_bench_roofline"), repetitions, probe)
+    return {int(k.split("threads:")[1].split("/")[0]): v["GFLOP/s"] for k, v in med.items()
+            if "GFLOP/s" in v}
 
 
 def torch_two_processes():
@@ -71,6 +73,8 @@ def main():
         ("SIRL step, Grid 19→128→128→6, 64 triplets", "BM_SirlStep/in:19/hidden:128/threads:{}/real_time", "sirl_step_grid"),
         ("SIRL step, Jaco 2037→1024→1024→6, 64 triplets", "BM_SirlStep/in:2037/hidden:1024/threads:{}/real_time", "sirl_step_jaco"),
         ("20 TPA heads 6→128→128→1, 64 pairs", "BM_TpaHeadsStep/hidden:128/threads:{}/real_time", "tpa_heads_grid"),
+        ("Jaco frozen TPA cell step: 20 heads 6→1024→1024→1, 64 pairs",
+         "BM_TpaHeadsStep/hidden:1024/threads:{}/real_time", "tpa_heads_jaco"),
         ("Jaco unfrozen TPA cell: 20 × (φ 2037→1024→1024→6 + head 6→1024→1024→1), 32 pairs",
          "BM_TpaUnfrozenStep/in:2037/hidden:1024/B:32/threads:{}/real_time", "tpa_unfrozen_jaco"),
     ]
@@ -87,6 +91,30 @@ def main():
             t, form = best_torch(case, threads)
             print(f"| {label} | {threads} | {ms:.3f} | {o['GFLOP/s']:.1f} | "
                   f"{100 * o['GFLOP/s'] / peak[min(threads, cores)]:.0f} % | {form} | "
+                  f"{t['gflops']:.1f} | {o['GFLOP/s'] / t['gflops']:.2f}x |")
+
+    # Precision "bf16" (kernels/gemm_bf16.h): the same cases, against the bf16 dot-product roof
+    # where the CPU has one (else the products are emulated, and the fp32 roof applies), our fp32
+    # and the best PyTorch (fp32) form. FLOPs are counted alike in both precisions.
+    peak16 = roof(args.build, args.repetitions, "BM_PeakBf16Dot")
+    native = bool(peak16)
+    ref = peak16 if native else peak
+    print(f"\nPrecision bf16 ({'native: vdpbf16ps' if native else 'emulated: no AVX512-BF16 here'}); "
+          f"roof {ref[1]:.0f} GFLOP/s on one core, {ref[max(ref)]:.0f} on {max(ref)} cores "
+          f"({'bf16 dot product' if native else 'fp32 FMA'}).\n")
+    print("| case | threads | ours bf16 ms | GFLOP/s | % of roof | vs ours fp32 | best PyTorch form (fp32) | speed-up |")
+    print("|---|---:|---:|---:|---:|---:|---|---:|")
+    for threads in (1, 2):
+        for label, key, case in rows:
+            k16 = key.replace("Step/", "StepBf16/", 1).format(threads)
+            if k16 not in med:
+                continue
+            o, o32 = med[k16], med[key.format(threads)]
+            ms = o["real_time"] if o["time_unit"] == "ms" else o["real_time"] * 1e-6
+            t, form = best_torch(case, threads)
+            print(f"| {label} | {threads} | {ms:.3f} | {o['GFLOP/s']:.1f} | "
+                  f"{100 * o['GFLOP/s'] / ref[min(threads, max(ref))]:.0f} % | "
+                  f"{o['GFLOP/s'] / o32['GFLOP/s']:.2f}x | {form} | "
                   f"{t['gflops']:.1f} | {o['GFLOP/s'] / t['gflops']:.2f}x |")
 
 

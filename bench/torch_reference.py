@@ -241,6 +241,8 @@ def main():
         "sirl_step_jaco": sirl_step_case([2037, 1024, 1024, 6]),
         "tpa_heads_grid": tpa_heads_case(128),
         "tpa_heads_grid_batched": tpa_heads_batched_case(128),
+        "tpa_heads_jaco": tpa_heads_case(1024),
+        "tpa_heads_jaco_batched": tpa_heads_batched_case(1024),
         "tpa_unfrozen_jaco": tpa_unfrozen_case(2037, 1024),
         "tpa_unfrozen_jaco_batched": tpa_unfrozen_batched_case(2037, 1024),
     }

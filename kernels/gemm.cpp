@@ -10,11 +10,7 @@
 #ifdef SIRL_HAVE_XSMM
 #include <libxsmm.h>
 #endif
-#ifdef SIRL_HAVE_DNNL
-#include <omp.h>
-
-#include <oneapi/dnnl/dnnl.h>
-#endif
+#include "kernels/onednn_matmul.h"
 
 namespace sirl {
 namespace {
@@ -125,34 +121,27 @@ bool xsmm_colmajor(const float* a, const float* b, float* c, int m, int n, int k
 thread_local std::vector<float> t_scratch;  // nt's transposed operand (and result)
 #endif
 
-#ifdef SIRL_HAVE_DNNL
-// oneDNN's sgemm on one slice (row-major; 'T' reads that operand transposed), on the calling
-// thread only: with more, its summation could depend on the thread count, and the engine already
-// spreads slices and tasks over the cores. Whether a product goes here depends on its shape only.
-// Two dimensions ≥ 512 and none below 32: with fewer rows (a TPA cell of M = 10 trains on 20),
-// oneDNN packs a whole weight slice for little work (one measurement on a noisy VM: 20 rows
-// through the Jaco unfrozen cell, 564 ms a step with oneDNN against 472 without).
+// oneDNN's matmul primitive on one slice (kernels/onednn_matmul.h: row-major; 'T' reads that
+// operand transposed), on the calling thread only, as every slice is. Whether a product goes
+// there depends on its shape only. Two dimensions ≥ 512 and none below 32: with fewer rows (a TPA
+// cell of M = 10 trains on 20), oneDNN packs a whole weight slice for little work (one
+// measurement on a noisy VM: 20 rows through the Jaco unfrozen cell, 564 ms a step with oneDNN
+// against 472 without). The primitive, not dnnl_sgemm: on Zen 5 the 192 × 2037 → 1024 forward
+// product ran at 130 GFLOP/s in 256-wide sgemm slices (bench/bench_gemm_candidates).
 bool dnnl_big(int M, int N, int K) {
+#ifdef SIRL_HAVE_DNNL
   return (M >= 512) + (N >= 512) + (K >= 512) >= 2 && std::min({M, N, K}) >= 32;
+#else
+  return false;
+#endif
 }
 bool dnnl_slice(char ta, char tb, int M, int nj, int K, const float* A, int lda, const float* B,
                 int ldb, bool acc, float* Cs, int ldc) {
-  const int saved = omp_get_max_threads();
-  omp_set_num_threads(1);
-  const dnnl_status_t st =
-      dnnl_sgemm(ta, tb, M, nj, K, 1.f, A, lda, B, ldb, acc ? 1.f : 0.f, Cs, ldc);
-  omp_set_num_threads(saved);
-  return st == dnnl_success;
+  const bool at = ta == 'T', bt = tb == 'T';
+  const MatmulShape s{M,   nj,  K,    at ? 1 : lda, at ? lda : 1, bt ? 1 : ldb, bt ? ldb : 1,
+                      ldc, acc, false};
+  return onednn_matmul(s, A, B, Cs);
 }
-#else
-bool dnnl_big(int, int, int) {
-  return false;
-}
-bool dnnl_slice(char, char, int, int, int, const float*, int, const float*, int, bool, float*,
-                int) {
-  return false;
-}
-#endif
 
 template <typename T>
 bool fast_nt(T*, int, const T*, const T*, int, int, int, bool, int, int) {
@@ -242,15 +231,69 @@ void matmul_nn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K,
     eigen_nn<T>(Cs, ldc, A, B, M, N, K, accumulate, j0, nj);
 }
 
+namespace {
+// A forward product oneDNN serves, C[M, N] = A[M, K] · B[N, K]ᵀ, as whole rows: two blocks of
+// rows when M ≥ 128 (a multiple of 16 each; so two threads share it), else one, each one call
+// over all N columns. The blocks depend on the shape only. oneDNN's matmul takes a strided slice
+// to its sgemm, which reads a transposed B with K = 2037 (JacoRobot's first layer) at half
+// speed: 2.4 ms per 256-column slice against 4.2 ms for all 1024 columns at once on its dense
+// brgemm path (192 rows; 4.3 ms as two blocks of 96; Zen 5, one thread). The fused backward pass
+// needs column slices; the forward pass does not.
+bool dnnl_nt_rows(float* C, const float* A, const float* B, int M, int N, int K, bool acc,
+                  int threads) {
+  if (acc || !(use_xsmm() && dnnl_big(M, N, K))) return false;  // a failed block is redone
+  const int block = M < 128 ? M : std::min(kRowBlock, ((M + 1) / 2 + 15) / 16 * 16);
+  const int blocks = (M + block - 1) / block;
+  bool ok = true;
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && blocks > 1) \
+    reduction(&& : ok)
+  for (int b = 0; b < blocks; ++b) {
+    const int i0 = b * block, rows = std::min(block, M - i0);
+    ok = ok && onednn_matmul({rows, N, K, K, 1, 1, K, N, acc, false}, A + size_t(i0) * K, B,
+                             C + size_t(i0) * N);
+  }
+  return ok;
+}
+}  // namespace
+
 template <typename T>
 void matmul_nt(T* C, const T* A, const T* B, int M, int N, int K, bool accumulate, int threads) {
+  if constexpr (std::is_same_v<T, float>)
+    if (dnnl_nt_rows(C, A, B, M, N, K, accumulate, threads)) return;
   for_column_slices(N, threads, [&](int j0, int nj) {
     matmul_nt_cols<T>(C + j0, N, A, B, M, N, K, accumulate, j0, nj);
   });
 }
 
+int gemm_tn_row_block(int M, int N, int K) {
+  return use_xsmm() && dnnl_big(M, N, K) ? kRowBlock : 0;
+}
+
+void matmul_tn_rows(float* Cr, const float* A, const float* B, int M, int N, int K, bool acc,
+                    int i0, int mi) {
+  // op(A) rows i0.. = A[K, M]ᵀ[i0.., :]: [mi, K] with strides (1, M); B [K, N] dense
+  if (onednn_matmul({mi, N, K, 1, M, N, 1, N, acc, false}, A + i0, B, Cr)) return;
+  using RowMatF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  Eigen::Map<const RowMatF> a(A, K, M), b(B, K, N);
+  Eigen::Map<RowMatF> c(Cr, mi, N);
+  if (acc)
+    c.noalias() += a.middleCols(i0, mi).transpose() * b;
+  else
+    c.noalias() = a.middleCols(i0, mi).transpose() * b;
+}
+
 template <typename T>
 void matmul_tn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulate, int threads) {
+  if constexpr (std::is_same_v<T, float>) {
+    if (const int block = gemm_tn_row_block(M, N, K)) {
+      const int blocks = (M + block - 1) / block;
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && blocks > 1)
+      for (int b = 0; b < blocks; ++b)
+        matmul_tn_rows(C + size_t(b) * block * N, A, B, M, N, K, accumulate, b * block,
+                       std::min(block, M - b * block));
+      return;
+    }
+  }
   for_column_slices(N, threads, [&](int j0, int nj) {
     matmul_tn_cols<T>(C + j0, N, A, B, M, N, K, accumulate, j0, nj);
   });

@@ -4,17 +4,10 @@
 #include <bit>
 #include <cstdlib>
 #include <cstring>
-#include <map>
-#include <tuple>
 #include <vector>
 
 #include "kernels/gemm.h"
-
-#ifdef SIRL_HAVE_DNNL
-#include <omp.h>
-
-#include <oneapi/dnnl/dnnl.hpp>
-#endif
+#include "kernels/onednn_matmul.h"
 
 namespace sirl {
 namespace {
@@ -72,74 +65,6 @@ const float* widen_b_cols(const uint16_t* B, int K, int N, int j0, int nj) {
   return s.data();
 }
 
-// ---- oneDNN's bf16 matmul (vdpbf16ps), one primitive per shape ----
-#ifdef SIRL_HAVE_DNNL
-bool cpu_has_bf16() {
-  const unsigned isa = unsigned(dnnl::get_effective_cpu_isa());
-  const unsigned want = unsigned(dnnl::cpu_isa::avx512_core_bf16);
-  return (isa & want) == want;
-}
-
-// C[M, nj] (+)= op(A)[M, K] · op(B)[K, nj], row-major with the given strides (elements).
-struct MatmulKey {
-  int M, nj, K;
-  long a_rs, a_cs, b_rs, b_cs, ldc;
-  bool acc;
-  auto tie() const { return std::tie(M, nj, K, a_rs, a_cs, b_rs, b_cs, ldc, acc); }
-  bool operator<(const MatmulKey& o) const { return tie() < o.tie(); }
-};
-
-struct Matmul {
-  dnnl::matmul prim;
-  dnnl::memory a, b, c;
-};
-
-const dnnl::engine& cpu_engine() {
-  static const dnnl::engine e(dnnl::engine::kind::cpu, 0);
-  return e;
-}
-
-// Created and run on the calling thread only (OMP threads = 1): oneDNN chooses its blocking, and
-// might split K, by the threads it may use; with one, the bits depend on the shape only.
-struct OneThread {
-  int saved = omp_get_max_threads();
-  OneThread() { omp_set_num_threads(1); }
-  ~OneThread() { omp_set_num_threads(saved); }
-};
-
-Matmul& matmul_for(const MatmulKey& k) {
-  thread_local std::map<MatmulKey, Matmul> cache;
-  auto it = cache.find(k);
-  if (it != cache.end()) return it->second;
-  using dt = dnnl::memory::data_type;
-  const dnnl::memory::desc a_md({k.M, k.K}, dt::bf16, {k.a_rs, k.a_cs});
-  const dnnl::memory::desc b_md({k.K, k.nj}, dt::bf16, {k.b_rs, k.b_cs});
-  const dnnl::memory::desc c_md({k.M, k.nj}, dt::f32, {k.ldc, 1});
-  dnnl::primitive_attr attr;
-  if (k.acc) {
-    dnnl::post_ops po;
-    po.append_sum(1.f);
-    attr.set_post_ops(po);
-  }
-  const auto& eng = cpu_engine();
-  const dnnl::matmul::primitive_desc pd(dnnl::matmul::desc(a_md, b_md, c_md), attr, eng);
-  Matmul m{dnnl::matmul(pd), dnnl::memory(a_md, eng, nullptr), dnnl::memory(b_md, eng, nullptr),
-           dnnl::memory(c_md, eng, nullptr)};
-  return cache.emplace(k, std::move(m)).first->second;
-}
-
-void dnnl_bf16(const MatmulKey& k, const uint16_t* A, const uint16_t* B, float* C) {
-  const OneThread one;
-  Matmul& m = matmul_for(k);
-  m.a.set_data_handle(const_cast<uint16_t*>(A));
-  m.b.set_data_handle(const_cast<uint16_t*>(B));
-  m.c.set_data_handle(C);
-  thread_local dnnl::stream strm(cpu_engine());
-  m.prim.execute(strm, {{DNNL_ARG_SRC, m.a}, {DNNL_ARG_WEIGHTS, m.b}, {DNNL_ARG_DST, m.c}});
-  strm.wait();
-}
-#endif
-
 bool native_shape(int M, int nj, int K) {
   return bf16_native() && std::min({M, nj, K}) >= kBf16NativeMin;
 }
@@ -154,12 +79,8 @@ void for_slices(int N, int threads, Fn&& fn) {
 }  // namespace
 
 bool bf16_native() {
-#ifdef SIRL_HAVE_DNNL
-  static const bool on = !forced_off() && cpu_has_bf16();
+  static const bool on = !forced_off() && onednn_native_bf16();
   return on;
-#else
-  return false;
-#endif
 }
 
 const char* bf16_backend() {
@@ -168,30 +89,29 @@ const char* bf16_backend() {
 
 void matmul_bf16_nt_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* B, int M, int N,
                          int K, bool acc, int j0, int nj) {
-#ifdef SIRL_HAVE_DNNL
   // op(B) = (B[j0.., K])ᵀ: [K, nj] with strides (1, K)
-  if (native_shape(M, nj, K))
-    return dnnl_bf16({M, nj, K, K, 1, 1, K, ldc, acc}, A, B + size_t(j0) * K, Cs);
-#endif
+  if (native_shape(M, nj, K) &&
+      onednn_matmul({M, nj, K, K, 1, 1, K, ldc, acc, true}, A, B + size_t(j0) * K, Cs))
+    return;
   matmul_nt_cols<float>(Cs, ldc, widen_a(A, size_t(M) * K), widen_b_rows(B, N, K, j0, nj), M, N, K,
                         acc, j0, nj);
 }
 
 void matmul_bf16_tn_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* B, int M, int N,
                          int K, bool acc, int j0, int nj) {
-#ifdef SIRL_HAVE_DNNL
   // op(A) = A[K, M]ᵀ: [M, K] with strides (1, M); op(B) = B[:, j0..]: [K, nj], strides (N, 1)
-  if (native_shape(M, nj, K)) return dnnl_bf16({M, nj, K, 1, M, N, 1, ldc, acc}, A, B + j0, Cs);
-#endif
+  if (native_shape(M, nj, K) &&
+      onednn_matmul({M, nj, K, 1, M, N, 1, ldc, acc, true}, A, B + j0, Cs))
+    return;
   matmul_tn_cols<float>(Cs, ldc, widen_a(A, size_t(K) * M), widen_b_cols(B, K, N, j0, nj), M, N, K,
                         acc, j0, nj);
 }
 
 void matmul_bf16_nn_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* B, int M, int N,
                          int K, bool acc, int j0, int nj) {
-#ifdef SIRL_HAVE_DNNL
-  if (native_shape(M, nj, K)) return dnnl_bf16({M, nj, K, K, 1, N, 1, ldc, acc}, A, B + j0, Cs);
-#endif
+  if (native_shape(M, nj, K) &&
+      onednn_matmul({M, nj, K, K, 1, N, 1, ldc, acc, true}, A, B + j0, Cs))
+    return;
   matmul_nn_cols<float>(Cs, ldc, widen_a(A, size_t(M) * K), widen_b_cols(B, K, N, j0, nj), M, N, K,
                         acc, j0, nj);
 }

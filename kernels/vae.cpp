@@ -48,10 +48,10 @@ namespace {
 #endif
 template <typename T>
 SIRL_NOT_SPECIALISED T vae_loss(const VaeShape& s, const T* params, const T* x, int B, const T* eps,
-                          T kl_weight, VaeElbo elbo, bool grad,
-                          const std::function<void(const T*, T*)>& backward_decoder,
-                          const std::function<void(const T*)>& backward_encoder,
-                          VaeWorkspace<T>& ws, VaeLossParts* parts, int threads) {
+                                T kl_weight, VaeElbo elbo, bool grad,
+                                const std::function<void(const T*, T*)>& backward_decoder,
+                                const std::function<void(const T*)>& backward_encoder,
+                                VaeWorkspace<T>& ws, VaeLossParts* parts, int threads) {
   const int in = s.encoder.in(), d = s.latent;
   const T* enc_p = params;
   const T* dec_p = params + s.encoder.param_count();

@@ -1,0 +1,98 @@
+#include "kernels/onednn_matmul.h"
+
+#ifdef SIRL_HAVE_DNNL
+#include <omp.h>
+
+#include <map>
+#include <oneapi/dnnl/dnnl.hpp>
+#include <tuple>
+#endif
+
+namespace sirl {
+
+#ifdef SIRL_HAVE_DNNL
+namespace {
+
+struct ShapeLess {
+  static auto tie(const MatmulShape& s) {
+    return std::tie(s.M, s.N, s.K, s.a_rs, s.a_cs, s.b_rs, s.b_cs, s.ldc, s.accumulate, s.bf16);
+  }
+  bool operator()(const MatmulShape& a, const MatmulShape& b) const { return tie(a) < tie(b); }
+};
+
+struct Matmul {
+  dnnl::matmul prim;
+  dnnl::memory a, b, c;
+};
+
+const dnnl::engine& cpu_engine() {
+  static const dnnl::engine e(dnnl::engine::kind::cpu, 0);
+  return e;
+}
+
+// oneDNN sizes its blocking, and may split K, by the threads it may use: one, while it creates
+// and runs a primitive (the engine spreads slices and tasks over the cores itself).
+struct OneThread {
+  int saved = omp_get_max_threads();
+  OneThread() { omp_set_num_threads(1); }
+  ~OneThread() { omp_set_num_threads(saved); }
+};
+
+Matmul* matmul_for(const MatmulShape& s) {
+  thread_local std::map<MatmulShape, Matmul, ShapeLess> cache;
+  if (auto it = cache.find(s); it != cache.end()) return &it->second;
+  using dt = dnnl::memory::data_type;
+  const dt in = s.bf16 ? dt::bf16 : dt::f32;
+  const dnnl::memory::desc a_md({s.M, s.K}, in, {s.a_rs, s.a_cs});
+  const dnnl::memory::desc b_md({s.K, s.N}, in, {s.b_rs, s.b_cs});
+  const dnnl::memory::desc c_md({s.M, s.N}, dt::f32, {s.ldc, 1});
+  dnnl::primitive_attr attr;
+  if (s.accumulate) {
+    dnnl::post_ops po;
+    po.append_sum(1.f);
+    attr.set_post_ops(po);
+  }
+  const auto& eng = cpu_engine();
+  try {
+    const dnnl::matmul::primitive_desc pd(dnnl::matmul::desc(a_md, b_md, c_md), attr, eng);
+    Matmul m{dnnl::matmul(pd), dnnl::memory(a_md, eng, nullptr), dnnl::memory(b_md, eng, nullptr),
+             dnnl::memory(c_md, eng, nullptr)};
+    return &cache.emplace(s, std::move(m)).first->second;
+  } catch (const dnnl::error&) {
+    return nullptr;  // no implementation for this shape: the caller computes it
+  }
+}
+
+}  // namespace
+
+bool onednn_matmul(const MatmulShape& s, const void* A, const void* B, float* C) {
+  const OneThread one;
+  Matmul* m = matmul_for(s);
+  if (!m) return false;
+  m->a.set_data_handle(const_cast<void*>(A));
+  m->b.set_data_handle(const_cast<void*>(B));
+  m->c.set_data_handle(C);
+  thread_local dnnl::stream strm(cpu_engine());
+  m->prim.execute(strm, {{DNNL_ARG_SRC, m->a}, {DNNL_ARG_WEIGHTS, m->b}, {DNNL_ARG_DST, m->c}});
+  strm.wait();
+  return true;
+}
+
+bool onednn_native_bf16() {
+  const unsigned isa = unsigned(dnnl::get_effective_cpu_isa());
+  const unsigned want = unsigned(dnnl::cpu_isa::avx512_core_bf16);
+  return (isa & want) == want;
+}
+
+#else
+
+bool onednn_matmul(const MatmulShape&, const void*, const void*, float*) {
+  return false;
+}
+bool onednn_native_bf16() {
+  return false;
+}
+
+#endif
+
+}  // namespace sirl
