@@ -231,74 +231,85 @@ void matmul_nn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K,
     eigen_nn<T>(Cs, ldc, A, B, M, N, K, accumulate, j0, nj);
 }
 
+// ---- products oneDNN serves, by blocks of C's rows ----
+//
+// oneDNN's matmul runs a dense operand set on its brgemm kernels and hands strided ones (a
+// 256-column slice of C) to its sgemm, which on Zen 5 read JacoRobot's transposed first-layer
+// weights (K = 2037) at half speed: 2.4 ms per 256-column slice of the forward product against
+// 4.2 ms for all 1024 columns at once (192 rows, one thread). So the forward and weight-gradient
+// products compute such a product in blocks of C's rows, each one call over all N columns, dense:
+// one block up to 128 rows, two (multiples of 16, so two threads can share it) up to 512, blocks of
+// 256 above. The blocks depend on the shape only, so the bits do too.
+
+int gemm_row_block(int M, int N, int K) {
+  if (!(use_xsmm() && dnnl_big(M, N, K))) return 0;
+  return M <= 128 ? M : std::min(kRowBlock, ((M + 1) / 2 + 15) / 16 * 16);
+}
+
 namespace {
-// A forward product oneDNN serves, C[M, N] = A[M, K] · B[N, K]ᵀ, as whole rows: two blocks of
-// rows when M ≥ 128 (a multiple of 16 each; so two threads share it), else one, each one call
-// over all N columns. The blocks depend on the shape only. oneDNN's matmul takes a strided slice
-// to its sgemm, which reads a transposed B with K = 2037 (JacoRobot's first layer) at half
-// speed: 2.4 ms per 256-column slice against 4.2 ms for all 1024 columns at once on its dense
-// brgemm path (192 rows; 4.3 ms as two blocks of 96; Zen 5, one thread). The fused backward pass
-// needs column slices; the forward pass does not.
-bool dnnl_nt_rows(float* C, const float* A, const float* B, int M, int N, int K, bool acc,
-                  int threads) {
-  if (acc || !(use_xsmm() && dnnl_big(M, N, K))) return false;  // a failed block is redone
-  const int block = M < 128 ? M : std::min(kRowBlock, ((M + 1) / 2 + 15) / 16 * 16);
-  const int blocks = (M + block - 1) / block;
-  bool ok = true;
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && blocks > 1) \
-    reduction(&& : ok)
-  for (int b = 0; b < blocks; ++b) {
-    const int i0 = b * block, rows = std::min(block, M - i0);
-    ok = ok && onednn_matmul({rows, N, K, K, 1, 1, K, N, acc, false}, A + size_t(i0) * K, B,
-                             C + size_t(i0) * N);
+// Rows [i0, i0 + mi) of C = op(A) · op(B) into Cr (row stride N): oneDNN, or Eigen should
+// oneDNN refuse the shape.
+enum class Form { kNt, kTn };
+void rows_of_product(Form op, float* Cr, const float* A, const float* B, int M, int N, int K,
+                     bool acc, int i0, int mi) {
+  using RowMatF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  Eigen::Map<RowMatF> c(Cr, mi, N);
+  if (op == Form::kNt) {  // C[M,N] = A[M,K]·B[N,K]ᵀ (the forward product)
+    if (onednn_matmul({mi, N, K, K, 1, 1, K, N, acc, false}, A + size_t(i0) * K, B, Cr)) return;
+    const auto prod = Eigen::Map<const RowMatF>(A, M, K).middleRows(i0, mi) *
+                      Eigen::Map<const RowMatF>(B, N, K).transpose();
+    acc ? void(c.noalias() += prod) : void(c.noalias() = prod);
+  } else {  // C[M,N] = A[K,M]ᵀ·B[K,N]: op(A)'s rows i0.. have strides (1, M)
+    if (onednn_matmul({mi, N, K, 1, M, N, 1, N, acc, false}, A + i0, B, Cr)) return;
+    const auto prod = Eigen::Map<const RowMatF>(A, K, M).middleCols(i0, mi).transpose() *
+                      Eigen::Map<const RowMatF>(B, K, N);
+    acc ? void(c.noalias() += prod) : void(c.noalias() = prod);
   }
-  return ok;
+}
+
+// The whole product by row blocks when oneDNN serves it; false (nothing done) otherwise.
+template <typename T>
+bool by_row_blocks(Form op, T* C, const T* A, const T* B, int M, int N, int K, bool acc,
+                   int threads) {
+  if constexpr (std::is_same_v<T, float>) {
+    const int block = gemm_row_block(M, N, K);
+    if (!block) return false;
+    const int blocks = (M + block - 1) / block;
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && blocks > 1)
+    for (int b = 0; b < blocks; ++b)
+      rows_of_product(op, C + size_t(b) * block * N, A, B, M, N, K, acc, b * block,
+                      std::min(block, M - b * block));
+    return true;
+  } else {
+    return false;
+  }
 }
 }  // namespace
 
+void matmul_tn_rows(float* Cr, const float* A, const float* B, int M, int N, int K, bool acc,
+                    int i0, int mi) {
+  rows_of_product(Form::kTn, Cr, A, B, M, N, K, acc, i0, mi);
+}
+
 template <typename T>
 void matmul_nt(T* C, const T* A, const T* B, int M, int N, int K, bool accumulate, int threads) {
-  if constexpr (std::is_same_v<T, float>)
-    if (dnnl_nt_rows(C, A, B, M, N, K, accumulate, threads)) return;
+  if (by_row_blocks<T>(Form::kNt, C, A, B, M, N, K, accumulate, threads)) return;
   for_column_slices(N, threads, [&](int j0, int nj) {
     matmul_nt_cols<T>(C + j0, N, A, B, M, N, K, accumulate, j0, nj);
   });
 }
 
-int gemm_tn_row_block(int M, int N, int K) {
-  return use_xsmm() && dnnl_big(M, N, K) ? kRowBlock : 0;
-}
-
-void matmul_tn_rows(float* Cr, const float* A, const float* B, int M, int N, int K, bool acc,
-                    int i0, int mi) {
-  // op(A) rows i0.. = A[K, M]ᵀ[i0.., :]: [mi, K] with strides (1, M); B [K, N] dense
-  if (onednn_matmul({mi, N, K, 1, M, N, 1, N, acc, false}, A + i0, B, Cr)) return;
-  using RowMatF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  Eigen::Map<const RowMatF> a(A, K, M), b(B, K, N);
-  Eigen::Map<RowMatF> c(Cr, mi, N);
-  if (acc)
-    c.noalias() += a.middleCols(i0, mi).transpose() * b;
-  else
-    c.noalias() = a.middleCols(i0, mi).transpose() * b;
-}
-
 template <typename T>
 void matmul_tn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulate, int threads) {
-  if constexpr (std::is_same_v<T, float>) {
-    if (const int block = gemm_tn_row_block(M, N, K)) {
-      const int blocks = (M + block - 1) / block;
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && blocks > 1)
-      for (int b = 0; b < blocks; ++b)
-        matmul_tn_rows(C + size_t(b) * block * N, A, B, M, N, K, accumulate, b * block,
-                       std::min(block, M - b * block));
-      return;
-    }
-  }
+  if (by_row_blocks<T>(Form::kTn, C, A, B, M, N, K, accumulate, threads)) return;
   for_column_slices(N, threads, [&](int j0, int nj) {
     matmul_tn_cols<T>(C + j0, N, A, B, M, N, K, accumulate, j0, nj);
   });
 }
 
+// ∂L/∂input stays in column slices: oneDNN's sgemm reads these operands untransposed at full
+// speed (192 × 1024 × 1024: 0.57 ms per 256-column slice), and its dense path was no faster
+// in A/B runs of the JacoRobot SIRL step and TPA cells.
 template <typename T>
 void matmul_nn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulate, int threads) {
   for_column_slices(N, threads, [&](int j0, int nj) {

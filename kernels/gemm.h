@@ -36,13 +36,13 @@ template <typename T>
 void matmul_nn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K, bool accumulate,
                     int j0, int nj);
 
-// A weight gradient oneDNN serves (C = dYᵀ·X with two dimensions ≥ 512) is computed in blocks of
-// C's rows, all N columns at once (oneDNN's dense brgemm path; 256-column slices took its slower
-// strided sgemm). gemm_tn_row_block(M, N, K) is that block height, or 0 when the product goes by
-// column slices. matmul_tn computes such a product block by block; matmul_tn_rows computes rows
-// [i0, i0 + mi) alone, into Cr [mi, N] (row stride N), with the same bits (the fused backward
-// pass updates the weights a block of rows at a time).
-int gemm_tn_row_block(int M, int N, int K);
+// A float product oneDNN serves (two dimensions ≥ 512, none below 32) runs on its dense kernels
+// in blocks of C's rows, all N columns at once: gemm_row_block(M, N, K) is the block height (fixed
+// by the shape), 0 for a product that goes by column slices. matmul_nt and matmul_tn do so block
+// by block (matmul_nn keeps column slices); matmul_tn_rows computes rows [i0, i0 + mi) of C =
+// A[K,M]ᵀ·B[K,N] alone into Cr [mi, N] (row stride N), the same bits as that block of matmul_tn:
+// the fused backward pass updates the weights a block of rows at a time.
+int gemm_row_block(int M, int N, int K);
 void matmul_tn_rows(float* Cr, const float* A, const float* B, int M, int N, int K, bool accumulate,
                     int i0, int mi);
 

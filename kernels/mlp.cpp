@@ -242,10 +242,9 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
         }
       }
     };
-    // fp32 weight gradients oneDNN serves go by blocks of W's rows (gemm.h, gemm_tn_row_block):
-    // ∂L/∂input first, every column slice of it from the old W, then each block's gradient and
-    // its Adam update, a contiguous [rows, ni] piece of W.
-    const int row_block = h ? 0 : gemm_tn_row_block(no, ni, batch);
+    // fp32 products oneDNN serves go by blocks of rows (gemm.h, gemm_row_block): ∂L/∂input
+    // first, whole, from the old W, then each block of W's rows: its gradient and its Adam update.
+    const int row_block = h ? 0 : gemm_row_block(no, ni, batch);
     const auto rows = [&](int p) {
       const int i0 = p * row_block, mi = std::min(row_block, no - i0);
       thread_local std::vector<float> dw;
@@ -254,17 +253,10 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
       const size_t at = w_off + size_t(i0) * ni;
       adam_apply(step, params + at, dw.data(), m + at, v + at, size_t(mi) * ni);
     };
-    const auto d_in_slice = [&](int p) {
-      const int j0 = p * width, nj = std::min(width, ni - j0);
-      matmul_nn_cols(d_in + j0, ni, g, W, batch, ni, no, false, j0, nj);
-    };
     const int blocks = row_block ? (no + row_block - 1) / row_block : 0;
     const bool par = threads > 1;
     if (row_block) {
-      if (d_in) {
-#pragma omp parallel for num_threads(threads) schedule(static) if (par && slices > 1)
-        for (int p = 0; p < slices; ++p) d_in_slice(p);
-      }
+      if (d_in) matmul_nn(d_in, g, W, batch, ni, no, false, threads);
 #pragma omp parallel for num_threads(threads) schedule(static) if (par && blocks > 1)
       for (int p = 0; p < blocks; ++p) rows(p);
     } else {
