@@ -72,7 +72,11 @@ bool native_shape(int M, int nj, int K) {
 template <typename Fn>
 void for_slices(int N, int threads, Fn&& fn) {
   const int w = gemm_column_slice(N), slices = (N + w - 1) / w;
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && slices > 1)
+  if (threads <= 1 || slices <= 1) {
+    for (int p = 0; p < slices; ++p) fn(p * w, std::min(w, N - p * w));
+    return;
+  }
+#pragma omp parallel for num_threads(threads) schedule(static)
   for (int p = 0; p < slices; ++p) fn(p * w, std::min(w, N - p * w));
 }
 

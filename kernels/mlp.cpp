@@ -254,14 +254,16 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
       adam_apply(step, params + at, dw.data(), m + at, v + at, size_t(mi) * ni);
     };
     const int blocks = row_block ? (no + row_block - 1) / row_block : 0;
-    const bool par = threads > 1;
-    if (row_block) {
-      if (d_in) matmul_nn(d_in, g, W, batch, ni, no, false, threads);
-#pragma omp parallel for num_threads(threads) schedule(static) if (par && blocks > 1)
-      for (int p = 0; p < blocks; ++p) rows(p);
+    // (No OpenMP region at all on one thread: even a serialised one costs microseconds, and a
+    // TPA step of 20 small heads runs 60 of these loops.)
+    if (row_block && d_in) matmul_nn(d_in, g, W, batch, ni, no, false, threads);
+    const int parts = row_block ? blocks : slices;
+    const auto part = [&](int p) { row_block ? rows(p) : slice(p); };
+    if (threads > 1 && parts > 1) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+      for (int p = 0; p < parts; ++p) part(p);
     } else {
-#pragma omp parallel for num_threads(threads) schedule(static) if (par && slices > 1)
-      for (int p = 0; p < slices; ++p) slice(p);
+      for (int p = 0; p < parts; ++p) part(p);
     }
     if (l > 0) std::swap(tape.grad, tape.grad_next);
   }
