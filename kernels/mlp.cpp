@@ -50,6 +50,13 @@ namespace {
 // multiplies the copies. The forward pass keeps its copies of each layer's input and weights in
 // the tape for the backward pass; ∂L/∂(pre-activation) is rounded into a scratch per thread (the
 // batched forms run models on OpenMP threads).
+// The forward pass's bf16 copies of layer l's operands, which a bf16 backward pass needs.
+const std::vector<uint16_t>& tape_copy(const std::vector<std::vector<uint16_t>>& copies, int l) {
+  if (size_t(l) >= copies.size())
+    throw std::logic_error("a bf16 backward pass needs the tape of a bf16 forward pass");
+  return copies[l];
+}
+
 std::vector<uint16_t>& bf16_scratch() {
   thread_local std::vector<uint16_t> g;
   return g;
@@ -154,8 +161,9 @@ void mlp_backward(const MlpShape& s, const T* params, MlpTape<T>& tape,
     if constexpr (std::is_same_v<T, float>) {
       if (s.bf16_products) {
         const uint16_t* gh = bf16_copy(g, size_t(batch) * no, bf16_scratch());
-        matmul_bf16_tn(dW, gh, tape.in16.at(l).data(), no, ni, batch, true, threads);
-        if (d_in) matmul_bf16_nn(d_in, gh, tape.w16.at(l).data(), batch, ni, no, false, threads);
+        matmul_bf16_tn(dW, gh, tape_copy(tape.in16, l).data(), no, ni, batch, true, threads);
+        if (d_in)
+          matmul_bf16_nn(d_in, gh, tape_copy(tape.w16, l).data(), batch, ni, no, false, threads);
       } else {
         matmul_tn(dW, g, in, no, ni, batch, true, threads);
         if (d_in) matmul_nn(d_in, g, W, batch, ni, no, false, threads);
@@ -218,8 +226,8 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
     // weights).
     const bool h = s.bf16_products;
     const uint16_t* gh = h ? bf16_copy(g, size_t(batch) * no, bf16_scratch()) : nullptr;
-    const uint16_t* inh = h ? tape.in16.at(l).data() : nullptr;
-    const uint16_t* Wh = h ? tape.w16.at(l).data() : nullptr;
+    const uint16_t* inh = h ? tape_copy(tape.in16, l).data() : nullptr;
+    const uint16_t* Wh = h ? tape_copy(tape.w16, l).data() : nullptr;
     const int width = gemm_column_slice(ni), slices = (ni + width - 1) / width;
     const auto slice = [&](int p) {
       const int j0 = p * width, nj = std::min(width, ni - j0);

@@ -73,8 +73,12 @@ bool onednn_matmul(const MatmulShape& s, const void* A, const void* B, float* C)
   m->b.set_data_handle(const_cast<void*>(B));
   m->c.set_data_handle(C);
   thread_local dnnl::stream strm(cpu_engine());
-  m->prim.execute(strm, {{DNNL_ARG_SRC, m->a}, {DNNL_ARG_WEIGHTS, m->b}, {DNNL_ARG_DST, m->c}});
-  strm.wait();
+  try {  // callers run inside OpenMP regions, which an exception must not leave
+    m->prim.execute(strm, {{DNNL_ARG_SRC, m->a}, {DNNL_ARG_WEIGHTS, m->b}, {DNNL_ARG_DST, m->c}});
+    strm.wait();
+  } catch (const dnnl::error&) {
+    return false;
+  }
   return true;
 }
 

@@ -153,6 +153,21 @@ TEST(Bf16, BackwardProductsAreOfRoundedOperands) {
     }
 }
 
+// A bf16 backward pass on the tape of an fp32 forward pass is refused (its bf16 copies are
+// missing), not run on stale or absent operands.
+TEST(Bf16, BackwardRefusesAnFp32Tape) {
+  MlpShape s{{4, 3}};
+  Rng rng(2);
+  std::vector<float> p(s.param_count()), x(8), dout(6), dp(p.size());
+  mlp_init(s, p.data(), rng);
+  MlpTape<float> t;
+  mlp_forward(s, p.data(), x.data(), 2, t);
+  MlpShape b = s;
+  b.bf16_products = true;
+  EXPECT_THROW(mlp_backward(b, p.data(), t, dout.data(), dp.data(), static_cast<float*>(nullptr)),
+               std::logic_error);
+}
+
 TEST(Bf16, DoubleNetworksRefuseIt) {
   MlpShape s{{3, 2}};
   s.bf16_products = true;
