@@ -38,6 +38,11 @@ def roof(build, repetitions, probe="BM_PeakFp32Fma"):
             if "GFLOP/s" in v}
 
 
+def milliseconds(bench):
+    """A Google Benchmark entry's real time in ms (the kernels report ms, the rest ns)."""
+    return bench["real_time"] if bench["time_unit"] == "ms" else bench["real_time"] * 1e-6
+
+
 def torch_two_processes():
     """Two 1-thread PyTorch processes at once (one per core): per case, the summed GFLOP/s."""
     procs = [subprocess.Popen(TORCH + ["--threads", "1"], stdout=subprocess.PIPE, text=True)
@@ -87,7 +92,7 @@ def main():
     for threads in (1, 2):
         for label, key, case in rows:
             o = med[key.format(threads)]
-            ms = o["real_time"] if o["time_unit"] == "ms" else o["real_time"] * 1e-6
+            ms = milliseconds(o)
             t, form = best_torch(case, threads)
             print(f"| {label} | {threads} | {ms:.3f} | {o['GFLOP/s']:.1f} | "
                   f"{100 * o['GFLOP/s'] / peak[min(threads, cores)]:.0f} % | {form} | "
@@ -110,7 +115,7 @@ def main():
             if k16 not in med:
                 continue
             o, o32 = med[k16], med[key.format(threads)]
-            ms = o["real_time"] if o["time_unit"] == "ms" else o["real_time"] * 1e-6
+            ms = milliseconds(o)
             t, form = best_torch(case, threads)
             print(f"| {label} | {threads} | {ms:.3f} | {o['GFLOP/s']:.1f} | "
                   f"{100 * o['GFLOP/s'] / ref[min(threads, max(ref))]:.0f} % | "
