@@ -50,6 +50,7 @@ namespace {
 // multiplies the copies. The forward pass keeps its copies of each layer's input and weights in
 // the tape for the backward pass; ∂L/∂(pre-activation) is rounded into a scratch per thread (the
 // batched forms run models on OpenMP threads).
+
 // The forward pass's bf16 copies of layer l's operands, which a bf16 backward pass needs.
 const std::vector<uint16_t>& tape_copy(const std::vector<std::vector<uint16_t>>& copies, int l) {
   if (size_t(l) >= copies.size())
@@ -94,18 +95,16 @@ void mlp_forward(const MlpShape& s, const T* params, const T* x, int batch, MlpT
     const T* W = params + s.weight_offset(l);  // [no, ni]
     const T* b = params + s.bias_offset(l);    // [no]
     // y [batch, no] = in [batch, ni] · Wᵀ
+    bool bf16 = false;
     if constexpr (std::is_same_v<T, float>) {
-      if (s.bf16_products) {
+      if ((bf16 = s.bf16_products)) {
         tape.in16.resize(L);
         tape.w16.resize(L);
         matmul_bf16_nt(y.data(), bf16_copy(in, size_t(batch) * ni, tape.in16[l]),
                        bf16_copy(W, size_t(no) * ni, tape.w16[l]), batch, no, ni, false, threads);
-      } else {
-        matmul_nt(y.data(), in, W, batch, no, ni, false, threads);
       }
-    } else {
-      matmul_nt(y.data(), in, W, batch, no, ni, false, threads);
     }
+    if (!bf16) matmul_nt(y.data(), in, W, batch, no, ni, false, threads);
     const bool relu = s.relu_after(l);
     for (int r = 0; r < batch; ++r) {
       T* row = y.data() + size_t(r) * no;
@@ -156,19 +155,18 @@ void mlp_backward(const MlpShape& s, const T* params, MlpTape<T>& tape,
     T* db = dparams + s.bias_offset(l);                          // [no]
     const T* W = params + s.weight_offset(l);                    // [no, ni]
     T* d_in = l > 0 ? tape.grad_next.data() : dx;                // [batch, ni] or none
-    // dW [no, ni] += gᵀ [no, batch] · in [batch, ni];  d_in [batch, ni] = g [batch, no] · W [no,
-    // ni]
+    // dW [no, ni] += gᵀ [no, batch] · in [batch, ni]
+    // d_in [batch, ni] = g [batch, no] · W [no, ni]
+    bool bf16 = false;
     if constexpr (std::is_same_v<T, float>) {
-      if (s.bf16_products) {
+      if ((bf16 = s.bf16_products)) {
         const uint16_t* gh = bf16_copy(g, size_t(batch) * no, bf16_scratch());
         matmul_bf16_tn(dW, gh, tape_copy(tape.in16, l).data(), no, ni, batch, true, threads);
         if (d_in)
           matmul_bf16_nn(d_in, gh, tape_copy(tape.w16, l).data(), batch, ni, no, false, threads);
-      } else {
-        matmul_tn(dW, g, in, no, ni, batch, true, threads);
-        if (d_in) matmul_nn(d_in, g, W, batch, ni, no, false, threads);
       }
-    } else {
+    }
+    if (!bf16) {
       matmul_tn(dW, g, in, no, ni, batch, true, threads);
       if (d_in) matmul_nn(d_in, g, W, batch, ni, no, false, threads);
     }
