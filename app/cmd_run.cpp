@@ -174,15 +174,28 @@ void print_schedule(const Plan& plan, const PlanEstimate& e, const PlanClusterOp
         "  1 node x %d cores, threads: a big task takes up to %d cores when nothing else is "
         "ready or its chain outlasts the rest of the work per core\n",
         m.cores_per_node, m.max_task_threads);
+  char mpi_start[128] = "";
+  if (m.mpi)
+    std::snprintf(mpi_start, sizeof mpi_start, ", %.1f s to start MPI, %.0f ms per task to ship it",
+                  m.mpi_start_seconds, m.mpi_task_seconds * 1e3);
   std::printf(
       "  assumed: speed-up of k cores on one task k/(1 + %.2f(k-1)); main memory %.0f GB/s "
-      "per node; %.0f ms per commit\n",
-      m.serial_fraction, m.node_bandwidth * 1e-9, m.commit_seconds * 1e3);
+      "per node; %.0f ms per commit; %.1f ms per task to write the results file%s\n",
+      m.serial_fraction, m.node_bandwidth * 1e-9, m.commit_seconds * 1e3,
+      m.finish_seconds_per_task * 1e3, mpi_start);
+  // Building Ξ and the query bundles happens once per process outside the schedule's tasks:
+  // in the run (threads), or in every worker rank in parallel and once more on rank 0 for the
+  // results file (MPI).
+  const double data = e.setup_seconds * (m.mpi ? 2 : 1);
+  const double outside = data + m.finish_seconds_per_task * double(plan.tasks.size()) +
+                         (m.mpi ? m.mpi_start_seconds : 0);
+  const double wall = r.makespan + outside;
   std::printf(
-      "  predicted makespan: %s (%.0f s)   (cores busy %.0f %% of the time; %s lost to "
-      "memory bandwidth, summed over tasks)\n",
-      format_duration(r.makespan).c_str(), r.makespan, 100 * r.utilisation,
-      format_duration(r.bandwidth_stall).c_str());
+      "  predicted makespan: %s (%.1f s)   (%.1f s of it outside the tasks: building the data, "
+      "writing the results file%s; cores busy %.0f %% of the time; %s lost to memory "
+      "bandwidth, summed over tasks)\n",
+      format_duration(wall).c_str(), wall, outside, m.mpi ? ", starting MPI" : "",
+      100 * r.utilisation, format_duration(r.bandwidth_stall).c_str());
   std::printf(
       "  without widening (every task on %s): %s;  lower bounds: the work over every core %s, "
       "the critical path on %d cores %s\n",
@@ -272,6 +285,10 @@ void register_plan(CLI::App& app, Runner& run) {
     std::printf("\nmeasured single-thread rates (+ the fixed cost of one call):");
     for (const auto& [k, r] : e.gflops_per_s)
       std::printf("  %s %.1f GFLOP/s + %.0f ms", k.c_str(), r, 1e3 * e.call_seconds.at(k));
+    std::printf("\nbuilding the data (one core, outside the tasks):");
+    for (const auto& [env, s] : e.dataset_seconds)
+      std::printf("  %s: Ξ %.1f s, a seed's queries %.2f s", env.c_str(), s,
+                  e.bundle_seconds.at(env));
     std::printf("\nmemory estimate: %.1f MiB\n", e.peak_bytes / (1024.0 * 1024.0));
     PlanClusterOptions here = co;
     if (!cluster) here.cores_per_node = th;

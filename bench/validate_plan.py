@@ -32,7 +32,7 @@ def predicted(sirl, profile, mode):
     p = subprocess.run(args, capture_output=True, text=True, stdin=subprocess.DEVNULL)
     if p.returncode != 0:
         sys.exit(f"validate_plan: {' '.join(args)} failed:\n{p.stderr}")
-    m = re.search(r"predicted makespan: \S+ \((\d+) s\)", p.stdout)
+    m = re.search(r"predicted makespan: \S+ \(([\d.]+) s\)", p.stdout)
     cp = re.search(r"critical path: (\d+) task\(s\), (\S+)", p.stdout)
     if not m:
         sys.exit(f"validate_plan: no prediction in the output of {' '.join(args)}")

@@ -17,6 +17,12 @@ struct PlanEstimate {
   double seconds_one_thread = 0;     // Σ task_seconds + commits
   double seconds = 0;     // the thread scheduler on `threads` cores, simulated (schedule_sim.h)
   double peak_bytes = 0;  // datasets + the `threads` largest working sets
+  // What a run spends outside its tasks, per environment: building Ξ (timed on a small Ξ and
+  // scaled by the trajectory count) and one seed's query bundle. A run builds each once, inside
+  // the first task that reads it; under MPI every worker rank builds what its tasks read, and
+  // rank 0 builds them for the results file beside the dispatching.
+  std::map<std::string, double> dataset_seconds, bundle_seconds;
+  double setup_seconds = 0;  // Σ over environments of Ξ + its seeds' bundles, one core
 };
 
 // Calibrates the rates (20-40 s of real training) and simulates the thread scheduler

@@ -118,8 +118,9 @@ std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending
   int busy = 0, reported = 0;
   std::string error;           // the first failure, which stops dispatching
   std::exception_ptr failure;  // rank 0's own, rethrown as it was
-  while (true) {
-    // The first task waits for every worker's report: a task borrows only workers it knows of.
+  // Hands the ready tasks to idle workers. The first task waits for every worker's report: a
+  // task borrows only workers it knows of.
+  auto hand_out = [&] {
     while (error.empty() && reported == size - 1 && !idle.empty() && !queue.empty()) {
       const int w = idle.front();
       idle.pop_front();
@@ -146,6 +147,9 @@ std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending
       running[w] = i;
       ++busy;
     }
+  };
+  while (true) {
+    hand_out();
     if (busy == 0 && (queue.remaining() == 0 || !error.empty())) break;
     const MPI_Status st = wait_for_message(MPI_ANY_SOURCE);
     const std::string msg = recv_bytes(st);
@@ -173,6 +177,10 @@ std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending
         if (error.empty()) error = "rank " + std::to_string(w) + ": " + msg;
         continue;
       }
+      // The worker takes its next task before rank 0 commits this result: it need not wait
+      // for the write. Only tasks ready before this result go out; its dependents become ready
+      // once it is committed (they read it from the staging folder).
+      hand_out();
       // A result rank 0 cannot take (a commit failing for want of space, a malformed record)
       // ends the run like a failed task: no new task starts, and the running ones are received
       // before the workers are released. Leaving now would leave them blocked in MPI_Send of

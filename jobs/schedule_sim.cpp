@@ -87,7 +87,8 @@ ScheduleResult simulate_schedule(const Plan& plan, const std::vector<double>& se
   auto start = [&](int i, int worker, int node, int cores) {
     const double alone = seconds[size_t(i)] / task_speedup(cores, m.serial_fraction);
     const Task& t = plan.tasks[size_t(i)];
-    running.push_back({i, worker, node, cores, alone + (m.mpi ? 0.0 : m.commit_seconds),
+    running.push_back({i, worker, node, cores,
+                       alone + (m.mpi ? m.mpi_task_seconds : m.commit_seconds),
                        alone > 0 ? t.stream_bytes / alone : 0.0, now});
   };
   auto dispatch = [&] {
@@ -160,9 +161,6 @@ ScheduleResult simulate_schedule(const Plan& plan, const std::vector<double>& se
     }
     if (next == running.size()) {  // rank 0 finished a commit: dependents become ready
       queue.finish(committing.first);
-      idle.push_back(committing.second);
-      for (int x : gang[size_t(committing.second)]) idle.push_back(x);
-      gang[size_t(committing.second)].clear();
       committing = {-1, -1};
       commit_done = std::numeric_limits<double>::infinity();
       begin_commit();
@@ -170,8 +168,11 @@ ScheduleResult simulate_schedule(const Plan& plan, const std::vector<double>& se
       const Running x = running[next];
       running.erase(running.begin() + std::ptrdiff_t(next));
       r.core_seconds += double(x.cores) * (now - x.started);
-      if (m.mpi) {
+      if (m.mpi) {  // as mpi_dispatch: the worker (and its gang) take new work at once
         to_commit.emplace_back(x.task, x.worker);
+        idle.push_back(x.worker);
+        for (int w : gang[size_t(x.worker)]) idle.push_back(w);
+        gang[size_t(x.worker)].clear();
         begin_commit();
       } else {
         free_cores += x.cores;

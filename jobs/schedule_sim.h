@@ -27,7 +27,15 @@ struct ClusterModel {
   // machine does; the scheduler sizes critical chains with its own kAssumedSerialFraction.
   double serial_fraction = kAssumedSerialFraction;
   double commit_seconds = 0.002;  // per task: in the worker (threads), on rank 0 (MPI)
-  double node_bandwidth = 0;      // bytes/s of main memory per node; 0: not a limit
+  // Outside the schedule (measured on the 2-core Zen 5 with smoke's 336 tasks): reading every
+  // committed record back and writing the results file at the end, per task; and what
+  // `mpirun` adds to a run (MPI_Init, the workers' hello, MPI_Finalize).
+  double finish_seconds_per_task = 0.0025;
+  double mpi_start_seconds = 0.4;
+  // MPI, per task on its worker: receiving it, reading its inputs' records from the shared
+  // staging folder (threads keep them in memory), serialising and sending its record.
+  double mpi_task_seconds = 0.004;
+  double node_bandwidth = 0;  // bytes/s of main memory per node; 0: not a limit
   // The engine's rule (task_threads) widens big tasks; false: every task on one core (threads)
   // or one worker rank (MPI), to show what widening buys.
   bool widen = true;

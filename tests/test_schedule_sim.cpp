@@ -35,6 +35,7 @@ ClusterModel cores(int n, int max_task_threads = 1) {
   m.cores_per_node = n;
   m.max_task_threads = max_task_threads;
   m.commit_seconds = 0;
+  m.mpi_task_seconds = 0;
   return m;
 }
 
@@ -82,10 +83,10 @@ TEST(ScheduleSim, ALoneBigTaskTakesTheIdleCores) {
   EXPECT_DOUBLE_EQ(sim(p, s, cores(4, 1)).makespan, 8);  // one core per task
 }
 
-TEST(ScheduleSim, MpiWorkersWaitForRankZerosCommits) {
-  // 1 node × 3 cores: rank 0 and 2 worker ranks; 4 tasks of 1 s, commits of 0.5 s in turn on
-  // rank 0. Both finish at 1; commits 1–1.5 and 1.5–2; worker 1 gets task 3 at 1.5 (ends 2.5),
-  // worker 2 task 4 at 2 (ends 3); commits 2.5–3 and 3–3.5.
+TEST(ScheduleSim, MpiWorkersTakeNewTasksWhileRankZeroCommits) {
+  // 1 node × 3 cores: rank 0 and 2 worker ranks; 4 independent tasks of 1 s, commits of 0.5 s
+  // in turn on rank 0. Both workers finish at 1 and take tasks 3 and 4 at once (they were
+  // ready), ending at 2; the commits run 1–1.5, 1.5–2, 2–2.5, 2.5–3.
   const std::vector<double> s{1, 1, 1, 1};
   const Plan p = plan_of(s, {{}, {}, {}, {}});
   ClusterModel m = cores(3);
@@ -93,7 +94,23 @@ TEST(ScheduleSim, MpiWorkersWaitForRankZerosCommits) {
   m.commit_seconds = 0.5;
   const ScheduleResult r = sim(p, s, m);
   EXPECT_EQ(r.workers, 2);
-  EXPECT_DOUBLE_EQ(r.makespan, 3.5);
+  EXPECT_DOUBLE_EQ(r.makespan, 3.0);
+}
+
+TEST(ScheduleSim, AnMpiDependentWaitsForItsInputsCommit) {
+  // A chain t0 → t1 of 1 s each, commits of 0.5 s: t1 reads t0's committed record, so it starts
+  // at 1.5, ends at 2.5, and its commit ends at 3. Each task's shipping (0.25 s on its worker)
+  // adds to both: t0 ends at 1.25, commit to 1.75, t1 to 3.0, commit to 3.5. (Each task on one
+  // worker: no borrowing of the idle one.)
+  const std::vector<double> s{1, 1};
+  const Plan p = plan_of(s, {{}, {0}});
+  ClusterModel m = cores(3);
+  m.mpi = true;
+  m.widen = false;
+  m.commit_seconds = 0.5;
+  EXPECT_DOUBLE_EQ(sim(p, s, m).makespan, 3.0);
+  m.mpi_task_seconds = 0.25;
+  EXPECT_DOUBLE_EQ(sim(p, s, m).makespan, 3.5);
 }
 
 TEST(ScheduleSim, AnMpiWorkerBorrowsIdleWorkersOfItsNodeForACriticalChain) {
