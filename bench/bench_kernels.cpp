@@ -179,13 +179,16 @@ BENCHMARK(BM_MlpForwardBackward)
     ->Args({2037, 1024, 192})
     ->UseRealTime();
 
-// One VAE step (ELBO forward + backward + Adam), the paper's batch of 32, one thread.
-// Args: {input width, hidden width, fused}: fused = 1 is what training runs
+// One VAE step (ELBO forward + backward + Adam), the paper's batch of 32.
+// Args: {input width, hidden width, fused, threads}: fused = 1 is what training runs
 // (vae_loss_and_adam_step: Adam inside the backward pass, no gradient buffer); fused = 0 the
 // gradient into a zeroed buffer, then Adam over it (the same bits; kept to measure the fusion).
+// threads: the cores one VAE task gets when the scheduler widens it (JacoRobot's VAE is the
+// paper's critical path; `sirl plan` needs what a second core buys it).
 void BM_VaeStep(benchmark::State& state) {
   const int in = int(state.range(0)), hidden = int(state.range(1)), B = 32, L = 6;
   const bool fused = state.range(2) != 0;
+  const int threads = int(state.range(3));
   const VaeShape s = make_vae_shape(in, {hidden, hidden}, L);
   Rng rng(4);
   auto X = random_inputs(B, in, rng);
@@ -201,11 +204,12 @@ void BM_VaeStep(benchmark::State& state) {
       const AdamStepScalars step = adam_begin_step(cfg, adam);
       benchmark::DoNotOptimize(vae_loss_and_adam_step(s, p.data(), X.data(), B, eps.data(), 0.01f,
                                                       VaeElbo::sum_over_inputs, step, adam.m.data(),
-                                                      adam.v.data(), ws));
+                                                      adam.v.data(), ws, nullptr, threads));
     } else {
       std::fill(g.begin(), g.end(), 0.f);
       benchmark::DoNotOptimize(vae_loss_and_grad(s, p.data(), X.data(), B, eps.data(), 0.01f,
-                                                 VaeElbo::sum_over_inputs, g.data(), ws));
+                                                 VaeElbo::sum_over_inputs, g.data(), ws, nullptr,
+                                                 threads));
       adam_step(cfg, adam, p.data(), g.data(), p.size());
     }
   }
@@ -214,9 +218,10 @@ void BM_VaeStep(benchmark::State& state) {
       benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_VaeStep)
-    ->ArgNames({"in", "hidden", "fused"})
-    ->ArgsProduct({{19}, {128}, {0, 1}})
-    ->ArgsProduct({{2037}, {1024}, {0, 1}})
+    ->ArgNames({"in", "hidden", "fused", "threads"})
+    ->ArgsProduct({{19}, {128}, {0, 1}, {1}})
+    ->ArgsProduct({{2037}, {1024}, {0, 1}, {1}})
+    ->Args({2037, 1024, 1, 2})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -268,12 +268,47 @@ void rows_of_product(Form op, float* Cr, const float* A, const float* B, int M, 
 }
 
 // The whole product by row blocks when oneDNN serves it; false (nothing done) otherwise.
+// A forward product of few rows (M ≤ 128: one row block, e.g. the VAE's and the preference
+// trainings' batches of 32) in fixed blocks of kRowBlock columns, so that a task on several
+// cores shares it: each block reads a dense band of W's rows (op(B)'s columns) and writes a dense
+// [M, nb] buffer, copied into C's columns (a strided C would send oneDNN to its sgemm). The
+// blocks depend on the shape only.
+void nt_by_column_blocks(float* C, const float* A, const float* B, int M, int N, int K, bool acc,
+                         int threads) {
+  const int blocks = (N + kRowBlock - 1) / kRowBlock;
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
+  for (int b = 0; b < blocks; ++b) {
+    const int j0 = b * kRowBlock, nb = std::min(kRowBlock, N - j0);
+    thread_local std::vector<float> tmp;
+    tmp.resize(size_t(M) * nb);
+    if (!onednn_matmul({M, nb, K, K, 1, 1, K, nb, false, false}, A, B + size_t(j0) * K,
+                       tmp.data())) {
+      using RowMatF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+      Eigen::Map<RowMatF>(tmp.data(), M, nb).noalias() =
+          Eigen::Map<const RowMatF>(A, M, K) *
+          Eigen::Map<const RowMatF>(B + size_t(j0) * K, nb, K).transpose();
+    }
+    for (int i = 0; i < M; ++i) {
+      float* c = C + size_t(i) * N + j0;
+      const float* t = tmp.data() + size_t(i) * nb;
+      if (acc)
+        for (int j = 0; j < nb; ++j) c[j] += t[j];
+      else
+        std::copy(t, t + nb, c);
+    }
+  }
+}
+
 template <typename T>
 bool by_row_blocks(Form op, T* C, const T* A, const T* B, int M, int N, int K, bool acc,
                    int threads) {
   if constexpr (std::is_same_v<T, float>) {
     const int block = gemm_row_block(M, N, K);
     if (!block) return false;
+    if (op == Form::kNt && block == M && N >= 2 * kRowBlock) {
+      nt_by_column_blocks(C, A, B, M, N, K, acc, threads);
+      return true;
+    }
     const int blocks = (M + block - 1) / block;
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && blocks > 1)
     for (int b = 0; b < blocks; ++b)

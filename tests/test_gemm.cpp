@@ -92,28 +92,34 @@ TEST(Gemm, NtGivesTheBitsOfNnOnTheTransposedMatrix) {
   }
 }
 
-// The products oneDNN serves (two dimensions ≥ 512) give the same bits on 1 and 2 threads (300
-// rows: the forward product's two row blocks).
+// The products oneDNN serves (two dimensions ≥ 512) give the same bits on 1 and 2 threads:
+// 300 rows (the forward product's two row blocks) and 32 rows through JacoRobot's first layer
+// (a VAE or preference batch: the forward product in column blocks, the last one ragged),
+// written and accumulated.
 TEST(Gemm, BigProductsAreTheSameBitsOnOneAndTwoThreads) {
-  const int M = 300, N = 1024, K = 700;
-  Rng rng(9);
-  std::vector<float> A(size_t(M) * K), B(size_t(N) * K);
-  for (auto& x : A) x = float(rng.uniform(-1, 1));
-  for (auto& x : B) x = float(rng.uniform(-1, 1));
-  for (int threads : {1, 2}) {
-    std::vector<float> nt(size_t(M) * N), nn(nt.size()), tn(nt.size());
-    matmul_nt(nt.data(), A.data(), B.data(), M, N, K, false, threads);  // B as [N, K]
-    matmul_nn(nn.data(), A.data(), B.data(), M, N, K, false, threads);  // B as [K, N]
-    matmul_tn(tn.data(), A.data(), B.data(), M, N, K, false, threads);  // A as [K, M]
-    static std::vector<float> one_nt, one_nn, one_tn;
-    if (threads == 1) {
-      one_nt = nt, one_nn = nn, one_tn = tn;
-    } else {
-      EXPECT_EQ(nt, one_nt);
-      EXPECT_EQ(nn, one_nn);
-      EXPECT_EQ(tn, one_tn);
+  for (const Case c : {Case{300, 1024, 700}, Case{32, 1100, 2037}})
+    for (bool acc : {false, true}) {
+      const int M = c.M, N = c.N, K = c.K;
+      Rng rng(9);
+      std::vector<float> A(size_t(M) * K), B(size_t(N) * K), C0(size_t(M) * N);
+      for (auto& x : A) x = float(rng.uniform(-1, 1));
+      for (auto& x : B) x = float(rng.uniform(-1, 1));
+      for (auto& x : C0) x = float(rng.uniform(-1, 1));
+      std::vector<float> one_nt, one_nn, one_tn;
+      for (int threads : {1, 2}) {
+        std::vector<float> nt = C0, nn = C0, tn = C0;
+        matmul_nt(nt.data(), A.data(), B.data(), M, N, K, acc, threads);  // B as [N, K]
+        matmul_nn(nn.data(), A.data(), B.data(), M, N, K, acc, threads);  // B as [K, N]
+        matmul_tn(tn.data(), A.data(), B.data(), M, N, K, acc, threads);  // A as [K, M]
+        if (threads == 1) {
+          one_nt = nt, one_nn = nn, one_tn = tn;
+        } else {
+          EXPECT_EQ(nt, one_nt) << "M" << M << " acc " << acc;
+          EXPECT_EQ(nn, one_nn) << "M" << M << " acc " << acc;
+          EXPECT_EQ(tn, one_tn) << "M" << M << " acc " << acc;
+        }
+      }
     }
-  }
 }
 
 TEST(Gemm, TheBackendIsTheOneTheEnvironmentAsksFor) {
