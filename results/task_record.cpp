@@ -84,7 +84,9 @@ TaskRecord deserialize(const std::string& bytes) {
     const uint64_t count = c.u64();
     if (count > bytes.size()) throw std::runtime_error("task record message is malformed");
     a.data.resize(count);
-    std::memcpy(a.data.data(), c.take(count * sizeof(float)), count * sizeof(float));
+    const void* src = c.take(count * sizeof(float));
+    if (count > 0)
+      std::memcpy(a.data.data(), src, count * sizeof(float));  // an empty array: no data
     r.arrays[k] = std::move(a);
   }
   if (c.pos != bytes.size()) throw std::runtime_error("task record message has trailing bytes");

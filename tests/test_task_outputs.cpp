@@ -3,9 +3,11 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "jobs/task_outputs.h"
 #include "results/h5.h"
+#include "results/task_record.h"
 #include "tests/scratch_dir.h"
 
 namespace sirl {
@@ -90,6 +92,25 @@ TEST(TaskOutputs, RepresentationAndVaeRoundTripThroughARecordAndAFile) {
               std::string::npos)
         << e.what();
   }
+}
+
+// A record with an empty array (a task with nothing to keep in one of them) crosses between MPI
+// ranks intact: the message carries its name and shape, no data (UBSan once caught a copy from
+// the empty array's null pointer here).
+TEST(TaskOutputs, AnEmptyArrayCrossesTheMessageFormat) {
+  TaskRecord r;
+  r.key = "grid/s0/x";
+  r.kind = "tpa";
+  r.num["seconds"] = 1.5;
+  r.arrays["empty"].dims = {0, 6};
+  r.arrays["full"].dims = {2};
+  r.arrays["full"].data = {1.f, -2.f};
+  const TaskRecord back = deserialize(serialize(r));
+  EXPECT_EQ(back.key, r.key);
+  EXPECT_EQ(back.num.at("seconds"), 1.5);
+  EXPECT_EQ(back.arrays.at("empty").dims, (std::vector<uint64_t>{0, 6}));
+  EXPECT_TRUE(back.arrays.at("empty").data.empty());
+  EXPECT_EQ(back.arrays.at("full").data, r.arrays.at("full").data);
 }
 
 }  // namespace
