@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace sirl {
@@ -27,11 +28,37 @@ Progress::Progress(int total, double total_flops, bool quiet)
       start_(std::chrono::steady_clock::now()),
       last_print_(start_) {}
 
+void Progress::set_resumed(std::set<std::string> keys) {
+  std::lock_guard lock(mu_);
+  resumed_ = std::move(keys);
+}
+
 void Progress::task_done(const std::string& key, double task_flops, double seconds) {
   std::lock_guard lock(mu_);
   ++done_;
   done_flops_ += task_flops;
+  if (!resumed_.count(key)) rate_flops_ += task_flops;
   print(key, done_ == total_);
+}
+
+std::string progress_line(int done, int total, double done_flops, double rate_flops,
+                          double total_flops, double elapsed) {
+  // The share of estimated work done (tasks differ in cost by orders of magnitude).
+  const double frac = total_flops > 0 ? done_flops / total_flops : double(done) / total;
+  const double rate = elapsed > 0 ? rate_flops / elapsed : 0;  // FLOP/s
+  const double left = total_flops > 0 ? std::max(0.0, total_flops - done_flops) : 0;
+  double eta = NAN;
+  if (done == total)
+    eta = 0;
+  else if (total_flops > 0 && rate > 0)
+    eta = left / rate;
+  else if (total_flops <= 0 && frac > 0)
+    eta = elapsed * (1 - frac) / frac;
+  char line[256];
+  std::snprintf(line, sizeof line, "[%d/%d tasks] %5.1f%% | %.1f GFLOP/s | elapsed %s | ETA %s",
+                done, total, 100 * frac, rate * 1e-9, format_duration(elapsed).c_str(),
+                format_duration(eta).c_str());
+  return line;
 }
 
 void Progress::print(const std::string& last, bool force) {
@@ -40,18 +67,12 @@ void Progress::print(const std::string& last, bool force) {
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   if (!tty_ && !force && std::chrono::duration<double>(now - last_print_).count() < 5) return;
   last_print_ = now;
-  // ETA from the share of estimated work done (tasks differ in cost by orders of magnitude).
-  const double frac = total_flops_ > 0 ? done_flops_ / total_flops_ : double(done_) / total_;
-  const double eta = frac > 0 ? elapsed * (1 - frac) / frac : NAN;
-  const double gflops = elapsed > 0 ? done_flops_ / elapsed * 1e-9 : 0;
-  char line[256];
-  std::snprintf(line, sizeof line, "[%d/%d tasks] %5.1f%% | %.1f GFLOP/s | elapsed %s | ETA %s",
-                done_, total_, 100 * frac, gflops, format_duration(elapsed).c_str(),
-                done_ == total_ ? "0s" : format_duration(eta).c_str());
+  const std::string line =
+      progress_line(done_, total_, done_flops_, rate_flops_, total_flops_, elapsed);
   if (tty_)
-    std::fprintf(stderr, "\r\033[K%s | %s", line, last.c_str());
+    std::fprintf(stderr, "\r\033[K%s | %s", line.c_str(), last.c_str());
   else
-    std::fprintf(stderr, "%s | last: %s\n", line, last.c_str());
+    std::fprintf(stderr, "%s | last: %s\n", line.c_str(), last.c_str());
   std::fflush(stderr);
 }
 

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <mutex>
+#include <set>
 #include <string>
 
 namespace sirl {
@@ -11,6 +12,10 @@ namespace sirl {
 class Progress {
  public:
   Progress(int total, double total_flops, bool quiet = false);
+  // Tasks that continue a training checkpoint: part of their work was done before this process
+  // started, so they count toward the share done but not toward the rate the ETA divides by
+  // (a 190-TFLOP cell finishing 2 minutes after a restart once read as 1372 GFLOP/s).
+  void set_resumed(std::set<std::string> keys);
   // One task finished (thread-safe).
   void task_done(const std::string& key, double task_flops, double seconds);
   void finish();
@@ -19,10 +24,17 @@ class Progress {
   void print(const std::string& last, bool force);
   std::mutex mu_;
   int total_, done_ = 0;
-  double total_flops_, done_flops_ = 0;
+  double total_flops_, done_flops_ = 0, rate_flops_ = 0;  // rate_flops_: of tasks run whole here
+  std::set<std::string> resumed_;
   bool tty_, quiet_;
   std::chrono::steady_clock::time_point start_, last_print_;
 };
+
+// The status line: tasks done of total, the share of the estimated FLOPs done, the rate (FLOPs of
+// tasks run whole in this process over the elapsed time) and the ETA (the FLOPs left at that rate;
+// "?" before any such task finished).
+std::string progress_line(int done, int total, double done_flops, double rate_flops,
+                          double total_flops, double elapsed);
 
 // "1h02m", "3m05s", "12s".
 std::string format_duration(double seconds);

@@ -342,6 +342,10 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
                  p.name.c_str(), ps.total, ps.reused, threads,
                  mpi_size > 1 ? "MPI workers" : "threads", o.out.c_str());
   Progress progress(to_run, ps.flops, o.quiet);
+  if (checkpoints) {
+    const std::vector<std::string> k = checkpoints->keys();
+    progress.set_resumed({k.begin(), k.end()});
+  }
   const std::exception_ptr failure =
       execute(plan, ps.pending, ctx, store, checkpoints.get(), threads,
               // Threads: the most cores one task takes; MPI: each worker rank's cores.

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "engine/checkpoint.h"
 #include "results/task_store.h"
@@ -22,6 +23,8 @@ class CheckpointStore {
   // The task is committed: its checkpoint is no longer needed.
   void remove(const std::string& key) { store_.remove(key); }
   bool empty() const { return store_.empty(); }
+  // The tasks with a saved state (each resumes from it when it runs).
+  std::vector<std::string> keys() const { return store_.keys(); }
 
  private:
   TaskStore store_;

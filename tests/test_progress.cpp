@@ -1,0 +1,31 @@
+// The run's status line: its share done, rate and ETA, worked out by hand.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "jobs/progress.h"
+
+namespace sirl {
+namespace {
+
+TEST(Progress, TheEtaIsTheFlopsLeftAtTheRateOfTasksRunHere) {
+  // 100 GFLOP in all, 50 done in 10 s, all run here: 5 GFLOP/s, 50 left → 10 s.
+  EXPECT_EQ(progress_line(3, 10, 50e9, 50e9, 100e9, 10),
+            "[3/10 tasks]  50.0% | 5.0 GFLOP/s | elapsed 10s | ETA 10s");
+  // The same, but 40 of the 50 were a task resumed from a checkpoint: the rate counts the 10
+  // GFLOP run whole here (1 GFLOP/s), so the 50 left take 50 s, not 10.
+  EXPECT_EQ(progress_line(3, 10, 50e9, 10e9, 100e9, 10),
+            "[3/10 tasks]  50.0% | 1.0 GFLOP/s | elapsed 10s | ETA 50s");
+  // Only a resumed task finished: no rate yet, so no ETA.
+  EXPECT_EQ(progress_line(1, 10, 40e9, 0, 100e9, 10),
+            "[1/10 tasks]  40.0% | 0.0 GFLOP/s | elapsed 10s | ETA ?");
+  // Done: ETA 0 whatever the rate.
+  EXPECT_EQ(progress_line(10, 10, 100e9, 0, 100e9, 125),
+            "[10/10 tasks] 100.0% | 0.0 GFLOP/s | elapsed 2m05s | ETA 0s");
+  // No FLOP estimates (every task 0): the ETA by task count, 2 of 8 in 30 s → 90 s more.
+  EXPECT_EQ(progress_line(2, 8, 0, 0, 0, 30),
+            "[2/8 tasks]  25.0% | 0.0 GFLOP/s | elapsed 30s | ETA 1m30s");
+}
+
+}  // namespace
+}  // namespace sirl
