@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cstring>
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <filesystem>
@@ -336,6 +337,11 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   }
 
   fp32_roof_gflops_per_core();  // measured now, on cores the tasks do not use yet
+  for (size_t i = 0; i < plan.tasks.size(); ++i)
+    if (ps.pending[i] && plan.tasks[i].stream_bytes > 0) {
+      stream_gbs_per_core();  // likewise, when a task will need its memory roof
+      break;
+    }
   const int to_run = ps.total - ps.reused;
   if (!o.quiet)
     std::fprintf(stderr, "sirl run: profile %s, %d tasks (%d already done), %d %s → %s\n",
@@ -371,6 +377,9 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
       break;
     }
   info.roof_fp32_gflops = fp32_roof_gflops_per_core();
+  if (std::any_of(records.begin(), records.end(),
+                  [](const TaskRecord& r) { return r.num.count("stream_bytes") > 0; }))
+    info.stream_gbs = stream_gbs_per_core();  // measured before the tasks when any streams
   info.started = started;
   info.finished = now_iso();
   info.shard = shard;
@@ -384,7 +393,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
     datasets.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
   try {
     write_results_file(o.out, info, datasets, records,
-                       result_tables(records, info.roof_fp32_gflops));
+                       result_tables(records, info.roof_fp32_gflops, info.stream_gbs));
   } catch (const std::exception&) {
     // A task's failure (a full disk while saving it) is the cause to report; the results file
     // then failed for the same reason. Every committed task stays in the staging folder.

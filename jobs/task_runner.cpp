@@ -140,6 +140,9 @@ TaskRecord run_task(const Task& t, RunContext& ctx) {
   r.num["seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   r.num["threads"] = t.threads;  // like seconds, a fact of this run's scheduling, not a result
+  // What it streams from main memory (the cost model's estimate, deterministic): with the
+  // bandwidth the run measures, its memory roof in /tables/timings.
+  if (t.stream_bytes > 0) r.num["stream_bytes"] = t.stream_bytes;
   return r;
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <vector>
 
 namespace sirl {
 
@@ -65,6 +66,33 @@ double measure() {
 double fp32_roof_gflops_per_core() {
   static const double roof = measure();
   return roof;
+}
+
+namespace {
+double measure_triad() {
+  const size_t n = size_t(8) << 20;  // 8 Mi floats = 32 MiB per array
+  std::vector<float> a(n), b(n, 1.f), c(n, 2.f);
+  const float s = 0.5f;
+  double best = 0;
+  for (int pass = 0; pass < 4; ++pass) {
+    const auto t0 = std::chrono::steady_clock::now();
+    float* __restrict pa = a.data();
+    const float* __restrict pb = b.data();
+    const float* __restrict pc = c.data();
+#pragma omp simd
+    for (size_t i = 0; i < n; ++i) pa[i] = pb[i] + s * pc[i];
+    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    volatile float sink = pa[n / 2];
+    (void)sink;
+    if (pass > 0 && t > 0) best = std::max(best, 12.0 * double(n) / t * 1e-9);
+  }
+  return best;
+}
+}  // namespace
+
+double stream_gbs_per_core() {
+  static const double gbs = measure_triad();
+  return gbs;
 }
 
 }  // namespace sirl

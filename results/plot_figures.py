@@ -621,18 +621,44 @@ def compute_lines(f, tim):
     by["GFLOP/s"] = by.gflop / by.seconds.where(by.seconds > 0)
     by["per core"] = by.gflop / by.core_seconds.where(by.core_seconds > 0)
     roof = float(a.get("roof_fp32_gflops_per_core", 0) or 0)  # one core's, measured by the run
+    # The relevant roof of each task: the lower of the fp32 roof of its cores and its memory roof
+    # (tasks that stream their weights and Adam state; engines from 0.7.0 on). A kind's share of it:
+    # the seconds its tasks would take at their roofs over the seconds they took.
+    relevant = "memory_roof_gflops" in tim and roof > 0
+    if relevant:
+        limit = (roof * tim.cores).where(tim.memory_roof_gflops <= 0,
+                                         np.minimum(roof * tim.cores, tim.memory_roof_gflops))
+        tim["ideal_seconds"] = tim.flops / 1e9 / limit
+        tim["streams"] = tim.memory_roof_gflops > 0
+        rel = tim.groupby("kind").agg(ideal=("ideal_seconds", "sum"), streams=("streams", "sum"))
+        by["relevant"] = rel.ideal / by.seconds.where(by.seconds > 0)
+        by["streams"] = rel.streams
     L = ["", "## Compute by task kind (task-seconds, summed over tasks)", ""]
     if roof:
         L += [f"A task runs on one core, or on several when nothing else was ready or its chain "
               f"was critical (column "
               f"*on > 1 core*); this machine's fp32 roof is {roof:.0f} GFLOP/s per core (measured "
               "at the start of the run), and % of roof is per core held.", ""]
-    L += ["| kind | tasks | on > 1 core | seconds | GFLOP | GFLOP/s | % of roof |",
-          "|---|---:|---:|---:|---:|---:|---:|"]
+    if relevant:
+        L += ["Tasks whose weights and Adam state do not fit a core's share of the caches stream "
+              "them from main memory every step (*memory-bound*, as the cost model counts bytes): "
+              "their memory roof is their FLOPs per byte streamed times the bandwidth the run "
+              "measured on one core (a STREAM triad). *% of the relevant roof* counts each task "
+              "against the lower of its two roofs.", ""]
+        L += ["| kind | tasks | on > 1 core | memory-bound | seconds | GFLOP | GFLOP/s | % of roof | "
+              "% of the relevant roof |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    else:
+        L += ["| kind | tasks | on > 1 core | seconds | GFLOP | GFLOP/s | % of roof |",
+              "|---|---:|---:|---:|---:|---:|---:|"]
     for k, r in by.iterrows():
         pct = f"{100 * r['per core'] / roof:.0f} %" if roof and r["per core"] == r["per core"] else "—"
-        L.append(f"| {k} | {int(r.tasks)} | {int(r.wide)} | {r.seconds:.1f} | {r.gflop:.1f} | "
-                 f"{r['GFLOP/s']:.1f} | {pct} |")
+        if relevant:
+            rp = f"{100 * r.relevant:.0f} %" if r.relevant == r.relevant else "—"
+            L.append(f"| {k} | {int(r.tasks)} | {int(r.wide)} | {int(r.streams)} | {r.seconds:.1f} | "
+                     f"{r.gflop:.1f} | {r['GFLOP/s']:.1f} | {pct} | {rp} |")
+        else:
+            L.append(f"| {k} | {int(r.tasks)} | {int(r.wide)} | {r.seconds:.1f} | {r.gflop:.1f} | "
+                     f"{r['GFLOP/s']:.1f} | {pct} |")
     return L
 
 

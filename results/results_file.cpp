@@ -132,12 +132,18 @@ H5Table vae_latents_table(const std::vector<TaskRecord>& records) {
 
 // roof_percent: a task's GFLOP/s as a share of the fp32 roof of the cores it ran on (`threads`,
 // 1 unless the scheduler gave it more); 0 when the roof is unknown (engines before 0.3.0).
-H5Table timings_table(const std::vector<TaskRecord>& records, double roof_gflops) {
+// memory_roof_gflops: for a task that streams its weights and Adam state from main memory (the
+// cost model's stream_bytes), its FLOPs per byte × the measured bandwidth × its cores; 0 for a
+// task that works in cache. attainable_percent: its GFLOP/s as a share of the lower of the two
+// roofs, the relevant one (= roof_percent when it does not stream).
+H5Table timings_table(const std::vector<TaskRecord>& records, double roof_gflops,
+                      double stream_gbs) {
   H5Table t;
   auto &kind = t.add("kind", C::String), &key = t.add("key", C::String),
        &sec = t.add("seconds", C::Double), &fl = t.add("flops", C::Double),
        &gf = t.add("gflops", C::Double), &pct = t.add("roof_percent", C::Double),
-       &th = t.add("threads", C::Int);
+       &th = t.add("threads", C::Int), &mem = t.add("memory_roof_gflops", C::Double),
+       &att = t.add("attainable_percent", C::Double);
   for (const auto& r : records) {
     kind.strings.push_back(r.kind);
     key.strings.push_back(r.key);
@@ -148,6 +154,12 @@ H5Table timings_table(const std::vector<TaskRecord>& records, double roof_gflops
     const double cores = std::max(1.0, num_or(r, "threads", 1));
     th.ints.push_back(int64_t(cores));
     pct.doubles.push_back(roof_gflops > 0 ? 100 * gf.doubles.back() / (roof_gflops * cores) : 0.0);
+    const double bytes = num_or(r, "stream_bytes", 0);
+    const double mem_roof = bytes > 0 && stream_gbs > 0 ? f / bytes * stream_gbs * cores : 0.0;
+    mem.doubles.push_back(mem_roof);
+    double roof = roof_gflops * cores;
+    if (mem_roof > 0 && (roof <= 0 || mem_roof < roof)) roof = mem_roof;
+    att.doubles.push_back(roof > 0 ? 100 * gf.doubles.back() / roof : 0.0);
   }
   return t;
 }
@@ -161,10 +173,11 @@ const H5Table& ResultTables::at(const std::string& name) const {
 }
 
 ResultTables build_tables(const std::vector<TaskRecord>& records,
-                          const std::vector<CellTableSpec>& cells, double roof_gflops) {
+                          const std::vector<CellTableSpec>& cells, double roof_gflops,
+                          double stream_gbs) {
   ResultTables t;
   for (const auto& spec : cells) t.tables.push_back({spec.name, cell_table(records, spec)});
-  t.tables.push_back({"timings", timings_table(records, roof_gflops)});
+  t.tables.push_back({"timings", timings_table(records, roof_gflops, stream_gbs)});
   t.tables.push_back({"training", training_table(records)});
   t.tables.push_back({"vae_latents", vae_latents_table(records)});
   return t;
@@ -186,6 +199,7 @@ void write_results_file(const std::string& path, const RunInfo& info,
       f.set_attr("/", "host", info.host);
       f.set_attr("/", "cpu_class", info.cpu_class);
       f.set_attr("/", "roof_fp32_gflops_per_core", info.roof_fp32_gflops);
+      f.set_attr("/", "stream_gbs_per_core", info.stream_gbs);
       f.set_attr("/", "started", info.started);
       f.set_attr("/", "finished", info.finished);
       f.set_attr("/", "shard", info.shard);
@@ -285,6 +299,8 @@ RunInfo read_run_info(const std::string& path) {
   if (f.has_attr("/", "cpu_class")) i.cpu_class = f.attr_string("/", "cpu_class");
   if (f.has_attr("/", "roof_fp32_gflops_per_core"))
     i.roof_fp32_gflops = f.attr_double("/", "roof_fp32_gflops_per_core");
+  if (f.has_attr("/", "stream_gbs_per_core"))
+    i.stream_gbs = f.attr_double("/", "stream_gbs_per_core");
   i.started = f.attr_string("/", "started");
   i.finished = f.attr_string("/", "finished");
   i.shard = f.attr_string("/", "shard");

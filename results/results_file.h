@@ -33,7 +33,8 @@ int64_t check_results_schema(const H5File& f);
 struct RunInfo {
   std::string profile_name, profile_text, engine_version, git_commit, host;
   double roof_fp32_gflops = 0;  // one core's fp32 roof, measured by the writer (kernels/roofline.h)
-  std::string cpu_class;        // kernels/cpu_class.h ("" in files of engines before 0.3.0)
+  double stream_gbs = 0;  // one core's main-memory bandwidth, measured by the writer (0: unknown)
+  std::string cpu_class;  // kernels/cpu_class.h ("" in files of engines before 0.3.0)
   std::string started, finished;  // ISO 8601 UTC
   std::string shard;              // "i/n" for a shard file, "" for a whole run
   int64_t threads = 0, tasks_total = 0, tasks_done = 0;
@@ -67,9 +68,11 @@ struct ResultTables {
 };
 // The cell tables in the order given, then the tables every kind contributes to: timings,
 // training (each training's convergence), vae_latents. `roof_gflops` (one core's fp32 roof; 0:
-// unknown) gives /tables/timings its roof_percent column.
+// unknown) gives /tables/timings its roof_percent column, `stream_gbs` (one core's bandwidth; 0:
+// unknown) the memory roofs of the tasks that stream (their records' stream_bytes).
 ResultTables build_tables(const std::vector<TaskRecord>& records,
-                          const std::vector<CellTableSpec>& cells, double roof_gflops = 0);
+                          const std::vector<CellTableSpec>& cells, double roof_gflops = 0,
+                          double stream_gbs = 0);
 
 struct RunDataset {
   const Dataset* dataset;

@@ -174,6 +174,30 @@ TEST(ResultsFile, TablesHoldOneRowPerCellWithTheRecordsValues) {
   EXPECT_EQ(column(t.at("vae_latents"), "kl").doubles, (std::vector<double>{0.5, 0.0}));
 }
 
+// /tables/timings' roofs, worked out by hand with a 200 GFLOP/s fp32 roof per core:
+//  - in cache (no stream_bytes): 100 GFLOP in 1 s on 1 core → 50 % of the roof, no memory roof;
+//  - streaming: 100 GFLOP over 10 GB at 20 GB/s per core, on 2 cores, in 2 s → 50 GFLOP/s;
+//    memory roof 10 FLOP/B × 20 GB/s × 2 = 400 GFLOP/s, fp32 400 → 12.5 % of either;
+//  - streaming harder: 100 GFLOP over 50 GB at 20 GB/s, 1 core, 4 s → 25 GFLOP/s; memory roof
+//    2 × 20 = 40 GFLOP/s, below the fp32 200 → attainable 62.5 %, roof_percent 12.5 %.
+TEST(ResultsFile, TimingsGiveEachTaskItsShareOfTheLowerRoof) {
+  auto rec = [](const std::string& key, double seconds, double threads, double bytes) {
+    TaskRecord r;
+    r.key = key;
+    r.kind = "rep";
+    r.num = {{"seconds", seconds}, {"flops", 100e9}, {"threads", threads}};
+    if (bytes > 0) r.num["stream_bytes"] = bytes;
+    return r;
+  };
+  const ResultTables t =
+      result_tables({rec("a", 1, 1, 0), rec("b", 2, 2, 10e9), rec("c", 4, 1, 50e9)}, 200, 20);
+  const H5Table& tm = t.at("timings");
+  EXPECT_EQ(column(tm, "gflops").doubles, (std::vector<double>{100, 50, 25}));
+  EXPECT_EQ(column(tm, "roof_percent").doubles, (std::vector<double>{50, 12.5, 12.5}));
+  EXPECT_EQ(column(tm, "memory_roof_gflops").doubles, (std::vector<double>{0, 400, 40}));
+  EXPECT_EQ(column(tm, "attainable_percent").doubles, (std::vector<double>{50, 12.5, 62.5}));
+}
+
 TEST(ResultsFile, ARecordMissingAColumnsKeyIsAnErrorNotAZero) {
   TaskRecord r = fpe_record("grid/s3/sirl+vae/N100/fpe", 0.25);
   r.num.erase("train_mse");
