@@ -22,6 +22,15 @@ double seconds_of(const std::function<double()>& f, double* flops) {
   *flops = f();
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
+double seconds_of(const std::function<void()>& f) {
+  double none = 0;
+  return seconds_of(
+      [&] {
+        f();
+        return 0.0;
+      },
+      &none);
+}
 
 }  // namespace
 
@@ -37,26 +46,15 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
     small.jaco.trajectories = kSmall;
     small.jaco.threads = 1;  // as a run builds Ξ: inside one task
     const EnvSpec& spec = env_spec(env);
-    double ignored = 0;
     Dataset d;
-    const double made = seconds_of(
-        [&] {
-          d = spec.make(small);
-          return 0.0;
-        },
-        &ignored);
+    const double made = seconds_of([&] { d = spec.make(small); });
     // A sampled Ξ costs per trajectory (each one sampled, solved and featurised on its own).
     const double gen =
         spec.sampled ? made * double(p.data.jaco.trajectories) / double(kSmall) : made;
     {
       QueryBundleConfig full = p.queries;
       full.fpe_trajectories = std::min<int64_t>(full.fpe_trajectories, d.count);
-      const double bundle = seconds_of(
-          [&] {
-            make_query_bundle(d, full, 1);
-            return 0.0;
-          },
-          &ignored);
+      const double bundle = seconds_of([&] { make_query_bundle(d, full, 1); });
       const auto axes = p.axes.find(env);
       const double seeds = axes != p.axes.end() ? double(axes->second.seeds.size()) : 1.0;
       e.dataset_seconds[env] = gen;

@@ -267,7 +267,6 @@ void rows_of_product(Form op, float* Cr, const float* A, const float* B, int M, 
   }
 }
 
-// The whole product by row blocks when oneDNN serves it; false (nothing done) otherwise.
 // A forward product of few rows (M ≤ 128: one row block, e.g. the VAE's and the preference
 // trainings' batches of 32) in fixed blocks of kRowBlock columns, so that a task on several
 // cores shares it: each block reads a dense band of W's rows (op(B)'s columns) and writes a dense
@@ -281,13 +280,8 @@ void nt_by_column_blocks(float* C, const float* A, const float* B, int M, int N,
     const int j0 = b * kRowBlock, nb = std::min(kRowBlock, N - j0);
     thread_local std::vector<float> tmp;
     tmp.resize(size_t(M) * nb);
-    if (!onednn_matmul({M, nb, K, K, 1, 1, K, nb, false, false}, A, B + size_t(j0) * K,
-                       tmp.data())) {
-      using RowMatF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-      Eigen::Map<RowMatF>(tmp.data(), M, nb).noalias() =
-          Eigen::Map<const RowMatF>(A, M, K) *
-          Eigen::Map<const RowMatF>(B + size_t(j0) * K, nb, K).transpose();
-    }
+    // tmp[M, nb] = A · (W's rows j0..)ᵀ: the product of a dense [nb, K] band, whole.
+    rows_of_product(Form::kNt, tmp.data(), A, B + size_t(j0) * K, M, nb, K, false, 0, M);
     for (int i = 0; i < M; ++i) {
       float* c = C + size_t(i) * N + j0;
       const float* t = tmp.data() + size_t(i) * nb;
@@ -299,6 +293,7 @@ void nt_by_column_blocks(float* C, const float* A, const float* B, int M, int N,
   }
 }
 
+// The whole product by row blocks when oneDNN serves it; false (nothing done) otherwise.
 template <typename T>
 bool by_row_blocks(Form op, T* C, const T* A, const T* B, int M, int N, int K, bool acc,
                    int threads) {
