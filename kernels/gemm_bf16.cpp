@@ -69,6 +69,23 @@ bool native_shape(int M, int nj, int K) {
   return bf16_native() && std::min({M, nj, K}) >= kBf16NativeMin;
 }
 
+// The native product of one column slice, C_s[M, nj] (+)= op(A) · op(B_s), always through a
+// dense [M, nj] buffer: oneDNN's AMX kernels (Sapphire Rapids) block K by the output's row
+// stride, so writing at Cs with ldc = N gave other bits than the same slice written densely.
+// The copy costs M·nj floats against M·nj·K products (K ≥ kBf16NativeMin).
+bool native_slice(MatmulShape s, const uint16_t* A, const uint16_t* Bs, float* Cs, long ldc) {
+  thread_local std::vector<float> dense;
+  dense.resize(size_t(s.M) * s.N);
+  if (s.accumulate)
+    for (int i = 0; i < s.M; ++i)
+      std::memcpy(dense.data() + size_t(i) * s.N, Cs + i * ldc, sizeof(float) * s.N);
+  s.ldc = s.N;
+  if (!onednn_matmul(s, A, Bs, dense.data())) return false;
+  for (int i = 0; i < s.M; ++i)
+    std::memcpy(Cs + i * ldc, dense.data() + size_t(i) * s.N, sizeof(float) * s.N);
+  return true;
+}
+
 template <typename Fn>
 void for_slices(int N, int threads, Fn&& fn) {
   const int w = gemm_column_slice(N), slices = (N + w - 1) / w;
@@ -88,14 +105,15 @@ bool bf16_native() {
 }
 
 const char* bf16_backend() {
-  return bf16_native() ? "onednn-avx512_bf16" : "emulated";
+  if (!bf16_native()) return "emulated";
+  return onednn_amx_bf16() ? "onednn-amx_bf16" : "onednn-avx512_bf16";
 }
 
 void matmul_bf16_nt_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* B, int M, int N,
                          int K, bool acc, int j0, int nj) {
   // op(B) = (B[j0.., K])ᵀ: [K, nj] with strides (1, K)
   if (native_shape(M, nj, K) &&
-      onednn_matmul({M, nj, K, K, 1, 1, K, ldc, acc, true}, A, B + size_t(j0) * K, Cs))
+      native_slice({M, nj, K, K, 1, 1, K, nj, acc, true}, A, B + size_t(j0) * K, Cs, ldc))
     return;
   matmul_nt_cols<float>(Cs, ldc, widen_a(A, size_t(M) * K), widen_b_rows(B, N, K, j0, nj), M, N, K,
                         acc, j0, nj);
@@ -105,7 +123,7 @@ void matmul_bf16_tn_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* 
                          int K, bool acc, int j0, int nj) {
   // op(A) = A[K, M]ᵀ: [M, K] with strides (1, M); op(B) = B[:, j0..]: [K, nj], strides (N, 1)
   if (native_shape(M, nj, K) &&
-      onednn_matmul({M, nj, K, 1, M, N, 1, ldc, acc, true}, A, B + j0, Cs))
+      native_slice({M, nj, K, 1, M, N, 1, nj, acc, true}, A, B + j0, Cs, ldc))
     return;
   matmul_tn_cols<float>(Cs, ldc, widen_a(A, size_t(K) * M), widen_b_cols(B, K, N, j0, nj), M, N, K,
                         acc, j0, nj);
@@ -114,7 +132,7 @@ void matmul_bf16_tn_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* 
 void matmul_bf16_nn_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* B, int M, int N,
                          int K, bool acc, int j0, int nj) {
   if (native_shape(M, nj, K) &&
-      onednn_matmul({M, nj, K, K, 1, N, 1, ldc, acc, true}, A, B + j0, Cs))
+      native_slice({M, nj, K, K, 1, N, 1, nj, acc, true}, A, B + j0, Cs, ldc))
     return;
   matmul_nn_cols<float>(Cs, ldc, widen_a(A, size_t(M) * K), widen_b_cols(B, K, N, j0, nj), M, N, K,
                         acc, j0, nj);

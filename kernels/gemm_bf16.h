@@ -3,7 +3,9 @@
 // is fp32. Shapes, slicing and the *_cols convention are gemm.h's.
 //
 // Where the CPU has AVX512-BF16 and the build has oneDNN, a product whose dimensions are all
-// ≥ kBf16NativeMin runs on oneDNN's bf16 matmul (vdpbf16ps: twice the fp32 FMA rate). Every other
+// ≥ kBf16NativeMin runs on oneDNN's bf16 matmul: on AMX tiles where the CPU has them (Sapphire
+// Rapids and later), else vdpbf16ps (twice the fp32 FMA rate on Zen 4/5, half of it on Sapphire
+// Rapids). Its bits depend on the CPU's kernel, as fp32's do on the GEMM backend. Every other
 // product widens its operands to fp32 (exactly) and runs gemm.h's fp32 kernels: the emulation
 // that gives the same values up to summation order on any CPU. SIRL_BF16=emulate (or
 // SIRL_KERNELS=generic) forces the emulation. Either way the bits depend on the shape only,
@@ -15,7 +17,8 @@ namespace sirl {
 
 // True when products large enough run natively (AVX512-BF16 + oneDNN, not forced off).
 bool bf16_native();
-// "onednn-avx512_bf16" or "emulated": recorded with the CPU class.
+// "onednn-amx_bf16" (AMX tiles), "onednn-avx512_bf16" (vdpbf16ps) or "emulated": recorded with
+// the CPU class.
 const char* bf16_backend();
 
 // C[M,N] (+)= A[M,K] · B[N,K]ᵀ

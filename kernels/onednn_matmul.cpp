@@ -88,12 +88,21 @@ bool onednn_native_bf16() {
   return (isa & want) == want;
 }
 
+bool onednn_amx_bf16() {
+  const unsigned isa = unsigned(dnnl::get_effective_cpu_isa());
+  const unsigned want = unsigned(dnnl::cpu_isa::avx512_core_amx);
+  return (isa & want) == want;
+}
+
 #else
 
 bool onednn_matmul(const MatmulShape&, const void*, const void*, float*) {
   return false;
 }
 bool onednn_native_bf16() {
+  return false;
+}
+bool onednn_amx_bf16() {
   return false;
 }
 

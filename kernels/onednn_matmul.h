@@ -23,5 +23,7 @@ bool onednn_matmul(const MatmulShape& shape, const void* A, const void* B, float
 
 // Whether oneDNN runs bf16 products natively on this CPU (AVX512-BF16 or better).
 bool onednn_native_bf16();
+// Whether those products run on AMX tiles (Sapphire Rapids and later: `tdpbf16ps`).
+bool onednn_amx_bf16();
 
 }  // namespace sirl
