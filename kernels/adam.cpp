@@ -1,6 +1,7 @@
 #include "kernels/adam.h"
 
 #include <cmath>
+#include <limits>
 
 namespace sirl {
 
@@ -30,12 +31,18 @@ AdamStepScalars adam_begin_step(const AdamConfig& cfg, AdamState& st) {
 void adam_apply(const AdamStepScalars& s, float* p, const float* g, float* m, float* v, size_t n) {
   const float b1 = s.b1, b2 = s.b2, eps = s.eps, step_size = s.step_size, bc2_sqrt = s.bc2_sqrt;
   const float one_minus_b1 = s.one_minus_b1, one_minus_b2 = s.one_minus_b2;
+  constexpr float kNormal = std::numeric_limits<float>::min();  // 1.18e-38
 #pragma omp simd
   for (size_t i = 0; i < n; ++i) {
-    m[i] = m[i] * b1 + g[i] * one_minus_b1;
-    v[i] = v[i] * b2 + g[i] * g[i] * one_minus_b2;
-    const float denom = std::sqrt(v[i]) / bc2_sqrt + eps;
-    p[i] -= step_size * (m[i] / denom);
+    float mi = m[i] * b1 + g[i] * one_minus_b1;
+    float vi = v[i] * b2 + g[i] * g[i] * one_minus_b2;
+    // A moment that underflows is stored as 0 (adam.h: why, and what it changes).
+    mi = std::fabs(mi) < kNormal ? 0.f : mi;
+    vi = vi < kNormal ? 0.f : vi;
+    m[i] = mi;
+    v[i] = vi;
+    const float denom = std::sqrt(vi) / bc2_sqrt + eps;
+    p[i] -= step_size * (mi / denom);
   }
 }
 

@@ -1,5 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
 #include "kernels/adam.h"
 
 namespace sirl {
@@ -51,6 +56,62 @@ TEST(Adam, ZeroGradientLeavesFreshParametersAlone) {
   std::vector<float> p = {1, 2, 3}, g = {0, 0, 0};
   adam_step(cfg, st, p.data(), g.data(), 3);
   EXPECT_EQ(p, (std::vector<float>{1, 2, 3}));
+}
+
+// A moment that falls below the smallest normal float is stored as 0 (adam.h). Hand values:
+// m = 1.5e-38 and g = 0 decay by β1 = 0.9 to 1.35e-38 and 1.215e-38 (both normal, kept), then
+// 1.0935e-38 < 1.1755e-38: stored as 0. v = 1.2e-38 decays by β2 = 0.999 to 1.1988e-38 (kept),
+// then 1.1976e-38 (kept) ... and is 0 from the step where it would go below 1.1755e-38.
+TEST(Adam, MomentsThatUnderflowAreStoredAsZero) {
+  AdamConfig cfg;
+  AdamState st(1);
+  st.m[0] = 1.5e-38f;
+  st.v[0] = 1.2e-38f;
+  float p = 0.5f, g = 0.f;
+  adam_step(cfg, st, &p, &g, 1);
+  EXPECT_FLOAT_EQ(st.m[0], 1.35e-38f);
+  adam_step(cfg, st, &p, &g, 1);
+  EXPECT_FLOAT_EQ(st.m[0], 1.215e-38f);
+  adam_step(cfg, st, &p, &g, 1);
+  EXPECT_EQ(st.m[0], 0.f);
+  EXPECT_GT(st.v[0], 1.19e-38f);  // 1.2e-38 · 0.999³ = 1.1964e-38: still normal
+  // v reaches the bound after ln(1.1755/1.2)/ln(0.999) ≈ 20.6 steps in all
+  for (int t = 3; t < 20; ++t) adam_step(cfg, st, &p, &g, 1);
+  EXPECT_GT(st.v[0], 0.f);
+  adam_step(cfg, st, &p, &g, 1);
+  EXPECT_EQ(st.v[0], 0.f);
+  EXPECT_EQ(p, 0.5f);
+}
+
+// What the flush leaves alone: with moments kept subnormal (PyTorch's arithmetic, written out
+// here in float), 2000 steps of a zero gradient after 10 of a real one move every parameter of
+// ordinary size to the same bits, and no stored moment is ever subnormal.
+TEST(Adam, FlushingUnderflowedMomentsKeepsTheParametersBits) {
+  AdamConfig cfg;
+  cfg.lr = 1e-3;
+  const std::vector<float> p0 = {0.5f, -0.03f, 2e-6f, -1.0f};
+  std::vector<float> p = p0, ref = p0, rm(4, 0.f), rv(4, 0.f);
+  AdamState st(4);
+  bool reference_went_subnormal = false;
+  for (int t = 1; t <= 2010; ++t) {
+    std::vector<float> g(4, 0.f);
+    if (t <= 10) g = {0.3f, -1e-3f, 5e-5f, 1.f};
+    adam_step(cfg, st, p.data(), g.data(), 4);
+    const double bc1 = 1.0 - std::pow(0.9, t), bc2 = 1.0 - std::pow(0.999, t);
+    const float step_size = float(cfg.lr / bc1), bc2_sqrt = float(std::sqrt(bc2));
+    for (int i = 0; i < 4; ++i) {
+      rm[i] = rm[i] * 0.9f + g[i] * float(1.0 - 0.9);
+      rv[i] = rv[i] * 0.999f + g[i] * g[i] * float(1.0 - 0.999);
+      ref[i] -= step_size * (rm[i] / (std::sqrt(rv[i]) / bc2_sqrt + 1e-8f));
+      reference_went_subnormal |= std::fpclassify(rm[i]) == FP_SUBNORMAL;
+      ASSERT_NE(std::fpclassify(st.m[i]), FP_SUBNORMAL) << "step " << t;
+      ASSERT_NE(std::fpclassify(st.v[i]), FP_SUBNORMAL) << "step " << t;
+    }
+  }
+  EXPECT_EQ(std::memcmp(p.data(), ref.data(), sizeof(float) * 4), 0);
+  EXPECT_NE(p, p0);                                          // the real steps moved them
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(st.m[i], 0.f) << i;  // 0.9^2000: flushed
+  EXPECT_TRUE(reference_went_subnormal);  // the run crossed the range the flush changes
 }
 
 }  // namespace
