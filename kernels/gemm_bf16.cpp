@@ -72,8 +72,10 @@ bool native_shape(int M, int nj, int K) {
 // The native product of one column slice, C_s[M, nj] (+)= op(A) · op(B_s), always through a
 // dense [M, nj] buffer: oneDNN's AMX kernels (Sapphire Rapids) block K by the output's row
 // stride, so writing at Cs with ldc = N gave other bits than the same slice written densely.
-// The copy costs M·nj floats against M·nj·K products (K ≥ kBf16NativeMin).
+// The copy costs M·nj floats against M·nj·K products (K ≥ kBf16NativeMin); a slice that is
+// dense already (ldc = nj) runs in place, the same primitive on the same layout.
 bool native_slice(MatmulShape s, const uint16_t* A, const uint16_t* Bs, float* Cs, long ldc) {
+  if (ldc == s.N) return onednn_matmul(s, A, Bs, Cs);  // dense already (the dW scratch)
   thread_local std::vector<float> dense;
   dense.resize(size_t(s.M) * s.N);
   if (s.accumulate)
