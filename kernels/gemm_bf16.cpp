@@ -69,13 +69,14 @@ bool native_shape(int M, int nj, int K) {
   return bf16_native() && std::min({M, nj, K}) >= kBf16NativeMin;
 }
 
-// The native product of one column slice, C_s[M, nj] (+)= op(A) · op(B_s), always through a
-// dense [M, nj] buffer: oneDNN's AMX kernels (Sapphire Rapids) block K by the output's row
-// stride, so writing at Cs with ldc = N gave other bits than the same slice written densely.
-// The copy costs M·nj floats against M·nj·K products (K ≥ kBf16NativeMin); a slice that is
-// dense already (ldc = nj) runs in place, the same primitive on the same layout.
-bool native_slice(MatmulShape s, const uint16_t* A, const uint16_t* Bs, float* Cs, long ldc) {
-  if (ldc == s.N) return onednn_matmul(s, A, Bs, Cs);  // dense already (the dW scratch)
+// The native product of one column slice, C_s[M, nj] (+)= op(A) · op(B_s) with C_s at Cs, row
+// stride s.ldc, computed as a dense [M, nj] result: oneDNN's AMX kernels (Sapphire Rapids) block
+// K by the output's row stride, so writing at ldc = N gave other bits than the same slice written
+// densely. A slice that is dense already (ldc = nj: the dW scratch) runs in place; any other goes
+// through a buffer, M·nj floats copied against M·nj·K products (K ≥ kBf16NativeMin).
+bool native_slice(MatmulShape s, const uint16_t* A, const uint16_t* Bs, float* Cs) {
+  const long ldc = s.ldc;
+  if (ldc == s.N) return onednn_matmul(s, A, Bs, Cs);
   thread_local std::vector<float> dense;
   dense.resize(size_t(s.M) * s.N);
   if (s.accumulate)
@@ -115,7 +116,7 @@ void matmul_bf16_nt_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* 
                          int K, bool acc, int j0, int nj) {
   // op(B) = (B[j0.., K])ᵀ: [K, nj] with strides (1, K)
   if (native_shape(M, nj, K) &&
-      native_slice({M, nj, K, K, 1, 1, K, nj, acc, true}, A, B + size_t(j0) * K, Cs, ldc))
+      native_slice({M, nj, K, K, 1, 1, K, ldc, acc, true}, A, B + size_t(j0) * K, Cs))
     return;
   matmul_nt_cols<float>(Cs, ldc, widen_a(A, size_t(M) * K), widen_b_rows(B, N, K, j0, nj), M, N, K,
                         acc, j0, nj);
@@ -124,8 +125,7 @@ void matmul_bf16_nt_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* 
 void matmul_bf16_tn_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* B, int M, int N,
                          int K, bool acc, int j0, int nj) {
   // op(A) = A[K, M]ᵀ: [M, K] with strides (1, M); op(B) = B[:, j0..]: [K, nj], strides (N, 1)
-  if (native_shape(M, nj, K) &&
-      native_slice({M, nj, K, 1, M, N, 1, nj, acc, true}, A, B + j0, Cs, ldc))
+  if (native_shape(M, nj, K) && native_slice({M, nj, K, 1, M, N, 1, ldc, acc, true}, A, B + j0, Cs))
     return;
   matmul_tn_cols<float>(Cs, ldc, widen_a(A, size_t(K) * M), widen_b_cols(B, K, N, j0, nj), M, N, K,
                         acc, j0, nj);
@@ -133,8 +133,7 @@ void matmul_bf16_tn_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* 
 
 void matmul_bf16_nn_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* B, int M, int N,
                          int K, bool acc, int j0, int nj) {
-  if (native_shape(M, nj, K) &&
-      native_slice({M, nj, K, K, 1, N, 1, nj, acc, true}, A, B + j0, Cs, ldc))
+  if (native_shape(M, nj, K) && native_slice({M, nj, K, K, 1, N, 1, ldc, acc, true}, A, B + j0, Cs))
     return;
   matmul_nn_cols<float>(Cs, ldc, widen_a(A, size_t(M) * K), widen_b_cols(B, K, N, j0, nj), M, N, K,
                         acc, j0, nj);

@@ -82,16 +82,18 @@ bool onednn_matmul(const MatmulShape& s, const void* A, const void* B, float* C)
   return true;
 }
 
-bool onednn_native_bf16() {
-  const unsigned isa = unsigned(dnnl::get_effective_cpu_isa());
-  const unsigned want = unsigned(dnnl::cpu_isa::avx512_core_bf16);
-  return (isa & want) == want;
+namespace {
+// oneDNN's ISA values are bit sets, each including the ones below it.
+bool effective_isa_has(dnnl::cpu_isa want) {
+  return (unsigned(dnnl::get_effective_cpu_isa()) & unsigned(want)) == unsigned(want);
 }
+}  // namespace
 
+bool onednn_native_bf16() {
+  return effective_isa_has(dnnl::cpu_isa::avx512_core_bf16);
+}
 bool onednn_amx_bf16() {
-  const unsigned isa = unsigned(dnnl::get_effective_cpu_isa());
-  const unsigned want = unsigned(dnnl::cpu_isa::avx512_core_amx);
-  return (isa & want) == want;
+  return effective_isa_has(dnnl::cpu_isa::avx512_core_amx);
 }
 
 #else
