@@ -70,10 +70,10 @@ bool native_shape(int M, int nj, int K) {
 }
 
 // The native product of one column slice, C_s[M, nj] (+)= op(A) · op(B_s) with C_s at Cs, row
-// stride s.ldc, computed as a dense [M, nj] result: oneDNN's AMX kernels (Sapphire Rapids) block
-// K by the output's row stride, so writing at ldc = N gave other bits than the same slice written
-// densely. A slice that is dense already (ldc = nj: the dW scratch) runs in place; any other goes
-// through a buffer, M·nj floats copied against M·nj·K products (K ≥ kBf16NativeMin).
+// stride s.ldc, computed as a dense [M, nj] result: oneDNN's AMX kernels (Sapphire Rapids) gave
+// other bits for the same slice written at ldc = N than written densely (their blocking depends
+// on the output's layout). A slice that is dense already (ldc = nj: the dW scratch) runs in place;
+// any other goes through a buffer, M·nj floats copied against M·nj·K products (K ≥ kBf16NativeMin).
 bool native_slice(MatmulShape s, const uint16_t* A, const uint16_t* Bs, float* Cs) {
   const long ldc = s.ldc;
   if (ldc == s.N) return onednn_matmul(s, A, Bs, Cs);
