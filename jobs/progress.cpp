@@ -33,6 +33,11 @@ void Progress::set_resumed(std::set<std::string> keys) {
   resumed_ = std::move(keys);
 }
 
+Progress::Counts Progress::counts() {
+  std::lock_guard lock(mu_);
+  return {done_, done_flops_, rate_flops_};
+}
+
 void Progress::task_done(const std::string& key, double task_flops, double seconds) {
   std::lock_guard lock(mu_);
   ++done_;

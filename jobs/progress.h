@@ -20,6 +20,14 @@ class Progress {
   void task_done(const std::string& key, double task_flops, double seconds);
   void finish();
 
+  // What the status line is computed from: tasks and FLOPs done, and the FLOPs of tasks run
+  // whole in this process (the rate's numerator).
+  struct Counts {
+    int done = 0;
+    double done_flops = 0, rate_flops = 0;
+  };
+  Counts counts();
+
  private:
   void print(const std::string& last, bool force);
   std::mutex mu_;

@@ -27,5 +27,23 @@ TEST(Progress, TheEtaIsTheFlopsLeftAtTheRateOfTasksRunHere) {
             "[2/8 tasks]  25.0% | 0.0 GFLOP/s | elapsed 30s | ETA 1m30s");
 }
 
+// The bookkeeping behind the line: a task named resumed counts toward the share done, not the
+// rate; every other task toward both.
+TEST(Progress, ResumedTasksCountTowardTheShareDoneButNotTheRate) {
+  Progress p(3, 100e9, /*quiet=*/true);
+  p.set_resumed({"cell/resumed"});
+  p.task_done("cell/resumed", 60e9, 1.0);
+  Progress::Counts c = p.counts();
+  EXPECT_EQ(c.done, 1);
+  EXPECT_DOUBLE_EQ(c.done_flops, 60e9);
+  EXPECT_DOUBLE_EQ(c.rate_flops, 0);
+  p.task_done("cell/fresh", 30e9, 1.0);
+  p.task_done("rep/fresh", 10e9, 1.0);
+  c = p.counts();
+  EXPECT_EQ(c.done, 3);
+  EXPECT_DOUBLE_EQ(c.done_flops, 100e9);
+  EXPECT_DOUBLE_EQ(c.rate_flops, 40e9);
+}
+
 }  // namespace
 }  // namespace sirl
