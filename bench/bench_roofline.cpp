@@ -22,7 +22,6 @@
 #include <unistd.h>
 
 #include <cstdint>
-#include <cstring>
 #include <thread>
 #include <vector>
 
