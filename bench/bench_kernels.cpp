@@ -104,6 +104,37 @@ void tpa_heads_args(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_TpaHeadsStep)->Apply(tpa_heads_args);
 BENCHMARK(BM_TpaHeadsStepBf16)->Apply(tpa_heads_args);
 
+// A MultiPref-K step: φ (in→h→h→6) with K linear reward heads, B pairs (2B trajectories), each
+// pair scored by its own human's head. Args: {input width, hidden width, K, threads}.
+void BM_MultiPrefStep(benchmark::State& state) {
+  const int in = int(state.range(0)), hidden = int(state.range(1)), K = int(state.range(2)),
+            threads = int(state.range(3));
+  const int B = 32, T = 400;
+  MlpShape s{{in, hidden, hidden, 6}};
+  Rng rng(7);
+  auto X = random_inputs(T, in, rng);
+  auto p = init_params(s, 1, rng);
+  for (int k = 0; k < K * 7; ++k) p.push_back(float(rng.uniform(-0.4, 0.4)));
+  Trainer t(s, AdamConfig{0.001, 1.0}, p);
+  std::vector<int32_t> pairs(size_t(B) * 2), human(B);
+  std::vector<float> label(B);
+  for (auto& v : pairs) v = int32_t(rng.uniform_int(T));
+  for (auto& v : human) v = int32_t(rng.uniform_int(K));
+  for (auto& v : label) v = float(rng.uniform_int(2));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(multihead_preference_train_step(
+        t, K, X.data(), pairs.data(), label.data(), human.data(), B, 10.f, threads));
+  state.counters["GFLOP/s"] = benchmark::Counter(3 * s.forward_flops(2 * B) * 1e-9,
+                                                 benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_MultiPrefStep)
+    ->ArgNames({"in", "hidden", "K", "threads"})
+    ->Args({19, 128, 10, 1})
+    ->Args({2037, 1024, 10, 1})
+    ->Args({2037, 1024, 10, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 // An unfrozen TPA cell's step: 20 copies of φ (in→h→h→6, linear output) each with its own head
 // (6→h→h→1), all fine-tuned side by side on B pairs each (2B trajectories). For JacoRobot
 // (in 2037, h 1024) that is 20 × 4.2 M weights, Adam moments included 1 GB, streamed every step.

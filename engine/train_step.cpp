@@ -10,11 +10,7 @@
 namespace sirl {
 
 Trainer::Trainer(MlpShape s, AdamConfig cfg, std::vector<float> initial_params)
-    : shape(std::move(s)),
-      adam_cfg(cfg),
-      params(std::move(initial_params)),
-      grad(params.size(), 0.f),
-      adam(params.size()) {
+    : shape(std::move(s)), adam_cfg(cfg), params(std::move(initial_params)), adam(params.size()) {
   validate(shape);
   if (params.size() < shape.param_count())
     throw std::invalid_argument("Trainer: fewer parameters than the network has");
@@ -88,22 +84,26 @@ float multihead_preference_train_step(Trainer& t, int K, const float* X, const i
     r[j] = s;
   }
   const float loss = bradley_terry_loss(r.data(), label, B, l2_weight, dr.data());
-  std::fill(t.grad.begin(), t.grad.end(), 0.f);
-  float* dheads = t.grad.data() + P;
+  // The heads' gradient, rows in order, and ∂L/∂φ from the heads before their update.
+  std::vector<float> dheads(t.params.size() - P, 0.f);  // [K, d + 1]
   t.d_out.resize(size_t(2) * B * d);
   for (int j = 0; j < 2 * B; ++j) {
     const int h = human[j % B];
     const float* w = heads + size_t(h) * (d + 1);
-    float* dw = dheads + size_t(h) * (d + 1);
+    float* dw = dheads.data() + size_t(h) * (d + 1);
     for (int k = 0; k < d; ++k) {
       t.d_out[size_t(j) * d + k] = dr[j] * w[k];  // ∂L/∂φ = dr · w
       dw[k] += dr[j] * emb[size_t(j) * d + k];    // ∂L/∂w = dr · φ
     }
     dw[d] += dr[j];
   }
-  mlp_backward(t.shape, t.params.data(), t.tape, t.d_out.data(), t.grad.data(),
-               static_cast<float*>(nullptr), threads);
-  adam_step(t.adam_cfg, t.adam, t.params.data(), t.grad.data(), t.params.size());
+  // One Adam step over [φ | heads]: φ's in its fused backward pass (the same bits as a stored
+  // gradient and adam_step, without writing, zeroing and re-reading a gradient of φ's size).
+  const AdamStepScalars step = adam_begin_step(t.adam_cfg, t.adam);
+  mlp_backward_adam(t.shape, t.params.data(), t.tape, t.d_out.data(), step, t.adam.m.data(),
+                    t.adam.v.data(), threads);
+  adam_apply(step, t.params.data() + P, dheads.data(), t.adam.m.data() + P, t.adam.v.data() + P,
+             dheads.size());
   return loss;
 }
 
@@ -144,8 +144,8 @@ float step_model_by_model(BatchedTrainer& t, const float* X, const int32_t* idx,
     gather_by_role(X, in, idx + size_t(m) * B * roles, B, roles, x);
     mlp_forward(s, t.params.data() + m * P, x, rows, t.tapes[m], 1);
     t.losses[m] = loss(m, t.tapes[m].output(), d_out);
-    mlp_backward_adam(s, t.params.data() + m * P, t.tapes[m], d_out, step,
-                      t.adam.m.data() + m * P, t.adam.v.data() + m * P, 1);
+    mlp_backward_adam(s, t.params.data() + m * P, t.tapes[m], d_out, step, t.adam.m.data() + m * P,
+                      t.adam.v.data() + m * P, 1);
   }
   float total = 0;
   for (int m = 0; m < M; ++m) total += t.losses[m];
@@ -156,11 +156,9 @@ float step_model_by_model(BatchedTrainer& t, const float* X, const int32_t* idx,
 
 float preference_train_step_batched(BatchedTrainer& t, const float* X, const int32_t* pairs,
                                     const float* label, int B, float l2_weight, int threads) {
-  return step_model_by_model(t, X, pairs, B, 2, threads,
-                             [&](int m, const float* r, float* dr) {
-                               return bradley_terry_loss(r, label + size_t(m) * B, B, l2_weight,
-                                                         dr);
-                             });
+  return step_model_by_model(t, X, pairs, B, 2, threads, [&](int m, const float* r, float* dr) {
+    return bradley_terry_loss(r, label + size_t(m) * B, B, l2_weight, dr);
+  });
 }
 
 float triplet_train_step_batched(BatchedTrainer& t, const float* X, const int32_t* triplets, int B,

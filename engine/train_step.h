@@ -1,6 +1,7 @@
 // One optimizer step of each training objective: forward, loss, backward, Adam.
 // A Trainer is the mutable workspace of one training run (MuJoCo's mjData in spirit): it owns
-// the parameters, gradients, optimizer moments and activation buffers; nothing is global.
+// the parameters, optimizer moments and activation buffers (no gradient: every step fuses its
+// Adam update into the backward pass); nothing is global.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -13,7 +14,7 @@ namespace sirl {
 struct Trainer {
   MlpShape shape;
   AdamConfig adam_cfg;
-  std::vector<float> params, grad;  // [P] (+ any trailing parameters a step owns, e.g. heads)
+  std::vector<float> params;  // [P] (+ any trailing parameters a step owns, e.g. heads)
   AdamState adam;
   MlpTape<float> tape;
   std::vector<float> batch_x, d_out;  // gathered inputs, ∂L/∂output
