@@ -310,7 +310,7 @@ void register_export(CLI::App& app, Runner& run) {
   run = [] {
     const auto records = read_results_records(file);
     const RunInfo info = read_run_info(file);
-    export_csv(result_tables(records, info.roof_fp32_gflops, info.stream_gbs), dir);
+    export_csv(result_tables(records, info.roofs()), dir);
     std::printf("wrote %s/{fpe,tpa,timings,training,vae_latents}.csv from %zu task records\n",
                 dir.c_str(), records.size());
     return 0;
@@ -371,8 +371,7 @@ void register_merge(CLI::App& app, Runner& run) {
       ds.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
     if (const auto dir = std::filesystem::path(out).parent_path(); !dir.empty())
       std::filesystem::create_directories(dir);
-    write_results_file(out, info, ds, records,
-                       result_tables(records, info.roof_fp32_gflops, info.stream_gbs));
+    write_results_file(out, info, ds, records, result_tables(records, info.roofs()));
     std::printf("merged %zu files: %zu of %zu tasks%s → %s\n", inputs.size(), records.size(),
                 plan.tasks.size(), info.complete ? " (complete)" : " (INCOMPLETE)", out.c_str());
     return 0;

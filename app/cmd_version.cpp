@@ -40,6 +40,8 @@ void register_version(CLI::App& app, Runner& run) {
         "emulation)\n",
         bf16_backend());
     std::printf("fp32 roof: %.1f GFLOP/s per core (measured now)\n", fp32_roof_gflops_per_core());
+    if (const double bf16 = bf16_roof_gflops_per_core(); bf16 > 0)
+      std::printf("bf16 roof: %.1f GFLOP/s per core (measured now, the unit above)\n", bf16);
     return 0;
   };
 }

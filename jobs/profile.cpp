@@ -627,6 +627,18 @@ const QueryBundleConfig& queries_for(const Profile& p, const std::string& teache
   throw std::invalid_argument("profile " + p.name + " has no teacher '" + teacher + "'");
 }
 
+bool runs_bf16(const Profile& p) {
+  if (p.precision == "bf16") return true;
+  for (const auto& [env, h] : p.hyper)
+    if (bf16_products(h)) return true;
+  return false;
+}
+
+const std::string& precision_of(const Profile& p, const std::string& env) {
+  const auto it = p.hyper.find(env);
+  return it == p.hyper.end() ? p.precision : it->second.precision;
+}
+
 Profile load_profile(const std::string& path_or_name) {
   namespace fs = std::filesystem;
   std::vector<fs::path> candidates{path_or_name};

@@ -119,6 +119,13 @@ struct Profile {
 const QueryBundleConfig& queries_for(const Profile& p, const std::string& teacher);
 
 Profile parse_profile(const std::string& text, const std::string& path = "<profile>");
+
+// Whether any network of the run has bf16 products: an environment's [hyper] precision, or the
+// top-level one (the user study's).
+bool runs_bf16(const Profile& p);
+// The precision the networks of environment `env` run in (the top-level one for an environment
+// the profile has no [hyper] entry for, such as the study's tasks).
+const std::string& precision_of(const Profile& p, const std::string& env);
 // Reads the file; a bare name ("quick") resolves to configs/<name>.toml beside the binary's
 // source tree or the working directory. Throws ProfileError.
 Profile load_profile(const std::string& path_or_name);

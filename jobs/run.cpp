@@ -337,6 +337,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   }
 
   fp32_roof_gflops_per_core();  // measured now, on cores the tasks do not use yet
+  if (runs_bf16(p)) bf16_roof_gflops_per_core();
   for (size_t i = 0; i < plan.tasks.size(); ++i)
     if (ps.pending[i] && plan.tasks[i].stream_bytes > 0) {
       stream_gbs_per_core();  // likewise, when a task will need its memory roof
@@ -371,12 +372,9 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   info.host = hostname();
   info.cpu_class = cpu_class();
   // bf16 products run natively or emulated: different bits, so a different class.
-  for (const auto& [env, h] : p.hyper)
-    if (bf16_products(h)) {
-      info.cpu_class += std::string(", bf16 ") + bf16_backend();
-      break;
-    }
+  if (runs_bf16(p)) info.cpu_class += std::string(", bf16 ") + bf16_backend();
   info.roof_fp32_gflops = fp32_roof_gflops_per_core();
+  if (runs_bf16(p)) info.roof_bf16_gflops = bf16_roof_gflops_per_core();
   if (std::any_of(records.begin(), records.end(),
                   [](const TaskRecord& r) { return r.num.count("stream_bytes") > 0; }))
     info.stream_gbs = stream_gbs_per_core();  // measured before the tasks when any streams
@@ -392,8 +390,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   for (const auto& env : p.envs)
     datasets.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
   try {
-    write_results_file(o.out, info, datasets, records,
-                       result_tables(records, info.roof_fp32_gflops, info.stream_gbs));
+    write_results_file(o.out, info, datasets, records, result_tables(records, info.roofs()));
   } catch (const std::exception&) {
     // A task's failure (a full disk while saving it) is the cause to report; the results file
     // then failed for the same reason. Every committed task stays in the staging folder.

@@ -49,12 +49,11 @@ int add_task(Plan& plan, const Profile& p, Task t) {
   return i;
 }
 
-ResultTables result_tables(const std::vector<TaskRecord>& records, double roof_gflops,
-                           double stream_gbs) {
+ResultTables result_tables(const std::vector<TaskRecord>& records, const Roofs& roofs) {
   std::vector<CellTableSpec> cells;
   for (const TaskKindSpec& k : task_kinds())
     if (!k.table.name.empty()) cells.push_back(k.table);
-  return build_tables(records, cells, roof_gflops, stream_gbs);
+  return build_tables(records, cells, roofs);
 }
 
 }  // namespace sirl

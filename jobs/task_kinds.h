@@ -50,10 +50,8 @@ int add_task(Plan& plan, const Profile& p, Task t);
 // with nothing more to say, and the start of every other kind's).
 void describe_env_and_seed(const Task& t, TaskRecord& r);
 
-// The results file's tables from its records: every kind's table, then the cross-kind ones.
-// `roof_gflops`: one core's fp32 roof for /tables/timings' roof_percent (0: unknown).
-// `stream_gbs`: one core's bandwidth (the memory roofs of streaming tasks; 0: unknown).
-ResultTables result_tables(const std::vector<TaskRecord>& records, double roof_gflops = 0,
-                           double stream_gbs = 0);
+// The results file's tables from its records: every kind's table, then the cross-kind ones, with
+// the roofs the run measured (results_file.h: build_tables).
+ResultTables result_tables(const std::vector<TaskRecord>& records, const Roofs& roofs = {});
 
 }  // namespace sirl

@@ -140,6 +140,15 @@ TaskRecord run_task(const Task& t, RunContext& ctx) {
   r.num["seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   r.num["threads"] = t.threads;  // like seconds, a fact of this run's scheduling, not a result
+  // Whether its networks' products ran in bf16 (/tables/timings holds it to the bf16 roof). FPE
+  // (robust_fpe too) fits a linear probe on a stored embedding: fp32 whatever the precision. The
+  // study's tasks run in the top-level precision (jobs/study_tasks.cpp).
+  const bool study = t.kind == TaskKind::study_rep || t.kind == TaskKind::study_heldout ||
+                     t.kind == TaskKind::study_tpa || t.kind == TaskKind::study_simulated;
+  const std::string& precision =
+      study ? ctx.profile().precision : precision_of(ctx.profile(), t.env);
+  const bool probe = t.kind == TaskKind::fpe || t.kind == TaskKind::robust_fpe;
+  if (!probe && precision == "bf16") r.num["bf16_products"] = 1;
   // What it streams from main memory (the cost model's estimate, deterministic): with the
   // bandwidth the run measures, its memory roof in /tables/timings.
   if (t.stream_bytes > 0) r.num["stream_bytes"] = t.stream_bytes;

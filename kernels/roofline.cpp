@@ -1,70 +1,62 @@
 #include "kernels/roofline.h"
 
-#include <immintrin.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <string>
 #include <vector>
+
+#include "kernels/gemm_bf16.h"
+#include "kernels/peak_loops.h"
 
 namespace sirl {
 
 namespace {
 
-constexpr int kChains = 16;  // more than latency × pipes: the FMA units never wait
-// AVX2 has 16 ymm registers: 16 accumulators and the two operands would spill to the stack
-// (measured on a Zen 3: 53 GFLOP/s a core, where oneDNN\'s sgemm reached 80). 12 chains still
-// cover latency × pipes.
-constexpr int kChainsYmm = 12;
-
-// 16 lanes × 2 FLOP per instruction; returns a value so the loop is not optimised away.
-__attribute__((target("avx512f"))) float fma_avx512(int64_t iters) {
-  __m512 acc[kChains];
-  for (int c = 0; c < kChains; ++c) acc[c] = _mm512_set1_ps(float(c));
-  const __m512 a = _mm512_set1_ps(0.999f), b = _mm512_set1_ps(1e-3f);
-  for (int64_t i = 0; i < iters; ++i)
-    for (int c = 0; c < kChains; ++c) acc[c] = _mm512_fmadd_ps(acc[c], a, b);
-  alignas(64) float x[16];
-  __m512 s = acc[0];
-  for (int c = 1; c < kChains; ++c) s = _mm512_add_ps(s, acc[c]);
-  _mm512_store_ps(x, s);
-  return x[0];
-}
-
-// 8 lanes × 2 FLOP per instruction.
-__attribute__((target("avx2,fma"))) float fma_avx2(int64_t iters) {
-  __m256 acc[kChainsYmm];
-  for (int c = 0; c < kChainsYmm; ++c) acc[c] = _mm256_set1_ps(float(c));
-  const __m256 a = _mm256_set1_ps(0.999f), b = _mm256_set1_ps(1e-3f);
-  for (int64_t i = 0; i < iters; ++i)
-    for (int c = 0; c < kChainsYmm; ++c) acc[c] = _mm256_fmadd_ps(acc[c], a, b);
-  alignas(32) float x[8];
-  __m256 s = acc[0];
-  for (int c = 1; c < kChainsYmm; ++c) s = _mm256_add_ps(s, acc[c]);
-  _mm256_store_ps(x, s);
-  return x[0];
-}
-
-double measure() {
-  const bool wide = __builtin_cpu_supports("avx512f");
-  if (!wide && !__builtin_cpu_supports("fma")) return 0;  // no FMA: no roof to report
-  const int64_t iters = 1 << 16;                          // ~0.3 ms a probe
-  const double flops = double(iters) * (wide ? kChains * 16 : kChainsYmm * 8) * 2;
+// Best GFLOP/s of five ~0.3 ms runs of a peak loop.
+template <typename Loop>
+double best_of_probes(Loop&& loop, double flops) {
   double best = 0;
   volatile float sink = 0;
   for (int probe = 0; probe < 5; ++probe) {
     const auto t0 = std::chrono::steady_clock::now();
-    sink = sink + (wide ? fma_avx512(iters) : fma_avx2(iters));
+    sink = sink + loop();
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (s > 0) best = std::max(best, flops / s * 1e-9);
   }
   return best;
 }
 
+constexpr int64_t kIters = 1 << 16;
+
+double measure_fp32() {
+  const bool wide = __builtin_cpu_supports("avx512f");
+  if (!wide && !__builtin_cpu_supports("fma")) return 0;  // no FMA: no roof to report
+  return best_of_probes(
+      [&] { return wide ? fma_loop_avx512(kIters, 1.f) : fma_loop_avx2(kIters, 1.f); },
+      fma_loop_flops(wide, kIters));
+}
+
+// The unit bf16_backend() multiplies on: AMX tiles, else vdpbf16ps, else none (emulated).
+double measure_bf16() {
+  const std::string backend = bf16_backend();
+  if (backend == "onednn-amx_bf16" && amx_bf16_usable())
+    return best_of_probes([] { return amx_bf16_loop(kIters * 16, 1.f); },
+                          amx_bf16_loop_flops(kIters * 16));
+  if (backend == "onednn-avx512_bf16" && has_avx512_bf16())
+    return best_of_probes([] { return dpbf16_loop(kIters, 1.f); }, dpbf16_loop_flops(kIters));
+  return 0;
+}
+
 }  // namespace
 
 double fp32_roof_gflops_per_core() {
-  static const double roof = measure();
+  static const double roof = measure_fp32();
+  return roof;
+}
+
+double bf16_roof_gflops_per_core() {
+  static const double roof = measure_bf16();
   return roof;
 }
 

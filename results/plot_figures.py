@@ -621,13 +621,23 @@ def compute_lines(f, tim):
     by["GFLOP/s"] = by.gflop / by.seconds.where(by.seconds > 0)
     by["per core"] = by.gflop / by.core_seconds.where(by.core_seconds > 0)
     roof = float(a.get("roof_fp32_gflops_per_core", 0) or 0)  # one core's, measured by the run
-    # The relevant roof of each task: the lower of the fp32 roof of its cores and its memory roof
-    # (tasks that stream their weights and Adam state; engines from 0.7.0 on). A kind's share of it:
-    # the seconds its tasks would take at their roofs over the seconds they took.
+    roof_bf16 = float(a.get("roof_bf16_gflops_per_core", 0) or 0)  # bf16 runs with a bf16 unit
+    # Each task's compute roof: that of its precision on its cores (a column from 2026-12-03 on;
+    # before, the fp32 roof of its cores). A kind's share of a roof: the seconds its tasks would
+    # take at their roofs over the seconds they took.
+    if "compute_roof_gflops" in tim and (tim.compute_roof_gflops > 0).all():
+        compute = tim.compute_roof_gflops
+    else:
+        compute = roof * tim.cores
+    if roof:
+        tim["compute_seconds"] = tim.flops / 1e9 / compute
+        by["compute"] = tim.groupby("kind").compute_seconds.sum() / by.seconds.where(by.seconds > 0)
+    # The relevant roof of each task: the lower of its compute roof and its memory roof (tasks that
+    # stream their weights and Adam state; engines from 0.7.0 on).
     relevant = "memory_roof_gflops" in tim and roof > 0
     if relevant:
-        limit = (roof * tim.cores).where(tim.memory_roof_gflops <= 0,
-                                         np.minimum(roof * tim.cores, tim.memory_roof_gflops))
+        limit = compute.where(tim.memory_roof_gflops <= 0,
+                              np.minimum(compute, tim.memory_roof_gflops))
         tim["ideal_seconds"] = tim.flops / 1e9 / limit
         tim["streams"] = tim.memory_roof_gflops > 0
         rel = tim.groupby("kind").agg(ideal=("ideal_seconds", "sum"), streams=("streams", "sum"))
@@ -638,7 +648,9 @@ def compute_lines(f, tim):
         L += [f"A task runs on one core, or on several when nothing else was ready or its chain "
               f"was critical (column "
               f"*on > 1 core*); this machine's fp32 roof is {roof:.0f} GFLOP/s per core (measured "
-              "at the start of the run), and % of roof is per core held.", ""]
+              "at the start of the run), and % of roof is the share of its cores' roof a kind "
+              "held." + (f" Tasks whose products ran in bf16 are held to the bf16 unit's roof, "
+                         f"{roof_bf16:.0f} GFLOP/s per core." if roof_bf16 else ""), ""]
     if relevant:
         L += ["Tasks whose weights and Adam state do not fit a core's share of the caches stream "
               "them from main memory every step (*memory-bound*, as the cost model counts bytes): "
@@ -651,7 +663,7 @@ def compute_lines(f, tim):
         L += ["| kind | tasks | on > 1 core | seconds | GFLOP | GFLOP/s | % of roof |",
               "|---|---:|---:|---:|---:|---:|---:|"]
     for k, r in by.iterrows():
-        pct = f"{100 * r['per core'] / roof:.0f} %" if roof and r["per core"] == r["per core"] else "—"
+        pct = f"{100 * r.compute:.0f} %" if roof and r.compute == r.compute else "—"
         if relevant:
             rp = f"{100 * r.relevant:.0f} %" if r.relevant == r.relevant else "—"
             L.append(f"| {k} | {int(r.tasks)} | {int(r.wide)} | {int(r.streams)} | {r.seconds:.1f} | "

@@ -130,20 +130,23 @@ H5Table vae_latents_table(const std::vector<TaskRecord>& records) {
   return t;
 }
 
-// roof_percent: a task's GFLOP/s as a share of the fp32 roof of the cores it ran on (`threads`,
-// 1 unless the scheduler gave it more); 0 when the roof is unknown (engines before 0.3.0).
+// precision: "bf16" for a task whose matrix products ran in bf16 (its record's bf16_products),
+// else "fp32". compute_roof_gflops: the roof of that precision's unit on the cores it ran on
+// (`threads`, 1 unless the scheduler gave it more): the bf16 roof where the run measured one, else
+// the fp32 roof (emulated bf16 products are fp32 arithmetic). roof_percent: its GFLOP/s as a share
+// of that roof; 0 when the roof is unknown (engines before 0.3.0).
 // memory_roof_gflops: for a task that streams its weights and Adam state from main memory (the
 // cost model's stream_bytes), its FLOPs per byte × the measured bandwidth × its cores; 0 for a
 // task that works in cache. attainable_percent: its GFLOP/s as a share of the lower of the two
 // roofs, the relevant one (= roof_percent when it does not stream).
-H5Table timings_table(const std::vector<TaskRecord>& records, double roof_gflops,
-                      double stream_gbs) {
+H5Table timings_table(const std::vector<TaskRecord>& records, const Roofs& roofs) {
   H5Table t;
   auto &kind = t.add("kind", C::String), &key = t.add("key", C::String),
        &sec = t.add("seconds", C::Double), &fl = t.add("flops", C::Double),
        &gf = t.add("gflops", C::Double), &pct = t.add("roof_percent", C::Double),
        &th = t.add("threads", C::Int), &mem = t.add("memory_roof_gflops", C::Double),
-       &att = t.add("attainable_percent", C::Double);
+       &att = t.add("attainable_percent", C::Double), &prec = t.add("precision", C::String),
+       &croof = t.add("compute_roof_gflops", C::Double);
   for (const auto& r : records) {
     kind.strings.push_back(r.kind);
     key.strings.push_back(r.key);
@@ -153,11 +156,17 @@ H5Table timings_table(const std::vector<TaskRecord>& records, double roof_gflops
     gf.doubles.push_back(s > 0 ? f / s * 1e-9 : 0.0);
     const double cores = std::max(1.0, num_or(r, "threads", 1));
     th.ints.push_back(int64_t(cores));
-    pct.doubles.push_back(roof_gflops > 0 ? 100 * gf.doubles.back() / (roof_gflops * cores) : 0.0);
+    const bool bf16 = num_or(r, "bf16_products", 0) != 0;
+    prec.strings.push_back(bf16 ? "bf16" : "fp32");
+    const double compute_roof =
+        (bf16 && roofs.bf16_gflops > 0 ? roofs.bf16_gflops : roofs.fp32_gflops) * cores;
+    croof.doubles.push_back(compute_roof);
+    pct.doubles.push_back(compute_roof > 0 ? 100 * gf.doubles.back() / compute_roof : 0.0);
     const double bytes = num_or(r, "stream_bytes", 0);
-    const double mem_roof = bytes > 0 && stream_gbs > 0 ? f / bytes * stream_gbs * cores : 0.0;
+    const double mem_roof =
+        bytes > 0 && roofs.stream_gbs > 0 ? f / bytes * roofs.stream_gbs * cores : 0.0;
     mem.doubles.push_back(mem_roof);
-    double roof = roof_gflops * cores;
+    double roof = compute_roof;
     if (mem_roof > 0 && (roof <= 0 || mem_roof < roof)) roof = mem_roof;
     att.doubles.push_back(roof > 0 ? 100 * gf.doubles.back() / roof : 0.0);
   }
@@ -173,11 +182,10 @@ const H5Table& ResultTables::at(const std::string& name) const {
 }
 
 ResultTables build_tables(const std::vector<TaskRecord>& records,
-                          const std::vector<CellTableSpec>& cells, double roof_gflops,
-                          double stream_gbs) {
+                          const std::vector<CellTableSpec>& cells, const Roofs& roofs) {
   ResultTables t;
   for (const auto& spec : cells) t.tables.push_back({spec.name, cell_table(records, spec)});
-  t.tables.push_back({"timings", timings_table(records, roof_gflops, stream_gbs)});
+  t.tables.push_back({"timings", timings_table(records, roofs)});
   t.tables.push_back({"training", training_table(records)});
   t.tables.push_back({"vae_latents", vae_latents_table(records)});
   return t;
@@ -199,6 +207,8 @@ void write_results_file(const std::string& path, const RunInfo& info,
       f.set_attr("/", "host", info.host);
       f.set_attr("/", "cpu_class", info.cpu_class);
       f.set_attr("/", "roof_fp32_gflops_per_core", info.roof_fp32_gflops);
+      if (info.roof_bf16_gflops > 0)  // a bf16 run on a CPU with a bf16 unit
+        f.set_attr("/", "roof_bf16_gflops_per_core", info.roof_bf16_gflops);
       f.set_attr("/", "stream_gbs_per_core", info.stream_gbs);
       f.set_attr("/", "started", info.started);
       f.set_attr("/", "finished", info.finished);
@@ -299,6 +309,8 @@ RunInfo read_run_info(const std::string& path) {
   if (f.has_attr("/", "cpu_class")) i.cpu_class = f.attr_string("/", "cpu_class");
   if (f.has_attr("/", "roof_fp32_gflops_per_core"))
     i.roof_fp32_gflops = f.attr_double("/", "roof_fp32_gflops_per_core");
+  if (f.has_attr("/", "roof_bf16_gflops_per_core"))
+    i.roof_bf16_gflops = f.attr_double("/", "roof_bf16_gflops_per_core");
   if (f.has_attr("/", "stream_gbs_per_core"))
     i.stream_gbs = f.attr_double("/", "stream_gbs_per_core");
   i.started = f.attr_string("/", "started");

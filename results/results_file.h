@@ -30,9 +30,17 @@ inline constexpr int64_t kResultsSchemaVersion = 2;
 // cannot read.
 int64_t check_results_schema(const H5File& f);
 
+// One core's roofs as the writer of a results file measured them (kernels/roofline.h; 0: unknown).
+struct Roofs {
+  double fp32_gflops = 0;  // peak fp32 FMA
+  double bf16_gflops = 0;  // the unit bf16 products ran on (0: no bf16 run, or bf16 emulated)
+  double stream_gbs = 0;   // main-memory bandwidth (STREAM triad)
+};
+
 struct RunInfo {
   std::string profile_name, profile_text, engine_version, git_commit, host;
   double roof_fp32_gflops = 0;  // one core's fp32 roof, measured by the writer (kernels/roofline.h)
+  double roof_bf16_gflops = 0;  // one core's bf16 roof, measured by a bf16 run's writer (else 0)
   double stream_gbs = 0;  // one core's main-memory bandwidth, measured by the writer (0: unknown)
   std::string cpu_class;  // kernels/cpu_class.h ("" in files of engines before 0.3.0)
   std::string started, finished;  // ISO 8601 UTC
@@ -41,6 +49,7 @@ struct RunInfo {
   double wall_seconds = 0;
   bool complete = false;
   int64_t schema_version = kResultsSchemaVersion;
+  Roofs roofs() const { return {roof_fp32_gflops, roof_bf16_gflops, stream_gbs}; }
 };
 
 // A table of one kind's records (a task kind declares it: jobs/task_kinds.h): one row per record,
@@ -67,12 +76,12 @@ struct ResultTables {
   const H5Table& at(const std::string& name) const;
 };
 // The cell tables in the order given, then the tables every kind contributes to: timings,
-// training (each training's convergence), vae_latents. `roof_gflops` (one core's fp32 roof; 0:
-// unknown) gives /tables/timings its roof_percent column, `stream_gbs` (one core's bandwidth; 0:
-// unknown) the memory roofs of the tasks that stream (their records' stream_bytes).
+// training (each training's convergence), vae_latents. The roofs give /tables/timings its
+// roof_percent column (a task whose record says bf16_products against the bf16 roof where there
+// is one, every other against the fp32 roof) and the memory roofs of the tasks that stream (their
+// records' stream_bytes).
 ResultTables build_tables(const std::vector<TaskRecord>& records,
-                          const std::vector<CellTableSpec>& cells, double roof_gflops = 0,
-                          double stream_gbs = 0);
+                          const std::vector<CellTableSpec>& cells, const Roofs& roofs = {});
 
 struct RunDataset {
   const Dataset* dataset;

@@ -18,9 +18,9 @@ SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
 MICRO = os.path.join(SRC, "tests", "data", "micro.toml")
 TIMING = {"seconds", "threads", "wall_seconds", "started", "finished", "roof_fp32_gflops_per_core",
-          "stream_gbs_per_core"}
+          "roof_bf16_gflops_per_core", "stream_gbs_per_core"}
 TIMING_COLUMNS = {"seconds", "gflops", "roof_percent", "threads", "memory_roof_gflops",
-                  "attainable_percent"}
+                  "attainable_percent", "compute_roof_gflops"}
 # Every STRIDE-th crash point (default 1: all). scripts/tsan.sh walks a fifth of them: under
 # ThreadSanitizer each point costs a 10x slower run and rerun, and the release suite walks them all.
 STRIDE = int(os.environ.get("SIRL_CRASH_WALK_STRIDE", "1"))

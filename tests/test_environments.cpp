@@ -11,6 +11,7 @@
 #include "jobs/profile.h"
 #include "jobs/run.h"
 #include "kernels/rng.h"
+#include "kernels/roofline.h"
 #include "results/h5.h"
 #include "results/results_file.h"
 #include "tests/scratch_dir.h"
@@ -214,6 +215,55 @@ M = [16]
   }
   const H5File f = H5File::open_read(out);
   EXPECT_EQ(f.attr_string("/datasets/toyline", "title"), "Toy lines");
+}
+
+// precision = "bf16": every record of a task whose networks ran in bf16 says so (rep, tpa), FPE's
+// linear probe does not; the results file carries a bf16 roof exactly where this CPU has a bf16
+// unit (kernels/roofline.h), and an fp32 run never does.
+TEST(Environments, ABf16RunMarksItsNetworkTasksAndRecordsItsRoof) {
+  register_toy_once();
+  const std::string profile = R"(
+name = "toy-bf16"
+precision = "bf16"
+envs = ["toyline"]
+seeds = [0]
+[queries]
+similarity = 60
+preference = 60
+tpa_pairs = 30
+fpe_trajectories = 100
+[fpe]
+methods = ["sirl"]
+N = [50]
+[tpa]
+methods = ["sirl"]
+N = [50]
+M = [8]
+[hyper.toyline]
+"sirl.epochs" = 2
+"tpa.epochs" = 2
+)";
+  const test::ScratchDir scratch;
+  for (const bool bf16 : {true, false}) {
+    std::string text = profile;
+    if (!bf16) text.replace(text.find("\"bf16\""), 6, "\"fp32\"");
+    RunOptions o;
+    o.out = scratch.file(bf16 ? "bf16.h5" : "fp32.h5");
+    o.threads = 1;
+    o.quiet = true;
+    run_profile(parse_profile(text, "toy.toml"), o);
+    std::set<std::string> marked;
+    for (const auto& r : read_results_records(o.out)) {
+      const auto it = r.num.find("bf16_products");
+      if (it != r.num.end() && it->second != 0) marked.insert(r.kind);
+    }
+    const std::set<std::string> want =
+        bf16 ? std::set<std::string>{"rep", "tpa"} : std::set<std::string>{};
+    EXPECT_EQ(marked, want);
+    const RunInfo info = read_run_info(o.out);
+    EXPECT_EQ(info.roof_bf16_gflops, bf16 ? bf16_roof_gflops_per_core() : 0.0);
+    EXPECT_GT(info.roof_fp32_gflops, 0);
+  }
 }
 
 }  // namespace

@@ -190,12 +190,42 @@ TEST(ResultsFile, TimingsGiveEachTaskItsShareOfTheLowerRoof) {
     return r;
   };
   const ResultTables t =
-      result_tables({rec("a", 1, 1, 0), rec("b", 2, 2, 10e9), rec("c", 4, 1, 50e9)}, 200, 20);
+      result_tables({rec("a", 1, 1, 0), rec("b", 2, 2, 10e9), rec("c", 4, 1, 50e9)}, {200, 0, 20});
   const H5Table& tm = t.at("timings");
   EXPECT_EQ(column(tm, "gflops").doubles, (std::vector<double>{100, 50, 25}));
   EXPECT_EQ(column(tm, "roof_percent").doubles, (std::vector<double>{50, 12.5, 12.5}));
   EXPECT_EQ(column(tm, "memory_roof_gflops").doubles, (std::vector<double>{0, 400, 40}));
   EXPECT_EQ(column(tm, "attainable_percent").doubles, (std::vector<double>{50, 12.5, 62.5}));
+  EXPECT_EQ(column(tm, "compute_roof_gflops").doubles, (std::vector<double>{200, 400, 200}));
+  EXPECT_EQ(column(tm, "precision").strings, (std::vector<std::string>{"fp32", "fp32", "fp32"}));
+}
+
+// A bf16 task against the bf16 roof, by hand: 100 GFLOP in 0.5 s = 200 GFLOP/s, with a 200 fp32
+// and an 800 bf16 roof per core → 25 % on 1 core, 12.5 % on 2; an fp32 task of the same run stays
+// against the fp32 roof (100 %); with no bf16 unit (bf16 roof 0: emulated products, fp32
+// arithmetic) the bf16 task is held to the fp32 roof too (100 %). Streaming 100 GB at 20 GB/s
+// gives the first a memory roof of 20, which is then its attainable roof (1000 %).
+TEST(ResultsFile, Bf16TasksAreMeasuredAgainstTheBf16Roof) {
+  auto rec = [](const std::string& key, bool bf16, double threads, double bytes) {
+    TaskRecord r;
+    r.key = key;
+    r.kind = "rep";
+    r.num = {{"seconds", 0.5}, {"flops", 100e9}, {"threads", threads}};
+    if (bf16) r.num["bf16_products"] = 1;
+    if (bytes > 0) r.num["stream_bytes"] = bytes;
+    return r;
+  };
+  const std::vector<TaskRecord> records = {rec("a", true, 1, 100e9), rec("b", true, 2, 0),
+                                           rec("c", false, 1, 0)};
+  const ResultTables with_unit = result_tables(records, {200, 800, 20});
+  const H5Table& tm = with_unit.at("timings");
+  EXPECT_EQ(column(tm, "precision").strings, (std::vector<std::string>{"bf16", "bf16", "fp32"}));
+  EXPECT_EQ(column(tm, "compute_roof_gflops").doubles, (std::vector<double>{800, 1600, 200}));
+  EXPECT_EQ(column(tm, "roof_percent").doubles, (std::vector<double>{25, 12.5, 100}));
+  EXPECT_EQ(column(tm, "attainable_percent").doubles, (std::vector<double>{1000, 12.5, 100}));
+  const ResultTables emulated = result_tables(records, {200, 0, 20});
+  EXPECT_EQ(column(emulated.at("timings"), "roof_percent").doubles,
+            (std::vector<double>{100, 50, 100}));
 }
 
 TEST(ResultsFile, ARecordMissingAColumnsKeyIsAnErrorNotAZero) {
