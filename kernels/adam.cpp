@@ -28,7 +28,9 @@ AdamStepScalars adam_begin_step(const AdamConfig& cfg, AdamState& st) {
   return s;
 }
 
-void adam_apply(const AdamStepScalars& s, float* p, const float* g, float* m, float* v, size_t n) {
+namespace {
+inline void adam_update(const AdamStepScalars& s, float* p, const float* g, float* m, float* v,
+                        size_t n) {
   const float b1 = s.b1, b2 = s.b2, eps = s.eps, step_size = s.step_size, bc2_sqrt = s.bc2_sqrt;
   const float one_minus_b1 = s.one_minus_b1, one_minus_b2 = s.one_minus_b2;
   constexpr float kNormal = std::numeric_limits<float>::min();  // 1.18e-38
@@ -44,6 +46,17 @@ void adam_apply(const AdamStepScalars& s, float* p, const float* g, float* m, fl
     const float denom = std::sqrt(vi) / bc2_sqrt + eps;
     p[i] -= step_size * (mi / denom);
   }
+}
+}  // namespace
+
+void adam_apply(const AdamStepScalars& s, float* p, const float* g, float* m, float* v, size_t n) {
+  adam_update(s, p, g, m, v, n);
+}
+
+void adam_apply_rows(const AdamStepScalars& s, float* p, size_t ld, const float* g, size_t ldg,
+                     float* m, float* v, size_t rows, size_t cols) {
+  for (size_t r = 0; r < rows; ++r)
+    adam_update(s, p + r * ld, g + r * ldg, m + r * ld, v + r * ld, cols);
 }
 
 void adam_step(const AdamConfig& cfg, AdamState& st, float* p, const float* g, size_t n) {

@@ -206,16 +206,28 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
   for (int l = L - 1; l >= 0; --l) {
     const int ni = s.widths[l], no = s.widths[l + 1];
     float* g = tape.grad.data();  // [batch, no] ∂L/∂(pre-activation)
-    mask_relu<float>(s, l, tape, g);
     const float* in = l == 0 ? tape.input : tape.act[l - 1].data();  // [batch, ni]
     const size_t w_off = s.weight_offset(l), b_off = s.bias_offset(l);
     float* W = params + w_off;  // [no, ni]
     {
-      // db [no] = Σ_rows g, rows in order (as mlp_backward), then the biases' update.
+      // In one pass over g: the ReLU mask (output > 0 ⇔ pre-activation > 0) and db [no] = Σ_rows
+      // g, rows in order (the same values and order as mask_relu then mlp_backward's sum). Then
+      // the biases' update.
       thread_local std::vector<float> db;
       db.assign(no, 0.f);
-      for (int r = 0; r < batch; ++r)
-        for (int j = 0; j < no; ++j) db[j] += g[size_t(r) * no + j];
+      const float* y = s.relu_after(l) ? tape.act[l].data() : nullptr;
+      for (int r = 0; r < batch; ++r) {
+        float* gr = g + size_t(r) * no;
+        if (y) {
+          const float* yr = y + size_t(r) * no;
+          for (int j = 0; j < no; ++j) {
+            gr[j] = yr[j] <= 0.f ? 0.f : gr[j];
+            db[j] += gr[j];
+          }
+        } else {
+          for (int j = 0; j < no; ++j) db[j] += gr[j];
+        }
+      }
       adam_apply(step, params + b_off, db.data(), m + b_off, v + b_off, no);
     }
     float* d_in = l > 0 ? tape.grad_next.data() : dx;  // [batch, ni]
@@ -239,14 +251,10 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
         matmul_bf16_tn_cols(dw.data(), nj, gh, inh, no, ni, batch, true, j0, nj);
       else
         matmul_tn_cols(dw.data(), nj, g, in, no, ni, batch, true, j0, nj);
-      if (nj == ni) {  // one slice: W and its scratch gradient are both contiguous [no, ni]
+      if (nj == ni)  // one slice: W and its scratch gradient are both contiguous [no, ni]
         adam_apply(step, W, dw.data(), m + w_off, v + w_off, size_t(no) * ni);
-      } else {
-        for (int i = 0; i < no; ++i) {
-          const size_t at = w_off + size_t(i) * ni + j0;
-          adam_apply(step, params + at, dw.data() + size_t(i) * nj, m + at, v + at, nj);
-        }
-      }
+      else
+        adam_apply_rows(step, W + j0, ni, dw.data(), nj, m + w_off + j0, v + w_off + j0, no, nj);
     };
     // fp32 products oneDNN serves go by blocks of rows (gemm.h, gemm_row_block): ∂L/∂input
     // first, whole, from the old W, then each block of W's rows: its gradient and its Adam update.

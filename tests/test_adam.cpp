@@ -114,5 +114,38 @@ TEST(Adam, FlushingUnderflowedMomentsKeepsTheParametersBits) {
   EXPECT_TRUE(reference_went_subnormal);  // the run crossed the range the flush changes
 }
 
+// adam_apply_rows on a 3 × 4 block of a 5 × 7 matrix (row stride 7, gradient stride 4): each of
+// the block's elements gets exactly adam_apply's update, and nothing outside the block changes.
+TEST(Adam, RowsOfABlockGetTheSameUpdateAndNothingElseMoves) {
+  const size_t R = 5, C = 7, rows = 3, cols = 4, r0 = 1, c0 = 2;
+  std::vector<float> p(R * C), m(R * C), v(R * C), g(rows * cols);
+  for (size_t i = 0; i < p.size(); ++i) {
+    p[i] = 0.1f * float(i) - 1.f;
+    m[i] = 0.01f * float(i % 5);
+    v[i] = 0.001f * float(i % 3);
+  }
+  for (size_t i = 0; i < g.size(); ++i) g[i] = 0.3f * float(i) - 1.45f;  // none 0
+  AdamConfig cfg;
+  AdamState st(0);
+  st.step = 4;
+  const AdamStepScalars sc = adam_begin_step(cfg, st);
+  std::vector<float> p2 = p, m2 = m, v2 = v;
+  const size_t at = r0 * C + c0;
+  adam_apply_rows(sc, p2.data() + at, C, g.data(), cols, m2.data() + at, v2.data() + at, rows,
+                  cols);
+  std::vector<float> p1 = p, m1 = m, v1 = v;
+  for (size_t r = 0; r < rows; ++r)
+    for (size_t c = 0; c < cols; ++c) {
+      const size_t i = (r0 + r) * C + c0 + c;
+      adam_apply(sc, &p1[i], &g[r * cols + c], &m1[i], &v1[i], 1);
+    }
+  EXPECT_EQ(p2, p1);
+  EXPECT_EQ(m2, m1);
+  EXPECT_EQ(v2, v1);
+  size_t moved = 0;
+  for (size_t i = 0; i < p.size(); ++i) moved += p2[i] != p[i];
+  EXPECT_EQ(moved, rows * cols);  // every element of the block (no gradient here is 0)
+}
+
 }  // namespace
 }  // namespace sirl
