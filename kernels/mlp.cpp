@@ -49,7 +49,7 @@ namespace {
 // bf16 (bf16_products): each operand is rounded once into a bf16 copy, then gemm_bf16.h
 // multiplies the copies. The forward pass keeps its copies of each layer's input and weights in
 // the tape for the backward pass; ∂L/∂(pre-activation) is rounded into a scratch per thread (the
-// batched forms run models on OpenMP threads).
+// batched training steps run models on OpenMP threads).
 
 // The forward pass's bf16 copies of layer l's operands, which a bf16 backward pass needs.
 const std::vector<uint16_t>& tape_copy(const std::vector<std::vector<uint16_t>>& copies, int l) {
@@ -176,29 +176,6 @@ void mlp_backward(const MlpShape& s, const T* params, MlpTape<T>& tape,
   }
 }
 
-template <typename T>
-void mlp_forward_batched(const MlpShape& s, int models, const T* params, const T* x, int batch,
-                         std::vector<MlpTape<T>>& tapes, int threads) {
-  const size_t P = s.param_count(), X = size_t(batch) * s.in();
-  tapes.resize(models);
-#pragma omp parallel for num_threads(std::max(1, threads)) schedule(static) if (threads > 1)
-  for (int m = 0; m < models; ++m) mlp_forward(s, params + m * P, x + m * X, batch, tapes[m], 1);
-}
-
-template <typename T>
-void mlp_backward_batched(const MlpShape& s, int models, const T* params,
-                          std::vector<MlpTape<T>>& tapes, const std::type_identity_t<T>* dout,
-                          std::type_identity_t<T>* dparams, std::type_identity_t<T>* dx,
-                          int threads) {
-  const size_t P = s.param_count(), X = size_t(tapes.empty() ? 0 : tapes[0].batch) * s.in();
-#pragma omp parallel for num_threads(std::max(1, threads)) schedule(static) if (threads > 1)
-  for (int m = 0; m < models; ++m) {
-    const size_t O = size_t(tapes[m].batch) * s.out();
-    mlp_backward(s, params + m * P, tapes[m], dout + m * O, dparams + m * P,
-                 dx ? dx + m * X : nullptr, 1);
-  }
-}
-
 void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, const float* dout,
                        const AdamStepScalars& step, float* m, float* v, int threads, float* dx) {
   const int L = s.layers(), batch = tape.batch;
@@ -283,17 +260,6 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
   }
 }
 
-void mlp_backward_adam_batched(const MlpShape& s, int models, float* params,
-                               std::vector<MlpTape<float>>& tapes, const float* dout,
-                               const AdamStepScalars& step, float* m, float* v, int threads) {
-  const size_t P = s.param_count();
-#pragma omp parallel for num_threads(std::max(1, threads)) schedule(static) if (threads > 1)
-  for (int k = 0; k < models; ++k) {
-    const size_t O = size_t(tapes[k].batch) * s.out();
-    mlp_backward_adam(s, params + k * P, tapes[k], dout + k * O, step, m + k * P, v + k * P, 1);
-  }
-}
-
 void mlp_init(const MlpShape& s, float* params, Rng& rng) {
   validate(s);
   for (int l = 0; l < s.layers(); ++l) {
@@ -306,13 +272,9 @@ void mlp_init(const MlpShape& s, float* params, Rng& rng) {
   }
 }
 
-#define SIRL_INSTANTIATE(T)                                                                       \
-  template void mlp_forward<T>(const MlpShape&, const T*, const T*, int, MlpTape<T>&, int);       \
-  template void mlp_backward<T>(const MlpShape&, const T*, MlpTape<T>&, const T*, T*, T*, int);   \
-  template void mlp_forward_batched<T>(const MlpShape&, int, const T*, const T*, int,             \
-                                       std::vector<MlpTape<T>>&, int);                            \
-  template void mlp_backward_batched<T>(const MlpShape&, int, const T*, std::vector<MlpTape<T>>&, \
-                                        const T*, T*, T*, int);
+#define SIRL_INSTANTIATE(T)                                                                 \
+  template void mlp_forward<T>(const MlpShape&, const T*, const T*, int, MlpTape<T>&, int); \
+  template void mlp_backward<T>(const MlpShape&, const T*, MlpTape<T>&, const T*, T*, T*, int);
 SIRL_INSTANTIATE(float)
 SIRL_INSTANTIATE(double)
 #undef SIRL_INSTANTIATE

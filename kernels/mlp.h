@@ -81,24 +81,6 @@ void mlp_backward_adam(const MlpShape& shape, float* params, MlpTape<float>& tap
                        const float* dout, const AdamStepScalars& step, float* m, float* v,
                        int threads = 1, float* dx = nullptr);
 
-// B models of one shape at once, each with its own weights and its own mini-batch:
-//   params [B, P], x [B, batch, in], tapes[b] holds model b's activations.
-// `threads` > 1 spreads the models over OpenMP threads (results identical for any count).
-template <typename T>
-void mlp_forward_batched(const MlpShape& shape, int models, const T* params, const T* x, int batch,
-                         std::vector<MlpTape<T>>& tapes, int threads = 1);
-// dout [B, batch, out]; dparams [B, P] accumulated; dx [B, batch, in] or null.
-template <typename T>
-void mlp_backward_batched(const MlpShape& shape, int models, const T* params,
-                          std::vector<MlpTape<T>>& tapes, const std::type_identity_t<T>* dout,
-                          std::type_identity_t<T>* dparams, std::type_identity_t<T>* dx,
-                          int threads = 1);
-
-// mlp_backward_adam for each of B models: params, m, v [B, P]; dout [B, batch, out].
-void mlp_backward_adam_batched(const MlpShape& shape, int models, float* params,
-                               std::vector<MlpTape<float>>& tapes, const float* dout,
-                               const AdamStepScalars& step, float* m, float* v, int threads = 1);
-
 // PyTorch's nn.Linear default: W ~ U(±1/√fan_in) (Kaiming-uniform with a = √5), b ~ U(±1/√fan_in).
 // Draws layer by layer, W row-major then b, from `rng`.
 void mlp_init(const MlpShape& shape, float* params, Rng& rng);

@@ -95,32 +95,6 @@ TEST(Mlp, ThreadedGemmIsBitIdentical) {
   EXPECT_EQ(g1, g2);
 }
 
-TEST(Mlp, BatchedEqualsOneModelAtATime) {
-  MlpShape s{{6, 16, 16, 1}};
-  const int models = 5, batch = 9;
-  const size_t P = s.param_count();
-  Rng rng(3);
-  std::vector<float> p(models * P), x(models * batch * 6), dout(models * batch);
-  for (int m = 0; m < models; ++m) mlp_init(s, p.data() + m * P, rng);
-  for (auto& v : x) v = float(rng.normal());
-  for (auto& v : dout) v = float(rng.normal());
-  for (int threads : {1, 2}) {
-    std::vector<MlpTape<float>> tapes;
-    std::vector<float> g(models * P, 0.f), dx(x.size(), 0.f);
-    mlp_forward_batched(s, models, p.data(), x.data(), batch, tapes, threads);
-    mlp_backward_batched(s, models, p.data(), tapes, dout.data(), g.data(), dx.data(), threads);
-    for (int m = 0; m < models; ++m) {
-      MlpTape<float> t;
-      std::vector<float> gm(P, 0.f), dxm(batch * 6, 0.f);
-      mlp_forward(s, p.data() + m * P, x.data() + m * batch * 6, batch, t);
-      mlp_backward(s, p.data() + m * P, t, dout.data() + m * batch, gm.data(), dxm.data());
-      for (int i = 0; i < batch; ++i) EXPECT_EQ(tapes[m].output()[i], t.output()[i]);
-      for (size_t i = 0; i < P; ++i) ASSERT_EQ(g[m * P + i], gm[i]);
-      for (int i = 0; i < batch * 6; ++i) ASSERT_EQ(dx[m * batch * 6 + i], dxm[i]);
-    }
-  }
-}
-
 // Three optimizer steps two ways: mlp_backward into a zeroed gradient then adam_step over all
 // parameters (the reference, gradient-checked above), and mlp_backward_adam. Weights and both
 // moments must agree to the bit, for every thread count.
@@ -179,38 +153,6 @@ TEST(Mlp, FusedBackwardAdamEqualsBackwardThenAdam) {
   // fp32 weight gradients oneDNN serves go by row blocks (600 × 520 with 40 rows: two dimensions
   // ≥ 512), 520 outputs = two blocks of 256 and a ragged one
   expect_fused_backward_adam_matches(MlpShape{{600, 520, 6}}, 40);
-}
-
-TEST(Mlp, FusedBatchedEqualsOneModelAtATime) {
-  MlpShape s{{6, 70, 1}};
-  const int models = 4, batch = 10;
-  const size_t P = s.param_count();
-  Rng rng(5);
-  std::vector<float> p0(models * P), x(models * batch * 6), dout(models * batch);
-  for (int m = 0; m < models; ++m) mlp_init(s, p0.data() + m * P, rng);
-  for (auto& v : x) v = float(rng.normal());
-  for (auto& v : dout) v = float(rng.normal());
-  AdamState one(models * P);
-  const AdamStepScalars sc = adam_begin_step(AdamConfig{0.05}, one);
-  std::vector<float> ref = p0;
-  for (int m = 0; m < models; ++m) {
-    MlpTape<float> t;
-    mlp_forward(s, ref.data() + m * P, x.data() + m * batch * 6, batch, t);
-    mlp_backward_adam(s, ref.data() + m * P, t, dout.data() + m * batch, sc, one.m.data() + m * P,
-                      one.v.data() + m * P);
-  }
-  for (int threads : {1, 2}) {
-    std::vector<float> p = p0;
-    AdamState adam(models * P);
-    std::vector<MlpTape<float>> tapes;
-    mlp_forward_batched(s, models, p.data(), x.data(), batch, tapes, threads);
-    mlp_backward_adam_batched(s, models, p.data(), tapes, dout.data(), sc, adam.m.data(),
-                              adam.v.data(), threads);
-    EXPECT_EQ(p, ref);
-    EXPECT_EQ(adam.m, one.m);
-    EXPECT_EQ(adam.v, one.v);
-    EXPECT_NE(p, p0);
-  }
 }
 
 TEST(Mlp, InitFollowsPyTorchLinearBounds) {
