@@ -95,6 +95,28 @@ TEST(Mlp, ThreadedGemmIsBitIdentical) {
   EXPECT_EQ(g1, g2);
 }
 
+// A training loop reuses one tape step after step: a forward pass into a used tape (its buffers
+// hold the last batch's activations) must give what a fresh tape gives, in fp32 and with bf16
+// products (the native kernel where the CPU has one: every product here is ≥ 32 wide).
+TEST(Mlp, AReusedTapeGivesWhatAFreshOneGives) {
+  for (const bool bf16 : {false, true}) {
+    MlpShape s{{40, 64, 48, 6}};
+    s.bf16_products = bf16;
+    Rng rng(13);
+    const int batch = 36;
+    std::vector<float> p(s.param_count()), x1(batch * 40), x2(batch * 40);
+    mlp_init(s, p.data(), rng);
+    for (auto& v : x1) v = float(rng.normal());
+    for (auto& v : x2) v = float(rng.normal());
+    MlpTape<float> used, fresh;
+    mlp_forward(s, p.data(), x1.data(), batch, used);
+    mlp_forward(s, p.data(), x2.data(), batch, used);
+    mlp_forward(s, p.data(), x2.data(), batch, fresh);
+    for (int l = 0; l < s.layers(); ++l)
+      EXPECT_EQ(used.act[l], fresh.act[l]) << "layer " << l << (bf16 ? ", bf16" : ", fp32");
+  }
+}
+
 // Three optimizer steps two ways: mlp_backward into a zeroed gradient then adam_step over all
 // parameters (the reference, gradient-checked above), and mlp_backward_adam. Weights and both
 // moments must agree to the bit, for every thread count.
