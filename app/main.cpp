@@ -6,8 +6,10 @@
 #include <string>
 
 #include "app/commands.h"
+#include "jobs/memory_reuse.h"
 
 int main(int argc, char** argv) {
+  sirl::keep_freed_memory_for_reuse();  // before any thread exists (jobs/memory_reuse.h)
   CLI::App app{
       "sirl-bench: reproduces the SIRL paper (Bobu, Liu et al., HRI 2023) - learning "
       "robot-behaviour\n"

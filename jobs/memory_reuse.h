@@ -1,0 +1,19 @@
+// How the process gets its large buffers back from the allocator. A JacoRobot TPA cell allocates
+// its 20 heads' weights and Adam moments afresh (254 MB frozen, 1 GB unfrozen) and frees them when
+// it ends. glibc serves blocks that large with mmap and returns them with munmap, so every cell
+// pays to fault its pages in again: on the 2-vCPU Xeon of 2026-12-03, 14 % of a frozen cell's
+// time was the kernel's page faults (`perf`), and the cell ran in 627 ms instead of 706 with
+// freed memory kept for reuse (`BM_TpaCell/jaco:1`, medians of 3).
+#pragma once
+
+namespace sirl {
+
+// Makes the allocator keep freed memory for the next allocation: no mmap for large blocks (they
+// come from the heap, whose freed space the next cell reuses), no trimming of the heap's top, and
+// one arena (the worker threads' own arenas would otherwise serve blocks over 64 MB with mmap
+// anyway). Call once at the start of main, before any thread exists. The cost: the process's
+// resident memory does not shrink while it runs (its peak is what `sirl plan` estimates).
+// Results do not depend on it (same table digests). A no-op with allocators other than glibc's.
+void keep_freed_memory_for_reuse();
+
+}  // namespace sirl
