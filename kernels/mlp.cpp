@@ -228,10 +228,8 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
         matmul_bf16_tn_cols(dw.data(), nj, gh, inh, no, ni, batch, true, j0, nj);
       else
         matmul_tn_cols(dw.data(), nj, g, in, no, ni, batch, true, j0, nj);
-      if (nj == ni)  // one slice: W and its scratch gradient are both contiguous [no, ni]
-        adam_apply(step, W, dw.data(), m + w_off, v + w_off, size_t(no) * ni);
-      else
-        adam_apply_rows(step, W + j0, ni, dw.data(), nj, m + w_off + j0, v + w_off + j0, no, nj);
+      // W[:, j0..] (row stride ni) with its scratch gradient [no, nj]
+      adam_apply_rows(step, W + j0, ni, dw.data(), nj, m + w_off + j0, v + w_off + j0, no, nj);
     };
     // fp32 products oneDNN serves go by blocks of rows (gemm.h, gemm_row_block): ∂L/∂input
     // first, whole, from the old W, then each block of W's rows: its gradient and its Adam update.
