@@ -85,6 +85,32 @@ BENCHMARK(BM_TpaCell)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The smallest cells of a quick run: 20 heads, M = 10 pairs each (one step an epoch), JacoRobot,
+// 15 epochs as quick's profile has them; frozen (heads only) and unfrozen (each head fine-tunes
+// its own copy of φ). Few FLOPs a byte: these are the cells a quick run spends at 25–30 GFLOP/s.
+void BM_TpaSmallCell(benchmark::State& state) {
+  const bool frozen = state.range(0) == 1;
+  const World& w = world(true);
+  Hyper h = paper_hyper("jaco");
+  h.tpa.epochs = 15;
+  Representation phi;
+  phi.shape = phi_shape(w.d.input_dim, h);
+  phi.params.resize(phi.shape.param_count());
+  Rng rng(3);
+  mlp_init(phi.shape, phi.params.data(), rng);
+  double flops = 0;
+  for (auto _ : state)
+    flops = evaluate_tpa(phi, w.d, w.b.tpa, TpaConfig{10, frozen, h, 1}, 5).train_flops;
+  state.counters["GFLOP/s"] =
+      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_TpaSmallCell)
+    ->ArgName("frozen")
+    ->Arg(1)
+    ->Arg(0)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 // Committing one representation's record (weights + loss curve): Grid φ (18k floats) and
 // Jaco φ (3.1 M floats), atomically (temporary file, fsync, rename).
 void BM_TaskCommit(benchmark::State& state) {

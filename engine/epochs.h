@@ -114,4 +114,63 @@ std::vector<float> run_epochs_batched(int64_t n, int epochs, int batch, std::vec
   return curves;
 }
 
+// The training run_epochs_batched runs, in another order: each model runs a stretch of epochs on
+// its own before the next model does (the models split over `threads`). Training 20 TPA heads side
+// by side streams every head's weights and Adam moments from memory each step (a JacoRobot head
+// with its copy of φ is 50 MB); one model's steps in a row find them in cache. The models are
+// independent (each its own order stream, weights, moments and examples), so every model's bits
+// and the curves are run_epochs_batched's.
+// step(m, rows, b, t) trains model m on rows[0..b) as its t-th optimizer step (1-based, counted
+// from the start of training) and returns its loss. at_epoch(e) is called whenever every model
+// stands at the end of epoch e (before a checkpoint is asked for, and at the end), for the caller
+// to bring its own state there (e.g. Adam's step count: e · batches per epoch).
+// Stretches: whole epochs, enough for ≥ `stretch_steps` steps of a model in a row. Checkpoints are
+// asked for after each (every model at the same epoch), so a stretch is also what a crash can
+// lose. Only the speed and the spacing of checkpoints depend on it, never the result.
+inline constexpr int kStretchSteps = 32;
+template <typename Step, typename AtEpoch>
+std::vector<float> run_epochs_model_by_model(int64_t n, int epochs, int batch,
+                                             std::vector<Rng>& rngs, int threads, Step&& step,
+                                             AtEpoch&& at_epoch,
+                                             const ResumableState* resume = nullptr,
+                                             int stretch_steps = kStretchSteps) {
+  const int R = int(rngs.size());
+  std::vector<float> curves(size_t(R) * size_t(epochs), 0.f);
+  if (n <= 0) return curves;
+  const int64_t per_epoch = (n + batch - 1) / batch;
+  int first = 0;
+  if (TrainingSnapshot s; epochs_detail::resume(resume, epochs, s)) {
+    first = s.epoch;
+    curves = s.get("loop/curves", curves.size());
+    for (int m = 0; m < R; ++m) s.get_rng("loop/order/" + std::to_string(m), rngs[m]);
+  }
+  const int stretch =
+      int(std::max<int64_t>(1, (std::max(1, stretch_steps) + per_epoch - 1) / per_epoch));
+  for (int e0 = first; e0 < epochs; e0 += stretch) {
+    const int e1 = std::min(epochs, e0 + stretch);
+#pragma omp parallel for num_threads(std::max(1, threads)) schedule(static) if (threads > 1)
+    for (int m = 0; m < R; ++m) {
+      std::vector<int32_t> order;
+      for (int e = e0; e < e1; ++e) {
+        shuffle_order(n, rngs[m], order);
+        double sum = 0;
+        for (int64_t i0 = 0; i0 < n; i0 += batch) {
+          const int b = int(n - i0 < batch ? n - i0 : batch);
+          sum += double(step(m, order.data() + i0, b, int64_t(e) * per_epoch + i0 / batch + 1)) * b;
+        }
+        curves[size_t(m) * epochs + e] = float(sum / double(n));
+      }
+    }
+    at_epoch(e1);
+    if (epochs_detail::due(resume, e1, epochs)) {
+      TrainingSnapshot s;
+      s.epoch = e1;
+      s.floats["loop/curves"] = curves;
+      for (int m = 0; m < R; ++m) s.put_rng("loop/order/" + std::to_string(m), rngs[m]);
+      epochs_detail::save(resume, s);
+    }
+  }
+  return curves;
+}
+
 }  // namespace sirl

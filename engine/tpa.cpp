@@ -121,28 +121,38 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
     order_rng.emplace_back(seed_from_key("tpa_order/" + std::to_string(r), seed));
   TpaResult res;
   res.epochs = h.tpa.epochs;
-  std::vector<int32_t> pairs;
-  std::vector<float> label;
+  // Each head's pairs and labels of its current batch, [R][2b] and [R][b].
+  std::vector<std::vector<int32_t>> pairs(R);
+  std::vector<std::vector<float>> label(R);
+  // Every epoch has the same batches: 3 passes of each batch's 2b rows through R networks.
+  double epoch_flops = 0;
+  for (int64_t i0 = 0; i0 < M; i0 += h.tpa.batch)
+    epoch_flops += 3 * R * net.forward_flops(2 * int(std::min<int64_t>(h.tpa.batch, M - i0)));
+  const int64_t batches = (M + h.tpa.batch - 1) / h.tpa.batch;
   const ResumableState resume =
       adam_resumable(cfg.checkpointer, "tpa", t.params, t.adam, res.train_flops);
-  res.loss_curves = run_epochs_batched(
-      M, res.epochs, h.tpa.batch, order_rng,
-      [&](const std::vector<const int32_t*>& order, int b) -> const std::vector<float>& {
-        pairs.resize(size_t(R) * b * 2);
-        label.resize(size_t(R) * b);
-        for (int r = 0; r < R; ++r)
-          for (int i = 0; i < b; ++i) {
-            const int64_t j = order[r][i];
-            pairs[(size_t(r) * b + i) * 2] = rows.train[r][2 * j];
-            pairs[(size_t(r) * b + i) * 2 + 1] = rows.train[r][2 * j + 1];
-            label[size_t(r) * b + i] = sets[r].pairs.label[j];
-          }
-        preference_train_step_batched(t, rows.X.data(), pairs.data(), label.data(), b,
-                                      float(h.tpa_l2), cfg.threads);
-        res.train_flops += 3 * R * net.forward_flops(2 * b);
-        return t.losses;
+  // Head by head: each head's steps in a row, its weights and moments in cache (the same bits as
+  // stepping all heads at once).
+  res.loss_curves = run_epochs_model_by_model(
+      M, res.epochs, h.tpa.batch, order_rng, cfg.threads,
+      [&](int r, const int32_t* order, int b, int64_t step) {
+        pairs[r].resize(size_t(b) * 2);
+        label[r].resize(size_t(b));
+        for (int i = 0; i < b; ++i) {
+          const int64_t j = order[i];
+          pairs[r][size_t(i) * 2] = rows.train[r][2 * j];
+          pairs[r][size_t(i) * 2 + 1] = rows.train[r][2 * j + 1];
+          label[r][i] = sets[r].pairs.label[j];
+        }
+        return preference_train_step_of_model(t, r, adam_step_scalars(h.tpa.adam, step),
+                                              rows.X.data(), pairs[r].data(), label[r].data(), b,
+                                              float(h.tpa_l2));
       },
-      &resume);
+      [&](int e) {
+        t.adam.step = e * batches;
+        res.train_flops = e * epoch_flops;
+      },
+      &resume, cfg.stretch_steps);
   require_finite(res.loss_curves, "TPA loss (frozen=" + std::to_string(cfg.frozen) + ")");
   require_finite(t.params, "TPA head weights");
 

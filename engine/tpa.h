@@ -1,6 +1,6 @@
 // Test Preference Accuracy (paper §4.3): how well φ supports learning new rewards from M
-// preference pairs. One reward head per test reward; the heads of a cell train side by side
-// through the batched MLP kernel.
+// preference pairs. One reward head per test reward; the heads of a cell train one after another,
+// each a stretch of steps in a row (engine/epochs.h, run_epochs_model_by_model).
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -8,6 +8,7 @@
 #include "datasets/dataset.h"
 #include "datasets/queries.h"
 #include "engine/checkpoint.h"
+#include "engine/epochs.h"
 #include "engine/hyperparams.h"
 #include "engine/representation.h"
 
@@ -20,6 +21,9 @@ struct TpaConfig {
   Hyper hyper;  // tpa.* (epochs, batch, Adam, hidden widths, L2)
   int threads = 1;
   Checkpointer* checkpointer = nullptr;  // saves / resumes the heads' training
+  // The heads train one after another, each this many steps in a row (rounded up to whole
+  // epochs) before the next; checkpoints fall between. Speed only: the result is the same.
+  int stretch_steps = kStretchSteps;
 };
 
 struct TpaResult {

@@ -113,6 +113,7 @@ BatchedTrainer::BatchedTrainer(MlpShape s, int m, AdamConfig cfg, std::vector<fl
       adam_cfg(cfg),
       params(std::move(initial)),
       adam(params.size()),
+      work(size_t(std::max(m, 0))),
       losses(m, 0.f) {
   validate(shape);
   if (params.size() != size_t(models) * shape.param_count())
@@ -121,32 +122,40 @@ BatchedTrainer::BatchedTrainer(MlpShape s, int m, AdamConfig cfg, std::vector<fl
 
 namespace {
 
-// One step of every model of t, model by model: each model's gather, forward pass, loss and
-// backward pass with its Adam update run back to back on one thread before its next model's.
-// A GridRobot head's weights, moments and activations (~0.4 MB) then stay in L2 from its forward
-// to its backward pass, where a pass over all 20 heads (8 MB) would have evicted them. idx
-// [M, B, roles] row indices into X; loss(m, out, d_out) returns model m's loss and writes
-// ∂L/∂output. The models are independent, so the bits are the same for any thread count.
+// Model m's step of t on its B examples idx [B, roles] (row indices into X): its gather, forward
+// pass, loss and backward pass with its Adam update back to back on the calling thread. A
+// GridRobot head's weights, moments and activations (~0.4 MB) then stay in L2 from its forward to
+// its backward pass, where a pass over all 20 heads (8 MB) would have evicted them.
+// loss(out, d_out) returns the model's loss and writes ∂L/∂output.
+template <typename Loss>
+float step_of_model(BatchedTrainer& t, int m, const AdamStepScalars& step, const float* X,
+                    const int32_t* idx, int B, int roles, Loss&& loss) {
+  const MlpShape& s = t.shape;
+  const int in = s.in(), rows = roles * B;
+  const size_t P = s.param_count();
+  BatchedTrainer::ModelWork& w = t.work[m];
+  w.x.resize(size_t(rows) * in);
+  w.d_out.resize(size_t(rows) * s.out());
+  gather_by_role(X, in, idx, B, roles, w.x.data());
+  mlp_forward(s, t.params.data() + m * P, w.x.data(), rows, w.tape, 1);
+  t.losses[m] = loss(w.tape.output(), w.d_out.data());
+  mlp_backward_adam(s, t.params.data() + m * P, w.tape, w.d_out.data(), step,
+                    t.adam.m.data() + m * P, t.adam.v.data() + m * P, 1);
+  return t.losses[m];
+}
+
+// One step of every model of t, model by model (step_of_model), idx [M, B, roles]. The models are
+// independent, so the bits are the same for any thread count. loss(m, out, d_out) as above for
+// model m.
 template <typename Loss>
 float step_model_by_model(BatchedTrainer& t, const float* X, const int32_t* idx, int B, int roles,
                           int threads, Loss&& loss) {
-  const MlpShape& s = t.shape;
-  const int in = s.in(), M = t.models, rows = roles * B;
-  const size_t per_model = size_t(rows) * in, out = size_t(rows) * s.out(), P = s.param_count();
-  t.batch_x.resize(M * per_model);
-  t.d_out.resize(M * out);
-  t.tapes.resize(M);
+  const int M = t.models;
   const AdamStepScalars step = adam_begin_step(t.adam_cfg, t.adam);
 #pragma omp parallel for num_threads(std::max(1, threads)) schedule(static) if (threads > 1)
-  for (int m = 0; m < M; ++m) {
-    float* x = t.batch_x.data() + m * per_model;
-    float* d_out = t.d_out.data() + m * out;
-    gather_by_role(X, in, idx + size_t(m) * B * roles, B, roles, x);
-    mlp_forward(s, t.params.data() + m * P, x, rows, t.tapes[m], 1);
-    t.losses[m] = loss(m, t.tapes[m].output(), d_out);
-    mlp_backward_adam(s, t.params.data() + m * P, t.tapes[m], d_out, step, t.adam.m.data() + m * P,
-                      t.adam.v.data() + m * P, 1);
-  }
+  for (int m = 0; m < M; ++m)
+    step_of_model(t, m, step, X, idx + size_t(m) * B * roles, B, roles,
+                  [&](const float* out, float* d_out) { return loss(m, out, d_out); });
   float total = 0;
   for (int m = 0; m < M; ++m) total += t.losses[m];
   return total / M;
@@ -158,6 +167,14 @@ float preference_train_step_batched(BatchedTrainer& t, const float* X, const int
                                     const float* label, int B, float l2_weight, int threads) {
   return step_model_by_model(t, X, pairs, B, 2, threads, [&](int m, const float* r, float* dr) {
     return bradley_terry_loss(r, label + size_t(m) * B, B, l2_weight, dr);
+  });
+}
+
+float preference_train_step_of_model(BatchedTrainer& t, int m, const AdamStepScalars& step,
+                                     const float* X, const int32_t* pairs, const float* label,
+                                     int B, float l2_weight) {
+  return step_of_model(t, m, step, X, pairs, B, 2, [&](const float* r, float* dr) {
+    return bradley_terry_loss(r, label, B, l2_weight, dr);
   });
 }
 

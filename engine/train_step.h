@@ -49,14 +49,19 @@ float multihead_preference_train_step(Trainer& t, int K, const float* X, const i
 // M reward heads of one shape trained side by side (the 20 TPA heads of a cell, or seeds),
 // each with its own weights, its own pairs and its own labels; one Adam over all M·P values.
 struct BatchedTrainer {
+  // One model's activations and scratch: separate per model, so models can step on different
+  // threads, and at different steps (run_epochs_model_by_model).
+  struct ModelWork {
+    MlpTape<float> tape;
+    std::vector<float> x, d_out;  // gathered inputs [roles·B, in], ∂L/∂output [roles·B, out]
+  };
   MlpShape shape;
   int models = 0;
   AdamConfig adam_cfg;
-  std::vector<float> params;  // [M, P]; the gradient is never stored (mlp_backward_adam)
-  AdamState adam;
-  std::vector<MlpTape<float>> tapes;
-  std::vector<float> batch_x, d_out;  // [M, 2B, in], [M, 2B]
-  std::vector<float> losses;          // [M] loss of each head at the last step
+  std::vector<float> params;    // [M, P]; the gradient is never stored (mlp_backward_adam)
+  AdamState adam;               // moments [M, P]; step = the steps every model has taken
+  std::vector<ModelWork> work;  // [M]
+  std::vector<float> losses;    // [M] loss of each head at the last step
 
   BatchedTrainer(MlpShape s, int models, AdamConfig cfg, std::vector<float> initial_params);
 };
@@ -69,5 +74,12 @@ float triplet_train_step_batched(BatchedTrainer& t, const float* X, const int32_
 // pairs [M, B, 2] row indices into X [T, in]; label [M, B]. Returns the mean loss over heads.
 float preference_train_step_batched(BatchedTrainer& t, const float* X, const int32_t* pairs,
                                     const float* label, int B, float l2_weight, int threads = 1);
+
+// Model m's part of preference_train_step_batched alone, as Adam's step `step` (the same bits):
+// pairs [B, 2] row indices into X, label [B]. Sets and returns t.losses[m]; t.adam.step is the
+// caller's to keep. Calls for different models may run at once on different threads.
+float preference_train_step_of_model(BatchedTrainer& t, int m, const AdamStepScalars& step,
+                                     const float* X, const int32_t* pairs, const float* label,
+                                     int B, float l2_weight);
 
 }  // namespace sirl

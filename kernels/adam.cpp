@@ -10,7 +10,10 @@ double adam_lr(const AdamConfig& cfg, int64_t t) {
 }
 
 AdamStepScalars adam_begin_step(const AdamConfig& cfg, AdamState& st) {
-  const int64_t t = ++st.step;
+  return adam_step_scalars(cfg, ++st.step);
+}
+
+AdamStepScalars adam_step_scalars(const AdamConfig& cfg, int64_t t) {
   const double lr = adam_lr(cfg, t);
   // torch.optim.Adam (1.13, single-tensor path), float tensors with double scalars cast to float:
   //   m = m·β1 + g·(1−β1);  v = v·β2 + g·g·(1−β2)

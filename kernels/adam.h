@@ -31,6 +31,10 @@ struct AdamStepScalars {
 // Learning rate used by step number `t` (1-based): lr·decay^(t−1).
 double adam_lr(const AdamConfig& cfg, int64_t t);
 
+// The scalars of step number `t` (1-based), whatever the state: models trained one after another
+// (engine/epochs.h, run_epochs_model_by_model) each need step t's while another is at another step.
+AdamStepScalars adam_step_scalars(const AdamConfig& cfg, int64_t t);
+
 // Starts a step: counts it in `state` and returns its scalars.
 AdamStepScalars adam_begin_step(const AdamConfig& cfg, AdamState& state);
 

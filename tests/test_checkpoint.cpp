@@ -95,21 +95,25 @@ TEST(Checkpoint, VaeResumesBitIdentical) {
 
 TEST(Checkpoint, TpaHeadsFrozenAndUnfrozenResumeBitIdentical) {
   const World& w = world();
-  for (bool frozen : {true, false}) {
-    const auto [plain, saving, resumed] = three_ways(
-        [&](Checkpointer* c) {
-          TpaConfig cfg{20, frozen, short_hyper()};
-          cfg.checkpointer = c;
-          return evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, cfg, 3);
-        },
-        4);
-    for (const TpaResult* r : {&saving, &resumed}) {
-      EXPECT_EQ(r->accuracy, plain.accuracy) << "frozen " << frozen;
-      EXPECT_EQ(r->loss_curves, plain.loss_curves) << "frozen " << frozen;
-      EXPECT_EQ(r->phi_drift, plain.phi_drift) << "frozen " << frozen;
-      EXPECT_EQ(r->train_flops, plain.train_flops) << "frozen " << frozen;
+  // The heads train one after another in stretches of epochs (M = 20 < one batch: one step an
+  // epoch), checkpoints between stretches: every epoch (stretch 1), every second (stretch 2).
+  for (bool frozen : {true, false})
+    for (int stretch : {1, 2}) {
+      const auto [plain, saving, resumed] = three_ways(
+          [&](Checkpointer* c) {
+            TpaConfig cfg{20, frozen, short_hyper()};
+            cfg.checkpointer = c;
+            cfg.stretch_steps = stretch;
+            return evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, cfg, 3);
+          },
+          4);
+      for (const TpaResult* r : {&saving, &resumed}) {
+        EXPECT_EQ(r->accuracy, plain.accuracy) << "frozen " << frozen << ", stretch " << stretch;
+        EXPECT_EQ(r->loss_curves, plain.loss_curves) << "frozen " << frozen;
+        EXPECT_EQ(r->phi_drift, plain.phi_drift) << "frozen " << frozen;
+        EXPECT_EQ(r->train_flops, plain.train_flops) << "frozen " << frozen;
+      }
     }
-  }
 }
 
 TEST(Checkpoint, TheLastEpochIsNeverSavedAndResumingChangesTheOutcomeOnlyByTheSavedState) {

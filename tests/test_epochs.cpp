@@ -71,5 +71,56 @@ TEST(Epochs, TheBatchedFormGivesEachModelItsOwnOrderAndTheSameBatchSizes) {
   EXPECT_FLOAT_EQ(curves[3], 19.0f / 7);
 }
 
+// A toy training for the loop tests: each model's state folds in every batch it sees and the
+// step number it is told, in order, so any change of order, rows or numbering changes it.
+struct ToyModels {
+  std::vector<uint64_t> state;
+  explicit ToyModels(int R) : state(R, 1) {}
+  float step(int m, const int32_t* rows, int b, int64_t t) {
+    uint64_t& s = state[m];
+    for (int i = 0; i < b; ++i) s = s * 1000003u + uint64_t(rows[i]) + 7;
+    s = s * 31 + uint64_t(t);
+    return float(s % 1000) / 8;
+  }
+};
+
+TEST(Epochs, ModelByModelIsTheBatchedTrainingInAnotherOrderWhateverTheStretchAndThreads) {
+  const int R = 3, epochs = 5, batch = 3;
+  const int64_t n = 7;  // 3 batches an epoch: 3, 3, 1
+  // The reference: every model one step at a time, step numbers counted from 1.
+  std::vector<Rng> rngs_b{Rng(1), Rng(2), Rng(3)};
+  ToyModels ref(R);
+  int64_t t = 0;
+  std::vector<float> losses(R);
+  const auto curves_b = run_epochs_batched(
+      n, epochs, batch, rngs_b,
+      [&](const std::vector<const int32_t*>& rows, int b) -> const std::vector<float>& {
+        ++t;
+        for (int m = 0; m < R; ++m) losses[m] = ref.step(m, rows[m], b, t);
+        return losses;
+      });
+  ASSERT_EQ(t, epochs * 3);
+  for (int threads : {1, 2})
+    for (int stretch : {1, 4, 100}) {  // 1 epoch, 2 epochs (4 steps), all epochs
+      std::vector<Rng> rngs{Rng(1), Rng(2), Rng(3)};
+      ToyModels toy(R);
+      std::vector<int> at;
+      const auto curves = run_epochs_model_by_model(
+          n, epochs, batch, rngs, threads,
+          [&](int m, const int32_t* rows, int b, int64_t step) {
+            return toy.step(m, rows, b, step);
+          },
+          [&](int e) { at.push_back(e); }, nullptr, stretch);
+      EXPECT_EQ(toy.state, ref.state) << "stretch " << stretch << ", threads " << threads;
+      EXPECT_EQ(curves, curves_b) << "stretch " << stretch << ", threads " << threads;
+      const std::vector<int> expect_at = stretch == 1   ? std::vector<int>{1, 2, 3, 4, 5}
+                                         : stretch == 4 ? std::vector<int>{2, 4, 5}
+                                                        : std::vector<int>{5};
+      EXPECT_EQ(at, expect_at) << "stretch " << stretch;
+      for (int m = 0; m < R; ++m)  // the order streams end where the batched loop left them
+        EXPECT_EQ(rngs[m].uniform_int(1000000), Rng(rngs_b[m]).uniform_int(1000000));
+    }
+}
+
 }  // namespace
 }  // namespace sirl

@@ -142,17 +142,22 @@ TEST(Tpa, MeanAndSampleStandardDeviationOverTheRewards) {
   EXPECT_GT(r.stddev, 0);
 }
 
-TEST(Tpa, SameResultWhateverTheThreadCount) {
+TEST(Tpa, SameResultWhateverTheThreadCountAndTheHeadsStretches) {
   const World& w = world();
   Hyper h = fast_hyper();
   h.tpa.epochs = 10;
+  h.tpa.batch = 16;  // M = 50: 4 steps an epoch; M = 30: 2
   for (bool frozen : {false, true}) {
     TpaConfig c{frozen ? 50 : 30, frozen, h, 1};
     const TpaResult a = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 4);
-    c.threads = 2;
-    const TpaResult b = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 4);
-    EXPECT_EQ(a.accuracy, b.accuracy) << "frozen " << frozen;
-    EXPECT_EQ(a.loss_curves, b.loss_curves) << "frozen " << frozen;
+    for (auto [threads, stretch] : {std::pair{2, kStretchSteps}, {1, 1}, {2, 5}}) {
+      c.threads = threads;
+      c.stretch_steps = stretch;  // 1 epoch; 2 or 3 epochs
+      const TpaResult b = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 4);
+      EXPECT_EQ(a.accuracy, b.accuracy) << "frozen " << frozen << ", stretch " << stretch;
+      EXPECT_EQ(a.loss_curves, b.loss_curves) << "frozen " << frozen << ", stretch " << stretch;
+      EXPECT_EQ(a.train_flops, b.train_flops) << "frozen " << frozen;
+    }
   }
 }
 

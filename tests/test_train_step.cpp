@@ -76,5 +76,43 @@ TEST(TrainStep, BatchedStepsEqualEachModelAloneWhateverTheThreadCount) {
   expect_batched_equals_alone(MlpShape{{19, 64, 64, 6}}, 3, trip_batched, trip_alone);
 }
 
+TEST(TrainStep, APreferenceModelSteppedAloneAtItsOwnPaceEqualsTheBatchedStep) {
+  // preference_train_step_of_model, as run_epochs_model_by_model calls it: model after model (in
+  // reverse, each its three steps in a row) with Adam's scalars by step number, against every
+  // model stepped at once by preference_train_step_batched.
+  MlpShape s{{19, 40, 6, 40, 1}};
+  s.linear_layers = {1};
+  const int M = 3, B = 5, T = 30, steps = 3;
+  const size_t P = s.param_count();
+  Rng rng(8);
+  std::vector<float> X(size_t(T) * s.in()), p0(M * P);
+  for (auto& v : X) v = float(rng.normal());
+  for (int m = 0; m < M; ++m) mlp_init(s, p0.data() + m * P, rng);
+  std::vector<int32_t> pairs(size_t(steps) * M * B * 2);
+  std::vector<float> label(size_t(steps) * M * B);
+  for (auto& v : pairs) v = int32_t(rng.uniform_int(T));
+  for (auto& v : label) v = float(rng.uniform_int(2));
+  const AdamConfig cfg{0.01, 0.99};  // a decaying rate, so a wrong step number shows
+  BatchedTrainer all(s, M, cfg, p0), each(s, M, cfg, p0);
+  std::vector<float> loss_all;
+  for (int k = 0; k < steps; ++k) {
+    preference_train_step_batched(all, X.data(), pairs.data() + size_t(k) * M * B * 2,
+                                  label.data() + size_t(k) * M * B, B, 0.5f);
+    loss_all.insert(loss_all.end(), all.losses.begin(), all.losses.end());
+  }
+  for (int m = M - 1; m >= 0; --m)
+    for (int k = 0; k < steps; ++k) {
+      const float loss =
+          preference_train_step_of_model(each, m, adam_step_scalars(cfg, k + 1), X.data(),
+                                         pairs.data() + (size_t(k) * M + m) * B * 2,
+                                         label.data() + (size_t(k) * M + m) * B, B, 0.5f);
+      EXPECT_EQ(loss, loss_all[size_t(k) * M + m]) << "model " << m << ", step " << k;
+    }
+  EXPECT_EQ(each.params, all.params);
+  EXPECT_EQ(each.adam.m, all.adam.m);
+  EXPECT_EQ(each.adam.v, all.adam.v);
+  EXPECT_NE(each.params, p0);
+}
+
 }  // namespace
 }  // namespace sirl
