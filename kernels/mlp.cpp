@@ -221,13 +221,15 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
       // d_in[:, j0..] [batch, nj] = g [batch, no] · W[:, j0..] [no, nj], with W before its update
       if (d_in && h) matmul_bf16_nn_cols(d_in + j0, ni, gh, Wh, batch, ni, no, false, j0, nj);
       if (d_in && !h) matmul_nn_cols(d_in + j0, ni, g, W, batch, ni, no, false, j0, nj);
-      // dW[:, j0..] [no, nj] = gᵀ [no, batch] · in[:, j0..] [batch, nj], into a zeroed scratch
+      // dW[:, j0..] [no, nj] = gᵀ [no, batch] · in[:, j0..] [batch, nj], written over a scratch
+      // (not added to a zeroed one: the same values but for the sign of a zero sum, which Adam's
+      // m = β1·m + (1−β1)·g and v = β2·v + (1−β2)·g² cannot tell from m = v = +0 on)
       thread_local std::vector<float> dw;
-      dw.assign(size_t(no) * nj, 0.f);
+      dw.resize(size_t(no) * nj);
       if (h)
-        matmul_bf16_tn_cols(dw.data(), nj, gh, inh, no, ni, batch, true, j0, nj);
+        matmul_bf16_tn_cols(dw.data(), nj, gh, inh, no, ni, batch, false, j0, nj);
       else
-        matmul_tn_cols(dw.data(), nj, g, in, no, ni, batch, true, j0, nj);
+        matmul_tn_cols(dw.data(), nj, g, in, no, ni, batch, false, j0, nj);
       // W[:, j0..] (row stride ni) with its scratch gradient [no, nj]
       adam_apply_rows(step, W + j0, ni, dw.data(), nj, m + w_off + j0, v + w_off + j0, no, nj);
     };
@@ -237,8 +239,8 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
     const auto rows = [&](int p) {
       const int i0 = p * row_block, mi = std::min(row_block, no - i0);
       thread_local std::vector<float> dw;
-      dw.assign(size_t(mi) * ni, 0.f);  // zeroed and accumulated into, as mlp_backward's dW
-      matmul_tn_rows(dw.data(), g, in, no, ni, batch, true, i0, mi);
+      dw.resize(size_t(mi) * ni);  // written over, as the slices' scratch above
+      matmul_tn_rows(dw.data(), g, in, no, ni, batch, false, i0, mi);
       const size_t at = w_off + size_t(i0) * ni;
       adam_apply(step, params + at, dw.data(), m + at, v + at, size_t(mi) * ni);
     };
