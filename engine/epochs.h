@@ -117,7 +117,8 @@ std::vector<float> run_epochs_batched(int64_t n, int epochs, int batch, std::vec
 // The training run_epochs_batched runs, in another order: each model runs a stretch of epochs on
 // its own before the next model does (the models split over `threads`). Training 20 TPA heads side
 // by side streams every head's weights and Adam moments from memory each step (a JacoRobot head
-// with its copy of φ is 50 MB); one model's steps in a row find them in cache. The models are
+// with its copy of φ is 50 MB); one model's steps in a row find more of them in cache (a quick
+// run's smallest JacoRobot cells ran 1.35–1.4× faster, docs/roofline.md). The models are
 // independent (each its own order stream, weights, moments and examples), so every model's bits
 // and the curves are run_epochs_batched's.
 // step(m, rows, b, t) trains model m on rows[0..b) as its t-th optimizer step (1-based, counted

@@ -84,7 +84,7 @@ struct ToyModels {
   }
 };
 
-TEST(Epochs, ModelByModelIsTheBatchedTrainingInAnotherOrderWhateverTheStretchAndThreads) {
+TEST(Epochs, ModelByModelIsTheBatchedTrainingInAnotherOrderWhateverTheStretchAndThreadCount) {
   const int R = 3, epochs = 5, batch = 3;
   const int64_t n = 7;  // 3 batches an epoch: 3, 3, 1
   // The reference: every model one step at a time, step numbers counted from 1.

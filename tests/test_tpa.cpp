@@ -142,7 +142,7 @@ TEST(Tpa, MeanAndSampleStandardDeviationOverTheRewards) {
   EXPECT_GT(r.stddev, 0);
 }
 
-TEST(Tpa, SameResultWhateverTheThreadCountAndTheHeadsStretches) {
+TEST(Tpa, SameResultWhateverTheHeadsStretchesAndTheThreadCount) {
   const World& w = world();
   Hyper h = fast_hyper();
   h.tpa.epochs = 10;
