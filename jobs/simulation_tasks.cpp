@@ -79,17 +79,20 @@ double working_set(const MlpShape& s, int batch_rows) {
   return 4.0 * (4.0 * double(s.param_count()) + 2 * act);
 }
 
-// Main-memory traffic of an Adam training whose state does not fit a core's share of the caches
-// (kCacheShare: Zen 4's 1 MiB L2 + a 32 MiB L3 shared by 8 cores): every optimizer step reads the
-// weights twice (forward, backward), writes and reads the gradient, reads and writes Adam's m and
-// v and the weights: 9 floats = 36 bytes per parameter per step. `models` trains side by side.
+// Main-memory traffic of an Adam training whose state (weights and both moments, plus a
+// gradient's worth of slack: 16 bytes a parameter) does not fit a core's share of the caches
+// (kCacheShare: Zen 4's 1 MiB L2 + a 32 MiB L3 shared by 8 cores). Every optimizer step reads the
+// weights three times (the forward pass, ∂L/∂input, Adam's update) and Adam's m and v, and writes
+// the weights, m and v: 8 floats = 32 bytes a parameter. (The gradient is never stored: every
+// step fuses Adam into its backward pass, kernels/mlp.h.) `models` step side by side, one step
+// of each in turn (an active-selection ensemble), so all of their states must fit.
 constexpr double kCacheShare = 5.0 * 1024 * 1024;
 double stream_bytes(const MlpShape& s, int64_t rows_per_epoch, int batch, int epochs,
                     int models = 1) {
   const double state = 16.0 * double(s.param_count()) * models;
   if (state <= kCacheShare) return 0;
   const double steps = double(epochs) * double((rows_per_epoch + batch - 1) / std::max(1, batch));
-  return 36.0 * double(s.param_count()) * models * steps;
+  return 32.0 * double(s.param_count()) * models * steps;
 }
 
 // ---- what the runners share ----
@@ -284,7 +287,8 @@ void tpa_cost(Task& t, const Profile& p) {
   const MlpShape net = tpa_network(z.phi, z.h, t.frozen);
   t.flops = kTestRewards * train_flops(net, 2 * t.M, z.h.tpa.epochs);
   t.bytes = kTestRewards * working_set(net, 2 * z.h.tpa.batch);
-  t.stream_bytes = stream_bytes(net, 2 * t.M, 2 * z.h.tpa.batch, z.h.tpa.epochs, kTestRewards);
+  // The heads train one after another (engine/tpa.h): what must fit the cache is one head's.
+  t.stream_bytes = kTestRewards * stream_bytes(net, 2 * t.M, 2 * z.h.tpa.batch, z.h.tpa.epochs);
 }
 
 // Converged when every head's loss curve is (the fraction tells how many were); the relative
