@@ -174,27 +174,39 @@ def sirl_run_case(widths, N, epochs, T, B=64):
     return run, flops(widths, 3 * N * epochs)
 
 
-def tpa_cell_case(phi_widths, hidden, epochs, T, M=100, R=20, B=64, l2=10.0):
-    """One TPA cell as people write it: φ frozen (embeddings under no_grad), then for each of R
-    test rewards its own head and optimizer, trained on M pairs, shuffled mini-batches."""
+def tpa_cell_case(phi_widths, hidden, epochs, T, M=100, R=20, B=64, l2=10.0, frozen=True):
+    """One TPA cell as people write it: for each of R test rewards its own network and optimizer,
+    trained on M pairs, shuffled mini-batches. Frozen: φ's embeddings computed once under no_grad,
+    and a head on them; unfrozen: each reward fine-tunes its own copy of φ with its head (φ's
+    output layer stays linear), on the raw inputs."""
     x = torch.randn(T, phi_widths[0])
     phi = mlp(phi_widths)
     pairs = torch.randint(0, T, (R, M, 2))
     labels = torch.randint(0, 2, (R, M)).float()
-    widths = [phi_widths[-1], hidden, hidden, 1]
+    head_widths = [phi_widths[-1], hidden, hidden, 1]
+    widths = head_widths if frozen else phi_widths + head_widths[1:]
 
     def run():
-        with torch.no_grad():
-            emb = phi(x)
+        if frozen:
+            with torch.no_grad():
+                inputs = phi(x)
+        else:
+            inputs = x
         for r in range(R):
-            head = mlp(widths)
-            opt = torch.optim.Adam(head.parameters(), lr=0.001)
+            net = mlp(widths, () if frozen else (len(phi_widths) - 2,))
+            if not frozen:  # φ's layers first, from φ's weights
+                with torch.no_grad():
+                    for dst, src in zip(net, phi):
+                        if isinstance(src, torch.nn.Linear):
+                            dst.weight.copy_(src.weight)
+                            dst.bias.copy_(src.bias)
+            opt = torch.optim.Adam(net.parameters(), lr=0.001)
             for _ in range(epochs):
                 perm = torch.randperm(M)
                 for i in range(0, M, B):
                     idx = perm[i:i + B]
-                    ra = head(emb[pairs[r, idx, 0]]).squeeze(1)
-                    rb = head(emb[pairs[r, idx, 1]]).squeeze(1)
+                    ra = net(inputs[pairs[r, idx, 0]]).squeeze(1)
+                    rb = net(inputs[pairs[r, idx, 1]]).squeeze(1)
                     loss = (torch.nn.functional.binary_cross_entropy_with_logits(ra - rb, labels[r, idx])
                             + l2 * (ra ** 2 + rb ** 2).mean())
                     opt.zero_grad()
@@ -252,10 +264,15 @@ def main():
             "sirl_run_jaco": sirl_run_case([2037, 1024, 1024, 6], N=200, epochs=2, T=2000),
             "tpa_cell_grid": tpa_cell_case([19, 128, 128, 6], 128, epochs=20, T=1960),
             "tpa_cell_jaco": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=2, T=2000, l2=1.0),
+            # quick's smallest JacoRobot cells (BM_TpaSmallCell): M = 10, 15 epochs
+            "tpa_small_cell_jaco_frozen": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=15,
+                                                        T=2000, M=10, l2=1.0),
+            "tpa_small_cell_jaco_unfrozen": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=15,
+                                                          T=2000, M=10, l2=1.0, frozen=False),
         })
     out = {"torch": torch.__version__, "threads": args.threads}
     for name, (step, fl) in cases.items():
-        s = time_case(step, args.min_time, args.repeats) if not name.startswith(("sirl_run", "tpa_cell")) \
+        s = time_case(step, args.min_time, args.repeats) if not name.startswith(("sirl_run", "tpa_cell", "tpa_small_cell")) \
             else time_run(step, args.repeats)
         out[name] = {"ms": s * 1e3, "gflops": fl / s * 1e-9, "steps_per_s": 1 / s}
     print(json.dumps(out))
