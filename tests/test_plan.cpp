@@ -101,25 +101,36 @@ TEST(Plan, MarksTheCellsOfTheMainGridAndOfTheAblation) {
 // The cost model's main-memory traffic of a TPA cell (what /tables/timings turns into its memory
 // roof): the 20 heads train one after another, so a cell streams only when one head's weights and
 // moments (16 bytes a parameter) outgrow a core's cache share (5 MiB), and then 32 bytes a
-// parameter a step. Quick's cells, by hand:
+// parameter a step. By hand, with quick's settings (64 pairs a batch, 15 JacoRobot epochs):
 //  - GridRobot unfrozen, φ 19→128→128→6 (19 846) + head 6→128→128→1 (17 537): 37 383 parameters,
 //    598 KB: in cache (before, the 20 heads' 12 MB together counted as streaming);
 //  - JacoRobot unfrozen, φ 2037→1024→1024→6 (3 142 662) + head 6→1024→1024→1 (1 057 793):
-//    4 200 455 parameters; M = 10 is one step an epoch (64 pairs a batch), 15 epochs:
-//    20 × 32 × 4 200 455 × 15 bytes;
-//  - JacoRobot frozen, the head alone (1 057 793 parameters, 17 MB), M = 100: 2 steps × 15 epochs.
+//    4 200 455 parameters; M = 10 is one step an epoch: 20 × 32 × 4 200 455 × 15 bytes;
+//  - JacoRobot frozen, the head alone (1 057 793 parameters, 17 MB), M = 100: 2 steps an epoch.
 TEST(Plan, ATpaCellStreamsOnlyWhatOneHeadCannotKeepInCache) {
-  const Plan plan = make_plan(load_profile(std::string(SIRL_SOURCE_DIR) + "/configs/quick.toml"));
+  const Profile p = parse_profile(R"(
+name = "stream"
+envs = ["grid", "jaco"]
+seeds = [0]
+[tpa]
+methods = ["sirl", "multipref10"]
+N = [100]
+M = [10, 100]
+frozen = [true, false]
+[hyper.jaco]
+"tpa.epochs" = 15
+)",
+                                  "stream.toml");
   int grid = 0, jaco10 = 0, jaco100 = 0;
-  for (const Task& t : plan.tasks) {
+  for (const Task& t : make_plan(p).tasks) {
     if (t.kind != TaskKind::tpa) continue;
     if (t.env == "grid") {
       EXPECT_EQ(t.stream_bytes, 0.0) << t.key;
-      ++grid;
-    } else if (t.env == "jaco" && !t.frozen && t.M == 10) {
+      grid += !t.frozen;
+    } else if (!t.frozen && t.M == 10) {
       EXPECT_DOUBLE_EQ(t.stream_bytes, 20.0 * 32 * 4200455 * 15) << t.key;
       ++jaco10;
-    } else if (t.env == "jaco" && t.frozen && t.M == 100) {
+    } else if (t.frozen && t.M == 100) {
       EXPECT_DOUBLE_EQ(t.stream_bytes, 20.0 * 32 * 1057793 * 2 * 15) << t.key;
       ++jaco100;
     }
