@@ -40,6 +40,24 @@ inline void save(const ResumableState* r, TrainingSnapshot& s) {
   r->save(s);
   r->checkpointer->save(s);
 }
+// R models' loop state: curves [R, epochs] and each model's order stream. Returns the epoch a
+// saved state resumes from (0: none).
+inline int resume_models(const ResumableState* r, int epochs, std::vector<float>& curves,
+                         std::vector<Rng>& rngs) {
+  TrainingSnapshot s;
+  if (!resume(r, epochs, s)) return 0;
+  curves = s.get("loop/curves", curves.size());
+  for (size_t m = 0; m < rngs.size(); ++m) s.get_rng("loop/order/" + std::to_string(m), rngs[m]);
+  return s.epoch;
+}
+inline void save_models(const ResumableState* r, int epoch, const std::vector<float>& curves,
+                        const std::vector<Rng>& rngs) {
+  TrainingSnapshot s;
+  s.epoch = epoch;
+  s.floats["loop/curves"] = curves;
+  for (size_t m = 0; m < rngs.size(); ++m) s.put_rng("loop/order/" + std::to_string(m), rngs[m]);
+  save(r, s);
+}
 }  // namespace epochs_detail
 
 // `epochs` passes over n examples in shuffled mini-batches. step(rows, b) trains on the b example
@@ -87,12 +105,7 @@ std::vector<float> run_epochs_batched(int64_t n, int epochs, int batch, std::vec
   std::vector<std::vector<int32_t>> order(R);
   std::vector<const int32_t*> rows(R);
   std::vector<double> sum(R);
-  int first = 0;
-  if (TrainingSnapshot s; n > 0 && epochs_detail::resume(resume, epochs, s)) {
-    first = s.epoch;
-    curves = s.get("loop/curves", curves.size());
-    for (size_t m = 0; m < R; ++m) s.get_rng("loop/order/" + std::to_string(m), rngs[m]);
-  }
+  const int first = n > 0 ? epochs_detail::resume_models(resume, epochs, curves, rngs) : 0;
   for (int e = first; e < epochs && n > 0; ++e) {
     for (size_t m = 0; m < R; ++m) shuffle_order(n, rngs[m], order[m]);
     std::fill(sum.begin(), sum.end(), 0.0);
@@ -103,13 +116,8 @@ std::vector<float> run_epochs_batched(int64_t n, int epochs, int batch, std::vec
       for (size_t m = 0; m < R; ++m) sum[m] += double(losses[m]) * b;
     }
     for (size_t m = 0; m < R; ++m) curves[m * epochs + e] = float(sum[m] / double(n));
-    if (epochs_detail::due(resume, e + 1, epochs)) {
-      TrainingSnapshot s;
-      s.epoch = e + 1;
-      s.floats["loop/curves"] = curves;
-      for (size_t m = 0; m < R; ++m) s.put_rng("loop/order/" + std::to_string(m), rngs[m]);
-      epochs_detail::save(resume, s);
-    }
+    if (epochs_detail::due(resume, e + 1, epochs))
+      epochs_detail::save_models(resume, e + 1, curves, rngs);
   }
   return curves;
 }
@@ -139,12 +147,7 @@ std::vector<float> run_epochs_model_by_model(int64_t n, int epochs, int batch,
   std::vector<float> curves(size_t(R) * size_t(epochs), 0.f);
   if (n <= 0) return curves;
   const int64_t per_epoch = (n + batch - 1) / batch;
-  int first = 0;
-  if (TrainingSnapshot s; epochs_detail::resume(resume, epochs, s)) {
-    first = s.epoch;
-    curves = s.get("loop/curves", curves.size());
-    for (int m = 0; m < R; ++m) s.get_rng("loop/order/" + std::to_string(m), rngs[m]);
-  }
+  const int first = epochs_detail::resume_models(resume, epochs, curves, rngs);
   const int stretch =
       int(std::max<int64_t>(1, (std::max(1, stretch_steps) + per_epoch - 1) / per_epoch));
   for (int e0 = first; e0 < epochs; e0 += stretch) {
@@ -163,13 +166,8 @@ std::vector<float> run_epochs_model_by_model(int64_t n, int epochs, int batch,
       }
     }
     at_epoch(e1);
-    if (epochs_detail::due(resume, e1, epochs)) {
-      TrainingSnapshot s;
-      s.epoch = e1;
-      s.floats["loop/curves"] = curves;
-      for (int m = 0; m < R; ++m) s.put_rng("loop/order/" + std::to_string(m), rngs[m]);
-      epochs_detail::save(resume, s);
-    }
+    if (epochs_detail::due(resume, e1, epochs))
+      epochs_detail::save_models(resume, e1, curves, rngs);
   }
   return curves;
 }
