@@ -61,12 +61,11 @@ BENCHMARK(BM_SirlTrainingRun)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// 20 heads, M = 100 pairs each, frozen φ. Grid: 20 epochs. Jaco: 2 epochs.
-void BM_TpaCell(benchmark::State& state) {
-  const bool jaco = state.range(0) == 1;
+// One TPA cell (20 heads, M pairs each) on a freshly initialised φ, `epochs` epochs.
+void time_tpa_cell(benchmark::State& state, bool jaco, int epochs, int64_t M, bool frozen) {
   const World& w = world(jaco);
   Hyper h = paper_hyper(jaco ? "jaco" : "grid");
-  h.tpa.epochs = jaco ? 2 : 20;
+  h.tpa.epochs = epochs;
   Representation phi;
   phi.shape = phi_shape(w.d.input_dim, h);
   phi.params.resize(phi.shape.param_count());
@@ -74,9 +73,15 @@ void BM_TpaCell(benchmark::State& state) {
   mlp_init(phi.shape, phi.params.data(), rng);
   double flops = 0;
   for (auto _ : state)
-    flops = evaluate_tpa(phi, w.d, w.b.tpa, TpaConfig{100, true, h, 1}, 5).train_flops;
+    flops = evaluate_tpa(phi, w.d, w.b.tpa, TpaConfig{M, frozen, h, 1}, 5).train_flops;
   state.counters["GFLOP/s"] =
       benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+// 20 heads, M = 100 pairs each, frozen φ. Grid: 20 epochs. Jaco: 2 epochs.
+void BM_TpaCell(benchmark::State& state) {
+  const bool jaco = state.range(0) == 1;
+  time_tpa_cell(state, jaco, jaco ? 2 : 20, 100, true);
 }
 BENCHMARK(BM_TpaCell)
     ->ArgName("jaco")
@@ -87,22 +92,10 @@ BENCHMARK(BM_TpaCell)
 
 // The smallest cells of a quick run: 20 heads, M = 10 pairs each (one step an epoch), JacoRobot,
 // 15 epochs as quick's profile has them; frozen (heads only) and unfrozen (each head fine-tunes
-// its own copy of φ). Few FLOPs a byte: these are the cells a quick run spends at 25–30 GFLOP/s.
+// its own copy of φ). Few FLOPs a byte: a quick run spent 25–30 GFLOP/s on them while the 20
+// heads stepped together, ~40 since they train one after another.
 void BM_TpaSmallCell(benchmark::State& state) {
-  const bool frozen = state.range(0) == 1;
-  const World& w = world(true);
-  Hyper h = paper_hyper("jaco");
-  h.tpa.epochs = 15;
-  Representation phi;
-  phi.shape = phi_shape(w.d.input_dim, h);
-  phi.params.resize(phi.shape.param_count());
-  Rng rng(3);
-  mlp_init(phi.shape, phi.params.data(), rng);
-  double flops = 0;
-  for (auto _ : state)
-    flops = evaluate_tpa(phi, w.d, w.b.tpa, TpaConfig{10, frozen, h, 1}, 5).train_flops;
-  state.counters["GFLOP/s"] =
-      benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+  time_tpa_cell(state, true, 15, 10, state.range(0) == 1);
 }
 BENCHMARK(BM_TpaSmallCell)
     ->ArgName("frozen")
