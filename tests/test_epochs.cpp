@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 
 #include "engine/epochs.h"
 
@@ -120,6 +122,28 @@ TEST(Epochs, ModelByModelIsTheBatchedTrainingInAnotherOrderWhateverTheStretchAnd
       for (int m = 0; m < R; ++m)  // the order streams end where the batched loop left them
         EXPECT_EQ(rngs[m].uniform_int(1000000), Rng(rngs_b[m]).uniform_int(1000000));
     }
+}
+
+TEST(Epochs, AStepThatThrowsInTheModelByModelLoopReachesTheCallerWhateverTheThreadCount) {
+  // Models 1 and 2 fail at their second step; the lowest model's exception comes out, and no
+  // checkpoint of the half-done stretch is taken (at_epoch is not called).
+  for (int threads : {1, 2}) {
+    std::vector<Rng> rngs{Rng(1), Rng(2), Rng(3)};
+    int at_epochs = 0;
+    try {
+      run_epochs_model_by_model(
+          4, 3, 2, rngs, threads,
+          [&](int m, const int32_t*, int, int64_t t) -> float {
+            if (m > 0 && t == 2) throw std::runtime_error("model " + std::to_string(m));
+            return 0.f;
+          },
+          [&](int) { ++at_epochs; });
+      ADD_FAILURE() << "no exception, threads " << threads;
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "model 1") << "threads " << threads;
+    }
+    EXPECT_EQ(at_epochs, 0);
+  }
 }
 
 }  // namespace
