@@ -4,7 +4,6 @@
 #pragma once
 #include <algorithm>
 #include <cstdint>
-#include <exception>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -12,6 +11,7 @@
 #include <vector>
 
 #include "engine/checkpoint.h"
+#include "engine/for_each_model.h"
 #include "kernels/rng.h"
 
 namespace sirl {
@@ -137,8 +137,8 @@ std::vector<float> run_epochs_batched(int64_t n, int epochs, int batch, std::vec
 // Stretches: whole epochs, enough for ≥ `stretch_steps` steps of a model in a row. Checkpoints are
 // asked for after each (every model at the same epoch), so a stretch is also what a crash can
 // lose. Only the speed and the spacing of checkpoints depend on it, never the result.
-// An exception from `step` (out of memory, say) ends the stretch and is rethrown here, the lowest
-// model's if several threw: an exception may not leave an OpenMP region.
+// An exception from `step` (out of memory, say) ends the stretch and is rethrown here, before any
+// checkpoint (for_each_model).
 inline constexpr int kStretchSteps = 32;
 template <typename Step, typename AtEpoch>
 std::vector<float> run_epochs_model_by_model(int64_t n, int epochs, int batch,
@@ -153,29 +153,21 @@ std::vector<float> run_epochs_model_by_model(int64_t n, int epochs, int batch,
   const int first = epochs_detail::resume_models(resume, epochs, curves, rngs);
   const int stretch =
       int(std::max<int64_t>(1, (std::max(1, stretch_steps) + per_epoch - 1) / per_epoch));
-  std::vector<std::exception_ptr> failed(R);
   for (int e0 = first; e0 < epochs; e0 += stretch) {
     const int e1 = std::min(epochs, e0 + stretch);
-#pragma omp parallel for num_threads(std::max(1, threads)) schedule(static) if (threads > 1)
-    for (int m = 0; m < R; ++m) {
-      try {
-        std::vector<int32_t> order;
-        for (int e = e0; e < e1; ++e) {
-          shuffle_order(n, rngs[m], order);
-          double sum = 0;
-          for (int64_t i0 = 0; i0 < n; i0 += batch) {
-            const int b = int(n - i0 < batch ? n - i0 : batch);
-            const int64_t t = int64_t(e) * per_epoch + i0 / batch + 1;
-            sum += double(step(m, order.data() + i0, b, t)) * b;
-          }
-          curves[size_t(m) * epochs + e] = float(sum / double(n));
+    for_each_model(R, threads, [&](int m) {
+      std::vector<int32_t> order;
+      for (int e = e0; e < e1; ++e) {
+        shuffle_order(n, rngs[m], order);
+        double sum = 0;
+        for (int64_t i0 = 0; i0 < n; i0 += batch) {
+          const int b = int(n - i0 < batch ? n - i0 : batch);
+          const int64_t t = int64_t(e) * per_epoch + i0 / batch + 1;
+          sum += double(step(m, order.data() + i0, b, t)) * b;
         }
-      } catch (...) {
-        failed[m] = std::current_exception();
+        curves[size_t(m) * epochs + e] = float(sum / double(n));
       }
-    }
-    for (const std::exception_ptr& f : failed)
-      if (f) std::rethrow_exception(f);
+    });
     at_epoch(e1);
     if (epochs_detail::due(resume, e1, epochs))
       epochs_detail::save_models(resume, e1, curves, rngs);

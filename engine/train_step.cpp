@@ -4,6 +4,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "engine/for_each_model.h"
 #include "kernels/bradley_terry_loss.h"
 #include "kernels/triplet_loss.h"
 
@@ -152,10 +153,10 @@ float step_model_by_model(BatchedTrainer& t, const float* X, const int32_t* idx,
                           int threads, Loss&& loss) {
   const int M = t.models;
   const AdamStepScalars step = adam_begin_step(t.adam_cfg, t.adam);
-#pragma omp parallel for num_threads(std::max(1, threads)) schedule(static) if (threads > 1)
-  for (int m = 0; m < M; ++m)
+  for_each_model(M, threads, [&](int m) {
     step_of_model(t, m, step, X, idx + size_t(m) * B * roles, B, roles,
                   [&](const float* out, float* d_out) { return loss(m, out, d_out); });
+  });
   float total = 0;
   for (int m = 0; m < M; ++m) total += t.losses[m];
   return total / M;
