@@ -131,8 +131,8 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   const int64_t batches = (M + h.tpa.batch - 1) / h.tpa.batch;
   const ResumableState resume =
       adam_resumable(cfg.checkpointer, "tpa", t.params, t.adam, res.train_flops);
-  // Head by head: each head's steps in a row, its weights and moments in cache (the same bits as
-  // stepping all heads at once).
+  // Head by head: each head's steps in a row, so more of its weights and moments stay in cache
+  // (the same bits as stepping all heads at once).
   res.loss_curves = run_epochs_model_by_model(
       M, res.epochs, h.tpa.batch, order_rng, cfg.threads,
       [&](int r, const int32_t* order, int b, int64_t step) {

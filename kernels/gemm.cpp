@@ -99,8 +99,6 @@ bool use_xsmm() {
 }
 
 #ifdef SIRL_HAVE_XSMM
-// Cᶜ[m, n] (+)= op(Aᶜ)[m, k] · op(Bᶜ)[k, n], column-major, in blocks of kRowBlock columns of Cᶜ.
-// Returns false when libxsmm has no kernel for the shape (the caller then uses Eigen).
 // libxsmm_smmdispatch builds a descriptor and looks it up in libxsmm's registry on every call:
 // ~2 % of a GridRobot SIRL step, which makes ~30 calls. A per-thread direct-mapped memo of the
 // kernels by their arguments skips that (the same kernel, so the same bits).
@@ -129,6 +127,8 @@ libxsmm_smmfunction xsmm_kernel(int m, int n, int k, int lda, int ldb, int ldc, 
   return kernel;
 }
 
+// Cᶜ[m, n] (+)= op(Aᶜ)[m, k] · op(Bᶜ)[k, n], column-major, in blocks of kRowBlock columns of Cᶜ.
+// Returns false when libxsmm has no kernel for the shape (the caller then uses Eigen).
 bool xsmm_colmajor(const float* a, const float* b, float* c, int m, int n, int k, int lda, int ldb,
                    int ldc, bool trans_b, bool acc) {
   for (int n0 = 0; n0 < n; n0 += kRowBlock) {
