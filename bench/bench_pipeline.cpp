@@ -104,6 +104,19 @@ BENCHMARK(BM_TpaSmallCell)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// Quick's largest JacoRobot cells: 20 heads, M = 100 pairs each (two steps an epoch), 15 epochs,
+// frozen and unfrozen, trained as the engine trains them (one head after another). The cell of
+// issue 15's "frozen Jaco TPA cell" target, measured whole rather than one step of all 20 heads.
+void BM_TpaQuickCell(benchmark::State& state) {
+  time_tpa_cell(state, true, 15, 100, state.range(0) == 1);
+}
+BENCHMARK(BM_TpaQuickCell)
+    ->ArgName("frozen")
+    ->Arg(1)
+    ->Arg(0)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 // Committing one representation's record (weights + loss curve): Grid φ (18k floats) and
 // Jaco φ (3.1 M floats), atomically (temporary file, fsync, rename).
 void BM_TaskCommit(benchmark::State& state) {

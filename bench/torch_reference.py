@@ -269,10 +269,15 @@ def main():
                                                         T=2000, M=10, l2=1.0),
             "tpa_small_cell_jaco_unfrozen": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=15,
                                                           T=2000, M=10, l2=1.0, frozen=False),
+            # quick's largest JacoRobot cells (BM_TpaQuickCell): M = 100, 15 epochs
+            "tpa_quick_cell_jaco_frozen": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=15,
+                                                        T=2000, M=100, l2=1.0),
+            "tpa_quick_cell_jaco_unfrozen": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=15,
+                                                          T=2000, M=100, l2=1.0, frozen=False),
         })
     out = {"torch": torch.__version__, "threads": args.threads}
     for name, (step, fl) in cases.items():
-        s = time_case(step, args.min_time, args.repeats) if not name.startswith(("sirl_run", "tpa_cell", "tpa_small_cell")) \
+        s = time_case(step, args.min_time, args.repeats) if not name.startswith(("sirl_run", "tpa_cell", "tpa_small_cell", "tpa_quick_cell")) \
             else time_run(step, args.repeats)
         out[name] = {"ms": s * 1e3, "gflops": fl / s * 1e-9, "steps_per_s": 1 / s}
     print(json.dumps(out))

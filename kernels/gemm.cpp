@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
+#include <stdexcept>
 #include <vector>
 
 #ifdef SIRL_HAVE_XSMM
@@ -270,6 +271,16 @@ int gemm_row_block(int M, int N, int K) {
   return M <= 128 ? M : std::min(kRowBlock, ((M + 1) / 2 + 15) / 16 * 16);
 }
 
+// A layer of at least 256 Ki weights (1 MiB) no longer fits a core's share of L2 with its Adam
+// moments; below that, column slices cost nothing.
+constexpr size_t kBigLayer = size_t(1) << 18;
+
+int gemm_weight_row_block(int M, int N, int K) {
+  if (const int block = gemm_row_block(M, N, K)) return block;
+  if (!use_xsmm() || size_t(M) * N < kBigLayer) return 0;
+  return std::clamp((1 << 16) / N, 1, M);
+}
+
 namespace {
 // Rows [i0, i0 + mi) of C = op(A) · op(B) into Cr (row stride N): oneDNN, or Eigen should
 // oneDNN refuse the shape.
@@ -342,6 +353,18 @@ bool by_row_blocks(Form op, T* C, const T* A, const T* B, int M, int N, int K, b
 
 void matmul_tn_rows(float* Cr, const float* A, const float* B, int M, int N, int K, bool acc,
                     int i0, int mi) {
+#ifdef SIRL_HAVE_XSMM
+  // Where libxsmm serves the product: each column slice of the block as matmul_tn's slice would
+  // compute it (Cᶜ = Bᶜ·(Aᶜ)ᵀ, the block's rows of C being columns i0.. of Cᶜ), so every element
+  // is the same FMA chain over k = 0..K−1 and has the same bits.
+  if (!dnnl_big(M, N, K) && use_xsmm()) {
+    const int w = gemm_column_slice(N);
+    bool done = true;
+    for (int j0 = 0; j0 < N && done; j0 += w)
+      done = xsmm_colmajor(B + j0, A + i0, Cr + j0, std::min(w, N - j0), mi, K, N, M, N, true, acc);
+    if (done) return;
+  }
+#endif
   rows_of_product(Form::kTn, Cr, A, B, M, N, K, acc, i0, mi);
 }
 
@@ -369,6 +392,25 @@ void matmul_nn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulat
   for_column_slices(N, threads, [&](int j0, int nj) {
     matmul_nn_cols<T>(C + j0, N, A, B, M, N, K, accumulate, j0, nj);
   });
+}
+
+bool gemm_nn_by_k_blocks(int M, int N, int K) {
+  return use_xsmm() && !dnnl_big(M, N, K);
+}
+
+void matmul_nn_k_block(float* C, const float* A, const float* B, int M, int N, int K, bool acc,
+                       int k0, int kn) {
+#ifdef SIRL_HAVE_XSMM
+  // As fast_nn's slices (Cᶜ = Bᶜ·Aᶜ) on the inner block: Bᶜ's columns k0.. are B's rows k0..,
+  // Aᶜ's rows k0.. start at A + k0.
+  const int w = gemm_column_slice(N);
+  bool done = gemm_nn_by_k_blocks(M, N, K);
+  for (int j0 = 0; j0 < N && done; j0 += w)
+    done = xsmm_colmajor(B + size_t(k0) * N + j0, A + k0, C + j0, std::min(w, N - j0), M, kn, N, K,
+                         N, false, acc);
+  if (done) return;
+#endif
+  throw std::logic_error("matmul_nn_k_block: libxsmm does not serve this product");
 }
 
 const char* gemm_backend() {

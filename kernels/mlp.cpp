@@ -235,9 +235,16 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
     };
     // fp32 products oneDNN serves go by blocks of rows (gemm.h, gemm_row_block): ∂L/∂input
     // first, whole, from the old W, then each block of W's rows: its gradient and its Adam update.
-    const int row_block = h ? 0 : gemm_row_block(no, ni, batch);
+    const int row_block = h ? 0 : gemm_weight_row_block(no, ni, batch);
+    // On one thread, where libxsmm serves the product, ∂L/∂input too goes block by block (its
+    // inner dimension is W's rows), each block of W read once, before its update (gemm.h:
+    // matmul_nn's bits). With more threads the blocks run at once, and ∂L/∂input comes first.
+    const bool d_in_by_blocks =
+        row_block && d_in && threads <= 1 && gemm_nn_by_k_blocks(batch, ni, no);
     const auto rows = [&](int p) {
       const int i0 = p * row_block, mi = std::min(row_block, no - i0);
+      // d_in [batch, ni] (+)= g[:, i0..] [batch, mi] · W[i0.., :] [mi, ni], W before its update
+      if (d_in_by_blocks) matmul_nn_k_block(d_in, g, W, batch, ni, no, p > 0, i0, mi);
       thread_local std::vector<float> dw;
       dw.resize(size_t(mi) * ni);  // written over, as the slices' scratch above
       matmul_tn_rows(dw.data(), g, in, no, ni, batch, false, i0, mi);
@@ -247,7 +254,7 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
     const int blocks = row_block ? (no + row_block - 1) / row_block : 0;
     // (No OpenMP region at all on one thread: even a serialised one costs microseconds, and a
     // TPA step of 20 small heads runs 60 of these loops.)
-    if (row_block && d_in) matmul_nn(d_in, g, W, batch, ni, no, false, threads);
+    if (row_block && d_in && !d_in_by_blocks) matmul_nn(d_in, g, W, batch, ni, no, false, threads);
     const int parts = row_block ? blocks : slices;
     const auto part = [&](int p) { row_block ? rows(p) : slice(p); };
     if (threads > 1 && parts > 1) {

@@ -175,6 +175,10 @@ TEST(Mlp, FusedBackwardAdamEqualsBackwardThenAdam) {
   // fp32 weight gradients oneDNN serves go by row blocks (600 × 520 with 40 rows: two dimensions
   // ≥ 512), 520 outputs = two blocks of 256 and a ragged one
   expect_fused_backward_adam_matches(MlpShape{{600, 520, 6}}, 40);
+  // a big hidden layer with few rows (400 × 700 weights, 20 rows: libxsmm's) also goes by row
+  // blocks of 65536 / 700 = 93 (four and a ragged 28), and on one thread its ∂L/∂input block by
+  // block as well
+  expect_fused_backward_adam_matches(MlpShape{{30, 700, 400, 6}}, 20);
 }
 
 TEST(Mlp, InitFollowsPyTorchLinearBounds) {
