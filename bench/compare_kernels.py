@@ -8,7 +8,12 @@ Rows on 1 thread compare with PyTorch on 1 thread and with one core's roof. Rows
 compare machine throughput: with the better of PyTorch on 2 threads and two PyTorch processes of
 1 thread each run at once (summed), and with the roof of all cores. For the 20 TPA heads the
 PyTorch figure is the faster of its loop over heads and its batched form (torch.baddbmm).
+A second table times whole TPA cells of JacoRobot as a quick run trains them (20 heads, one
+after another, 15 epochs; bench/bench_pipeline.cpp) against the same cells written in PyTorch
+(each reward its own network and Adam), one thread each: the engine's own unit of work, where the
+step rows above time all 20 heads taking one step in turn.
 Usage: /usr/bin/python3 bench/compare_kernels.py [--build build/release] [--repetitions 5]
+                                                 [--no-cells]
 """
 import argparse
 import json
@@ -57,6 +62,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--build", default=os.path.join(HERE, "..", "build", "release"))
     ap.add_argument("--repetitions", type=int, default=5)
+    ap.add_argument("--no-cells", action="store_true",
+                    help="skip the whole-cell table (about 4 minutes, 3 repetitions a side)")
     args = ap.parse_args()
     exe = os.path.join(args.build, "bench", "sirl_bench_kernels")
     if not os.path.exists(exe):
@@ -126,6 +133,39 @@ def main():
                   f"{100 * o['GFLOP/s'] / ref[min(threads, max(ref))]:.0f} % | "
                   f"{o['GFLOP/s'] / o32['GFLOP/s']:.2f}x | {form} | "
                   f"{t['gflops']:.1f} | {o['GFLOP/s'] / t['gflops']:.2f}x |")
+
+    if not args.no_cells:
+        print_cells(args.build, peak[1])
+
+
+CELLS = [  # (label, ours in sirl_bench_pipeline, the PyTorch case)
+    ("Jaco TPA cell, M = 100, frozen (20 heads 6→1024→1024→1)", "BM_TpaQuickCell/frozen:1/real_time",
+     "tpa_quick_cell_jaco_frozen"),
+    ("Jaco TPA cell, M = 100, unfrozen (20 × φ + head)", "BM_TpaQuickCell/frozen:0/real_time",
+     "tpa_quick_cell_jaco_unfrozen"),
+    ("Jaco TPA cell, M = 10, frozen", "BM_TpaSmallCell/frozen:1/real_time",
+     "tpa_small_cell_jaco_frozen"),
+    ("Jaco TPA cell, M = 10, unfrozen", "BM_TpaSmallCell/frozen:0/real_time",
+     "tpa_small_cell_jaco_unfrozen"),
+]
+
+
+def print_cells(build, roof1, repetitions=3):
+    """Whole cells, one thread, medians of `repetitions` (after one warm-up run on PyTorch's side)."""
+    med = gbench(os.path.join(build, "bench", "sirl_bench_pipeline"), repetitions,
+                 "BM_TpaQuickCell|BM_TpaSmallCell")
+    torch1 = json.loads(subprocess.run(
+        TORCH + ["--threads", "1", "--repeats", str(repetitions), "--cases",
+                 ",".join(c for _, _, c in CELLS)], check=True, capture_output=True, text=True).stdout)
+    print(f"\nWhole cells as a quick run trains them (15 epochs, heads one after another), one "
+          f"thread; medians of {repetitions}.\n")
+    print("| cell | ours s | ours GFLOP/s | % of roof | PyTorch s | PyTorch GFLOP/s | speed-up |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    for label, key, case in CELLS:
+        o, t = med[key], torch1[case]
+        s = milliseconds(o) * 1e-3
+        print(f"| {label} | {s:.2f} | {o['GFLOP/s']:.1f} | {100 * o['GFLOP/s'] / roof1:.0f} % | "
+              f"{t['ms'] * 1e-3:.2f} | {t['gflops']:.1f} | {t['ms'] * 1e-3 / s:.2f}x |")
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@ Usage: /usr/bin/python3 bench/torch_reference.py [--repeats 5] [--threads 1]
 import argparse
 import json
 import statistics
+import sys
 import time
 
 import torch
@@ -245,6 +246,7 @@ def main():
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--min-time", type=float, default=2.0, help="seconds per case")
     ap.add_argument("--runs", action="store_true", help="also time whole training runs and TPA cells")
+    ap.add_argument("--cases", help="comma-separated case names: time only these (runs included)")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     torch.manual_seed(0)
@@ -258,7 +260,7 @@ def main():
         "tpa_unfrozen_jaco": tpa_unfrozen_case(2037, 1024),
         "tpa_unfrozen_jaco_batched": tpa_unfrozen_batched_case(2037, 1024),
     }
-    if args.runs:  # the same units as bench_pipeline.cpp
+    if args.runs or args.cases:  # the same units as bench_pipeline.cpp
         cases.update({
             "sirl_run_grid": sirl_run_case([19, 128, 128, 6], N=1000, epochs=10, T=1960),
             "sirl_run_jaco": sirl_run_case([2037, 1024, 1024, 6], N=200, epochs=2, T=2000),
@@ -275,6 +277,12 @@ def main():
             "tpa_quick_cell_jaco_unfrozen": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=15,
                                                           T=2000, M=100, l2=1.0, frozen=False),
         })
+    if args.cases:
+        wanted = args.cases.split(",")
+        unknown = [c for c in wanted if c not in cases]
+        if unknown:
+            sys.exit(f"torch_reference: no case {', '.join(unknown)}; cases: {', '.join(cases)}")
+        cases = {c: cases[c] for c in wanted}
     out = {"torch": torch.__version__, "threads": args.threads}
     for name, (step, fl) in cases.items():
         s = time_case(step, args.min_time, args.repeats) if not name.startswith(("sirl_run", "tpa_cell", "tpa_small_cell", "tpa_quick_cell")) \

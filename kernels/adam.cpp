@@ -23,6 +23,7 @@ AdamStepScalars adam_step_scalars(const AdamConfig& cfg, int64_t t) {
   AdamStepScalars s;
   s.step_size = float(lr / bc1);
   s.bc2_sqrt = float(std::sqrt(bc2));
+  s.inv_bc2_sqrt = 1.f / s.bc2_sqrt;
   s.b1 = float(cfg.beta1);
   s.b2 = float(cfg.beta2);
   s.eps = float(cfg.eps);
@@ -34,7 +35,8 @@ AdamStepScalars adam_step_scalars(const AdamConfig& cfg, int64_t t) {
 namespace {
 inline void adam_update(const AdamStepScalars& s, float* p, const float* g, float* m, float* v,
                         size_t n) {
-  const float b1 = s.b1, b2 = s.b2, eps = s.eps, step_size = s.step_size, bc2_sqrt = s.bc2_sqrt;
+  const float b1 = s.b1, b2 = s.b2, eps = s.eps, step_size = s.step_size, bc2_sqrt = s.bc2_sqrt,
+              inv_bc2_sqrt = s.inv_bc2_sqrt;
   const float one_minus_b1 = s.one_minus_b1, one_minus_b2 = s.one_minus_b2;
   constexpr float kNormal = std::numeric_limits<float>::min();  // 1.18e-38
 #pragma omp simd
@@ -46,7 +48,8 @@ inline void adam_update(const AdamStepScalars& s, float* p, const float* g, floa
     vi = vi < kNormal ? 0.f : vi;
     m[i] = mi;
     v[i] = vi;
-    const float denom = std::sqrt(vi) / bc2_sqrt + eps;
+    // √v / √(1 − β2^t), the division's bits (adam.h); v ≥ 1.18e-38 or 0, so √v is normal or 0
+    const float denom = divide_by_constant(std::sqrt(vi), bc2_sqrt, inv_bc2_sqrt) + eps;
     p[i] -= step_size * (mi / denom);
   }
 }

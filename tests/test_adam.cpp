@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <vector>
@@ -145,6 +147,52 @@ TEST(Adam, RowsOfABlockGetTheSameUpdateAndNothingElseMoves) {
   size_t moved = 0;
   for (size_t i = 0; i < p.size(); ++i) moved += p2[i] != p[i];
   EXPECT_EQ(moved, rows * cols);  // every element of the block (no gradient here is 0)
+}
+
+// Adam divides √v by step t's √(1 − β2^t) as a multiplication by its reciprocal and one FMA
+// correction (adam.h, divide_by_constant): the division's bits for every float significand, at
+// several exponents, for the divisors of steps from the first (√0.001) to where they reach 1.
+TEST(Adam, DividingByTheStepsConstantGivesTheDivisionsBits) {
+  const AdamConfig cfg;
+  size_t checked = 0;
+  for (int64_t t : {1, 2, 3, 7, 50, 333, 1000, 4000, 20000, 1000000}) {
+    const AdamStepScalars s = adam_step_scalars(cfg, t);
+    ASSERT_EQ(s.inv_bc2_sqrt, 1.f / s.bc2_sqrt);
+    for (uint32_t mantissa = 0; mantissa < (1u << 23); ++mantissa) {
+      const float x = std::bit_cast<float>(0x3f800000u | mantissa);  // [1, 2)
+      const float q = divide_by_constant(x, s.bc2_sqrt, s.inv_bc2_sqrt);
+      if (q != x / s.bc2_sqrt) FAIL() << "t " << t << ": " << x << " / " << s.bc2_sqrt;
+      if (mantissa % 61 == 0)  // √v spans 1e-19 (v at the flush) to 1e19
+        for (float scale : {0x1p-63f, 0x1p-20f, 0x1p20f, 0x1p63f})
+          if (divide_by_constant(x * scale, s.bc2_sqrt, s.inv_bc2_sqrt) != x * scale / s.bc2_sqrt)
+            FAIL() << "t " << t << ": " << x * scale << " / " << s.bc2_sqrt;
+      ++checked;
+    }
+    EXPECT_EQ(divide_by_constant(0.f, s.bc2_sqrt, s.inv_bc2_sqrt), 0.f);
+  }
+  EXPECT_EQ(checked, size_t(10) << 23);
+}
+
+// The same for every divisor Adam can use: the float √(1 − β2^t) (β2 = 0.999) takes 10 030
+// distinct values, and from step 16 628 on it is 1. About 15 s in a release build, so not run by
+// default: sirl_tests --gtest_also_run_disabled_tests --gtest_filter='Adam.DISABLED_*'
+TEST(Adam, DISABLED_DividingByEveryStepsConstantGivesTheDivisionsBits) {
+  const AdamConfig cfg;
+  float last = 0;
+  int64_t t = 1, divisors = 0;
+  for (; last != 1.f; ++t) {
+    const AdamStepScalars s = adam_step_scalars(cfg, t);
+    if (s.bc2_sqrt == last) continue;
+    last = s.bc2_sqrt;
+    ++divisors;
+    uint32_t bad = 0;
+    for (uint32_t mantissa = 0; mantissa < (1u << 23); ++mantissa) {
+      const float x = std::bit_cast<float>(0x3f800000u | mantissa);
+      bad += divide_by_constant(x, s.bc2_sqrt, s.inv_bc2_sqrt) != x / s.bc2_sqrt;
+    }
+    ASSERT_EQ(bad, 0u) << "t " << t << ", divisor " << s.bc2_sqrt;
+  }
+  EXPECT_GT(divisors, 10000);  // the loop went through them all, up to 1
 }
 
 }  // namespace
