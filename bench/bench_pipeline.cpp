@@ -105,8 +105,9 @@ BENCHMARK(BM_TpaSmallCell)
     ->UseRealTime();
 
 // Quick's largest JacoRobot cells: 20 heads, M = 100 pairs each (two steps an epoch), 15 epochs,
-// frozen and unfrozen, trained as the engine trains them (one head after another). The cell of
-// issue 15's "frozen Jaco TPA cell" target, measured whole rather than one step of all 20 heads.
+// frozen and unfrozen, trained as the engine trains them (one head after another): the frozen
+// JacoRobot cell of README's performance targets, measured whole rather than as one step of all
+// 20 heads (BM_TpaHeadsStep).
 void BM_TpaQuickCell(benchmark::State& state) {
   time_tpa_cell(state, true, 15, 100, state.range(0) == 1);
 }

@@ -233,8 +233,9 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
       // W[:, j0..] (row stride ni) with its scratch gradient [no, nj]
       adam_apply_rows(step, W + j0, ni, dw.data(), nj, m + w_off + j0, v + w_off + j0, no, nj);
     };
-    // fp32 products oneDNN serves go by blocks of rows (gemm.h, gemm_row_block): ∂L/∂input
-    // first, whole, from the old W, then each block of W's rows: its gradient and its Adam update.
+    // fp32 products oneDNN serves, and big layers libxsmm serves, go by blocks of W's rows
+    // (gemm.h, gemm_weight_row_block): ∂L/∂input first, whole, from the old W, then each block:
+    // its gradient and its Adam update.
     const int row_block = h ? 0 : gemm_weight_row_block(no, ni, batch);
     // On one thread, where libxsmm serves the product, ∂L/∂input too goes block by block (its
     // inner dimension is W's rows), each block of W read once, before its update (gemm.h:
