@@ -3,7 +3,7 @@
 
 Prints one JSON object: {case: {"ms": median step time, "gflops": ..., "steps_per_s": ...}}.
 FLOPs are counted as in the C++ benchmark: 2·in·out per layer per sample forward, ×3 with backward.
-Usage: /usr/bin/python3 bench/torch_reference.py [--repeats 5] [--threads 1]
+Usage: /usr/bin/python3 bench/torch_reference.py [--repeats 5] [--threads 1] [--runs] [--cases a,b]
 """
 import argparse
 import json
@@ -260,8 +260,9 @@ def main():
         "tpa_unfrozen_jaco": tpa_unfrozen_case(2037, 1024),
         "tpa_unfrozen_jaco_batched": tpa_unfrozen_batched_case(2037, 1024),
     }
-    if args.runs or args.cases:  # the same units as bench_pipeline.cpp
-        cases.update({
+    runs = {}  # whole units, timed end to end: the same units as bench_pipeline.cpp
+    if args.runs or args.cases:
+        runs = {
             "sirl_run_grid": sirl_run_case([19, 128, 128, 6], N=1000, epochs=10, T=1960),
             "sirl_run_jaco": sirl_run_case([2037, 1024, 1024, 6], N=200, epochs=2, T=2000),
             "tpa_cell_grid": tpa_cell_case([19, 128, 128, 6], 128, epochs=20, T=1960),
@@ -276,7 +277,8 @@ def main():
                                                         T=2000, M=100, l2=1.0),
             "tpa_quick_cell_jaco_unfrozen": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=15,
                                                           T=2000, M=100, l2=1.0, frozen=False),
-        })
+        }
+        cases.update(runs)
     if args.cases:
         wanted = args.cases.split(",")
         unknown = [c for c in wanted if c not in cases]
@@ -285,8 +287,7 @@ def main():
         cases = {c: cases[c] for c in wanted}
     out = {"torch": torch.__version__, "threads": args.threads}
     for name, (step, fl) in cases.items():
-        s = time_case(step, args.min_time, args.repeats) if not name.startswith(("sirl_run", "tpa_cell", "tpa_small_cell", "tpa_quick_cell")) \
-            else time_run(step, args.repeats)
+        s = time_run(step, args.repeats) if name in runs else time_case(step, args.min_time, args.repeats)
         out[name] = {"ms": s * 1e3, "gflops": fl / s * 1e-9, "steps_per_s": 1 / s}
     print(json.dumps(out))
 
