@@ -17,7 +17,7 @@ struct Trainer {
   std::vector<float> params;  // [P] (+ any trailing parameters a step owns, e.g. heads)
   AdamState adam;
   MlpTape<float> tape;
-  std::vector<float> batch_x, d_out;  // gathered inputs, ∂L/∂output
+  AlignedVector<float> batch_x, d_out;  // gathered inputs, ∂L/∂output
 
   Trainer(MlpShape s, AdamConfig cfg, std::vector<float> initial_params);
 };
@@ -53,7 +53,7 @@ struct BatchedTrainer {
   // threads, and at different steps (run_epochs_model_by_model).
   struct ModelWork {
     MlpTape<float> tape;
-    std::vector<float> x, d_out;  // gathered inputs [roles·B, in], ∂L/∂output [roles·B, out]
+    AlignedVector<float> x, d_out;  // gathered inputs [roles·B, in], ∂L/∂output [roles·B, out]
   };
   MlpShape shape;
   int models = 0;

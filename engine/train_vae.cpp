@@ -67,7 +67,7 @@ VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads,
 
   const int B = h.vae.batch, in = d.input_dim, L = h.embedding_dim;
   const int64_t T = d.count;
-  std::vector<float> x(size_t(B) * in), eps(size_t(B) * L);
+  AlignedVector<float> x(size_t(B) * in), eps(size_t(B) * L);
   AdamState adam(m.params.size());
   VaeWorkspace<float> ws;
   VaeLossParts parts;

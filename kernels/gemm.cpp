@@ -11,6 +11,7 @@
 #ifdef SIRL_HAVE_XSMM
 #include <libxsmm.h>
 #endif
+#include "kernels/aligned_vector.h"
 #include "kernels/onednn_matmul.h"
 
 namespace sirl {
@@ -143,7 +144,7 @@ bool xsmm_colmajor(const float* a, const float* b, float* c, int m, int n, int k
   return true;
 }
 
-thread_local std::vector<float> t_scratch;  // nt's transposed operand (and result)
+thread_local AlignedVector<float> t_scratch;  // nt's transposed operand (and result)
 #endif
 
 // oneDNN's matmul primitive on one slice (kernels/onednn_matmul.h: row-major; 'T' reads that
@@ -195,7 +196,7 @@ bool fast_nt<float>(float* Cs, int ldc, const float* A, const float* B, int M, i
                     bool acc, int j0, int nj) {
   if (dnnl_big(M, N, K))  // C[:, j0..] = A[M, K] · (B[j0.., K])ᵀ
     return dnnl_slice('N', 'T', M, nj, K, A, K, B + size_t(j0) * K, K, acc, Cs, ldc);
-  std::vector<float>& scratch = t_scratch;
+  AlignedVector<float>& scratch = t_scratch;
   if (M <= kRowBlock && size_t(M) * (K + nj) < size_t(nj) * K) {
     scratch.resize(size_t(M) * (K + nj));
     float* at = scratch.data();
@@ -313,7 +314,7 @@ void nt_by_column_blocks(float* C, const float* A, const float* B, int M, int N,
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
   for (int b = 0; b < blocks; ++b) {
     const int j0 = b * kRowBlock, nb = std::min(kRowBlock, N - j0);
-    thread_local std::vector<float> tmp;
+    thread_local AlignedVector<float> tmp;
     tmp.resize(size_t(M) * nb);
     // tmp[M, nb] = A · (W's rows j0..)ᵀ: the product of a dense [nb, K] band, whole.
     rows_of_product(Form::kNt, tmp.data(), A, B + size_t(j0) * K, M, nb, K, false, 0, M);

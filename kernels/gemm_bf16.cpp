@@ -6,6 +6,7 @@
 #include <cstring>
 #include <vector>
 
+#include "kernels/aligned_vector.h"
 #include "kernels/gemm.h"
 #include "kernels/onednn_matmul.h"
 
@@ -77,7 +78,7 @@ bool native_shape(int M, int nj, int K) {
 bool native_slice(MatmulShape s, const uint16_t* A, const uint16_t* Bs, float* Cs) {
   const long ldc = s.ldc;
   if (ldc == s.N) return onednn_matmul(s, A, Bs, Cs);
-  thread_local std::vector<float> dense;
+  thread_local AlignedVector<float> dense;
   dense.resize(size_t(s.M) * s.N);
   if (s.accumulate)
     for (int i = 0; i < s.M; ++i)

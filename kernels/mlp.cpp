@@ -190,7 +190,7 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
       // In one pass over g: the ReLU mask (output > 0 ⇔ pre-activation > 0) and db [no] = Σ_rows
       // g, rows in order (the same values and order as mask_relu then mlp_backward's sum). Then
       // the biases' update.
-      thread_local std::vector<float> db;
+      thread_local AlignedVector<float> db;
       db.assign(no, 0.f);
       const float* y = s.relu_after(l) ? tape.act[l].data() : nullptr;
       for (int r = 0; r < batch; ++r) {
@@ -224,7 +224,7 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
       // dW[:, j0..] [no, nj] = gᵀ [no, batch] · in[:, j0..] [batch, nj], written over a scratch
       // (not added to a zeroed one: the same values but for the sign of a zero sum, which Adam's
       // m = β1·m + (1−β1)·g and v = β2·v + (1−β2)·g² cannot tell from m = v = +0 on)
-      thread_local std::vector<float> dw;
+      thread_local AlignedVector<float> dw;
       dw.resize(size_t(no) * nj);
       if (h)
         matmul_bf16_tn_cols(dw.data(), nj, gh, inh, no, ni, batch, false, j0, nj);
@@ -246,7 +246,7 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
       const int i0 = p * row_block, mi = std::min(row_block, no - i0);
       // d_in [batch, ni] (+)= g[:, i0..] [batch, mi] · W[i0.., :] [mi, ni], W before its update
       if (d_in_by_blocks) matmul_nn_k_block(d_in, g, W, batch, ni, no, p > 0, i0, mi);
-      thread_local std::vector<float> dw;
+      thread_local AlignedVector<float> dw;
       dw.resize(size_t(mi) * ni);  // written over, as the slices' scratch above
       matmul_tn_rows(dw.data(), g, in, no, ni, batch, false, i0, mi);
       const size_t at = w_off + size_t(i0) * ni;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "kernels/adam.h"
+#include "kernels/aligned_vector.h"
 #include "kernels/rng.h"
 
 namespace sirl {
@@ -45,9 +46,9 @@ void validate(const MlpShape& shape);
 template <typename T>
 struct MlpTape {
   int batch = 0;
-  const T* input = nullptr;         // [batch, in], not owned: must outlive the backward call
-  std::vector<std::vector<T>> act;  // act[l]: [batch, widths[l+1]] output of layer l (post-ReLU)
-  std::vector<T> grad, grad_next;   // backward scratch, [batch, max width]
+  const T* input = nullptr;           // [batch, in], not owned: must outlive the backward call
+  std::vector<AlignedVector<T>> act;  // act[l]: [batch, widths[l+1]] output of layer l (post-ReLU)
+  AlignedVector<T> grad, grad_next;   // backward scratch, [batch, max width]
   // With bf16_products, the forward pass's bf16 operands of layer l: its input [batch, ni] and
   // its weights [no, ni], which the backward pass's products reuse (the weights are the ones the
   // forward pass saw, as the gradient of that pass must).

@@ -36,7 +36,7 @@ struct VaeLossParts {
 template <typename T>
 struct VaeWorkspace {
   MlpTape<T> enc, dec;
-  std::vector<T> z, d_recon, d_z, d_enc_out;
+  AlignedVector<T> z, d_recon, d_z, d_enc_out;
 };
 
 // params = [encoder params | decoder params]; x [B, in]; eps [B, latent] standard-normal noise

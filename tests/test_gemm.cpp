@@ -7,12 +7,15 @@
 // (float rounding over K terms of size ~1: 1e-5·√K relative to Σ|a·b|).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <string>
 #include <vector>
 
+#include "kernels/aligned_vector.h"
 #include "kernels/gemm.h"
 #include "kernels/rng.h"
 
@@ -120,6 +123,51 @@ TEST(Gemm, BigProductsAreTheSameBitsOnOneAndTwoThreads) {
         }
       }
     }
+}
+
+// The engine keeps activations and scratch 64-byte aligned for speed (kernels/aligned_vector.h);
+// the bits must not depend on it. Each product, with every operand and C shifted by 0, 1, 5 and
+// 15 floats from a cache line, gives the bits of the aligned call: a Grid layer (libxsmm), a
+// 20-row JacoRobot layer (libxsmm, 256-wide slices) and a product oneDNN serves.
+TEST(Gemm, ProductsAreTheSameBitsWhereverTheOperandsStart) {
+  for (const Case c : {Case{192, 128, 128}, Case{20, 300, 2037}, Case{64, 520, 600}})
+    for (Op op : {kNT, kTN, kNN})
+      for (bool acc : {false, true}) {
+        const size_t a_n = size_t(c.M) * c.K, b_n = size_t(c.N) * c.K, c_n = size_t(c.M) * c.N;
+        Rng rng(uint64_t(c.M + op));
+        std::vector<float> A(a_n), B(b_n), C0(c_n);
+        for (auto& x : A) x = float(rng.uniform(-1, 1));
+        for (auto& x : B) x = float(rng.uniform(-1, 1));
+        for (auto& x : C0) x = float(rng.uniform(-1, 1));
+        std::vector<float> first;
+        for (int shift : {0, 1, 5, 15}) {
+          AlignedVector<float> a(a_n + shift), b(b_n + shift), out(c_n + shift);
+          std::copy(A.begin(), A.end(), a.begin() + shift);
+          std::copy(B.begin(), B.end(), b.begin() + shift);
+          std::copy(C0.begin(), C0.end(), out.begin() + shift);
+          float *pa = a.data() + shift, *pb = b.data() + shift, *pc = out.data() + shift;
+          if (op == kNT) matmul_nt(pc, pa, pb, c.M, c.N, c.K, acc, 1);
+          if (op == kTN) matmul_tn(pc, pa, pb, c.M, c.N, c.K, acc, 1);
+          if (op == kNN) matmul_nn(pc, pa, pb, c.M, c.N, c.K, acc, 1);
+          std::vector<float> got(pc, pc + c_n);
+          if (shift == 0)
+            first = got;
+          else
+            EXPECT_EQ(got, first) << "op " << op << " M" << c.M << " N" << c.N << " K" << c.K
+                                  << " acc " << acc << " shifted by " << shift;
+        }
+      }
+}
+
+TEST(AlignedVector, StartsOnACacheLineAtEverySize) {
+  for (size_t n : {size_t(1), size_t(3), size_t(17), size_t(1000), size_t(1) << 20}) {
+    AlignedVector<float> v(n, 1.f);
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(v.data()) % 64, 0u) << n;
+    v.resize(3 * n + 5, 2.f);  // a reallocation keeps the alignment and the values
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(v.data()) % 64, 0u) << n;
+    EXPECT_EQ(v[n - 1], 1.f);
+    EXPECT_EQ(v[3 * n + 4], 2.f);
+  }
 }
 
 TEST(Gemm, TheBackendIsTheOneTheEnvironmentAsksFor) {
