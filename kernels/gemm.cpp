@@ -273,14 +273,27 @@ int gemm_row_block(int M, int N, int K) {
 }
 
 // A layer of at least 256 Ki weights (1 MiB) no longer fits a core's share of L2 with its Adam
-// moments; below that, column slices cost nothing.
-constexpr size_t kBigLayer = size_t(1) << 18;
+// moments: blocks of ~64 Ki weights. A layer of 4 Ki to 256 Ki weights (GridRobot's 128 × 128)
+// fits; on one thread it goes by blocks of kRowBlock rows, the blocks libxsmm's calls cut the
+// whole product into (xsmm_colmajor), so Adam runs over whole rows instead of 64-wide pieces of
+// them (20 Grid heads 2.51–2.53 → 2.42–2.47 ms, the Grid unfrozen TPA step 3.02–3.28 → 2.92 ms);
+// with more threads, by column slices, which two threads share. Below 4 Ki, column slices.
+constexpr size_t kBigLayer = size_t(1) << 18, kMidLayer = size_t(1) << 12;
 
-int gemm_weight_row_block(int M, int N, int K) {
+int gemm_weight_row_block(int M, int N, int K, int threads) {
   if (const int block = gemm_row_block(M, N, K)) return block;
-  if (!use_xsmm() || size_t(M) * N < kBigLayer) return 0;
+  if (!use_xsmm() || size_t(M) * N < kMidLayer) return 0;
+  if (size_t(M) * N < kBigLayer) return threads <= 1 ? std::min(M, kRowBlock) : 0;
   return std::clamp((1 << 16) / N, 1, M);
 }
+
+namespace {
+// A layer's weight gradient dW [M, N] (M units, N inputs, K batch rows) that libxsmm serves and
+// the fused backward pass updates by blocks of ~64 Ki weights.
+bool big_xsmm_layer(int M, int N, int K) {
+  return use_xsmm() && !dnnl_big(M, N, K) && size_t(M) * N >= kBigLayer;
+}
+}  // namespace
 
 namespace {
 // Rows [i0, i0 + mi) of C = op(A) · op(B) into Cr (row stride N): oneDNN, or Eigen should
@@ -380,38 +393,82 @@ void matmul_nt(T* C, const T* A, const T* B, int M, int N, int K, bool accumulat
 template <typename T>
 void matmul_tn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulate, int threads) {
   if (by_row_blocks<T>(Form::kTn, C, A, B, M, N, K, accumulate, threads)) return;
+  if constexpr (std::is_same_v<T, float>) {
+    // A big layer's weight gradient libxsmm serves: by the fused backward pass's blocks of weight
+    // rows (matmul_tn_rows), so that both give the same bits by construction, whatever the
+    // summation order of libxsmm's kernel for each block height.
+    if (big_xsmm_layer(M, N, K)) {
+      const int block = gemm_weight_row_block(M, N, K), blocks = (M + block - 1) / block;
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && blocks > 1)
+      for (int b = 0; b < blocks; ++b)
+        matmul_tn_rows(C + size_t(b) * block * N, A, B, M, N, K, accumulate, b * block,
+                       std::min(block, M - b * block));
+      return;
+    }
+  }
   for_column_slices(N, threads, [&](int j0, int nj) {
     matmul_tn_cols<T>(C + j0, N, A, B, M, N, K, accumulate, j0, nj);
   });
 }
 
+namespace {
+// A big layer libxsmm serves: ∂L/∂input [M, N] = dY [M, K] · W [K, N] (K the layer's units), the
+// layers the fused backward pass updates by blocks of kn weight rows.
+bool big_xsmm_layer_nn(int M, int N, int K) {
+  return big_xsmm_layer(K, N, M);
+}
+
+// Columns [j0, j0 + nj) of C (+)= A[:, k0..k0+kn) · B[k0..k0+kn, :] (A's row stride K): one
+// libxsmm call per kRowBlock rows (Cᶜ = Bᶜ·Aᶜ on the inner block: Bᶜ's columns k0.. are B's rows
+// k0.., Aᶜ's rows k0.. start at A + k0), Eigen should libxsmm refuse it.
+void nn_k_block_slice(float* C, const float* A, const float* B, int M, int N, int K, bool acc,
+                      int k0, int kn, int j0, int nj) {
+#ifdef SIRL_HAVE_XSMM
+  if (xsmm_colmajor(B + size_t(k0) * N + j0, A + k0, C + j0, nj, M, kn, N, K, N, false, acc))
+    return;
+#endif
+  using RowMatF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  SliceMap<float> c(C + j0, M, nj, Eigen::OuterStride<>(N));
+  const auto a = MapC<float>(A, M, K).middleCols(k0, kn);
+  const auto b = Eigen::Map<const RowMatF>(B, K, N).block(k0, j0, kn, nj);
+  acc ? void(c.noalias() += a * b) : void(c.noalias() = a * b);
+}
+}  // namespace
+
 // ∂L/∂input stays in column slices: oneDNN's sgemm reads these operands untransposed at full
 // speed (192 × 1024 × 1024: 0.57 ms per 256-column slice), and its dense path was no faster
-// in A/B runs of the JacoRobot SIRL step and TPA cells.
+// in A/B runs of the JacoRobot SIRL step and TPA cells. A big layer libxsmm serves sums each
+// slice over the fused pass's blocks of the inner dimension, one after the other (as
+// matmul_nn_k_block does): the same bits on any thread count and in either pass by construction.
+// (libxsmm's kernels are not all one FMA chain over k: a 700-unit layer's whole product and its
+// sum over blocks of 163 differed in 2–4 % of the elements.)
 template <typename T>
 void matmul_nn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulate, int threads) {
+  if constexpr (std::is_same_v<T, float>) {
+    if (big_xsmm_layer_nn(M, N, K)) {
+      const int kn = gemm_weight_row_block(K, N, M);
+      for_column_slices(N, threads, [&](int j0, int nj) {
+        for (int k0 = 0; k0 < K; k0 += kn)
+          nn_k_block_slice(C, A, B, M, N, K, accumulate || k0 > 0, k0, std::min(kn, K - k0), j0,
+                           nj);
+      });
+      return;
+    }
+  }
   for_column_slices(N, threads, [&](int j0, int nj) {
     matmul_nn_cols<T>(C + j0, N, A, B, M, N, K, accumulate, j0, nj);
   });
 }
 
 bool gemm_nn_by_k_blocks(int M, int N, int K) {
-  return use_xsmm() && !dnnl_big(M, N, K);
+  return big_xsmm_layer_nn(M, N, K);
 }
 
 void matmul_nn_k_block(float* C, const float* A, const float* B, int M, int N, int K, bool acc,
                        int k0, int kn) {
-#ifdef SIRL_HAVE_XSMM
-  // As fast_nn's slices (Cᶜ = Bᶜ·Aᶜ) on the inner block: Bᶜ's columns k0.. are B's rows k0..,
-  // Aᶜ's rows k0.. start at A + k0.
   const int w = gemm_column_slice(N);
-  bool done = gemm_nn_by_k_blocks(M, N, K);
-  for (int j0 = 0; j0 < N && done; j0 += w)
-    done = xsmm_colmajor(B + size_t(k0) * N + j0, A + k0, C + j0, std::min(w, N - j0), M, kn, N, K,
-                         N, false, acc);
-  if (done) return;
-#endif
-  throw std::logic_error("matmul_nn_k_block: libxsmm does not serve this product");
+  for (int j0 = 0; j0 < N; j0 += w)
+    nn_k_block_slice(C, A, B, M, N, K, acc, k0, kn, j0, std::min(w, N - j0));
 }
 
 const char* gemm_backend() {

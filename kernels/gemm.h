@@ -45,15 +45,18 @@ void matmul_nn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K,
 int gemm_row_block(int M, int N, int K);
 // The fused backward pass's block of weight rows for a weight gradient dW[M,N] = A[K,M]ᵀ·B[K,N]
 // (M units, N inputs, K batch rows): gemm_row_block's where oneDNN serves the product; for a big
-// layer libxsmm serves (few batch rows: a TPA cell of M = 10 trains on 20), blocks of ~64 Ki
-// weights, so that a block's weights, Adam moments and gradient stay in cache and are read
-// contiguously (column slices of a 1024 × 2037 layer read its rows 1 KiB at a time, and Adam ran
-// at half speed on them); 0 where it goes by column slices.
-int gemm_weight_row_block(int M, int N, int K);
+// layer libxsmm serves (≥ 256 Ki weights, few batch rows: a TPA cell of M = 10 trains on 20),
+// blocks of ~64 Ki weights, so that a block's weights, Adam moments and gradient stay in cache and
+// are read contiguously (column slices of a 1024 × 2037 layer read its rows 1 KiB at a time, and
+// Adam ran at half speed on them); for a layer of 4 Ki to 256 Ki weights on one thread, blocks of
+// 256 rows (Adam over whole rows); 0 where it goes by column slices. matmul_tn computes a big
+// layer's gradient by these blocks too, so both have the same bits.
+int gemm_weight_row_block(int M, int N, int K, int threads = 1);
 // C[M,N] (+)= A[M, k0..k0+kn) · B[k0..k0+kn, N] (A's row stride K): one block of matmul_nn's inner
-// dimension. Where gemm_nn_by_k_blocks(M, N, K), consecutive blocks k0 = 0, kn, 2·kn, …, the first
-// written and the rest accumulated, give matmul_nn's bits: each element's FMA chain over k goes
-// on from the partial sum stored in C. The fused backward pass computes ∂L/∂input so while it
+// dimension. Where gemm_nn_by_k_blocks(M, N, K) (∂L/∂input of a big layer libxsmm serves),
+// matmul_nn itself sums over the blocks kn = gemm_weight_row_block(K, N, M), one after the other,
+// so consecutive calls k0 = 0, kn, 2·kn, …, the first written and the rest accumulated, give
+// matmul_nn's bits by construction. The fused backward pass computes ∂L/∂input so while it
 // updates the weights block by block, reading each block once.
 bool gemm_nn_by_k_blocks(int M, int N, int K);
 void matmul_nn_k_block(float* C, const float* A, const float* B, int M, int N, int K,

@@ -233,13 +233,14 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
       // W[:, j0..] (row stride ni) with its scratch gradient [no, nj]
       adam_apply_rows(step, W + j0, ni, dw.data(), nj, m + w_off + j0, v + w_off + j0, no, nj);
     };
-    // fp32 products oneDNN serves, and big layers libxsmm serves, go by blocks of W's rows
-    // (gemm.h, gemm_weight_row_block): ∂L/∂input first, whole, from the old W, then each block:
-    // its gradient and its Adam update.
-    const int row_block = h ? 0 : gemm_weight_row_block(no, ni, batch);
-    // On one thread, where libxsmm serves the product, ∂L/∂input too goes block by block (its
+    // fp32 products oneDNN serves, big layers libxsmm serves, and on one thread mid-sized ones go
+    // by blocks of W's rows (gemm.h, gemm_weight_row_block): ∂L/∂input first, whole, from the
+    // old W, then each block: its gradient and its Adam update.
+    const int row_block = h ? 0 : gemm_weight_row_block(no, ni, batch, threads);
+    // On one thread, for a big layer libxsmm serves, ∂L/∂input too goes block by block (its
     // inner dimension is W's rows), each block of W read once, before its update (gemm.h:
-    // matmul_nn's bits). With more threads the blocks run at once, and ∂L/∂input comes first.
+    // matmul_nn sums over the same blocks). With more threads the blocks run at once, and
+    // ∂L/∂input comes first.
     const bool d_in_by_blocks =
         row_block && d_in && threads <= 1 && gemm_nn_by_k_blocks(batch, ni, no);
     const auto rows = [&](int p) {

@@ -165,8 +165,9 @@ TEST(Mlp, FusedBackwardAdamEqualsBackwardThenAdam) {
   unfrozen.linear_layers = {1};
   expect_fused_backward_adam_matches(unfrozen, 33);
   expect_fused_backward_adam_matches(MlpShape{{3, 5, 2}, true}, 1);  // ReLU output, one row
-  expect_fused_backward_adam_matches(MlpShape{{300, 260, 70, 8}}, 9);
-  MlpShape bf16{{700, 300, 7}};  // bf16 products: the same bits both ways too
+  expect_fused_backward_adam_matches(MlpShape{{300, 260, 70, 8}},
+                                     9);  // on one thread: 256 + 4 units
+  MlpShape bf16{{700, 300, 7}};           // bf16 products: the same bits both ways too
   bf16.bf16_products = true;
   expect_fused_backward_adam_matches(bf16, 20);
   MlpShape native{{700, 300, 64}};  // every product ≥ 32 wide: oneDNN's bf16 kernel where native
@@ -179,6 +180,9 @@ TEST(Mlp, FusedBackwardAdamEqualsBackwardThenAdam) {
   // blocks of 65536 / 700 = 93 (four and a ragged 28), and on one thread its ∂L/∂input block by
   // block as well
   expect_fused_backward_adam_matches(MlpShape{{30, 700, 400, 6}}, 20);
+  // and a 700-unit layer (400 → 700, blocks of 163 units), whose whole ∂L/∂input libxsmm sums in
+  // another order than block by block: matmul_nn sums over the same blocks, so the bits agree
+  expect_fused_backward_adam_matches(MlpShape{{30, 400, 700, 6}}, 20);
 }
 
 TEST(Mlp, InitFollowsPyTorchLinearBounds) {
