@@ -1,8 +1,9 @@
 // std::vector whose storage starts on a 64-byte boundary: one cache line, one AVX-512 vector.
-// The GEMM kernels load 16 floats at a time along rows of activations, weights and scratch; from
-// malloc's 16-byte alignment a quarter of those loads straddle two cache lines, which cost the
-// libxsmm products up to 12 % on a 192 × 128 × 128 product (docs/roofline.md). Alignment changes
-// no result: the kernels run the same instructions on the same values.
+// The GEMM kernels load 16 floats at a time along rows of activations, weights and scratch. malloc
+// aligns to 16 bytes, so unless a buffer happened to start on a cache line (one time in four),
+// every such load along its 64-byte-multiple rows straddled two lines, which cost libxsmm's
+// 192 × 128 × 128 product 12 % (docs/roofline.md). Alignment changes no result: the kernels run
+// the same instructions on the same values.
 #pragma once
 
 #include <cstddef>

@@ -5,7 +5,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
-#include <stdexcept>
 #include <vector>
 
 #ifdef SIRL_HAVE_XSMM
@@ -293,9 +292,7 @@ namespace {
 bool big_xsmm_layer(int M, int N, int K) {
   return use_xsmm() && !dnnl_big(M, N, K) && size_t(M) * N >= kBigLayer;
 }
-}  // namespace
 
-namespace {
 // Rows [i0, i0 + mi) of C = op(A) · op(B) into Cr (row stride N): oneDNN, or Eigen should
 // oneDNN refuse the shape.
 enum class Form { kNt, kTn };
