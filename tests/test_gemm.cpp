@@ -62,11 +62,22 @@ void check(Op op, Case c, bool accumulate, int threads) {
 TEST(Gemm, MatchesADoubleReferenceOnEveryEdgeOfTheBlocking) {
   RecordProperty("backend", gemm_backend());
   const Case cases[] = {
-      {192, 128, 19},  {192, 6, 128},  {128, 1, 128}, {128, 128, 6},  // the engine's layers
-      {300, 130, 7},   {257, 65, 33},  {5, 300, 1},   {1, 1, 1},      // blocking edges
-      {192, 64, 2037},                                                // a long K
-      {10, 128, 128},  {20, 300, 700},                                // nt transposing A
+      {192, 128, 19},
+      {192, 6, 128},
+      {128, 1, 128},
+      {128, 128, 6},  // the engine's layers
+      {300, 130, 7},
+      {257, 65, 33},
+      {5, 300, 1},
+      {1, 1, 1},        // blocking edges
+      {192, 64, 2037},  // a long K
+      {10, 128, 128},
+      {20, 300, 700},  // nt transposing A
       {64, 520, 600},  // oneDNN's (two dimensions >= 512, none below 32), a ragged last slice
+      // a big layer libxsmm serves, by blocks of weight rows: its weight gradient (700 units ×
+      // 400 inputs, 20 rows: tn by row blocks of 163) and its ∂L/∂input (nn summed over k-blocks)
+      {700, 400, 20},
+      {20, 400, 700},
   };
   for (const Case& c : cases)
     for (Op op : {kNT, kTN, kNN})
