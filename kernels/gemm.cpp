@@ -233,6 +233,14 @@ bool fast_nn<float>(float* Cs, int ldc, const float* A, const float* B, int M, i
 
 }  // namespace
 
+namespace {
+// Defined with the row blocks below: a big layer's ∂L/∂input, which matmul_nn_cols sums over the
+// fused backward pass's blocks of k.
+bool big_xsmm_layer_nn(int M, int N, int K);
+void nn_k_block_slice(float* Cs, int ldc, const float* A, const float* B, int M, int N, int K,
+                      bool acc, int k0, int kn, int j0, int nj);
+}  // namespace
+
 int gemm_column_slice(int N) {
   return N <= 256 ? 64 : 256;
 }
@@ -252,6 +260,15 @@ void matmul_tn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K,
 template <typename T>
 void matmul_nn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K, bool accumulate,
                     int j0, int nj) {
+  if constexpr (std::is_same_v<T, float>) {
+    if (big_xsmm_layer_nn(M, N, K)) {  // summed over the fused pass's blocks of k (matmul_nn)
+      const int kn = gemm_weight_row_block(K, N, M);
+      for (int k0 = 0; k0 < K; k0 += kn)
+        nn_k_block_slice(Cs, ldc, A, B, M, N, K, accumulate || k0 > 0, k0, std::min(kn, K - k0), j0,
+                         nj);
+      return;
+    }
+  }
   if (!(use_xsmm() && fast_nn<T>(Cs, ldc, A, B, M, N, K, accumulate, j0, nj)))
     eigen_nn<T>(Cs, ldc, A, B, M, N, K, accumulate, j0, nj);
 }
@@ -415,17 +432,17 @@ bool big_xsmm_layer_nn(int M, int N, int K) {
   return big_xsmm_layer(K, N, M);
 }
 
-// Columns [j0, j0 + nj) of C (+)= A[:, k0..k0+kn) · B[k0..k0+kn, :] (A's row stride K): one
-// libxsmm call per kRowBlock rows (Cᶜ = Bᶜ·Aᶜ on the inner block: Bᶜ's columns k0.. are B's rows
-// k0.., Aᶜ's rows k0.. start at A + k0), Eigen should libxsmm refuse it.
-void nn_k_block_slice(float* C, const float* A, const float* B, int M, int N, int K, bool acc,
-                      int k0, int kn, int j0, int nj) {
+// Columns [j0, j0 + nj) of C (+)= A[:, k0..k0+kn) · B[k0..k0+kn, :] (A's row stride K), written
+// at Cs with row stride ldc: one libxsmm call per kRowBlock rows (Cᶜ = Bᶜ·Aᶜ on the inner block:
+// Bᶜ's columns k0.. are B's rows k0.., Aᶜ's rows k0.. start at A + k0), Eigen should libxsmm
+// refuse it.
+void nn_k_block_slice(float* Cs, int ldc, const float* A, const float* B, int M, int N, int K,
+                      bool acc, int k0, int kn, int j0, int nj) {
 #ifdef SIRL_HAVE_XSMM
-  if (xsmm_colmajor(B + size_t(k0) * N + j0, A + k0, C + j0, nj, M, kn, N, K, N, false, acc))
-    return;
+  if (xsmm_colmajor(B + size_t(k0) * N + j0, A + k0, Cs, nj, M, kn, N, K, ldc, false, acc)) return;
 #endif
   using RowMatF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  SliceMap<float> c(C + j0, M, nj, Eigen::OuterStride<>(N));
+  SliceMap<float> c(Cs, M, nj, Eigen::OuterStride<>(ldc));
   const auto a = MapC<float>(A, M, K).middleCols(k0, kn);
   const auto b = Eigen::Map<const RowMatF>(B, K, N).block(k0, j0, kn, nj);
   acc ? void(c.noalias() += a * b) : void(c.noalias() = a * b);
@@ -441,17 +458,6 @@ void nn_k_block_slice(float* C, const float* A, const float* B, int M, int N, in
 // sum over blocks of 163 differed in 2–4 % of the elements.)
 template <typename T>
 void matmul_nn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulate, int threads) {
-  if constexpr (std::is_same_v<T, float>) {
-    if (big_xsmm_layer_nn(M, N, K)) {
-      const int kn = gemm_weight_row_block(K, N, M);
-      for_column_slices(N, threads, [&](int j0, int nj) {
-        for (int k0 = 0; k0 < K; k0 += kn)
-          nn_k_block_slice(C, A, B, M, N, K, accumulate || k0 > 0, k0, std::min(kn, K - k0), j0,
-                           nj);
-      });
-      return;
-    }
-  }
   for_column_slices(N, threads, [&](int j0, int nj) {
     matmul_nn_cols<T>(C + j0, N, A, B, M, N, K, accumulate, j0, nj);
   });
@@ -465,7 +471,7 @@ void matmul_nn_k_block(float* C, const float* A, const float* B, int M, int N, i
                        int k0, int kn) {
   const int w = gemm_column_slice(N);
   for (int j0 = 0; j0 < N; j0 += w)
-    nn_k_block_slice(C, A, B, M, N, K, acc, k0, kn, j0, std::min(w, N - j0));
+    nn_k_block_slice(C + j0, N, A, B, M, N, K, acc, k0, kn, j0, std::min(w, N - j0));
 }
 
 const char* gemm_backend() {

@@ -39,9 +39,10 @@ void matmul_nn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K,
 // A float product oneDNN serves (two dimensions ≥ 512, none below 32) runs on its dense kernels
 // in blocks of C's rows, all N columns at once: gemm_row_block(M, N, K) is the block height (fixed
 // by the shape), 0 for a product that goes by column slices. matmul_nt and matmul_tn do so block
-// by block (matmul_nn keeps column slices); matmul_tn_rows computes rows [i0, i0 + mi) of C =
-// A[K,M]ᵀ·B[K,N] alone into Cr [mi, N] (row stride N), the same bits as that block of matmul_tn:
-// the fused backward pass updates the weights a block of rows at a time.
+// by block (matmul_nn keeps column slices), and matmul_tn does so for a big layer libxsmm serves
+// too (gemm_weight_row_block). matmul_tn_rows computes rows [i0, i0 + mi) of C = A[K,M]ᵀ·B[K,N]
+// alone into Cr [mi, N] (row stride N), the same bits as that block of matmul_tn: the fused
+// backward pass updates the weights a block of rows at a time.
 int gemm_row_block(int M, int N, int K);
 // The fused backward pass's block of weight rows for a weight gradient dW[M,N] = A[K,M]ᵀ·B[K,N]
 // (M units, N inputs, K batch rows): gemm_row_block's where oneDNN serves the product; for a big

@@ -170,6 +170,58 @@ TEST(Gemm, ProductsAreTheSameBitsWhereverTheOperandsStart) {
       }
 }
 
+// gemm.h's promise for the *_cols forms: where a product goes by column slices, each slice,
+// written in place (ldc = N) or into a compact scratch (ldc = nj), has the bits of that slice of
+// the whole product; written and accumulated. All three on a Grid layer and two 20-row JacoRobot
+// layers (the second a big one, whose ∂L/∂input matmul_nn sums over k-blocks); ∂L/∂input alone
+// where the forward and weight-gradient products go by row blocks instead (a big layer's weight
+// gradient, oneDNN's products).
+TEST(Gemm, ColumnSlicesGiveTheWholeProductsBits) {
+  struct Sliced {
+    Case c;
+    std::vector<Op> ops;
+  };
+  const std::vector<Op> all{kNT, kTN, kNN};
+  for (const auto& [c, ops] :
+       {Sliced{{192, 128, 19}, all}, Sliced{{20, 1024, 300}, all}, Sliced{{20, 400, 700}, all},
+        Sliced{{700, 400, 20}, {kNN}}, Sliced{{64, 520, 600}, {kNN}}})
+    for (Op op : ops)
+      for (bool acc : {false, true}) {
+        Rng rng(uint64_t(c.N + op));
+        std::vector<float> A(size_t(c.M) * c.K), B(size_t(c.N) * c.K), C0(size_t(c.M) * c.N);
+        for (auto& x : A) x = float(rng.uniform(-1, 1));
+        for (auto& x : B) x = float(rng.uniform(-1, 1));
+        for (auto& x : C0) x = float(rng.uniform(-1, 1));
+        std::vector<float> whole = C0, in_place = C0, compact = C0;
+        const auto product = [&](float* C, const std::vector<float>& a) {
+          if (op == kNT) matmul_nt(C, a.data(), B.data(), c.M, c.N, c.K, acc, 1);
+          if (op == kTN) matmul_tn(C, a.data(), B.data(), c.M, c.N, c.K, acc, 1);
+          if (op == kNN) matmul_nn(C, a.data(), B.data(), c.M, c.N, c.K, acc, 1);
+        };
+        product(whole.data(), A);
+        const int w = gemm_column_slice(c.N);
+        for (int j0 = 0; j0 < c.N; j0 += w) {
+          const int nj = std::min(w, c.N - j0);
+          std::vector<float> s(size_t(c.M) * nj);
+          for (int i = 0; i < c.M; ++i)
+            for (int j = 0; j < nj; ++j) s[size_t(i) * nj + j] = C0[size_t(i) * c.N + j0 + j];
+          const auto cols = [&](float* Cs, int ldc) {
+            if (op == kNT) matmul_nt_cols(Cs, ldc, A.data(), B.data(), c.M, c.N, c.K, acc, j0, nj);
+            if (op == kTN) matmul_tn_cols(Cs, ldc, A.data(), B.data(), c.M, c.N, c.K, acc, j0, nj);
+            if (op == kNN) matmul_nn_cols(Cs, ldc, A.data(), B.data(), c.M, c.N, c.K, acc, j0, nj);
+          };
+          cols(in_place.data() + j0, c.N);
+          cols(s.data(), nj);
+          for (int i = 0; i < c.M; ++i)
+            for (int j = 0; j < nj; ++j) compact[size_t(i) * c.N + j0 + j] = s[size_t(i) * nj + j];
+        }
+        EXPECT_EQ(in_place, whole) << "op " << op << " M" << c.M << " N" << c.N << " K" << c.K
+                                   << " acc " << acc << ", in place";
+        EXPECT_EQ(compact, whole) << "op " << op << " M" << c.M << " N" << c.N << " K" << c.K
+                                  << " acc " << acc << ", compact";
+      }
+}
+
 TEST(AlignedVector, StartsOnACacheLineAtEverySize) {
   for (size_t n : {size_t(1), size_t(3), size_t(17), size_t(1000), size_t(1) << 20}) {
     AlignedVector<float> v(n, 1.f);
