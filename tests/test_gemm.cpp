@@ -182,11 +182,12 @@ TEST(Gemm, ColumnSlicesGiveTheWholeProductsBits) {
     std::vector<Op> ops;
   };
   const std::vector<Op> all{kNT, kTN, kNN};
-  for (const auto& [c, ops] :
+  for (const Sliced& sliced :
        {Sliced{{192, 128, 19}, all}, Sliced{{20, 1024, 300}, all}, Sliced{{20, 400, 700}, all},
         Sliced{{700, 400, 20}, {kNN}}, Sliced{{64, 520, 600}, {kNN}}})
-    for (Op op : ops)
+    for (Op op : sliced.ops)
       for (bool acc : {false, true}) {
+        const Case c = sliced.c;
         Rng rng(uint64_t(c.N + op));
         std::vector<float> A(size_t(c.M) * c.K), B(size_t(c.N) * c.K), C0(size_t(c.M) * c.N);
         for (auto& x : A) x = float(rng.uniform(-1, 1));
