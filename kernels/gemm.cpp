@@ -234,9 +234,8 @@ bool fast_nn<float>(float* Cs, int ldc, const float* A, const float* B, int M, i
 }  // namespace
 
 namespace {
-// Defined with the row blocks below: a big layer's ∂L/∂input, which matmul_nn_cols sums over the
-// fused backward pass's blocks of k.
-bool big_xsmm_layer_nn(int M, int N, int K);
+// Defined with the row blocks below: one block of k of a big layer's ∂L/∂input, which
+// matmul_nn_cols sums over the fused backward pass's blocks (gemm_nn_by_k_blocks).
 void nn_k_block_slice(float* Cs, int ldc, const float* A, const float* B, int M, int N, int K,
                       bool acc, int k0, int kn, int j0, int nj);
 }  // namespace
@@ -261,7 +260,7 @@ template <typename T>
 void matmul_nn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K, bool accumulate,
                     int j0, int nj) {
   if constexpr (std::is_same_v<T, float>) {
-    if (big_xsmm_layer_nn(M, N, K)) {  // summed over the fused pass's blocks of k (matmul_nn)
+    if (gemm_nn_by_k_blocks(M, N, K)) {  // summed over the fused pass's blocks of k (matmul_nn)
       const int kn = gemm_weight_row_block(K, N, M);
       for (int k0 = 0; k0 < K; k0 += kn)
         nn_k_block_slice(Cs, ldc, A, B, M, N, K, accumulate || k0 > 0, k0, std::min(kn, K - k0), j0,
@@ -426,12 +425,6 @@ void matmul_tn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulat
 }
 
 namespace {
-// A big layer libxsmm serves: ∂L/∂input [M, N] = dY [M, K] · W [K, N] (K the layer's units), the
-// layers the fused backward pass updates by blocks of kn weight rows.
-bool big_xsmm_layer_nn(int M, int N, int K) {
-  return big_xsmm_layer(K, N, M);
-}
-
 // Columns [j0, j0 + nj) of C (+)= A[:, k0..k0+kn) · B[k0..k0+kn, :] (A's row stride K), written
 // at Cs with row stride ldc: one libxsmm call per kRowBlock rows (Cᶜ = Bᶜ·Aᶜ on the inner block:
 // Bᶜ's columns k0.. are B's rows k0.., Aᶜ's rows k0.. start at A + k0), Eigen should libxsmm
@@ -463,8 +456,10 @@ void matmul_nn(T* C, const T* A, const T* B, int M, int N, int K, bool accumulat
   });
 }
 
+// ∂L/∂input [M, N] = dY [M, K] · W [K, N] of a big layer libxsmm serves (K the layer's units):
+// the layers the fused backward pass updates by blocks of weight rows.
 bool gemm_nn_by_k_blocks(int M, int N, int K) {
-  return big_xsmm_layer_nn(M, N, K);
+  return big_xsmm_layer(K, N, M);
 }
 
 void matmul_nn_k_block(float* C, const float* A, const float* B, int M, int N, int K, bool acc,
