@@ -58,6 +58,12 @@ const float* widen_b_rows(const uint16_t* B, int N, int K, int j0, int nj) {
   widen(B + size_t(j0) * K, s.data() + size_t(j0) * K, size_t(nj) * K);
   return s.data();
 }
+const float* widen_b(const uint16_t* B, size_t n) {
+  auto& s = wide_scratch().b;
+  s.resize(n);
+  widen(B, s.data(), n);
+  return s.data();
+}
 const float* widen_b_cols(const uint16_t* B, int K, int N, int j0, int nj) {
   auto& s = wide_scratch().b;
   s.resize(size_t(K) * N);
@@ -101,6 +107,22 @@ void for_slices(int N, int threads, Fn&& fn) {
   for (int p = 0; p < slices; ++p) fn(p * w, std::min(w, N - p * w));
 }
 
+// The row block of a native weight gradient (gemm_bf16.h), 0 where it goes by column slices.
+int native_row_block(int M, int N, int K) {
+  return native_shape(M, N, K) ? gemm_row_block(M, N, K) : 0;
+}
+
+// The row blocks of a weight gradient that goes by them: in parallel (each block's bits are its
+// own, so any thread count gives the same), into C [M, N] (row stride N).
+void tn_by_row_blocks(int block, float* C, const uint16_t* A, const uint16_t* B, int M, int N,
+                      int K, bool acc, int threads) {
+  const int blocks = (M + block - 1) / block;
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && blocks > 1)
+  for (int b = 0; b < blocks; ++b)
+    matmul_bf16_tn_rows(C + size_t(b) * block * N, A, B, M, N, K, acc, b * block,
+                        std::min(block, M - b * block));
+}
+
 }  // namespace
 
 bool bf16_native() {
@@ -125,6 +147,18 @@ void matmul_bf16_nt_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* 
 
 void matmul_bf16_tn_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* B, int M, int N,
                          int K, bool acc, int j0, int nj) {
+  if (const int block = native_row_block(M, N, K)) {
+    // A product that goes by row blocks: the slice of those blocks' result (every column of them
+    // computed, into a dense buffer holding the slice's prior values where it accumulates).
+    thread_local AlignedVector<float> whole;
+    whole.resize(size_t(M) * N);
+    for (int i = 0; acc && i < M; ++i)
+      std::memcpy(whole.data() + size_t(i) * N + j0, Cs + size_t(i) * ldc, sizeof(float) * nj);
+    tn_by_row_blocks(block, whole.data(), A, B, M, N, K, acc, 1);
+    for (int i = 0; i < M; ++i)
+      std::memcpy(Cs + size_t(i) * ldc, whole.data() + size_t(i) * N + j0, sizeof(float) * nj);
+    return;
+  }
   // op(A) = A[K, M]ᵀ: [M, K] with strides (1, M); op(B) = B[:, j0..]: [K, nj], strides (N, 1)
   if (native_shape(M, nj, K) && native_slice({M, nj, K, 1, M, N, 1, ldc, acc, true}, A, B + j0, Cs))
     return;
@@ -140,6 +174,19 @@ void matmul_bf16_nn_cols(float* Cs, int ldc, const uint16_t* A, const uint16_t* 
                         acc, j0, nj);
 }
 
+int gemm_bf16_weight_row_block(int M, int N, int K, int threads) {
+  return native_shape(M, N, K) ? native_row_block(M, N, K)
+                               : gemm_weight_row_block(M, N, K, threads);
+}
+
+void matmul_bf16_tn_rows(float* Cr, const uint16_t* A, const uint16_t* B, int M, int N, int K,
+                         bool acc, int i0, int mi) {
+  // op(A)'s rows i0..: A[K, M]ᵀ from column i0, strides (1, M); B [K, N] whole; Cr dense [mi, N]
+  if (native_shape(mi, N, K) && onednn_matmul({mi, N, K, 1, M, N, 1, N, acc, true}, A + i0, B, Cr))
+    return;
+  matmul_tn_rows(Cr, widen_a(A, size_t(K) * M), widen_b(B, size_t(K) * N), M, N, K, acc, i0, mi);
+}
+
 void matmul_bf16_nt(float* C, const uint16_t* A, const uint16_t* B, int M, int N, int K, bool acc,
                     int threads) {
   for_slices(N, threads,
@@ -147,6 +194,8 @@ void matmul_bf16_nt(float* C, const uint16_t* A, const uint16_t* B, int M, int N
 }
 void matmul_bf16_tn(float* C, const uint16_t* A, const uint16_t* B, int M, int N, int K, bool acc,
                     int threads) {
+  if (const int block = native_row_block(M, N, K))
+    return tn_by_row_blocks(block, C, A, B, M, N, K, acc, threads);
   for_slices(N, threads,
              [&](int j0, int nj) { matmul_bf16_tn_cols(C + j0, N, A, B, M, N, K, acc, j0, nj); });
 }

@@ -234,29 +234,39 @@ void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, c
       adam_apply_rows(step, W + j0, ni, dw.data(), nj, m + w_off + j0, v + w_off + j0, no, nj);
     };
     // fp32 products oneDNN serves, big layers libxsmm serves, and on one thread mid-sized ones go
-    // by blocks of W's rows (gemm.h, gemm_weight_row_block): ∂L/∂input first, whole, from the
-    // old W, then each block: its gradient and its Adam update.
-    const int row_block = h ? 0 : gemm_weight_row_block(no, ni, batch, threads);
+    // by blocks of W's rows (gemm.h, gemm_weight_row_block), and so do bf16 products of those
+    // shapes (gemm_bf16.h, gemm_bf16_weight_row_block): ∂L/∂input first, whole, from the old W,
+    // then each block: its gradient and its Adam update.
+    const int row_block = h ? gemm_bf16_weight_row_block(no, ni, batch, threads)
+                            : gemm_weight_row_block(no, ni, batch, threads);
     // On one thread, for a big layer libxsmm serves, ∂L/∂input too goes block by block (its
     // inner dimension is W's rows), each block of W read once, before its update (gemm.h:
     // matmul_nn sums over the same blocks). With more threads the blocks run at once, and
     // ∂L/∂input comes first.
     const bool d_in_by_blocks =
-        row_block && d_in && threads <= 1 && gemm_nn_by_k_blocks(batch, ni, no);
+        !h && row_block && d_in && threads <= 1 && gemm_nn_by_k_blocks(batch, ni, no);
     const auto rows = [&](int p) {
       const int i0 = p * row_block, mi = std::min(row_block, no - i0);
       // d_in [batch, ni] (+)= g[:, i0..] [batch, mi] · W[i0.., :] [mi, ni], W before its update
       if (d_in_by_blocks) matmul_nn_k_block(d_in, g, W, batch, ni, no, p > 0, i0, mi);
       thread_local AlignedVector<float> dw;
       dw.resize(size_t(mi) * ni);  // written over, as the slices' scratch above
-      matmul_tn_rows(dw.data(), g, in, no, ni, batch, false, i0, mi);
+      if (h)
+        matmul_bf16_tn_rows(dw.data(), gh, inh, no, ni, batch, false, i0, mi);
+      else
+        matmul_tn_rows(dw.data(), g, in, no, ni, batch, false, i0, mi);
       const size_t at = w_off + size_t(i0) * ni;
       adam_apply(step, params + at, dw.data(), m + at, v + at, size_t(mi) * ni);
     };
     const int blocks = row_block ? (no + row_block - 1) / row_block : 0;
     // (No OpenMP region at all on one thread: even a serialised one costs microseconds, and a
     // TPA step of 20 small heads runs 60 of these loops.)
-    if (row_block && d_in && !d_in_by_blocks) matmul_nn(d_in, g, W, batch, ni, no, false, threads);
+    if (row_block && d_in && !d_in_by_blocks) {
+      if (h)
+        matmul_bf16_nn(d_in, gh, Wh, batch, ni, no, false, threads);
+      else
+        matmul_nn(d_in, g, W, batch, ni, no, false, threads);
+    }
     const int parts = row_block ? blocks : slices;
     const auto part = [&](int p) { row_block ? rows(p) : slice(p); };
     if (threads > 1 && parts > 1) {

@@ -108,6 +108,9 @@ std::vector<Case> cases() {
       out.push_back({op, 33, 1, 64, acc});
       out.push_back({op, 50, 128, 19, acc});
     }
+  // A weight gradient oneDNN serves in fp32 (two dimensions ≥ 512): natively by row blocks of 256,
+  // the last one 8 rows (emulated: below 32)
+  for (bool acc : {false, true}) out.push_back({Op::kTn, 520, 600, 40, acc});
   return out;
 }
 
@@ -181,14 +184,41 @@ TEST(GemmBf16, EmulatedProductsAreTheFp32KernelOnRoundedCopies) {
   EXPECT_GE(checked, 18);  // the narrow shapes at least
 }
 
+// A weight gradient of a shape oneDNN serves in fp32 goes by row blocks: natively gemm.h's
+// (fixed by the shape), emulated the fp32 kernel's own. Each block alone (the fused backward
+// pass's form) has the bits of that block of the whole.
+TEST(GemmBf16, WeightGradientsOfOneDnnShapesGoByRowBlocks) {
+  const int M = 520, N = 600, K = 40;
+  const int block = gemm_bf16_weight_row_block(M, N, K);
+  EXPECT_EQ(block, bf16_native() ? gemm_row_block(M, N, K) : gemm_weight_row_block(M, N, K));
+  if (block == 0) GTEST_SKIP() << "no row blocks with the " << gemm_backend() << " kernels";
+  if (bf16_native()) {
+    EXPECT_EQ(gemm_bf16_weight_row_block(128, 128, 64), 0);  // GridRobot's: column slices
+  }
+  const Case c{Op::kTn, M, N, K, false};
+  const Operands o = operands(c, 41);
+  std::vector<float> whole(size_t(M) * N);
+  run_bf16(c, whole.data(), o.a16.data(), o.b16.data(), 2);
+  for (int i0 = 0; i0 < M; i0 += block) {
+    const int mi = std::min(block, M - i0);
+    std::vector<float> rows(size_t(mi) * N, -1.f);
+    matmul_bf16_tn_rows(rows.data(), o.a16.data(), o.b16.data(), M, N, K, false, i0, mi);
+    ASSERT_EQ(std::memcmp(rows.data(), whole.data() + size_t(i0) * N, rows.size() * sizeof(float)),
+              0)
+        << "rows " << i0 << ".." << i0 + mi;
+  }
+}
+
 TEST(GemmBf16, NamesItsBackend) {
   const std::string b = bf16_backend();
-  if (bf16_native())
+  if (bf16_native()) {
     EXPECT_TRUE(b == "onednn-avx512_bf16" || b == "onednn-amx_bf16") << b;
-  else
+  } else {
     EXPECT_EQ(b, "emulated");
-  if (const char* e = std::getenv("SIRL_BF16"); e && std::strcmp(e, "emulate") == 0)
+  }
+  if (const char* e = std::getenv("SIRL_BF16"); e && std::strcmp(e, "emulate") == 0) {
     EXPECT_FALSE(bf16_native());
+  }
 }
 
 }  // namespace

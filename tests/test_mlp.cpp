@@ -173,6 +173,11 @@ TEST(Mlp, FusedBackwardAdamEqualsBackwardThenAdam) {
   MlpShape native{{700, 300, 64}};  // every product ≥ 32 wide: oneDNN's bf16 kernel where native
   native.bf16_products = true;
   expect_fused_backward_adam_matches(native, 48);
+  // a native bf16 layer of a shape oneDNN serves in fp32 goes by the same row blocks (256, 256
+  // and a ragged 8 emulated) in both passes
+  MlpShape native_rows{{600, 520, 6}};
+  native_rows.bf16_products = true;
+  expect_fused_backward_adam_matches(native_rows, 40);
   // fp32 weight gradients oneDNN serves go by row blocks (600 × 520 with 40 rows: two dimensions
   // ≥ 512), 520 outputs = two blocks of 256 and a ragged one
   expect_fused_backward_adam_matches(MlpShape{{600, 520, 6}}, 40);
