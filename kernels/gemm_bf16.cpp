@@ -45,23 +45,20 @@ WideScratch& wide_scratch() {
   return s;
 }
 
-// A whole; B's rows [j0, j0 + nj) of [N, K] (nt) or its columns of [K, N] (tn, nn).
-const float* widen_a(const uint16_t* A, size_t n) {
-  auto& s = wide_scratch().a;
+// A whole (or B whole: a weight gradient's block of rows needs all of it); B's rows [j0, j0 + nj)
+// of [N, K] (nt) or its columns of [K, N] (tn, nn).
+const float* widen_whole(std::vector<float>& s, const uint16_t* x, size_t n) {
   s.resize(n);
-  widen(A, s.data(), n);
+  widen(x, s.data(), n);
   return s.data();
+}
+const float* widen_a(const uint16_t* A, size_t n) {
+  return widen_whole(wide_scratch().a, A, n);
 }
 const float* widen_b_rows(const uint16_t* B, int N, int K, int j0, int nj) {
   auto& s = wide_scratch().b;
   s.resize(size_t(N) * K);
   widen(B + size_t(j0) * K, s.data() + size_t(j0) * K, size_t(nj) * K);
-  return s.data();
-}
-const float* widen_b(const uint16_t* B, size_t n) {
-  auto& s = wide_scratch().b;
-  s.resize(n);
-  widen(B, s.data(), n);
   return s.data();
 }
 const float* widen_b_cols(const uint16_t* B, int K, int N, int j0, int nj) {
@@ -184,7 +181,8 @@ void matmul_bf16_tn_rows(float* Cr, const uint16_t* A, const uint16_t* B, int M,
   // op(A)'s rows i0..: A[K, M]ᵀ from column i0, strides (1, M); B [K, N] whole; Cr dense [mi, N]
   if (native_shape(mi, N, K) && onednn_matmul({mi, N, K, 1, M, N, 1, N, acc, true}, A + i0, B, Cr))
     return;
-  matmul_tn_rows(Cr, widen_a(A, size_t(K) * M), widen_b(B, size_t(K) * N), M, N, K, acc, i0, mi);
+  matmul_tn_rows(Cr, widen_a(A, size_t(K) * M), widen_whole(wide_scratch().b, B, size_t(K) * N), M,
+                 N, K, acc, i0, mi);
 }
 
 void matmul_bf16_nt(float* C, const uint16_t* A, const uint16_t* B, int M, int N, int K, bool acc,
