@@ -12,6 +12,8 @@ A second table times whole TPA cells of JacoRobot as a quick run trains them (20
 after another, 15 epochs; bench/bench_pipeline.cpp) against the same cells written in PyTorch
 (each reward its own network and Adam), one thread each: the engine's own unit of work, where the
 step rows above time all 20 heads taking one step in turn.
+Last, the performance issue's targets checked on this run's numbers (one thread): each target's
+measured value, whether it holds, and the GFLOP/s it would take here with its share of the roof.
 Usage: /usr/bin/python3 bench/compare_kernels.py [--build build/release] [--repetitions 5]
                                                  [--no-cells]
 """
@@ -96,11 +98,14 @@ def main():
           f"{args.repetitions} repetitions.\n")
     print("| case | threads | ours ms | ours GFLOP/s | % of roof | best PyTorch form | PyTorch GFLOP/s | speed-up |")
     print("|---|---:|---:|---:|---:|---|---:|---:|")
+    one = {}  # case -> our fp32, our bf16 and the best PyTorch GFLOP/s, one thread
     for threads in (1, 2):
         for label, key, case in rows:
             o = med[key.format(threads)]
             ms = milliseconds(o)
             t, form = best_torch(case, threads)
+            if threads == 1:
+                one[case] = {"ours": o["GFLOP/s"], "torch": t["gflops"]}
             print(f"| {label} | {threads} | {ms:.3f} | {o['GFLOP/s']:.1f} | "
                   f"{100 * o['GFLOP/s'] / peak[min(threads, cores)]:.0f} % | {form} | "
                   f"{t['gflops']:.1f} | {o['GFLOP/s'] / t['gflops']:.2f}x |")
@@ -127,6 +132,8 @@ def main():
             if k16 not in med:
                 continue
             o, o32 = med[k16], med[key.format(threads)]
+            if threads == 1:
+                one[case]["bf16"] = o["GFLOP/s"]
             ms = milliseconds(o)
             t, form = best_torch(case, threads)
             print(f"| {label} | {threads} | {ms:.3f} | {o['GFLOP/s']:.1f} | "
@@ -134,8 +141,51 @@ def main():
                   f"{o['GFLOP/s'] / o32['GFLOP/s']:.2f}x | {form} | "
                   f"{t['gflops']:.1f} | {o['GFLOP/s'] / t['gflops']:.2f}x |")
 
-    if not args.no_cells:
-        print_cells(args.build, peak[1])
+    cells = None if args.no_cells else print_cells(args.build, peak[1])
+    print("\nThe performance issue's targets, one thread, this run (\"takes\": the GFLOP/s our case "
+          "would need, and its share of one core's roof: fp32's, or for bf16 that of the unit its "
+          "products run on).\n")
+    print("| target | measured | holds | takes |")
+    print("|---|---:|---|---:|")
+    for name, measured, holds, need, precision in target_rows(peak[1], one, cells):
+        top = ref[1] if precision == "bf16" else peak[1]
+        print(f"| {name} | {measured} | {'yes' if holds else '**no**'} | "
+              f"{need:.0f} GFLOP/s, {100 * need / top:.0f} % |")
+    print("\nNot checked here: the whole quick run ≥ 300 GFLOP/s on 2 threads (the aggregate "
+          "`sirl run quick` prints).")
+
+
+def target_rows(roof1, one, cells=None):
+    """The issue's targets on one thread's numbers: [(target, measured, holds, GFLOP/s needed,
+    the precision whose roof applies: "fp32" or "bf16")].
+    one: {case: {"ours": fp32 GFLOP/s, "torch": the best PyTorch form's, "bf16": ours in bf16
+    (absent when not measured)}}; cells: {PyTorch cell case: speed-up} or None."""
+    out = []
+
+    def share(name, case, goal):
+        pct = one[case]["ours"] / roof1
+        out.append((name, f"{100 * pct:.0f} %", pct >= goal, goal * roof1, "fp32"))
+
+    def ratio(name, case, goal, ours="ours", of="torch", what="PyTorch"):
+        if ours not in one[case]:
+            return
+        x = one[case][ours] / one[case][of]
+        out.append((name, f"{x:.2f}× {what}", x >= goal, goal * one[case][of],
+                    "bf16" if ours == "bf16" else "fp32"))
+
+    share("Grid SIRL step ≥ 70 % of the roof", "sirl_step_grid", 0.70)
+    share("Jaco SIRL step ≥ 80 % of the roof", "sirl_step_jaco", 0.80)
+    share("20 Grid TPA heads ≥ 70 % of the roof", "tpa_heads_grid", 0.70)
+    ratio("20 Grid TPA heads ≥ 4.5× the best PyTorch form", "tpa_heads_grid", 4.5)
+    ratio("frozen Jaco TPA cell step ≥ 2.5× PyTorch", "tpa_heads_jaco", 2.5)
+    if cells and "tpa_quick_cell_jaco_frozen" in cells:
+        x = cells["tpa_quick_cell_jaco_frozen"]
+        out.append(("frozen Jaco TPA cell (whole, M = 100) ≥ 2.5× PyTorch", f"{x:.2f}× PyTorch",
+                    x >= 2.5, 2.5 * cells["tpa_quick_cell_jaco_frozen_torch_gflops"], "fp32"))
+    ratio("Jaco bf16 step ≥ 1.7× our fp32", "sirl_step_jaco", 1.7, "bf16", "ours", "our fp32")
+    ratio("Jaco bf16 step ≥ 3.5× PyTorch", "sirl_step_jaco", 3.5, "bf16")
+    ratio("Grid bf16 step ≥ 7× PyTorch", "sirl_step_grid", 7.0, "bf16")
+    return out
 
 
 CELLS = [  # (label, ours in sirl_bench_pipeline, the PyTorch case)
@@ -151,7 +201,9 @@ CELLS = [  # (label, ours in sirl_bench_pipeline, the PyTorch case)
 
 
 def print_cells(build, roof1, repetitions=3):
-    """Whole cells, one thread, medians of `repetitions` (after one warm-up run on PyTorch's side)."""
+    """Whole cells, one thread, medians of `repetitions` (after one warm-up run on PyTorch's side).
+    Returns each PyTorch cell case's speed-up (ours over PyTorch) and, under case +
+    "_torch_gflops", PyTorch's GFLOP/s."""
     med = gbench(os.path.join(build, "bench", "sirl_bench_pipeline"), repetitions,
                  "BM_TpaQuickCell|BM_TpaSmallCell")
     torch1 = json.loads(subprocess.run(
@@ -161,11 +213,15 @@ def print_cells(build, roof1, repetitions=3):
           f"thread; medians of {repetitions}.\n")
     print("| cell | ours s | ours GFLOP/s | % of roof | PyTorch s | PyTorch GFLOP/s | speed-up |")
     print("|---|---:|---:|---:|---:|---:|---:|")
+    speedups = {}
     for label, key, case in CELLS:
         o, t = med[key], torch1[case]
         s = milliseconds(o) * 1e-3
+        speedups[case] = t["ms"] * 1e-3 / s
+        speedups[case + "_torch_gflops"] = t["gflops"]
         print(f"| {label} | {s:.2f} | {o['GFLOP/s']:.1f} | {100 * o['GFLOP/s'] / roof1:.0f} % | "
               f"{t['ms'] * 1e-3:.2f} | {t['gflops']:.1f} | {t['ms'] * 1e-3 / s:.2f}x |")
+    return speedups
 
 
 if __name__ == "__main__":
