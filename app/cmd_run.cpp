@@ -302,17 +302,21 @@ void register_plan(CLI::App& app, Runner& run) {
 
 void register_export(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand("export",
-                                 "Write a results file's tables (fpe, tpa, robust_fpe, robust_tpa, "
-                                 "timings, training, vae_latents) as CSV files into a directory.");
+                                 "Write every table of a results file (fpe, tpa, robust_fpe, "
+                                 "robust_tpa, timings, training, vae_latents, tpa_heads) as "
+                                 "<table>.csv into a directory.");
   static std::string file, dir;
   cmd->add_option("file", file, "Results file (HDF5)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--csv", dir, "Directory for fpe.csv, tpa.csv, timings.csv")->required();
+  cmd->add_option("--csv", dir, "Directory for the CSV files (one per table)")->required();
   run = [] {
     const auto records = read_results_records(file);
     const RunInfo info = read_run_info(file);
-    export_csv(result_tables(records, info.roofs()), dir);
-    std::printf("wrote %s/{fpe,tpa,timings,training,vae_latents}.csv from %zu task records\n",
-                dir.c_str(), records.size());
+    const ResultTables tables = result_tables(records, info.roofs());
+    export_csv(tables, dir);
+    std::string names;
+    for (const auto& t : tables.tables) names += (names.empty() ? "" : ",") + t.name;
+    std::printf("wrote %s/{%s}.csv from %zu task records\n", dir.c_str(), names.c_str(),
+                records.size());
     return 0;
   };
 }

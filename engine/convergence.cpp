@@ -24,3 +24,12 @@ Convergence check_convergence(const std::vector<float>& curve, double rel_tol, d
 }
 
 }  // namespace sirl
+
+namespace sirl {
+
+bool stops_after(const StopRule& rule, const float* curve, int e) {
+  if (!rule.converged || e < std::max(2, rule.min_epochs)) return false;
+  return check_convergence(std::vector<float>(curve, curve + e), rule.rel_tol).converged;
+}
+
+}  // namespace sirl

@@ -24,3 +24,22 @@ Convergence check_convergence(const std::vector<float>& curve, double rel_tol = 
                               double abs_tol = kConvergenceAbsTol);
 
 }  // namespace sirl
+
+namespace sirl {
+
+// When a reward head's training ends (tpa.stop): `fixed` runs every epoch of the schedule (the
+// paper's protocol); `converged` ends a head at the first epoch e ≥ min_epochs at which its loss
+// curve so far, curve[0, e), satisfies check_convergence with rel_tol (the loss moved by less
+// than rel_tol over the last tenth of the epochs run), and never later than the schedule's
+// epochs. Only the head's own training loss decides: never held-out pairs or accuracy, so the
+// rule cannot be tuned to the verdicts it produces.
+struct StopRule {
+  bool converged = false;  // false: fixed
+  int min_epochs = 100;
+  double rel_tol = kConvergenceRelTol;
+};
+
+// Whether a head whose curve so far is curve[0, e) stops after epoch e under `rule`.
+bool stops_after(const StopRule& rule, const float* curve, int e);
+
+}  // namespace sirl

@@ -43,6 +43,9 @@ void for_each_field(H& h, F&& f) {
   schedule("tpa", h.tpa);
   f("tpa.hidden", h.tpa_hidden);
   f("tpa.l2", h.tpa_l2);
+  f("tpa.stop", h.tpa_stop);
+  f("tpa.stop_min_epochs", h.tpa_stop_min_epochs);
+  f("tpa.stop_rel_tol", h.tpa_stop_rel_tol);
   f("precision", h.precision);
 }
 
@@ -136,6 +139,14 @@ std::string describe(const Hyper& h) {
   return s;
 }
 
+StopRule tpa_stop_rule(const Hyper& h) {
+  StopRule r;
+  r.converged = h.tpa_stop == "converged";
+  r.min_epochs = h.tpa_stop_min_epochs;
+  r.rel_tol = h.tpa_stop_rel_tol;
+  return r;
+}
+
 void validate_precision(const std::string& precision) {
   if (precision != "fp32" && precision != "bf16")
     throw std::invalid_argument(
@@ -173,6 +184,14 @@ void validate(const Hyper& h) {
         h.vae_elbo + "\"");
   if (h.pref_l2 < 0) fail("pref.l2 must be >= 0");
   if (h.tpa_l2 < 0) fail("tpa.l2 must be >= 0");
+  if (h.tpa_stop != "fixed" && h.tpa_stop != "converged")
+    fail(
+        "tpa.stop must be \"fixed\" (every epoch, the paper's) or \"converged\" (each head "
+        "stops once its loss has converged), got \"" +
+        h.tpa_stop + "\"");
+  if (h.tpa_stop_min_epochs < 2) fail("tpa.stop_min_epochs must be >= 2");
+  if (!(h.tpa_stop_rel_tol > 0 && h.tpa_stop_rel_tol < 1))
+    fail("tpa.stop_rel_tol must be in (0, 1)");
   try {
     validate_precision(h.precision);
   } catch (const std::invalid_argument& e) {

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/convergence.h"
 #include "kernels/adam.h"
 
 namespace sirl {
@@ -40,6 +41,12 @@ struct Hyper {
   TrainSchedule tpa{500, 64, {0.001, 1.0}};  // the TPA reward heads
   std::vector<int> tpa_hidden{128, 128};
   double tpa_l2 = 10;
+  // When a reward head stops (engine/convergence.h, StopRule): "fixed" runs tpa.epochs (the
+  // paper's protocol); "converged" stops each head once its loss has converged, at the earliest
+  // after tpa.stop_min_epochs, by check_convergence at tpa.stop_rel_tol; tpa.epochs is the cap.
+  std::string tpa_stop = "fixed";
+  int tpa_stop_min_epochs = 100;
+  double tpa_stop_rel_tol = 0.01;
   // "fp32" (the paper's) or "bf16": every network's matrix products in bf16 with fp32
   // accumulation, master weights and Adam state in fp32 (MlpShape::bf16_products).
   std::string precision = "fp32";
@@ -52,6 +59,9 @@ void validate_precision(const std::string& precision);
 inline bool bf16_products(const Hyper& h) {
   return h.precision == "bf16";
 }
+
+// The reward heads' stopping rule that h.tpa_stop* describe.
+StopRule tpa_stop_rule(const Hyper& h);
 
 // The paper's values for a registered environment (datasets/environments.h: the engine's
 // defaults plus the environment's HyperDefault list); throws std::invalid_argument for an unknown

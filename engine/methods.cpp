@@ -7,6 +7,7 @@
 #include "engine/epochs.h"
 #include "engine/train_step.h"
 #include "kernels/rng.h"
+#include "kernels/triplet_loss.h"
 
 namespace sirl {
 
@@ -27,6 +28,22 @@ std::vector<float> initial_phi(const Dataset& d, const MethodConfig& cfg, uint64
   return p;
 }
 
+// Whether every value is exactly 0.
+bool all_zero(const std::vector<float>& v) {
+  return std::all_of(v.begin(), v.end(), [](float x) { return x == 0.f; });
+}
+
+// SIRL's triplet loss is a hinge: once every triplet is inside its margin, the loss and every
+// gradient are exactly 0, Adam's first moments decay to exactly 0 (kernels/adam.h stores a moment
+// below the smallest normal float as 0), and from then on every step leaves every weight bit
+// unchanged. An epoch that starts with every first moment 0 and whose every triplet stays inside
+// its margin by kFixedPointSlack·max(α, 1) therefore ends where it began, and so does every epoch
+// after it: training skips to its end (run_epochs' at_fixed_point; the skipped epochs' loss is 0,
+// as the full run's). The slack keeps the decision clear of rounding: a triplet's hinge is
+// computed from its rows' embeddings, which another batch of the next epoch might round
+// differently in the last bits.
+constexpr float kFixedPointSlack = 1e-3f;
+
 void train_sirl(const Dataset& d, const QueryBundle& bundle, const MethodConfig& cfg, uint64_t seed,
                 Representation& rep) {
   const TripletSet q = first_triplets(bundle.similarity, cfg.queries);
@@ -36,17 +53,40 @@ void train_sirl(const Dataset& d, const QueryBundle& bundle, const MethodConfig&
   std::vector<int32_t> batch;
   const ResumableState resume =
       adam_resumable(cfg.checkpointer, "sirl", t.params, t.adam, rep.train_flops);
+  const float margin = float(cfg.hyper.triplet_margin);
+  const float inside = -kFixedPointSlack * std::max(margin, 1.f);
+  // Per epoch: whether it started with every first moment 0, and whether every triplet so far
+  // was inside its margin by the slack.
+  bool epoch_start = true, moments_zero = false, idle = false;
+  double epoch_flops = 0;  // every epoch has the same batches
+  for (int64_t i0 = 0; i0 < q.count; i0 += s.batch)
+    epoch_flops += 3 * t.shape.forward_flops(3 * int(std::min<int64_t>(s.batch, q.count - i0)));
+  int skipped = 0;
   rep.loss_curve = run_epochs(
       q.count, s.epochs, s.batch, order_rng,
       [&](const int32_t* rows, int b) {
+        if (epoch_start) {
+          moments_zero = all_zero(t.adam.m);  // after a resume too: the restored moments
+          idle = true;
+          epoch_start = false;
+        }
         batch.resize(size_t(3) * b);
         for (int i = 0; i < b; ++i)
           std::copy_n(q.idx.begin() + 3 * rows[i], 3, batch.begin() + 3 * i);
         rep.train_flops += 3 * t.shape.forward_flops(3 * b);
-        return triplet_train_step(t, d.inputs.data(), batch.data(), b,
-                                  float(cfg.hyper.triplet_margin), cfg.threads);
+        const float loss =
+            triplet_train_step(t, d.inputs.data(), batch.data(), b, margin, cfg.threads);
+        if (idle) idle = triplet_max_hinge(t.tape.output(), b, t.shape.out(), margin) <= inside;
+        return loss;
       },
-      &resume);
+      &resume,
+      [&](int done) {
+        epoch_start = true;
+        if (!(cfg.skip_fixed_point && moments_zero && idle)) return false;
+        skipped = s.epochs - done;
+        return true;
+      });
+  rep.skipped_flops = skipped * epoch_flops;
   rep.params = std::move(t.params);
 }
 

@@ -19,6 +19,9 @@ struct MethodConfig {
   Hyper hyper;
   int threads = 1;
   Checkpointer* checkpointer = nullptr;  // saves / resumes the training (engine/checkpoint.h)
+  // SIRL: end training where it reaches a fixed point (engine/methods.cpp; the same weights and
+  // curve as running every epoch). false runs every epoch (the tests' reference).
+  bool skip_fixed_point = true;
 };
 
 // - sirl:        φ trained on the first N triplets of bundle.similarity (symmetric triplet loss).

@@ -30,7 +30,10 @@ struct Representation {
   // Preference methods: the K reward heads trained with φ, [K, d + 1] (w, c) per human. Kept in
   // memory for inspection; not part of a task's record (FPE and TPA use φ alone).
   std::vector<float> heads;
-  double train_flops = 0;         // multiply-adds ×2 spent training (excluding VAE pre-training)
+  double train_flops = 0;  // multiply-adds ×2 spent training (excluding VAE pre-training)
+  // What the epochs skipped at a fixed point would have cost (SIRL's exact skip,
+  // engine/methods.cpp): train_flops + skipped_flops is the protocol's count.
+  double skipped_flops = 0;
   int dim() const { return shape.out(); }
 };
 

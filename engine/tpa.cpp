@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "engine/convergence.h"
 #include "engine/epochs.h"
 #include "engine/train_step.h"
 #include "kernels/bradley_terry_loss.h"
@@ -124,7 +125,8 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   // Each head's pairs and labels of its current batch, [R][2b] and [R][b].
   std::vector<std::vector<int32_t>> pairs(R);
   std::vector<std::vector<float>> label(R);
-  // Every epoch has the same batches: 3 passes of each batch's 2b rows through R networks.
+  // Every epoch has the same batches: 3 passes of each batch's 2b rows through R networks (a
+  // head's share: epoch_flops / R).
   double epoch_flops = 0;
   for (int64_t i0 = 0; i0 < M; i0 += h.tpa.batch)
     epoch_flops += 3 * R * net.forward_flops(2 * int(std::min<int64_t>(h.tpa.batch, M - i0)));
@@ -132,8 +134,13 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   const ResumableState resume =
       adam_resumable(cfg.checkpointer, "tpa", t.params, t.adam, res.train_flops);
   // Head by head: each head's steps in a row, so more of its weights and moments stay in cache
-  // (the same bits as stepping all heads at once).
-  res.loss_curves = run_epochs_model_by_model(
+  // (the same bits as stepping all heads at once). Under tpa.stop = "converged" a head whose loss
+  // has converged takes no further step.
+  ModelLoopOptions loop;
+  loop.resume = &resume;
+  loop.stretch_steps = cfg.stretch_steps;
+  loop.stop = tpa_stop_rule(h);
+  ModelCurves run = run_epochs_model_by_model(
       M, res.epochs, h.tpa.batch, order_rng, cfg.threads,
       [&](int r, const int32_t* order, int b, int64_t step) {
         pairs[r].resize(size_t(b) * 2);
@@ -148,12 +155,19 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
                                               rows.X.data(), pairs[r].data(), label[r].data(), b,
                                               float(h.tpa_l2));
       },
-      [&](int e) {
-        t.adam.step = e * batches;
-        res.train_flops = e * epoch_flops;
-      },
-      &resume, cfg.stretch_steps);
-  require_finite(res.loss_curves, "TPA loss (frozen=" + std::to_string(cfg.frozen) + ")");
+      // Adam's step count is each head's own (the step function is handed it); the shared
+      // counter is kept at the epoch every running head stands at, for checkpoints.
+      [&](int e) { t.adam.step = e * batches; }, loop);
+  res.loss_curves = std::move(run.curves);
+  res.head_epochs = std::move(run.epochs_run);
+  res.protocol_flops = double(res.epochs) * epoch_flops;
+  res.train_flops = 0;
+  for (int r = 0; r < R; ++r) {
+    res.train_flops += double(res.head_epochs[r]) * epoch_flops / R;
+    const float* c = res.loss_curves.data() + size_t(r) * res.epochs;
+    require_finite(std::vector<float>(c, c + res.head_epochs[r]),
+                   "TPA loss (frozen=" + std::to_string(cfg.frozen) + ")");
+  }
   require_finite(t.params, "TPA head weights");
 
   // Held-out and training accuracy of each head.

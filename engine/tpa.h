@@ -30,10 +30,13 @@ struct TpaResult {
   std::vector<double> accuracy;        // [R] held-out accuracy per test reward
   std::vector<double> train_accuracy;  // [R] accuracy on the head's own M training pairs
   double mean = 0, stddev = 0;         // TPA = mean over rewards; stddev over rewards (n − 1)
-  int epochs = 0;
-  std::vector<float> loss_curves;  // [R, epochs] mean training loss per epoch, per head
-  std::vector<float> phi_drift;    // [R] max |Δ| of the head's copy of φ (0 when frozen)
-  double train_flops = 0;
+  int epochs = 0;                      // the schedule's epochs (tpa.epochs): the cap on every head
+  std::vector<int> head_epochs;        // [R] epochs each head trained (< epochs: stopped, tpa.stop)
+  std::vector<float> loss_curves;      // [R, epochs] mean training loss per epoch, per head; NaN
+                                       // after a head stopped
+  std::vector<float> phi_drift;        // [R] max |Δ| of the head's copy of φ (0 when frozen)
+  double train_flops = 0;              // FLOPs the heads' training executed
+  double protocol_flops = 0;  // FLOPs of every head's full schedule (== train_flops when fixed)
 };
 
 // The network each head trains: frozen → the head alone on φ(ξ) (embedding → tpa_hidden… → 1);

@@ -249,6 +249,8 @@ void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
   // FLOPs spent in this task: the VAE method's φ is the VAE task's encoder, trained there.
   r.num["flops"] =
       (t.variant.method == Method::vae ? 0.0 : rep.train_flops) + record_embedding(rep, d, r);
+  // The protocol's count: what the epochs skipped at a fixed point would have added.
+  r.num["protocol_flops"] = r.num["flops"] + rep.skipped_flops;
   if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
   if (t.variant.method != Method::vae && t.variant.method != Method::random)
     record_convergence(rep.loss_curve, r);
@@ -298,8 +300,8 @@ void record_heads_convergence(const TpaResult& res, TaskRecord& r) {
   int converged = 0;
   std::vector<double> change;
   for (uint64_t k = 0; k < R; ++k) {
-    const auto* c = res.loss_curves.data() + k * res.epochs;
-    const Convergence v = check_convergence(std::vector<float>(c, c + res.epochs));
+    const auto* c = res.loss_curves.data() + k * res.epochs;  // NaN after a head's stop
+    const Convergence v = check_convergence(std::vector<float>(c, c + res.head_epochs[k]));
     converged += v.converged;
     change.push_back(v.relative_change);
   }
@@ -319,6 +321,7 @@ void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   r.num["tpa"] = res.mean;
   r.num["tpa_std"] = res.stddev;
   r.num["flops"] = res.train_flops;
+  r.num["protocol_flops"] = res.protocol_flops;
   const uint64_t R = res.accuracy.size();
   r.arrays["accuracy"] =
       TaskRecord::Array::of(std::vector<float>(res.accuracy.begin(), res.accuracy.end()));
@@ -329,6 +332,10 @@ void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   r.num["tpa_train"] = train_mean;
   r.arrays["loss_curves"] = TaskRecord::Array::of(res.loss_curves, {R, uint64_t(res.epochs)});
   r.arrays["phi_drift"] = TaskRecord::Array::of(res.phi_drift);
+  // Each head's epochs trained; a head below the cap stopped by tpa.stop = "converged".
+  r.arrays["head_epochs"] =
+      TaskRecord::Array::of(std::vector<float>(res.head_epochs.begin(), res.head_epochs.end()));
+  r.text["stop"] = ctx.profile().hyper.at(t.env).tpa_stop;
   record_heads_convergence(res, r);
   if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
 }

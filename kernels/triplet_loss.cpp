@@ -1,6 +1,7 @@
 #include "kernels/triplet_loss.h"
 
 #include <algorithm>
+#include <limits>
 
 namespace sirl {
 namespace {
@@ -50,6 +51,19 @@ T symmetric_triplet_loss(const T* emb, int B, int d, T margin, T* demb) {
 }
 
 template <typename T>
+T triplet_max_hinge(const T* emb, int B, int d, T margin) {
+  T worst = -std::numeric_limits<T>::infinity();
+  for (int i = 0; i < B; ++i) {
+    const T* p1 = emb + size_t(i) * d;
+    const T* p2 = emb + size_t(B + i) * d;
+    const T* n = emb + size_t(2 * B + i) * d;
+    const T dpp = sqdist(p1, p2, d);
+    worst = std::max({worst, dpp - sqdist(p1, n, d) + margin, dpp - sqdist(p2, n, d) + margin});
+  }
+  return worst;
+}
+
+template <typename T>
 double triplet_accuracy(const T* emb, int B, int d) {
   int ok = 0;
   for (int i = 0; i < B; ++i) {
@@ -64,6 +78,8 @@ double triplet_accuracy(const T* emb, int B, int d) {
 
 template float symmetric_triplet_loss<float>(const float*, int, int, float, float*);
 template double symmetric_triplet_loss<double>(const double*, int, int, double, double*);
+template float triplet_max_hinge<float>(const float*, int, int, float);
+template double triplet_max_hinge<double>(const double*, int, int, double);
 template double triplet_accuracy<float>(const float*, int, int);
 template double triplet_accuracy<double>(const double*, int, int);
 

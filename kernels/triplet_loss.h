@@ -10,6 +10,11 @@ namespace sirl {
 template <typename T>
 T symmetric_triplet_loss(const T* emb, int B, int d, T margin, T* demb);
 
+// The largest hinge of the batch, max over i of max(h1_i, h2_i) with h = d(P,P') − d(P,N) + α:
+// ≤ 0 means no triplet contributes to the loss or its gradient (both exactly 0).
+template <typename T>
+T triplet_max_hinge(const T* emb, int B, int d, T margin);
+
 // Fraction of triplets whose embedding already ranks them right: d(P1,P2) < min(d(P1,N), d(P2,N)).
 template <typename T>
 double triplet_accuracy(const T* emb, int B, int d);

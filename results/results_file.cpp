@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -54,8 +55,16 @@ H5Table cell_table(const std::vector<TaskRecord>& records, const CellTableSpec& 
   return t;
 }
 
+// The last finite value of a curve row (a reward head that stopped early has NaN after its
+// stop; tpa.stop), or NaN when it has none.
+double last_finite(const float* row, int64_t n) {
+  for (int64_t i = n - 1; i >= 0; --i)
+    if (row[i] == row[i]) return row[i];
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
 // The final loss and epoch count of a record's curve: loss_curves is [heads, epochs] (the mean of
-// the heads' last epochs), loss_curve [epochs].
+// the heads' last trained epochs), loss_curve [epochs].
 std::pair<int64_t, double> final_loss_of(const TaskRecord& r) {
   const TaskRecord::Array* curve = nullptr;
   for (const char* c : {"loss_curve", "loss_curves"})
@@ -64,8 +73,61 @@ std::pair<int64_t, double> final_loss_of(const TaskRecord& r) {
   const uint64_t rows = curve->dims.size() == 2 ? curve->dims[0] : 1;
   const int64_t E = int64_t(curve->data.size() / rows);
   double last = 0;
-  for (uint64_t k = 0; k < rows; ++k) last += curve->data[(k + 1) * E - 1] / double(rows);
+  for (uint64_t k = 0; k < rows; ++k)
+    last += last_finite(curve->data.data() + k * E, E) / double(rows);
   return {E, last};
+}
+
+// One row per TPA reward head (every "tpa" and robustness TPA record): its held-out and training
+// accuracy, the epochs it trained and whether it stopped before the schedule's end by the stopping
+// rule (tpa.stop = "converged"; `stop` names the cell's rule), its final loss and how far its copy
+// of φ moved (0 when frozen).
+H5Table tpa_heads_table(const std::vector<TaskRecord>& records) {
+  H5Table t;
+  auto &key = t.add("key", C::String), &env = t.add("env", C::String),
+       &variant = t.add("variant", C::String), &N = t.add("N", C::Int), &M = t.add("M", C::Int),
+       &frozen = t.add("frozen", C::Int), &seed = t.add("seed", C::Int),
+       &teacher = t.add("teacher", C::String), &head = t.add("head", C::Int),
+       &acc = t.add("accuracy", C::Double), &train = t.add("train_accuracy", C::Double),
+       &epochs = t.add("epochs", C::Int), &cap = t.add("max_epochs", C::Int),
+       &stopped = t.add("stopped", C::Int), &stop = t.add("stop", C::String),
+       &loss = t.add("final_loss", C::Double), &drift = t.add("phi_drift", C::Double);
+  for (const auto& r : records) {
+    auto a = r.arrays.find("accuracy"), tr = r.arrays.find("train_accuracy"),
+         lc = r.arrays.find("loss_curves");
+    if (a == r.arrays.end() || tr == r.arrays.end() || lc == r.arrays.end() || !r.num.count("M"))
+      continue;
+    const size_t R = a->second.data.size();
+    if (lc->second.dims.size() != 2 || lc->second.dims[0] != R || tr->second.data.size() != R)
+      throw H5Error("task " + r.key + ": its per-head arrays disagree in size");
+    const int64_t E = int64_t(lc->second.dims[1]);
+    auto he = r.arrays.find("head_epochs"), pd = r.arrays.find("phi_drift");
+    auto tt = r.text.find("teacher"), st = r.text.find("stop");
+    for (size_t k = 0; k < R; ++k) {
+      key.strings.push_back(r.key);
+      env.strings.push_back(need_text(r, "env"));
+      variant.strings.push_back(need_text(r, "variant"));
+      N.ints.push_back(int64_t(num_or(r, "N", 0)));
+      M.ints.push_back(int64_t(need_num(r, "M")));
+      frozen.ints.push_back(int64_t(num_or(r, "frozen", 0)));
+      seed.ints.push_back(int64_t(need_num(r, "seed")));
+      teacher.strings.push_back(tt == r.text.end() ? "" : tt->second);
+      head.ints.push_back(int64_t(k));
+      acc.doubles.push_back(a->second.data[k]);
+      train.doubles.push_back(tr->second.data[k]);
+      const int64_t e = he != r.arrays.end() && he->second.data.size() == R
+                            ? int64_t(he->second.data[k])
+                            : E;  // records before the stopping rule trained every epoch
+      epochs.ints.push_back(e);
+      cap.ints.push_back(E);
+      stopped.ints.push_back(e < E);
+      stop.strings.push_back(st == r.text.end() ? "fixed" : st->second);
+      loss.doubles.push_back(last_finite(lc->second.data.data() + k * size_t(E), E));
+      drift.doubles.push_back(
+          pd != r.arrays.end() && pd->second.data.size() == R ? double(pd->second.data[k]) : 0.0);
+    }
+  }
+  return t;
 }
 
 // Every training's convergence (engine/convergence.h) and its final loss; dead_fraction is the
@@ -146,13 +208,15 @@ H5Table timings_table(const std::vector<TaskRecord>& records, const Roofs& roofs
        &gf = t.add("gflops", C::Double), &pct = t.add("roof_percent", C::Double),
        &th = t.add("threads", C::Int), &mem = t.add("memory_roof_gflops", C::Double),
        &att = t.add("attainable_percent", C::Double), &prec = t.add("precision", C::String),
-       &croof = t.add("compute_roof_gflops", C::Double);
+       &croof = t.add("compute_roof_gflops", C::Double), &pfl = t.add("protocol_flops", C::Double);
   for (const auto& r : records) {
     kind.strings.push_back(r.kind);
     key.strings.push_back(r.key);
     const double s = num_or(r, "seconds", 0), f = num_or(r, "flops", 0);
     sec.doubles.push_back(s);
     fl.doubles.push_back(f);
+    // What the protocol's full schedule would have cost (≠ flops where training stopped early).
+    pfl.doubles.push_back(num_or(r, "protocol_flops", f));
     gf.doubles.push_back(s > 0 ? f / s * 1e-9 : 0.0);
     const double cores = std::max(1.0, num_or(r, "threads", 1));
     th.ints.push_back(int64_t(cores));
@@ -188,6 +252,7 @@ ResultTables build_tables(const std::vector<TaskRecord>& records,
   t.tables.push_back({"timings", timings_table(records, roofs)});
   t.tables.push_back({"training", training_table(records)});
   t.tables.push_back({"vae_latents", vae_latents_table(records)});
+  t.tables.push_back({"tpa_heads", tpa_heads_table(records)});
   return t;
 }
 

@@ -5,10 +5,13 @@
 //   /tables/fpe      env, method, variant, vae, N, seed, fpe, train_mse
 //   /tables/tpa      env, method, variant, vae, frozen, N, M, seed, tpa, tpa_std, tpa_train,
 //                    in_main (a Fig. 5 cell), in_ablation (a Fig. 7 cell)
-//   /tables/timings  kind, key, seconds, flops, gflops
+//   /tables/timings  kind, key, seconds, flops (executed), gflops, …, protocol_flops (the full
+//                    schedule's: more than flops where reward heads stopped early)
 //   /tables/training kind, key, env, variant, N, M, frozen, seed, epochs, final_loss,
 //                    loss_relative_change, converged, converged_fraction, dead_fraction
 //   /tables/vae_latents  env, seed, elbo, dim, kl, reconstruction_mse
+//   /tables/tpa_heads    key, env, variant, N, M, frozen, seed, teacher, head, accuracy,
+//                        train_accuracy, epochs, max_epochs, stopped, stop, final_loss, phi_drift
 // Written atomically (a .partial file renamed into place), so the file on disk is always whole.
 #pragma once
 #include <string>
@@ -76,7 +79,7 @@ struct ResultTables {
   const H5Table& at(const std::string& name) const;
 };
 // The cell tables in the order given, then the tables every kind contributes to: timings,
-// training (each training's convergence), vae_latents. The roofs give /tables/timings its
+// training (each training's convergence), vae_latents, tpa_heads (one row per reward head). The roofs give /tables/timings its
 // roof_percent column (a task whose record says bf16_products against the bf16 roof where there
 // is one, every other against the fp32 roof) and the memory roofs of the tasks that stream (their
 // records' stream_bytes).

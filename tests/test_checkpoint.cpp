@@ -4,6 +4,9 @@
 // frozen and unfrozen). Saving alone changes nothing, and a snapshot that does not fit is refused.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstring>
+
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -114,6 +117,38 @@ TEST(Checkpoint, TpaHeadsFrozenAndUnfrozenResumeBitIdentical) {
         EXPECT_EQ(r->train_flops, plain.train_flops) << "frozen " << frozen;
       }
     }
+}
+
+// With the converged stopping rule, heads stop at different epochs; a resume must know which
+// heads had stopped (and where), or it would train them again.
+TEST(Checkpoint, ConvergedHeadsResumeBitIdenticalWithTheirStoppingEpochs) {
+  const World& w = world();
+  Hyper h = fast_hyper();
+  h.tpa.epochs = 200;
+  h.tpa_stop = "converged";
+  h.tpa_stop_min_epochs = 30;
+  auto run = [&](Checkpointer* c) {
+    TpaConfig cfg{20, true, h};
+    cfg.checkpointer = c;
+    cfg.stretch_steps = 1;  // one step an epoch: a save after every epoch
+    return evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, cfg, 3);
+  };
+  // Interrupted right after the first head stopped (a stop at a stretch's end) and one epoch
+  // later, while other heads still train.
+  const TpaResult first = run(nullptr);
+  const int lo = *std::min_element(first.head_epochs.begin(), first.head_epochs.end());
+  const int hi = *std::max_element(first.head_epochs.begin(), first.head_epochs.end());
+  ASSERT_LT(lo + 1, hi) << "the heads stop too close together for this test";
+  for (int stop : {lo, lo + 1}) {
+    const auto [plain, saving, resumed] = three_ways(run, stop);
+    for (const TpaResult* r : {&saving, &resumed}) {
+      EXPECT_EQ(r->head_epochs, plain.head_epochs) << "interrupted after epoch " << stop;
+      EXPECT_EQ(r->accuracy, plain.accuracy) << "interrupted after epoch " << stop;
+      EXPECT_EQ(0, std::memcmp(r->loss_curves.data(), plain.loss_curves.data(),
+                               plain.loss_curves.size() * sizeof(float)));
+      EXPECT_EQ(r->train_flops, plain.train_flops);
+    }
+  }
 }
 
 TEST(Checkpoint, TheLastEpochIsNeverSavedAndResumingChangesTheOutcomeOnlyByTheSavedState) {

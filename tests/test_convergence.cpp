@@ -1,6 +1,8 @@
 // The one convergence rule (engine/convergence.h) on hand-made curves.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "engine/convergence.h"
@@ -26,6 +28,37 @@ TEST(Convergence, ComparesTheLastTwoTenthsOfTheCurve) {
   EXPECT_FALSE(check_convergence({1.f}).converged);  // one epoch cannot be judged
   EXPECT_EQ(check_convergence({1.f}).window, 0);
   EXPECT_EQ(check_convergence(std::vector<float>(300, 1.f)).window, 30);
+}
+
+// The heads' stopping rule: the convergence rule on the curve so far, from min_epochs on.
+// A loss falling by 0.1 an epoch from 14 to 2.1 over 120 epochs (windows ≥ 10 apart by ≥ 1/14 ≫
+// 1 %), then flat at 1: the first e whose two last tenths (windows of ⌊e/10⌋) lie wholly in the
+// flat part is the first with e − 2·⌊e/10⌋ ≥ 120, e = 148 (at 147 the earlier window still holds
+// one 2.1: a change of 1.1/14 ≫ 1 %).
+TEST(Convergence, AConvergedRuleStopsAtTheFirstConvergedEpochAfterItsMinimum) {
+  std::vector<float> c(400, 1.f);
+  for (int i = 0; i < 120; ++i) c[i] = 2.f + 0.1f * float(120 - i);
+  StopRule rule;
+  rule.converged = true;
+  rule.min_epochs = 100;
+  int first = -1;
+  for (int e = 1; e <= 400 && first < 0; ++e)
+    if (stops_after(rule, c.data(), e)) first = e;
+  EXPECT_EQ(first, 148);
+  // Flat from the start: the minimum decides.
+  const std::vector<float> flat(400, 3.f);
+  EXPECT_FALSE(stops_after(rule, flat.data(), 99));
+  EXPECT_TRUE(stops_after(rule, flat.data(), 100));
+  // `fixed` never stops.
+  StopRule fixed;
+  EXPECT_FALSE(stops_after(fixed, flat.data(), 400));
+  // A tighter tolerance waits for a smaller change: a loss falling 0.05 % an epoch changes by
+  // ~0.5 % between windows of 10 (at e = 100): within 1 %, not within 0.1 %.
+  std::vector<float> slope(400);
+  for (int e = 0; e < 400; ++e) slope[e] = float(std::pow(0.9995, e));
+  EXPECT_TRUE(stops_after(rule, slope.data(), 100));
+  rule.rel_tol = 0.001;
+  EXPECT_FALSE(stops_after(rule, slope.data(), 100));
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -107,12 +108,15 @@ TEST(Epochs, ModelByModelIsTheBatchedTrainingInAnotherOrderWhateverTheStretchAnd
       std::vector<Rng> rngs{Rng(1), Rng(2), Rng(3)};
       ToyModels toy(R);
       std::vector<int> at;
+      ModelLoopOptions opt;
+      opt.stretch_steps = stretch;
       const auto curves = run_epochs_model_by_model(
-          n, epochs, batch, rngs, threads,
-          [&](int m, const int32_t* rows, int b, int64_t step) {
-            return toy.step(m, rows, b, step);
-          },
-          [&](int e) { at.push_back(e); }, nullptr, stretch);
+                              n, epochs, batch, rngs, threads,
+                              [&](int m, const int32_t* rows, int b, int64_t step) {
+                                return toy.step(m, rows, b, step);
+                              },
+                              [&](int e) { at.push_back(e); }, opt)
+                              .curves;
       EXPECT_EQ(toy.state, ref.state) << "stretch " << stretch << ", threads " << threads;
       EXPECT_EQ(curves, curves_b) << "stretch " << stretch << ", threads " << threads;
       const std::vector<int> expect_at = stretch == 1   ? std::vector<int>{1, 2, 3, 4, 5}
@@ -122,6 +126,93 @@ TEST(Epochs, ModelByModelIsTheBatchedTrainingInAnotherOrderWhateverTheStretchAnd
       for (int m = 0; m < R; ++m)  // the order streams end where the batched loop left them
         EXPECT_EQ(rngs[m].uniform_int(1000000), Rng(rngs_b[m]).uniform_int(1000000));
     }
+}
+
+// Models whose loss is flat from an epoch of their own on (model m: 100 − e before epoch 10 + 15m,
+// then 1) stop where the rule says on their own curves; each stopped model's state is that of a
+// fixed run of that many epochs, whatever the threads and stretches, and its curve is NaN after.
+TEST(Epochs, EachModelStopsOnItsOwnCurveAndKeepsTheFixedRunsBits) {
+  const int R = 3, epochs = 120, batch = 3;
+  const int64_t n = 7;  // 3 steps an epoch
+  StopRule rule;
+  rule.converged = true;
+  rule.min_epochs = 5;
+  auto loss = [](int m, int64_t t) {  // step t (1-based) is in epoch (t − 1) / 3
+    const int e = int((t - 1) / 3);
+    return e < 10 + 15 * m ? float(100 - e) : 1.f;
+  };
+  // Where the rule stops each model, from its curve alone.
+  std::vector<int> expect_epochs(R, epochs);
+  for (int m = 0; m < R; ++m) {
+    std::vector<float> c;
+    for (int e = 0; e < epochs; ++e) {
+      c.push_back(loss(m, int64_t(e) * 3 + 1));
+      if (e + 1 < epochs && stops_after(rule, c.data(), e + 1)) {
+        expect_epochs[m] = e + 1;
+        break;
+      }
+    }
+    ASSERT_LT(expect_epochs[m], epochs);
+  }
+  EXPECT_LT(expect_epochs[0], expect_epochs[1]);
+  for (int threads : {1, 2})
+    for (int stretch : {1, 4, 1000}) {
+      std::vector<Rng> rngs{Rng(1), Rng(2), Rng(3)};
+      ToyModels toy(R);
+      ModelLoopOptions opt;
+      opt.stretch_steps = stretch;
+      opt.stop = rule;
+      const ModelCurves out = run_epochs_model_by_model(
+          n, epochs, batch, rngs, threads,
+          [&](int m, const int32_t* rows, int b, int64_t t) {
+            toy.step(m, rows, b, t);
+            return loss(m, t);
+          },
+          [](int) {}, opt);
+      EXPECT_EQ(out.epochs_run, expect_epochs) << threads << " threads, stretch " << stretch;
+      for (int m = 0; m < R; ++m) {
+        // The reference: model m alone, a fixed run of its epochs.
+        std::vector<Rng> one{Rng(uint64_t(m + 1))};
+        ToyModels ref(1);
+        run_epochs_model_by_model(
+            n, expect_epochs[m], batch, one, 1,
+            [&](int, const int32_t* rows, int b, int64_t t) { return ref.step(0, rows, b, t); },
+            [](int) {});
+        EXPECT_EQ(toy.state[m], ref.state[0]) << "model " << m << ", stretch " << stretch;
+        for (int e = 0; e < epochs; ++e) {
+          const float v = out.curves[size_t(m) * epochs + e];
+          if (e < expect_epochs[m])
+            EXPECT_EQ(v, loss(m, int64_t(e) * 3 + 1));
+          else
+            EXPECT_TRUE(std::isnan(v)) << "model " << m << ", epoch " << e;
+        }
+      }
+    }
+}
+
+// The exact skip: when the training says it stands at a fixed point, the loop ends and the
+// remaining epochs repeat the last loss; otherwise every epoch runs.
+TEST(Epochs, AFixedPointEndsTheLoopAndFillsTheCurveWithItsLoss) {
+  Rng rng(3);
+  int steps = 0;
+  std::vector<int> asked;
+  const auto curve = run_epochs(
+      4, 10, 2, rng, [&](const int32_t*, int) { return float(++steps > 6 ? 0 : 7 - steps); },
+      nullptr,
+      [&](int done) {
+        asked.push_back(done);
+        return done == 4;  // epochs 1..4 run: 8 steps, losses (6 5) (4 3) (2 1) (0 0)
+      });
+  EXPECT_EQ(steps, 8);
+  EXPECT_EQ(asked, (std::vector<int>{1, 2, 3, 4}));
+  EXPECT_EQ(curve, (std::vector<float>{5.5f, 3.5f, 1.5f, 0, 0, 0, 0, 0, 0, 0}));
+  Rng rng2(3);
+  int all = 0;
+  const auto never = run_epochs(
+      4, 10, 2, rng2, [&](const int32_t*, int) { return float(++all); }, nullptr,
+      [](int) { return false; });
+  EXPECT_EQ(all, 20);
+  EXPECT_EQ(never.size(), 10u);
 }
 
 TEST(Epochs, AStepThatThrowsInTheModelByModelLoopReachesTheCallerWhateverTheThreadCount) {

@@ -203,6 +203,35 @@ TEST(Methods, SirlUsesExactlyItsFirstNTriplets) {
   EXPECT_NE(train_representation(w.d, within, c, 2).params, base.params);
 }
 
+// SIRL on few triplets fits them all inside the margin; the gradient is then exactly 0, Adam's
+// first moments decay to exactly 0, and the exact skip ends training there. The weights and the
+// curve must be those of running every epoch, and the skipped epochs' FLOPs are reported.
+TEST(Methods, SirlSkipsToTheEndAtAFixedPointWithTheFullRunsBits) {
+  const World& w = world();
+  Hyper h = fast_hyper();
+  h.sirl.epochs = 2500;  // 20 triplets: one step an epoch
+  MethodConfig full{Method::sirl, 20, false, h};
+  full.skip_fixed_point = false;
+  const Representation ref = train_representation(w.d, w.bundle, full, 6);
+  ASSERT_EQ(ref.loss_curve.back(), 0.f) << "the setting no longer reaches zero loss";
+  MethodConfig skip = full;
+  skip.skip_fixed_point = true;
+  for (int threads : {1, 2}) {
+    skip.threads = threads;
+    const Representation r = train_representation(w.d, w.bundle, skip, 6);
+    EXPECT_EQ(r.params, ref.params) << threads << " threads";
+    EXPECT_EQ(r.loss_curve, ref.loss_curve) << threads << " threads";
+    EXPECT_GT(r.skipped_flops, 0.0);
+    // Executed + skipped = every epoch's FLOPs (one batch of 20 triplets an epoch).
+    EXPECT_NEAR(r.train_flops + r.skipped_flops, ref.train_flops, 1e-9 * ref.train_flops);
+    EXPECT_LT(r.train_flops, ref.train_flops);
+  }
+  EXPECT_EQ(ref.skipped_flops, 0.0);
+  // A training that never reaches its fixed point (too few epochs) runs every epoch.
+  skip.hyper.sirl.epochs = 20;
+  EXPECT_EQ(train_representation(w.d, w.bundle, skip, 6).skipped_flops, 0.0);
+}
+
 // ∂L/∂params of the multi-head step against finite differences of an independent double
 // implementation (φ forward + per-human linear heads + Bradley–Terry).
 TEST(Methods, MultiheadPreferenceGradientMatchesFiniteDifferences) {

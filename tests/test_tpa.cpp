@@ -1,6 +1,9 @@
 // Transfer-to-preference accuracy (TPA): heads on φ, frozen and unfrozen, its M, L2 and statistics.
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <map>
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -159,6 +162,81 @@ TEST(Tpa, SameResultWhateverTheHeadsStretchesAndTheThreadCount) {
       EXPECT_EQ(a.train_flops, b.train_flops) << "frozen " << frozen;
     }
   }
+}
+
+// Curves compared bit for bit (a stopped head's epochs are NaN, which == would call unequal).
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
+}
+
+// Under tpa.stop = "converged" each head stops on its own curve. Heads are independent, so a
+// head that stopped after k epochs must be exactly the head of a `fixed` run of k epochs: the
+// same held-out accuracy and the same curve up to k, NaN after it. For any thread count and
+// stretch.
+TEST(Tpa, AConvergedHeadIsTheFixedRunsHeadAtItsStoppingEpoch) {
+  const World& w = world();
+  Hyper h = fast_hyper();
+  h.tpa.epochs = 400;
+  h.tpa_stop = "converged";
+  h.tpa_stop_min_epochs = 30;
+  for (bool frozen : {true, false}) {
+    TpaConfig c{20, frozen, h, 1};
+    const TpaResult conv = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 5);
+    ASSERT_EQ(conv.head_epochs.size(), 20u);
+    std::map<int, std::vector<int>> heads_at;  // stopping epoch → heads
+    for (int r = 0; r < 20; ++r) {
+      const int k = conv.head_epochs[r];
+      EXPECT_GE(k, 30);
+      EXPECT_LE(k, 400);
+      heads_at[k].push_back(r);
+      // The rule, applied to the head's own curve: not before k, at k (unless k is the cap).
+      const float* curve = conv.loss_curves.data() + size_t(r) * 400;
+      for (int e = 30; e < k; ++e) EXPECT_FALSE(stops_after(tpa_stop_rule(h), curve, e));
+      if (k < 400) {
+        EXPECT_TRUE(stops_after(tpa_stop_rule(h), curve, k));
+      }
+      for (int e = k; e < 400; ++e) EXPECT_TRUE(std::isnan(curve[e]));
+    }
+    EXPECT_GT(heads_at.size(), 1u) << "every head stopped at one epoch: a weak test";
+    EXPECT_LT(heads_at.begin()->first, 400) << "no head stopped early: a weak test";
+    double flops = 0;
+    for (const auto& [k, heads] : heads_at) {
+      TpaConfig f = c;
+      f.hyper.tpa_stop = "fixed";
+      f.hyper.tpa.epochs = k;
+      const TpaResult fixed = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, f, 5);
+      for (int r : heads) {
+        EXPECT_EQ(conv.accuracy[r], fixed.accuracy[r]) << "head " << r << ", frozen " << frozen;
+        EXPECT_EQ(conv.train_accuracy[r], fixed.train_accuracy[r]) << "head " << r;
+        EXPECT_EQ(conv.phi_drift[r], fixed.phi_drift[r]) << "head " << r;
+        EXPECT_EQ(0, std::memcmp(conv.loss_curves.data() + size_t(r) * 400,
+                                 fixed.loss_curves.data() + size_t(r) * k, k * sizeof(float)));
+      }
+      flops += fixed.train_flops / 20 * double(heads.size());
+    }
+    // Only the epochs run are counted as executed; the protocol's count is every head's cap.
+    EXPECT_NEAR(conv.train_flops, flops, 1e-9 * flops);
+    EXPECT_LT(conv.train_flops, conv.protocol_flops);
+    for (auto [threads, stretch] : {std::pair{2, kStretchSteps}, {1, 1}, {2, 7}}) {
+      c.threads = threads;
+      c.stretch_steps = stretch;
+      const TpaResult b = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 5);
+      EXPECT_EQ(b.head_epochs, conv.head_epochs) << threads << " threads, stretch " << stretch;
+      EXPECT_EQ(b.accuracy, conv.accuracy) << threads << " threads, stretch " << stretch;
+      EXPECT_TRUE(same_bits(b.loss_curves, conv.loss_curves)) << threads << " threads";
+    }
+  }
+}
+
+TEST(Tpa, FixedRunsEveryEpochOfEveryHead) {
+  const World& w = world();
+  Hyper h = fast_hyper();
+  h.tpa.epochs = 40;
+  const TpaResult r = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, TpaConfig{20, true, h}, 5);
+  EXPECT_EQ(r.head_epochs, std::vector<int>(20, 40));
+  EXPECT_EQ(r.train_flops, r.protocol_flops);
+  for (float v : r.loss_curves) EXPECT_TRUE(std::isfinite(v));
 }
 
 TEST(Tpa, RejectsMOutsideTheTrainingSplit) {

@@ -1,0 +1,170 @@
+#!/usr/bin/python3
+"""Does the converged stopping rule change TPA? An equivalence test (TOST) of tpa.stop =
+"converged" against "fixed" (every head the schedule's epochs, the paper's protocol).
+
+Runs one profile (its [hyper.<env>] sections say "tpa.stop" = "fixed") as it is and with
+"converged" in their place, over the same seeds, cells, queries and initial weights, then asks per
+environment and method whether the two give the same TPA:
+
+  per seed, the method's mean TPA over its cells (M values, frozen modes);
+  d = converged − fixed per seed (paired);
+  two one-sided t-tests at α = 0.05 against ±0.02 (bench/bf16_equivalence.py's test and margin):
+  *equivalent* when the 90 % confidence interval of the mean d lies inside the margin.
+
+Also reports every cell's difference, each head's stopping epoch (spread per cell), and the
+compute each side took (FLOPs executed and task-seconds, from /tables/timings).
+
+Both runs resume (`sirl run` skips committed tasks). Writes OUT/fixed.toml, OUT/converged.toml,
+their results files and OUT/stop-equivalence.{md,json}.
+
+  /usr/bin/python3 bench/stop_equivalence.py --profile bench/stop-equivalence-jaco.toml
+                                             [--threads 2] [--out out/stop-equivalence-jaco]
+"""
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tomllib
+
+import h5py
+import pandas as pd
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bf16_equivalence import ALPHA, run, tost  # noqa: E402  (the same test, the same runner)
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+MARGIN = 0.02
+
+
+def profile_text(base_text, stop):
+    """The base profile with every "tpa.stop" = "fixed" line set to `stop`, renamed."""
+    text, n = re.subn(r'(?m)^"tpa\.stop"\s*=\s*"fixed"\s*$', f'"tpa.stop" = "{stop}"', base_text)
+    if n == 0:
+        sys.exit('stop_equivalence: the profile has no \'"tpa.stop" = "fixed"\' line to vary')
+    text, n = re.subn(r'(?m)^name\s*=\s*"([^"]*)"', rf'name = "\1-{stop}"', text, count=1)
+    if n != 1:
+        sys.exit("stop_equivalence: the profile has no top-level name")
+    tomllib.loads(text)  # refuse now what sirl would refuse later
+    return text
+
+
+def tables(path):
+    out = {}
+    with h5py.File(path, "r") as f:
+        for k in ("tpa", "timings", "tpa_heads"):
+            d = pd.DataFrame(f["tables/" + k][:])
+            for c in d.columns:
+                if d[c].dtype == object:
+                    d[c] = d[c].str.decode("utf-8")
+            out[k] = d
+    return out
+
+
+CELL = ["env", "variant", "N", "M", "frozen", "seed"]
+
+
+def compare(fixed_path, conv_path):
+    a, b = tables(fixed_path), tables(conv_path)
+    ta, tb = a["tpa"].set_index(CELL).tpa, b["tpa"].set_index(CELL).tpa
+    if set(ta.index) != set(tb.index):
+        sys.exit("stop_equivalence: the two runs' TPA cells differ")
+    cells = pd.DataFrame({"fixed": ta, "converged": tb.reindex(ta.index)})
+    cells["d"] = cells.converged - cells.fixed
+    heads = b["tpa_heads"].groupby(CELL).agg(
+        epochs_min=("epochs", "min"), epochs_median=("epochs", "median"),
+        epochs_max=("epochs", "max"), stopped=("stopped", "mean"))
+    cells = cells.join(heads).reset_index()
+    rows = []
+    per_seed = cells.groupby(["env", "variant", "seed"])[["fixed", "converged"]].mean()
+    for (env, variant), g in per_seed.groupby(level=[0, 1]):
+        diffs = list((g.converged - g.fixed).astype(float))
+        mean, ci, p = tost(diffs, MARGIN)
+        rows.append({"env": env, "method": variant, "seeds": len(diffs),
+                     "fixed": float(g.fixed.mean()), "converged": float(g.converged.mean()),
+                     "diff": mean, "ci90": ci, "margin": MARGIN, "p_tost": p,
+                     "equivalent": bool(p < ALPHA)})
+    cost = {}
+    for side, t in (("fixed", a["timings"]), ("converged", b["timings"])):
+        tp = t[t.kind == "tpa"]
+        cost[side] = {"tpa_flops": float(tp.flops.sum()),
+                      "tpa_protocol_flops": float(tp.protocol_flops.sum()),
+                      "tpa_task_seconds": float(tp.seconds.sum()),
+                      "all_task_seconds": float(t.seconds.sum())}
+    return rows, cells, cost
+
+
+def report(rows, cells, cost, profile):
+    ok = all(r["equivalent"] for r in rows)
+    lines = [f"# tpa.stop = \"converged\" against \"fixed\": equivalence (TOST, α = {ALPHA}) on "
+             f"{profile}", "",
+             "Per seed: the method's mean TPA over its cells; d = converged − fixed, paired by "
+             f"seed. Equivalent when the 90 % CI of the mean d lies inside ±{MARGIN}.", "",
+             "| env | method | seeds | fixed | converged | mean d | 90 % CI | TOST p | verdict |",
+             "|---|---|---:|---:|---:|---:|---|---:|---|"]
+    for r in rows:
+        lo, hi = r["ci90"]
+        lines.append(f"| {r['env']} | {r['method']} | {r['seeds']} | {r['fixed']:.4f} | "
+                     f"{r['converged']:.4f} | {r['diff']:+.4f} | [{lo:+.4f}, {hi:+.4f}] | "
+                     f"{r['p_tost']:.2g} | "
+                     f"{'equivalent' if r['equivalent'] else 'not shown equivalent'} |")
+    failed = [f"{r['env']} {r['method']}" for r in rows if not r["equivalent"]]
+    lines += ["", "**Verdict: equivalent on every method.**" if ok else
+              "**Verdict: equivalence not shown** for " + ", ".join(failed) + "."]
+    f, c = cost["fixed"], cost["converged"]
+    lines += ["", "## Compute", "",
+              "| | fixed | converged | ratio |", "|---|---:|---:|---:|",
+              f"| TPA FLOPs executed | {f['tpa_flops']:.4g} | {c['tpa_flops']:.4g} | "
+              f"{f['tpa_flops'] / max(c['tpa_flops'], 1):.2f}× |",
+              f"| TPA task-seconds | {f['tpa_task_seconds']:.0f} | {c['tpa_task_seconds']:.0f} | "
+              f"{f['tpa_task_seconds'] / max(c['tpa_task_seconds'], 1e-9):.2f}× |",
+              f"| all task-seconds | {f['all_task_seconds']:.0f} | {c['all_task_seconds']:.0f} | |",
+              "", "## Every cell", "",
+              "| env | method | N | M | frozen | seed | fixed | converged | d | head epochs "
+              "min / median / max | stopped |",
+              "|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|"]
+    for _, r in cells.sort_values(CELL).iterrows():
+        lines.append(f"| {r.env} | {r.variant} | {r.N} | {r.M} | {r.frozen} | {r.seed} | "
+                     f"{r.fixed:.4f} | {r.converged:.4f} | {r.d:+.4f} | {r.epochs_min:.0f} / "
+                     f"{r.epochs_median:.0f} / {r.epochs_max:.0f} | {100 * r.stopped:.0f} % |")
+    return "\n".join(lines) + "\n", ok
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--profile", default=os.path.join(ROOT, "bench", "stop-equivalence-jaco.toml"))
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--out", default=None, help="default out/<profile name>")
+    ap.add_argument("--sirl", default=os.path.join(ROOT, "build", "release", "app", "sirl"))
+    ap.add_argument("--analyse-only", action="store_true", help="compare existing results files")
+    a = ap.parse_args()
+    stem = os.path.splitext(os.path.basename(a.profile))[0]
+    out = a.out or os.path.join(ROOT, "out", stem)
+    if not a.analyse_only and not os.access(a.sirl, os.X_OK):
+        sys.exit(f"stop_equivalence: no sirl binary at {a.sirl} (./scripts/build.sh release)")
+    os.makedirs(out, exist_ok=True)
+    base = open(a.profile, encoding="utf-8").read()
+    paths = {}
+    for stop in ("fixed", "converged"):
+        prof = os.path.join(out, stop + ".toml")
+        with open(prof, "w", encoding="utf-8") as f:
+            f.write(base if stop == "fixed" else profile_text(base, stop))
+        paths[stop] = os.path.join(out, stop + ".h5")
+        if not a.analyse_only:
+            run(a.sirl, prof, paths[stop], a.threads)
+    for path in paths.values():
+        if not os.path.isfile(path):
+            sys.exit(f"stop_equivalence: {path}: no results file (run without --analyse-only)")
+    rows, cells, cost = compare(paths["fixed"], paths["converged"])
+    text, ok = report(rows, cells, cost, os.path.relpath(a.profile, ROOT))
+    with open(os.path.join(out, "stop-equivalence.md"), "w", encoding="utf-8") as f:
+        f.write(text)
+    with open(os.path.join(out, "stop-equivalence.json"), "w", encoding="utf-8") as f:
+        json.dump({"profile": a.profile, "equivalent": ok, "rows": rows, "cost": cost}, f,
+                  indent=1)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()
