@@ -276,9 +276,19 @@ void register_plan(CLI::App& app, Runner& run) {
       std::printf("%-16s %8d %14.1f  %s\n", ks.name, plan.count(ks.kind),
                   plan.flops(ks.kind) * 1e-9, ks.description);
     }
-    double total = 0;
-    for (const auto& t : plan.tasks) total += t.flops;
+    double total = 0, protocol = 0;
+    for (const auto& t : plan.tasks) total += t.flops, protocol += t.protocol_flops;
     std::printf("%-16s %8zu %14.1f\n", "total", plan.tasks.size(), total * 1e-9);
+    if (protocol > total * (1 + 1e-9)) {
+      // Trainings that end early by rule: the FLOPs above are what they are expected to execute.
+      std::printf("%-16s %8s %14.1f  every epoch of every schedule; the rows above expect",
+                  "protocol", "", protocol * 1e-9);
+      std::printf(" SIRL's exact skip%s (measured medians: jobs/expected_epochs.cpp)\n",
+                  std::any_of(p.hyper.begin(), p.hyper.end(),
+                              [](const auto& kv) { return kv.second.tpa_stop == "converged"; })
+                      ? " and converged reward heads"
+                      : "");
+    }
     std::fflush(stdout);
     std::fprintf(stderr, "calibrating on this machine...\n");
     const PlanEstimate e = estimate_plan(plan, p, th);

@@ -68,7 +68,8 @@ def curves(path):
             if kind in ("vae", "rep") and "loss_curve" in g:
                 c = g["loss_curve"][:]
             elif kind == "tpa" and "loss_curves" in g:
-                c = g["loss_curves"][:].mean(axis=0)
+                c = g["loss_curves"][:]
+                c = np.nanmean(c[:, ~np.isnan(c).all(0)], axis=0)  # stopped heads: NaN after
             else:
                 continue
             if len(c) < 2 or key.startswith("study/"):

@@ -65,6 +65,50 @@ def tables(path):
 CELL = ["env", "variant", "N", "M", "frozen", "seed"]
 
 
+def rule_stop(curve, min_epochs, rel_tol, abs_tol=1e-4):
+    """The epochs a head trains under the converged rule, from its fixed-run curve: an independent
+    reimplementation of engine/convergence.h (sums in order, in double, as the engine's)."""
+    cap = len(curve)
+    for e in range(max(2, min_epochs), cap):
+        w = max(1, e // 10)
+        a = b = 0.0
+        for x in curve[e - 2 * w:e - w]:
+            a += float(x)
+        for x in curve[e - w:e]:
+            b += float(x)
+        a, b = a / w, b / w
+        if abs(a - b) <= rel_tol * max(abs(a), abs(b)) + abs_tol:
+            return e
+    return cap
+
+
+def check_stops(fixed_path, conv_path, conv_profile):
+    """Every head of the converged run must have stopped where the rule, applied to the same
+    head's curve in the fixed run, says (the two trainings are identical up to the stop).
+    Returns the number of heads checked."""
+    prof = tomllib.load(open(conv_profile, "rb"))
+    checked = 0
+    with h5py.File(fixed_path, "r") as fa, h5py.File(conv_path, "r") as fb:
+        for key in fb["runs_index"][:]:
+            key = key.decode()
+            g = fb["runs/" + key]
+            if "head_epochs" not in g:
+                continue
+            env = key.split("/")[0]
+            hy = prof.get("hyper", {}).get(env, {})
+            min_epochs = int(hy.get("tpa.stop_min_epochs", 100))
+            rel_tol = float(hy.get("tpa.stop_rel_tol", 0.01))
+            curves = fa["runs/" + key]["loss_curves"][:]
+            got = g["head_epochs"][:]
+            for r, c in enumerate(curves):
+                want = rule_stop(c, min_epochs, rel_tol)
+                if int(got[r]) != want:
+                    sys.exit(f"stop_equivalence: {key} head {r} stopped after {int(got[r])} "
+                             f"epochs; the rule on its fixed-run curve says {want}")
+                checked += 1
+    return checked
+
+
 def compare(fixed_path, conv_path):
     a, b = tables(fixed_path), tables(conv_path)
     ta, tb = a["tpa"].set_index(CELL).tpa, b["tpa"].set_index(CELL).tpa
@@ -156,8 +200,13 @@ def main():
     for path in paths.values():
         if not os.path.isfile(path):
             sys.exit(f"stop_equivalence: {path}: no results file (run without --analyse-only)")
+    checked = check_stops(paths["fixed"], paths["converged"], os.path.join(out, "converged.toml"))
+    print(f"stop_equivalence: {checked} heads stopped where the rule on their fixed-run curves "
+          "says", flush=True)
     rows, cells, cost = compare(paths["fixed"], paths["converged"])
     text, ok = report(rows, cells, cost, os.path.relpath(a.profile, ROOT))
+    text += (f"\n{checked} heads checked: each stopped where the rule, applied to the same head's "
+             "curve in the fixed run, says.\n")
     with open(os.path.join(out, "stop-equivalence.md"), "w", encoding="utf-8") as f:
         f.write(text)
     with open(os.path.join(out, "stop-equivalence.json"), "w", encoding="utf-8") as f:

@@ -21,6 +21,13 @@ double Plan::flops(TaskKind k) const {
   return f;
 }
 
+double Plan::protocol_flops(TaskKind k) const {
+  double f = 0;
+  for (const auto& t : tasks)
+    if (t.kind == k) f += t.protocol_flops;
+  return f;
+}
+
 // Forward+backward ≈ 3× the forward multiply-adds (docs/ARCHITECTURE.md §6).
 double train_flops(const MlpShape& s, int64_t rows_per_epoch, int epochs) {
   return 3.0 * s.forward_flops(1) * double(rows_per_epoch) * epochs;

@@ -43,7 +43,10 @@ struct Task {
   // teacher's tag ("beta=1"; Profile::robustness). Only for cells that learn from answers.
   std::string teacher;
   std::vector<int> deps;    // indices into Plan::tasks (set by add_task)
-  double flops = 0;         // estimated floating-point operations (add_task)
+  double flops = 0;         // estimated floating-point operations executed (add_task)
+  // Every epoch of every schedule: more than `flops` where the engine ends training early by
+  // rule (SIRL's exact skip, converged reward heads; jobs/expected_epochs.h).
+  double protocol_flops = 0;
   double bytes = 0;         // estimated peak working set (add_task)
   double stream_bytes = 0;  // estimated main-memory traffic over the task (add_task; 0: in cache)
   int threads = 1;          // cores its kernels use: set by the scheduler, not part of its key
@@ -54,6 +57,7 @@ struct Plan {
   std::map<std::string, int> index;  // key → position
   int count(TaskKind k) const;
   double flops(TaskKind k) const;
+  double protocol_flops(TaskKind k) const;
 };
 
 // Throws std::invalid_argument for an inconsistent profile (e.g. a TPA variant with no rep).

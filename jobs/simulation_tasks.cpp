@@ -8,6 +8,7 @@
 #include "engine/fpe.h"
 #include "engine/methods.h"
 #include "engine/tpa.h"
+#include "jobs/expected_epochs.h"
 #include "jobs/task_outputs.h"
 #include "kernels/vae.h"
 
@@ -216,15 +217,20 @@ void rep_cost(Task& t, const Profile& p) {
   const EnvSizes z = env_sizes(t, p);
   t.flops = 0;
   if (t.variant.method == Method::sirl) {
-    t.flops = train_flops(z.phi, 3 * t.N, z.h.sirl.epochs);
+    t.protocol_flops = train_flops(z.phi, 3 * t.N, z.h.sirl.epochs);
+    // Trainings end at their fixed point (the exact skip): what they are expected to run.
+    t.flops = t.protocol_flops * expected_sirl_epochs(t.env, t.N, t.variant.vae, z.h) /
+              std::max(1, z.h.sirl.epochs);
     t.bytes = working_set(z.phi, 3 * z.h.sirl.batch);
     t.stream_bytes = stream_bytes(z.phi, 3 * t.N, 3 * z.h.sirl.batch, z.h.sirl.epochs);
   } else if (uses_queries(t.variant.method)) {
     t.flops = train_flops(z.phi, 2 * t.N, z.h.pref.epochs);
     t.bytes = working_set(z.phi, 2 * z.h.pref.batch);
     t.stream_bytes = stream_bytes(z.phi, 2 * t.N, 2 * z.h.pref.batch, z.h.pref.epochs);
+    t.protocol_flops = t.flops;
   }
   t.flops += z.phi.forward_flops(int(z.trajectories));  // the embedding of Ξ it stores
+  t.protocol_flops += z.phi.forward_flops(int(z.trajectories));
 }
 
 void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
@@ -287,10 +293,14 @@ void run_robust_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
 void tpa_cost(Task& t, const Profile& p) {
   const EnvSizes z = env_sizes(t, p);
   const MlpShape net = tpa_network(z.phi, z.h, t.frozen);
-  t.flops = kTestRewards * train_flops(net, 2 * t.M, z.h.tpa.epochs);
+  t.protocol_flops = kTestRewards * train_flops(net, 2 * t.M, z.h.tpa.epochs);
+  // Under tpa.stop = "converged" the heads stop early: what they are expected to run.
+  t.flops = t.protocol_flops * expected_head_epochs(t.env, t.frozen, t.M, z.h) /
+            std::max(1, z.h.tpa.epochs);
   t.bytes = kTestRewards * working_set(net, 2 * z.h.tpa.batch);
   // The heads train one after another (engine/tpa.h): what must fit the cache is one head's.
-  t.stream_bytes = kTestRewards * stream_bytes(net, 2 * t.M, 2 * z.h.tpa.batch, z.h.tpa.epochs);
+  t.stream_bytes = kTestRewards * stream_bytes(net, 2 * t.M, 2 * z.h.tpa.batch, z.h.tpa.epochs) *
+                   t.flops / std::max(1.0, t.protocol_flops);
 }
 
 // Converged when every head's loss curve is (the fraction tells how many were); the relative

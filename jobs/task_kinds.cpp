@@ -43,6 +43,7 @@ int add_task(Plan& plan, const Profile& p, Task t) {
   t.deps.clear();
   for (Task& in : kind.inputs(t, p)) t.deps.push_back(add_task(plan, p, std::move(in)));
   kind.cost(t, p);
+  if (t.protocol_flops < t.flops) t.protocol_flops = t.flops;  // no early end expected
   const int i = int(plan.tasks.size());
   plan.index[t.key] = i;
   plan.tasks.push_back(std::move(t));

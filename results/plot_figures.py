@@ -336,13 +336,19 @@ def plot_fig3(f, out, notes):
 
 
 def curves_of(f, keys, name):
-    """{key: 1-D curve}; a [heads, epochs] array is averaged over its heads."""
+    """{key: 1-D curve}; a [heads, epochs] array is averaged over the heads still training at each
+    epoch (a head stopped by tpa.stop = "converged" is NaN from its stop on), and ends where the
+    last head stopped."""
     out = {}
     for k in keys:
         g = f["runs/" + k]
         if name in g:
             c = g[name][:]
-            out[k] = c.mean(0) if c.ndim == 2 else c
+            if c.ndim == 2:
+                trained = ~np.isnan(c)
+                counts = trained.sum(0)
+                c = np.where(trained, c, 0).sum(0)[counts > 0] / counts[counts > 0]
+            out[k] = c
     return out
 
 
@@ -373,15 +379,17 @@ def plot_learning_curves(f, t, envs, out, notes):
                 cs = list(curves_of(f, dv.key, "loss_curves" if kind == "tpa" else "loss_curve").values())
                 if not cs:
                     continue
-                n = min(len(x) for x in cs)
-                A = np.stack([x[:n] for x in cs])
+                n = max(len(x) for x in cs)  # curves of stopped heads end early: NaN-padded
+                A = np.full((len(cs), n), np.nan)
+                for i, x in enumerate(cs):
+                    A[i, :len(x)] = x
                 ep = np.arange(1, n + 1)
                 colour, label = STYLE.get(v, ("#2ca02c", "VAE"))
                 if kind == "tpa":
                     label += " (frozen)" if (dv.frozen == 1).all() else ""
-                ax.plot(ep, np.median(A, 0), "o-" if n < 10 else "-", ms=3, color=colour,
+                ax.plot(ep, np.nanmedian(A, 0), "o-" if n < 10 else "-", ms=3, color=colour,
                         label=f"{label} ({len(cs)})")
-                ax.fill_between(ep, A.min(0), A.max(0), color=colour, alpha=0.15)
+                ax.fill_between(ep, np.nanmin(A, 0), np.nanmax(A, 0), color=colour, alpha=0.15)
             ax.set_title(f"{env_title(env)}: {title}", fontsize=9)
             ax.set_xlabel("epoch")
             ax.set_ylabel("training loss")

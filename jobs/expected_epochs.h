@@ -1,0 +1,24 @@
+// The epochs a training is expected to execute, for the cost model (`sirl plan`): the schedule's,
+// except where the engine ends a training early by rule:
+// - SIRL's exact skip (engine/methods.cpp): a training stops at its fixed point;
+// - reward heads under tpa.stop = "converged" (engine/convergence.h, StopRule).
+// Where that happens depends on the data, so these are measured medians (the tables in
+// expected_epochs.cpp say where from), interpolated in the number of queries and clamped to the
+// schedule. An environment or setting without a measurement is expected to run every epoch.
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "engine/hyperparams.h"
+
+namespace sirl {
+
+// Epochs a SIRL φ training (N triplets; from the VAE's encoder when vae_pretrain) is expected to
+// run before its exact skip, at most h.sirl.epochs.
+double expected_sirl_epochs(const std::string& env, int64_t N, bool vae_pretrain, const Hyper& h);
+
+// Epochs a TPA cell's reward heads are expected to run on average, at most h.tpa.epochs:
+// all of them under tpa.stop = "fixed".
+double expected_head_epochs(const std::string& env, bool frozen, int64_t M, const Hyper& h);
+
+}  // namespace sirl
