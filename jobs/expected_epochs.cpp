@@ -75,8 +75,7 @@ double expected_head_epochs(const std::string& env, bool frozen, int64_t M, cons
   const StopRule rule = tpa_stop_rule(h);
   // Measured under the default rule only: another minimum or tolerance stops elsewhere.
   const StopRule standard{true};
-  if (!rule.converged || rule.min_epochs != standard.min_epochs ||
-      rule.rel_tol != standard.rel_tol)
+  if (!rule.converged || rule.min_epochs != standard.min_epochs || rule.rel_tol != standard.rel_tol)
     return h.tpa.epochs;
   for (const auto& s : head_stops())
     if (env == s.env && frozen == s.frozen)

@@ -42,8 +42,8 @@ struct Task {
   // The teacher who answered the queries: "" = the profile's main teacher, else a noisy
   // teacher's tag ("beta=1"; Profile::robustness). Only for cells that learn from answers.
   std::string teacher;
-  std::vector<int> deps;    // indices into Plan::tasks (set by add_task)
-  double flops = 0;         // estimated floating-point operations executed (add_task)
+  std::vector<int> deps;  // indices into Plan::tasks (set by add_task)
+  double flops = 0;       // estimated floating-point operations executed (add_task)
   // Every epoch of every schedule: more than `flops` where the engine ends training early by
   // rule (SIRL's exact skip, converged reward heads; jobs/expected_epochs.h).
   double protocol_flops = 0;

@@ -219,8 +219,9 @@ void rep_cost(Task& t, const Profile& p) {
   if (t.variant.method == Method::sirl) {
     t.protocol_flops = train_flops(z.phi, 3 * t.N, z.h.sirl.epochs);
     // Trainings end at their fixed point (the exact skip): what they are expected to run.
-    t.flops = t.protocol_flops * expected_sirl_epochs(t.env, t.N, t.variant.vae, z.h) /
-              std::max(1, z.h.sirl.epochs);
+    t.flops = t.protocol_flops;
+    if (const double e = expected_sirl_epochs(t.env, t.N, t.variant.vae, z.h); e < z.h.sirl.epochs)
+      t.flops *= e / z.h.sirl.epochs;
     t.bytes = working_set(z.phi, 3 * z.h.sirl.batch);
     t.stream_bytes = stream_bytes(z.phi, 3 * t.N, 3 * z.h.sirl.batch, z.h.sirl.epochs);
   } else if (uses_queries(t.variant.method)) {
@@ -295,12 +296,13 @@ void tpa_cost(Task& t, const Profile& p) {
   const MlpShape net = tpa_network(z.phi, z.h, t.frozen);
   t.protocol_flops = kTestRewards * train_flops(net, 2 * t.M, z.h.tpa.epochs);
   // Under tpa.stop = "converged" the heads stop early: what they are expected to run.
-  t.flops = t.protocol_flops * expected_head_epochs(t.env, t.frozen, t.M, z.h) /
-            std::max(1, z.h.tpa.epochs);
+  t.flops = t.protocol_flops;
+  if (const double e = expected_head_epochs(t.env, t.frozen, t.M, z.h); e < z.h.tpa.epochs)
+    t.flops *= e / z.h.tpa.epochs;
   t.bytes = kTestRewards * working_set(net, 2 * z.h.tpa.batch);
   // The heads train one after another (engine/tpa.h): what must fit the cache is one head's.
-  t.stream_bytes = kTestRewards * stream_bytes(net, 2 * t.M, 2 * z.h.tpa.batch, z.h.tpa.epochs) *
-                   t.flops / std::max(1.0, t.protocol_flops);
+  t.stream_bytes = kTestRewards * stream_bytes(net, 2 * t.M, 2 * z.h.tpa.batch, z.h.tpa.epochs);
+  if (t.flops < t.protocol_flops) t.stream_bytes *= t.flops / t.protocol_flops;
 }
 
 // Converged when every head's loss curve is (the fraction tells how many were); the relative

@@ -364,7 +364,7 @@ with tempfile.TemporaryDirectory() as tmp:
     assert len(c) == len(ref["tpa"]) and np.allclose(c["tpa"], ref["tpa"]["tpa"])
     with h5py.File(one, "r") as f:
         # Every CSV: the same rows and every numeric column equal to the table's (17 digits).
-        for name in ("fpe", "tpa", "timings", "training", "vae_latents"):
+        for name in ("fpe", "tpa", "timings", "training", "vae_latents", "tpa_heads"):
             t = pd.DataFrame(f["tables/" + name][:])
             # keep_default_na=False: an empty text field (the main teacher's "") stays "", not NaN
             c = pd.read_csv(os.path.join(csv, name + ".csv"), float_precision="round_trip",
@@ -377,7 +377,7 @@ with tempfile.TemporaryDirectory() as tmp:
                 else:
                     assert np.array_equal(c[col].to_numpy(), t[col].to_numpy()), (name, col)
     print("ok: export --csv writes every table, every column equal (fpe, tpa, timings, training, "
-          "vae_latents)")
+          "vae_latents, tpa_heads)")
 
     # Another engine version wrote the file: refused, and --force starts over.
     # An edited file no longer matches its checksum: refused as changed (exit 1, one line), and

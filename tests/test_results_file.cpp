@@ -3,6 +3,8 @@
 // a file of a newer version is refused with one line naming both versions.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -172,6 +174,51 @@ TEST(ResultsFile, TablesHoldOneRowPerCellWithTheRecordsValues) {
   ASSERT_EQ(t.at("vae_latents").rows(), 2u);
   EXPECT_EQ(column(t.at("vae_latents"), "dim").ints, (std::vector<int64_t>{0, 1}));
   EXPECT_EQ(column(t.at("vae_latents"), "kl").doubles, (std::vector<double>{0.5, 0.0}));
+}
+
+// /tables/tpa_heads: one row per reward head, worked out by hand for a cell of 2 heads under the
+// converged rule, head 0 stopped after 2 of 4 epochs (its curve NaN after), head 1 ran all 4.
+TEST(ResultsFile, TpaHeadsTableHasOneRowPerHeadWithItsStopAndLastTrainedLoss) {
+  TaskRecord r;
+  r.key = "jaco/s1/random/tpa/M10/unfrozen";
+  r.kind = "tpa";
+  r.text = {{"env", "jaco"}, {"method", "random"}, {"variant", "random"}, {"stop", "converged"}};
+  r.num = {{"N", 0},       {"M", 10},          {"frozen", 0},    {"seed", 1},
+           {"vae", 0},     {"tpa", 0.625},     {"tpa_std", 0.2}, {"tpa_train", 0.95},
+           {"in_main", 1}, {"in_ablation", 0}, {"flops", 6},     {"protocol_flops", 8},
+           {"seconds", 1}};
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  r.arrays["accuracy"] = {{2}, {0.75f, 0.5f}};
+  r.arrays["train_accuracy"] = {{2}, {1.0f, 0.9f}};
+  r.arrays["loss_curves"] = {{2, 4}, {0.7f, 0.6f, nan, nan, 0.7f, 0.5f, 0.4f, 0.3f}};
+  r.arrays["head_epochs"] = {{2}, {2, 4}};
+  r.arrays["phi_drift"] = {{2}, {0.25f, 0.125f}};
+  const ResultTables t = result_tables({r});
+  const H5Table& h = t.at("tpa_heads");
+  ASSERT_EQ(h.rows(), 2u);
+  EXPECT_EQ(column(h, "head").ints, (std::vector<int64_t>{0, 1}));
+  EXPECT_EQ(column(h, "epochs").ints, (std::vector<int64_t>{2, 4}));
+  EXPECT_EQ(column(h, "max_epochs").ints, (std::vector<int64_t>{4, 4}));
+  EXPECT_EQ(column(h, "stopped").ints, (std::vector<int64_t>{1, 0}));
+  EXPECT_EQ(column(h, "stop").strings, (std::vector<std::string>{"converged", "converged"}));
+  EXPECT_EQ(column(h, "final_loss").doubles, (std::vector<double>{0.6f, 0.3f}));
+  EXPECT_EQ(column(h, "accuracy").doubles, (std::vector<double>{0.75, 0.5}));
+  EXPECT_EQ(column(h, "phi_drift").doubles, (std::vector<double>{0.25, 0.125}));
+  EXPECT_EQ(column(h, "M").ints, (std::vector<int64_t>{10, 10}));
+  // The training table's final loss: the mean of each head's last trained epoch, not NaN.
+  ASSERT_EQ(t.at("training").rows(), 0u);  // no convergence fields in this record
+  // timings: executed and protocol FLOPs side by side.
+  EXPECT_EQ(column(t.at("timings"), "flops").doubles, (std::vector<double>{6}));
+  EXPECT_EQ(column(t.at("timings"), "protocol_flops").doubles, (std::vector<double>{8}));
+  // A record from before the stopping rule (no head_epochs, no stop): every epoch, "fixed".
+  r.arrays.erase("head_epochs");
+  r.text.erase("stop");
+  r.arrays["loss_curves"] = {{2, 4}, {0.7f, 0.6f, 0.5f, 0.4f, 0.7f, 0.5f, 0.4f, 0.3f}};
+  const ResultTables before = result_tables({r});
+  const H5Table& old = before.at("tpa_heads");
+  EXPECT_EQ(column(old, "epochs").ints, (std::vector<int64_t>{4, 4}));
+  EXPECT_EQ(column(old, "stopped").ints, (std::vector<int64_t>{0, 0}));
+  EXPECT_EQ(column(old, "stop").strings, (std::vector<std::string>{"fixed", "fixed"}));
 }
 
 // /tables/timings' roofs, worked out by hand with a 200 GFLOP/s fp32 roof per core:
