@@ -22,7 +22,8 @@ void register_reproduce(CLI::App& app, Runner& run) {
   static std::string profile = "quick", out, figures;
   static int threads = 0;
   static bool force = false, no_study = false;
-  cmd->add_option("--profile", profile, "Profile: smoke, quick, beyond, paper, paper-grid, or a .toml path")
+  cmd->add_option("--profile", profile,
+                  "Profile: a name in configs/ (" + bundled_profile_names() + ") or a .toml path")
       ->capture_default_str();
   cmd->add_option("--out", out, "Results file (default: out/<profile>.h5)");
   cmd->add_option("--figures", figures, "Figure directory (default: out/<profile>-figures)");

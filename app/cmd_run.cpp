@@ -84,7 +84,7 @@ void register_run(CLI::App& app, Runner& run) {
   static double checkpoint_minutes = 5;
   static int task_threads = 0;
   cmd->add_option("profile", profile,
-                  "Profile: a name in configs/ (smoke, quick, paper) or a .toml path")
+                  "Profile: a name in configs/ (" + bundled_profile_names() + ") or a .toml path")
       ->required();
   cmd->add_option("--out", out, "Results file (HDF5)")->required();
   cmd->add_option("--threads", threads, "Worker threads (default: every core)")
@@ -222,7 +222,9 @@ void register_plan(CLI::App& app, Runner& run) {
   static int threads = 0;
   static bool list_tasks = false;
   static PlanClusterOptions co;
-  cmd->add_option("profile", profile, "Profile: a name in configs/ or a .toml path")->required();
+  cmd->add_option("profile", profile,
+                  "Profile: a name in configs/ (" + bundled_profile_names() + ") or a .toml path")
+      ->required();
   cmd->add_option("--threads", threads, "Worker threads to plan for (default: every core)")
       ->check(CLI::Range(1, 4096));
   cmd->add_flag("--tasks", list_tasks,
@@ -285,7 +287,7 @@ void register_plan(CLI::App& app, Runner& run) {
                   "protocol", "", protocol * 1e-9);
       std::printf(" SIRL's exact skip%s (measured medians: jobs/expected_epochs.cpp)\n",
                   std::any_of(p.hyper.begin(), p.hyper.end(),
-                              [](const auto& kv) { return kv.second.tpa_stop == "converged"; })
+                              [](const auto& kv) { return kv.second.tpa_stop != "fixed"; })
                       ? " and converged reward heads"
                       : "");
     }

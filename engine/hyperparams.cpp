@@ -139,9 +139,9 @@ std::string describe(const Hyper& h) {
   return s;
 }
 
-StopRule tpa_stop_rule(const Hyper& h) {
+StopRule tpa_stop_rule(const Hyper& h, bool frozen) {
   StopRule r;
-  r.converged = h.tpa_stop == "converged";
+  r.converged = h.tpa_stop == "converged" || (h.tpa_stop == "converged-unfrozen" && !frozen);
   r.min_epochs = h.tpa_stop_min_epochs;
   r.rel_tol = h.tpa_stop_rel_tol;
   return r;
@@ -184,10 +184,11 @@ void validate(const Hyper& h) {
         h.vae_elbo + "\"");
   if (h.pref_l2 < 0) fail("pref.l2 must be >= 0");
   if (h.tpa_l2 < 0) fail("tpa.l2 must be >= 0");
-  if (h.tpa_stop != "fixed" && h.tpa_stop != "converged")
+  if (h.tpa_stop != "fixed" && h.tpa_stop != "converged" && h.tpa_stop != "converged-unfrozen")
     fail(
-        "tpa.stop must be \"fixed\" (every epoch, the paper's) or \"converged\" (each head "
-        "stops once its loss has converged), got \"" +
+        "tpa.stop must be \"fixed\" (every epoch, the paper's), \"converged\" (each head "
+        "stops once its loss has converged) or \"converged-unfrozen\" (only unfrozen cells' "
+        "heads stop early), got \"" +
         h.tpa_stop + "\"");
   if (h.tpa_stop_min_epochs < 2) fail("tpa.stop_min_epochs must be >= 2");
   if (!(h.tpa_stop_rel_tol > 0 && h.tpa_stop_rel_tol < 1))

@@ -44,6 +44,8 @@ struct Hyper {
   // When a reward head stops (engine/convergence.h, StopRule): "fixed" runs tpa.epochs (the
   // paper's protocol); "converged" stops each head once its loss has converged, at the earliest
   // after tpa.stop_min_epochs, by check_convergence at tpa.stop_rel_tol; tpa.epochs is the cap.
+  // "converged-unfrozen": the rule for unfrozen cells only, frozen cells' heads run every epoch
+  // (on JacoRobot the rule changed frozen cells' TPA: docs/stopping-rule.md).
   std::string tpa_stop = "fixed";
   int tpa_stop_min_epochs = 100;
   double tpa_stop_rel_tol = 0.01;
@@ -60,8 +62,8 @@ inline bool bf16_products(const Hyper& h) {
   return h.precision == "bf16";
 }
 
-// The reward heads' stopping rule that h.tpa_stop* describe.
-StopRule tpa_stop_rule(const Hyper& h);
+// The stopping rule that h.tpa_stop* give a cell's reward heads (frozen φ or not).
+StopRule tpa_stop_rule(const Hyper& h, bool frozen);
 
 // The paper's values for a registered environment (datasets/environments.h: the engine's
 // defaults plus the environment's HyperDefault list); throws std::invalid_argument for an unknown

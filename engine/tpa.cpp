@@ -139,7 +139,7 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   ModelLoopOptions loop;
   loop.resume = &resume;
   loop.stretch_steps = cfg.stretch_steps;
-  loop.stop = tpa_stop_rule(h);
+  loop.stop = tpa_stop_rule(h, cfg.frozen);
   ModelCurves run = run_epochs_model_by_model(
       M, res.epochs, h.tpa.batch, order_rng, cfg.threads,
       [&](int r, const int32_t* order, int b, int64_t step) {

@@ -639,6 +639,18 @@ const std::string& precision_of(const Profile& p, const std::string& env) {
   return it == p.hyper.end() ? p.precision : it->second.precision;
 }
 
+std::string bundled_profile_names() {
+  namespace fs = std::filesystem;
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(SIRL_CONFIG_DIR, ec))
+    if (e.path().extension() == ".toml") names.push_back(e.path().stem().string());
+  std::sort(names.begin(), names.end());
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s.empty() ? "none found in " + std::string(SIRL_CONFIG_DIR) : s;
+}
+
 Profile load_profile(const std::string& path_or_name) {
   namespace fs = std::filesystem;
   std::vector<fs::path> candidates{path_or_name};

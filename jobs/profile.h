@@ -130,6 +130,9 @@ const std::string& precision_of(const Profile& p, const std::string& env);
 // source tree or the working directory. Throws ProfileError.
 Profile load_profile(const std::string& path_or_name);
 
+// The names of the profiles shipped in configs/ ("beyond, jaco-fig5, paper, …"), for --help.
+std::string bundled_profile_names();
+
 // The frozen settings a TPA cell of this variant runs with under `grid`.
 std::vector<bool> frozen_settings(const TpaGrid& grid, const Variant& v);
 

@@ -347,7 +347,8 @@ void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   // Each head's epochs trained; a head below the cap stopped by tpa.stop = "converged".
   r.arrays["head_epochs"] =
       TaskRecord::Array::of(std::vector<float>(res.head_epochs.begin(), res.head_epochs.end()));
-  r.text["stop"] = ctx.profile().hyper.at(t.env).tpa_stop;
+  r.text["stop"] =  // the rule this cell's heads ran under
+      tpa_stop_rule(ctx.profile().hyper.at(t.env), t.frozen).converged ? "converged" : "fixed";
   record_heads_convergence(res, r);
   if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
 }

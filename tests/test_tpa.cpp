@@ -1,6 +1,7 @@
 // Transfer-to-preference accuracy (TPA): heads on φ, frozen and unfrozen, its M, L2 and statistics.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <map>
 
@@ -192,9 +193,9 @@ TEST(Tpa, AConvergedHeadIsTheFixedRunsHeadAtItsStoppingEpoch) {
       heads_at[k].push_back(r);
       // The rule, applied to the head's own curve: not before k, at k (unless k is the cap).
       const float* curve = conv.loss_curves.data() + size_t(r) * 400;
-      for (int e = 30; e < k; ++e) EXPECT_FALSE(stops_after(tpa_stop_rule(h), curve, e));
+      for (int e = 30; e < k; ++e) EXPECT_FALSE(stops_after(tpa_stop_rule(h, frozen), curve, e));
       if (k < 400) {
-        EXPECT_TRUE(stops_after(tpa_stop_rule(h), curve, k));
+        EXPECT_TRUE(stops_after(tpa_stop_rule(h, frozen), curve, k));
       }
       for (int e = k; e < 400; ++e) EXPECT_TRUE(std::isnan(curve[e]));
     }
@@ -227,6 +228,24 @@ TEST(Tpa, AConvergedHeadIsTheFixedRunsHeadAtItsStoppingEpoch) {
       EXPECT_TRUE(same_bits(b.loss_curves, conv.loss_curves)) << threads << " threads";
     }
   }
+}
+
+// "converged-unfrozen": unfrozen cells' heads stop by the rule, frozen cells' run every epoch.
+TEST(Tpa, ConvergedUnfrozenStopsOnlyUnfrozenCellsHeads) {
+  const World& w = world();
+  Hyper h = fast_hyper();
+  h.tpa.epochs = 200;
+  h.tpa_stop = "converged-unfrozen";
+  h.tpa_stop_min_epochs = 30;
+  const TpaResult f = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, TpaConfig{20, true, h}, 5);
+  EXPECT_EQ(f.head_epochs, std::vector<int>(20, 200));
+  const TpaResult u = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, TpaConfig{20, false, h}, 5);
+  Hyper all = h;
+  all.tpa_stop = "converged";
+  const TpaResult a = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, TpaConfig{20, false, all}, 5);
+  EXPECT_EQ(u.head_epochs, a.head_epochs);
+  EXPECT_EQ(u.accuracy, a.accuracy);
+  EXPECT_LT(*std::min_element(u.head_epochs.begin(), u.head_epochs.end()), 200);
 }
 
 TEST(Tpa, FixedRunsEveryEpochOfEveryHead) {
