@@ -3,6 +3,7 @@
 // representation, FPE, TPA) shares one commit path.
 #pragma once
 #include <cstdint>
+#include <cstring>
 #include <map>
 #include <string>
 #include <vector>
@@ -15,7 +16,13 @@ struct TaskRecord {
   struct Array {
     std::vector<uint64_t> dims;
     std::vector<float> data;
-    bool operator==(const Array&) const = default;
+    // Bit for bit: a reward head that stopped early has NaN epochs in its curve, and two
+    // records of one task are the same results only when every bit agrees.
+    bool operator==(const Array& o) const {
+      return dims == o.dims && data.size() == o.data.size() &&
+             (data.empty() ||
+              std::memcmp(data.data(), o.data.data(), data.size() * sizeof(float)) == 0);
+    }
     // A float array of the given shape; a vector when dims is empty.
     static Array of(std::vector<float> data, std::vector<uint64_t> dims = {}) {
       if (dims.empty()) dims = {uint64_t(data.size())};

@@ -221,6 +221,23 @@ TEST(ResultsFile, TpaHeadsTableHasOneRowPerHeadWithItsStopAndLastTrainedLoss) {
   EXPECT_EQ(column(old, "stop").strings, (std::vector<std::string>{"fixed", "fixed"}));
 }
 
+// Two records of one task are the same results when every bit agrees: a stopped head's NaN
+// epochs must not make a record differ from itself (sirl merge compares records of one task).
+TEST(ResultsFile, ARecordWithNaNEpochsEqualsItsRoundTripAndNothingElse) {
+  TaskRecord r;
+  r.key = "jaco/s0/random/tpa/M10/unfrozen";
+  r.kind = "tpa";
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  r.arrays["loss_curves"] = {{1, 3}, {0.5f, nan, nan}};
+  EXPECT_TRUE(deserialize(serialize(r)) == r);
+  TaskRecord other = r;
+  other.arrays["loss_curves"].data[0] = 0.25f;
+  EXPECT_FALSE(other == r);
+  other = r;
+  other.arrays["loss_curves"].data[2] = -0.0f;  // a value where the other has none
+  EXPECT_FALSE(other == r);
+}
+
 // /tables/timings' roofs, worked out by hand with a 200 GFLOP/s fp32 roof per core:
 //  - in cache (no stream_bytes): 100 GFLOP in 1 s on 1 core → 50 % of the roof, no memory roof;
 //  - streaming: 100 GFLOP over 10 GB at 20 GB/s per core, on 2 cores, in 2 s → 50 GFLOP/s;
