@@ -131,7 +131,7 @@ TEST(Epochs, ModelByModelIsTheBatchedTrainingInAnotherOrderWhateverTheStretchAnd
 // Models whose loss is flat from an epoch of their own on (model m: 100 − e before epoch 10 + 15m,
 // then 1) stop where the rule says on their own curves; each stopped model's state is that of a
 // fixed run of that many epochs, whatever the threads and stretches, and its curve is NaN after.
-TEST(Epochs, EachModelStopsOnItsOwnCurveAndKeepsTheFixedRunsBits) {
+TEST(Epochs, EachModelStopsOnItsOwnCurveWithTheFixedRunsBitsWhateverTheThreadCount) {
   const int R = 3, epochs = 120, batch = 3;
   const int64_t n = 7;  // 3 steps an epoch
   StopRule rule;
