@@ -94,7 +94,8 @@ def check_stops(fixed_path, conv_path, conv_profile):
             g = fb["runs/" + key]
             if "head_epochs" not in g:
                 continue
-            env = key.split("/")[0]
+            env = g.attrs["env"]  # the record's own field, not a piece of its key
+            env = env.decode() if isinstance(env, bytes) else str(env)
             hy = prof.get("hyper", {}).get(env, {})
             min_epochs = int(hy.get("tpa.stop_min_epochs", 100))
             rel_tol = float(hy.get("tpa.stop_rel_tol", 0.01))

@@ -34,7 +34,7 @@ struct SirlSkip {
   std::vector<Point> at_N;  // the epoch of the exact skip, median over seeds
 };
 
-// Measured with the paper's SIRL hyper-parameters (docs/stopping-rule.md, 2026-12-03):
+// Measured with the paper's SIRL hyper-parameters (the runs: docs/stopping-rule.md):
 // JacoRobot N = 1000 (bench/sirl-past-zero-loss.toml, seed 0): skipped after epoch 158, the
 // same point for every N until other N are measured.
 const std::vector<SirlSkip>& sirl_skips() {
@@ -50,7 +50,7 @@ struct HeadStops {
   std::vector<Point> at_M;  // mean epochs a head runs under the default rule, median over cells
 };
 
-// Measured under the default rule (docs/stopping-rule.md, 2026-12-03), every cell at N = 1000:
+// Measured under the default rule (the runs: docs/stopping-rule.md), every cell at N = 1000:
 // JacoRobot seeds 0-2, SIRL frozen and Random / SinglePref / MultiPref-10 unfrozen at M = 10 and
 // 50 (bench/stop-equivalence-jaco.toml); GridRobot seeds 0-9, every method in its best mode at
 // M = 10, 50, 100 and 190 (bench/stop-equivalence-grid.toml). Every head stopped at the rule's

@@ -42,6 +42,16 @@ inline Hyper fast_hyper() {
   return h;
 }
 
+// fast_hyper with the reward heads capped at `epochs` and stopping by `stop` ("converged",
+// "converged-unfrozen") from a minimum of 30 epochs, so Grid heads stop well inside the cap.
+inline Hyper stopping_hyper(int epochs, const char* stop) {
+  Hyper h = fast_hyper();
+  h.tpa.epochs = epochs;
+  h.tpa_stop = stop;
+  h.tpa_stop_min_epochs = 30;
+  return h;
+}
+
 inline double tail_mean(const std::vector<float>& c) {
   double s = 0;
   const size_t n = std::max<size_t>(1, c.size() / 10);

@@ -123,10 +123,7 @@ TEST(Checkpoint, TpaHeadsFrozenAndUnfrozenResumeBitIdentical) {
 // heads had stopped (and where), or it would train them again.
 TEST(Checkpoint, ConvergedHeadsResumeBitIdenticalWithTheirStoppingEpochs) {
   const World& w = world();
-  Hyper h = fast_hyper();
-  h.tpa.epochs = 200;
-  h.tpa_stop = "converged";
-  h.tpa_stop_min_epochs = 30;
+  const Hyper h = stopping_hyper(200, "converged");
   auto run = [&](Checkpointer* c) {
     TpaConfig cfg{20, true, h};
     cfg.checkpointer = c;

@@ -177,10 +177,7 @@ bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
 // stretch.
 TEST(Tpa, AConvergedHeadIsTheFixedRunsHeadAtItsStoppingEpoch) {
   const World& w = world();
-  Hyper h = fast_hyper();
-  h.tpa.epochs = 400;
-  h.tpa_stop = "converged";
-  h.tpa_stop_min_epochs = 30;
+  const Hyper h = stopping_hyper(400, "converged");
   for (bool frozen : {true, false}) {
     TpaConfig c{20, frozen, h, 1};
     const TpaResult conv = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 5);
@@ -233,10 +230,7 @@ TEST(Tpa, AConvergedHeadIsTheFixedRunsHeadAtItsStoppingEpoch) {
 // "converged-unfrozen": unfrozen cells' heads stop by the rule, frozen cells' run every epoch.
 TEST(Tpa, ConvergedUnfrozenStopsOnlyUnfrozenCellsHeads) {
   const World& w = world();
-  Hyper h = fast_hyper();
-  h.tpa.epochs = 200;
-  h.tpa_stop = "converged-unfrozen";
-  h.tpa_stop_min_epochs = 30;
+  const Hyper h = stopping_hyper(200, "converged-unfrozen");
   const TpaResult f = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, TpaConfig{20, true, h}, 5);
   EXPECT_EQ(f.head_epochs, std::vector<int>(20, 200));
   const TpaResult u = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, TpaConfig{20, false, h}, 5);
