@@ -47,8 +47,10 @@ Variant parse_variant(const std::string& name) {
 
 std::vector<bool> frozen_settings(const TpaGrid& grid, const Variant& v) {
   if (!grid.frozen.empty()) return grid.frozen;
-  return {v.method == Method::sirl};
+  return {is_best_mode(v, true)};
 }
+
+bool is_best_mode(const Variant& v, bool frozen) { return frozen == (v.method == Method::sirl); }
 
 namespace {
 

@@ -135,5 +135,8 @@ std::string bundled_profile_names();
 
 // The frozen settings a TPA cell of this variant runs with under `grid`.
 std::vector<bool> frozen_settings(const TpaGrid& grid, const Variant& v);
+// The paper's best mode of a method's TPA cells (Fig. 5): SIRL, with or without VAE pre-training
+// and whatever its query selection, frozen; every other method unfrozen.
+bool is_best_mode(const Variant& v, bool frozen);
 
 }  // namespace sirl

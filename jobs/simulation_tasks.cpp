@@ -1,6 +1,8 @@
 #include "jobs/simulation_tasks.h"
 
 #include <algorithm>
+#include <initializer_list>
+#include <string_view>
 
 #include "datasets/environments.h"
 #include "datasets/queries.h"
@@ -158,6 +160,8 @@ void describe_variant(const Task& t, TaskRecord& r) {
   describe_env_and_seed(t, r);
   r.text["method"] = method_name(t.variant.method);
   r.text["variant"] = t.variant.name();
+  r.text["selection"] = selection_name(t.variant.selection);
+  r.text["teacher"] = t.teacher;  // "" = the profile's main teacher
   r.num["vae"] = t.variant.vae;
   r.num["N"] = double(t.N);
 }
@@ -178,6 +182,7 @@ void describe_tpa(const Task& t, TaskRecord& r) {
   describe_variant(t, r);
   r.num["M"] = double(t.M);
   r.num["frozen"] = t.frozen;
+  r.num["best_mode"] = is_best_mode(t.variant, t.frozen);
   r.num["in_main"] = t.in_main;  // a cell of Fig. 5 ([tpa]), of Fig. 7 ([ablation]), or both
   r.num["in_ablation"] = t.in_ablation;
 }
@@ -428,6 +433,12 @@ const std::vector<TableColumn> kTeacherColumns{{"teacher", C::String, "teacher"}
                                                {"similarity_error", C::Double, "similarity_error"},
                                                {"preference_error", C::Double, "preference_error"}};
 
+void drop_columns(CellTableSpec& t, std::initializer_list<std::string_view> names) {
+  std::erase_if(t.columns, [&](const TableColumn& c) {
+    return std::find(names.begin(), names.end(), std::string_view(c.name)) != names.end();
+  });
+}
+
 }  // namespace
 
 TaskKindSpec vae_kind() {
@@ -493,7 +504,9 @@ TaskKindSpec fpe_kind() {
                  {"N", C::Int, "N"},
                  {"seed", C::Int, "seed"},
                  {"fpe", C::Double, "fpe"},
-                 {"train_mse", C::Double, "train_mse"}}},
+                 {"train_mse", C::Double, "train_mse"},
+                 {"selection", C::String, "selection"},
+                 {"teacher", C::String, "teacher"}}},
   };
 }
 
@@ -524,7 +537,10 @@ TaskKindSpec tpa_kind() {
                  {"tpa_std", C::Double, "tpa_std"},
                  {"tpa_train", C::Double, "tpa_train"},
                  {"in_main", C::Int, "in_main"},
-                 {"in_ablation", C::Int, "in_ablation"}}},
+                 {"in_ablation", C::Int, "in_ablation"},
+                 {"selection", C::String, "selection"},
+                 {"teacher", C::String, "teacher"},
+                 {"best_mode", C::Int, "best_mode"}}},
   };
 }
 
@@ -538,6 +554,7 @@ TaskKindSpec robust_fpe_kind() {
   k.run = run_robust_fpe;
   k.table.kind = "robust_fpe";
   k.table.name = "robust_fpe";
+  drop_columns(k.table, {"teacher"});  // kTeacherColumns bring it, next to the method
   k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
                          kTeacherColumns.end());
   return k;
@@ -551,8 +568,7 @@ TaskKindSpec robust_tpa_kind() {
   k.run = run_robust_tpa;
   k.table.kind = "robust_tpa";
   k.table.name = "robust_tpa";
-  // in_main / in_ablation say nothing here
-  k.table.columns.resize(k.table.columns.size() - 2);
+  drop_columns(k.table, {"in_main", "in_ablation", "teacher"});  // in_main, in_ablation: no grid
   k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
                          kTeacherColumns.end());
   return k;

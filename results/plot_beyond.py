@@ -13,7 +13,6 @@ and timings. Draws nothing (and says so) when a file has none of these cells.
 """
 import math
 import os
-import re
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -30,6 +29,10 @@ METHOD_STYLE = {"sirl": ("#d62728", "SIRL"), "vae": ("#2ca02c", "VAE"),
 AXES = {"beta": ("Boltzmann β", True), "mistake": ("mistake rate", False),
         "attend": ("share of features attended", True)}  # True: noisier as the value falls
 BOOTSTRAP = 2000
+
+
+# The active variants' query selection rules (the `selection` column of every table).
+RULE = {"sirl@vote": "vote", "sirl@infogain": "infogain"}
 
 
 def mean_ci(v):
@@ -132,12 +135,12 @@ def plot_active(fpe, tpa, out, notes, drawn):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
         ax = axes[1][c]
-        t = tpa[(tpa.env == env) & (tpa.frozen == 1)] if not tpa.empty else tpa
-        Ms = sorted(t.M.unique()) if not t.empty else []
+        t = tpa[(tpa.env == env) & tpa.frozen] if not tpa.empty else tpa
+        Ms = sorted(int(m) for m in t.M.dropna().unique()) if not t.empty else []
         if t.empty or not t.variant.isin(["sirl@vote", "sirl@infogain"]).any():
             ax.set_axis_off()
             continue
-        Ns = sorted(t[t.variant.isin(list(SELECTION))].N.unique())
+        Ns = sorted(int(n) for n in t[t.variant.isin(list(SELECTION))].N.dropna().unique())
         styles = ["--", "-", ":", "-."]
         for i, n in enumerate(Ns):
             for v, (colour, label) in SELECTION.items():
@@ -190,7 +193,7 @@ def active_lines(fpe, tim, envs):
             lo, hi = e["ci"]
             ci = "—" if not math.isfinite(lo) and not math.isfinite(hi) and len(d.seed.unique()) < 2 \
                 else f"[{lo:.0f}, {'> ' + str(e['N_top']) if not math.isfinite(hi) else f'{hi:.0f}'}]"
-            L.append(f"| {env} | {v.split('@')[1]} | {e['uniform_at_top']:.4f} → "
+            L.append(f"| {env} | {RULE[v]} | {e['uniform_at_top']:.4f} → "
                      f"{e['active_at_top']:.4f} (N = {e['N_top']}) | {ns} | {ci} | "
                      f"{100 * e['share_reached']:.0f} % | {e['seeds']} |")
     if len(tim):
@@ -201,12 +204,12 @@ def active_lines(fpe, tim, envs):
               "|---|---|---:|---:|---:|"]
         for env in envs:
             for v in ("sirl", "sirl@vote", "sirl@infogain"):
-                rule = v.split("@")[1] if "@" in v else None
-                act = tim[(tim.kind == "active") & tim.key.str.startswith(env + "/") &
-                          tim.key.str.endswith("/active/" + str(rule))] if rule else tim.iloc[0:0]
+                rule = RULE.get(v)
+                act = tim[(tim.kind == "active") & (tim.env == env) & (tim.selection == rule)
+                          & (tim.teacher == "")] if rule else tim.iloc[0:0]
                 # the main teacher's φ of this selection only (not the robustness cells' φ)
-                reps = tim[(tim.kind == "rep") & tim.key.str.match(
-                    "^" + re.escape(env) + r"/s\d+/" + re.escape(v) + "/N")]
+                reps = tim[(tim.kind == "rep") & (tim.env == env) & (tim.variant == v)
+                           & (tim.teacher == "")]
                 L.append(f"| {env} | {rule or 'uniform'} | {act.seconds.sum():.1f} | "
                          f"{act.flops.sum() / 1e9:.0f} | {reps.seconds.sum():.1f} |")
     return L
@@ -239,11 +242,10 @@ def robustness_frames(fpe, tpa, rfpe, rtpa):
             continue
         r = rob.copy()
         if metric == "tpa":  # the paper's best mode per method, as in [robustness]
-            best = r.variant.isin(["sirl", "sirl+vae"]).astype(int)
-            r = r[r.frozen == best]
+            r = r[r.best_mode]
         ref = reference_rows(main, r, metric)
         if metric == "tpa" and not ref.empty:
-            ref = ref[ref.frozen == ref.variant.isin(["sirl", "sirl+vae"]).astype(int)]
+            ref = ref[ref.best_mode]
         frames = [r.assign(perfect=0)]
         for axis in r.axis.unique():
             if not ref.empty:

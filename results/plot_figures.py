@@ -16,7 +16,6 @@ import math
 import os
 import sys
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
@@ -26,7 +25,10 @@ import pandas as pd  # noqa: E402
 from scipy import stats  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+# The reader package: installed by scripts/setup.sh, or beside this folder in a checkout.
+sys.path.insert(1, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
 import claims as claims_stats  # noqa: E402
+import sirl_bench  # noqa: E402
 import plot_beyond  # noqa: E402
 
 # One colour and one label per method variant, shared by every figure.
@@ -46,9 +48,9 @@ ENV = {}
 ALPHA = claims_stats.ALPHA
 
 
-def load_envs(f):
-    for name, g in f.get("datasets", {}).items():
-        a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in g.attrs.items()}
+def load_envs(res):
+    for name, g in res.datasets.items():
+        a = g["attrs"]
         ENV[name] = {"title": a.get("title", name), "in_claims": int(a.get("in_claims", 1)),
                      "fig3_rank": int(a.get("fig3_rank", 0)),
                      "vae_weak_claim": int(a.get("vae_weak_claim", 0))}
@@ -62,21 +64,14 @@ def env_title(env):
 DRAWN = {}
 
 
-def decode(df):
-    for c in df.columns:
-        if df[c].dtype == object:
-            df[c] = df[c].str.decode("utf-8")
-    return df
-
-
 TABLES = ("fpe", "tpa", "timings", "training", "vae_latents", "robust_fpe", "robust_tpa")
 
 
 def load(path):
-    f = h5py.File(path, "r")
-    t = {k: decode(pd.DataFrame(f["tables/" + k][:])) if "tables/" + k in f else pd.DataFrame()
-         for k in TABLES}
-    return f, t
+    """The file through sirl_bench (typed tables; N and M are <NA> where a cell has none)."""
+    res = sirl_bench.open(path)
+    t = {k: res.tables[k] if k in res.tables else pd.DataFrame() for k in TABLES}
+    return res, t
 
 
 def mean_ci(values):
@@ -101,9 +96,9 @@ def main_tpa(tpa):
     frozen, the others unfrozen)."""
     if tpa.empty:
         return tpa
-    t = tpa[tpa["in_main"] == 1] if "in_main" in tpa else tpa
-    best_frozen = t["variant"].isin(["sirl", "sirl+vae"]).astype(int)
-    return t[t["frozen"] == best_frozen]
+    t = tpa[tpa["in_main"]] if "in_main" in tpa else tpa
+    # best_mode: the file's (engines ≥ 0.8.0); older files have no such column
+    return t[t["best_mode"]] if "best_mode" in t else t.iloc[0:0]
 
 
 def plot_fig4(fpe, envs, out, notes):
@@ -115,13 +110,13 @@ def plot_fig4(fpe, envs, out, notes):
                              constrained_layout=True)
     for ax, env in zip(axes[0], envs):
         d = fpe[fpe.env == env]
-        Ns = sorted(n for n in d.N.unique() if n > 0)
+        Ns = sorted(int(n) for n in d.N.dropna().unique())
         for v in ORDER:
             dv = d[d.variant == v]
             if dv.empty:
                 continue
             colour, label = STYLE[v]
-            if (dv.N == 0).all():  # VAE and Random use no queries: one value per seed
+            if dv.N.isna().all():  # VAE and Random use no queries: one value per seed
                 m, ci = mean_ci(dv.fpe)
                 DRAWN.setdefault("fig4", {}).setdefault(env, {})[v] = {"0": float(m)}
                 ax.axhline(m, color=colour, ls="--", lw=1.5, label=label)
@@ -159,7 +154,7 @@ def plot_fig5(tpa, envs, out, notes):
     if not envs:
         notes.append("Fig. 5: no TPA cells of the main grid in this file")
         return
-    Ns = sorted(n for n in t.N.unique() if n > 0)
+    Ns = sorted(int(n) for n in t.N.dropna().unique())
     if not Ns:
         Ns = [0]
     fig, axes = plt.subplots(len(envs), len(Ns), figsize=(4.2 * len(Ns), 3.4 * len(envs)),
@@ -167,8 +162,8 @@ def plot_fig5(tpa, envs, out, notes):
     for r, env in enumerate(envs):
         for c, n in enumerate(Ns):
             ax = axes[r][c]
-            d = t[(t.env == env) & ((t.N == n) | (t.N == 0))]
-            Ms = sorted(d.M.unique())
+            d = t[(t.env == env) & ((t.N == n) | t.N.isna())]
+            Ms = sorted(int(m) for m in d.M.dropna().unique())
             for v in ORDER:
                 dv = d[d.variant == v]
                 if dv.empty:
@@ -200,7 +195,7 @@ def plot_fig5(tpa, envs, out, notes):
 
 def plot_fig7(tpa, envs, out, notes):
     """Fig. 7 from the cells the file marks as the ablation's (in_ablation), per environment."""
-    ab = tpa[tpa["in_ablation"] == 1] if not tpa.empty and "in_ablation" in tpa else tpa.iloc[0:0]
+    ab = tpa[tpa["in_ablation"]] if not tpa.empty and "in_ablation" in tpa else tpa.iloc[0:0]
     envs = [e for e in envs if (ab.env == e).any()]
     if not envs:
         notes.append("Fig. 7: no ablation cells in this file")
@@ -213,8 +208,8 @@ def plot_fig7(tpa, envs, out, notes):
     hatches = ["", "//", "..", "xx"]
     for ax, env in zip(axes[0], envs):
         d = ab[ab.env == env]
-        Nab = sorted(int(n) for n in d.N.unique() if n > 0)
-        Mab = sorted(int(m) for m in d.M.unique())
+        Nab = sorted(int(n) for n in d.N.dropna().unique())
+        Mab = sorted(int(m) for m in d.M.dropna().unique())
         width = 0.2
         for k, (fr, vae, name) in enumerate(configs):
             ms, cis = [], []
@@ -255,22 +250,25 @@ def plot_fig7(tpa, envs, out, notes):
     save(fig, out, "fig7_ablation")
 
 
-def rep_keys(f, env, method):
-    """Representation keys of (env, method) in the file, largest N first, then lowest seed."""
-    keys = [k.decode() for k in f["runs_index"][:]]
-    keys = [k for k in keys if k.startswith(env + "/s") and f"/{method}/N" in k and k.endswith("/rep")]
-    return sorted(keys, key=lambda k: (-int(k.split("/N")[1].split("/")[0]),
-                                       int(k.split("/s")[1].split("/")[0])))
+def rep_keys(res, env, variant):
+    """Keys of the main teacher's representations of (env, variant) that stored an embedding,
+    largest N first, then lowest seed."""
+    r = res.records
+    if r.empty or "variant" not in r:
+        return []
+    r = r[(r.kind == "rep") & (r.env == env) & (r.variant == variant) & (r.teacher == "")]
+    r = r[r.arrays.str.split(",").map(lambda a: "embedding" in a)]
+    return list(r.sort_values(["N", "seed"], ascending=[False, True]).key)
 
 
-def plot_fig3(f, out, notes):
+def plot_fig3(res, out, notes):
     """The paper's Fig. 3: on the simplified GridRobot (laptop + angle), trajectories most and
     least similar to a query under a SIRL φ, from the φ's stored embedding of Ξ."""
     # The environment Fig. 3 is drawn on: the highest fig3_rank with a SIRL φ in the file.
     ranked = sorted((e for e in ENV if ENV[e]["fig3_rank"] > 0), key=lambda e: -ENV[e]["fig3_rank"])
     env, keys = None, []
     for e in ranked:
-        keys = rep_keys(f, e, "sirl")
+        keys = rep_keys(res, e, "sirl")
         if keys:
             env = e
             break
@@ -280,16 +278,11 @@ def plot_fig3(f, out, notes):
         notes.append("Fig. 3: no SIRL representation of a Fig. 3 environment in this file")
         return None
     key = keys[0]
-    r = f["runs/" + key]
-    if "embedding" not in r:
-        notes.append(f"Fig. 3: {key} has no stored embedding (written by an older engine)")
-        return None
-    E = r["embedding"][:]
-    g = f["datasets/" + env]
-    X = g["inputs"][:]
-    F = g["features"][:]  # normalised φ*; columns as the dataset names them
-    fnames = [n.decode() if isinstance(n, bytes) else n
-              for n in g["features"].attrs.get("feature_names", [])]
+    E = res.embedding(key)
+    g = res.datasets[env]
+    X = g["inputs"]
+    F = g["features"]  # normalised φ*; columns as the dataset names them
+    fnames = list(g["attrs"].get("features.feature_names", []))
     lap = fnames.index("laptop_distance") if "laptop_distance" in fnames else 0
     ang = fnames.index("abs_angle") if "abs_angle" in fnames else 1
     # The paper's two queries: far from the laptop holding the cup on its side; close to the
@@ -297,8 +290,8 @@ def plot_fig3(f, out, notes):
     q_far = int(np.argmax(F[:, lap] + F[:, ang]))
     tilted = np.where(np.isin(np.round(np.abs(X[:, 18]) * 90), [30, 60]))[0]
     q_near = int(tilted[np.argmin(F[tilted, lap])]) if len(tilted) else int(np.argmin(F[:, lap]))
-    objects = g["objects"][:]
-    onames = [n.decode() if isinstance(n, bytes) else n for n in g["objects"].attrs["names"]]
+    objects = g["objects"]
+    onames = list(g["attrs"]["objects.names"])
     size, scale = 5, 4
 
     def draw(ax, idx, title, colour):
@@ -335,24 +328,19 @@ def plot_fig3(f, out, notes):
     return key
 
 
-def curves_of(f, keys, name):
-    """{key: 1-D curve}; a [heads, epochs] array is averaged over the heads still training at each
-    epoch (a head stopped by tpa.stop = "converged" is NaN from its stop on), and ends where the
-    last head stopped."""
-    out = {}
-    for k in keys:
-        g = f["runs/" + k]
-        if name in g:
-            c = g[name][:]
-            if c.ndim == 2:
-                trained = ~np.isnan(c)
-                counts = trained.sum(0)
-                c = np.where(trained, c, 0).sum(0)[counts > 0] / counts[counts > 0]
-            out[k] = c
-    return out
+def head_mean_curves(res, rows):
+    """{key: 1-D loss curve} of the given training rows; a TPA cell's heads are averaged at each
+    epoch over the heads still training (a head stopped by tpa.stop has no rows after its stop),
+    and the curve ends where the last head stopped."""
+    recs = res.records[res.records.key.isin(set(rows.key))]
+    c = res.curves_of(recs)
+    if c.empty:
+        return {}
+    m = c.groupby(["key", "epoch"], sort=True).loss.mean()
+    return {k: m.loc[k].to_numpy() for k in m.index.get_level_values(0).unique()}
 
 
-def plot_learning_curves(f, t, envs, out, notes):
+def plot_learning_curves(res, t, envs, out, notes):
     """Per environment: the VAE, each method's φ at its largest N, and the TPA heads of the main
     grid's largest (N, M): median over seeds with the min–max band."""
     tr = t["training"]
@@ -376,7 +364,7 @@ def plot_learning_curves(f, t, envs, out, notes):
                     dv = dv[dv.N == dv.N.max()]
                 if dv.empty:
                     continue
-                cs = list(curves_of(f, dv.key, "loss_curves" if kind == "tpa" else "loss_curve").values())
+                cs = list(head_mean_curves(res, dv).values())
                 if not cs:
                     continue
                 n = max(len(x) for x in cs)  # curves of stopped heads end early: NaN-padded
@@ -386,7 +374,7 @@ def plot_learning_curves(f, t, envs, out, notes):
                 ep = np.arange(1, n + 1)
                 colour, label = STYLE.get(v, ("#2ca02c", "VAE"))
                 if kind == "tpa":
-                    label += " (frozen)" if (dv.frozen == 1).all() else ""
+                    label += " (frozen)" if dv.frozen.all() else ""
                 ax.plot(ep, np.nanmedian(A, 0), "o-" if n < 10 else "-", ms=3, color=colour,
                         label=f"{label} ({len(cs)})")
                 ax.fill_between(ep, np.nanmin(A, 0), np.nanmax(A, 0), color=colour, alpha=0.15)
@@ -425,7 +413,7 @@ def convergence_lines(t):
     return L
 
 
-def vae_lines(f, t):
+def vae_lines(res, t):
     """The VAE's posterior (per-latent KL) and how alive each φ's last hidden layer is."""
     vl = t["vae_latents"]
     L = []
@@ -440,12 +428,12 @@ def vae_lines(f, t):
             L.append(f"| {env} | {seed} | {d.elbo.iloc[0]} | {(kl > 0.01).sum()} of {len(kl)} | "
                      f"{', '.join(f'{x:.3g}' for x in kl)} | {d.reconstruction_mse.iloc[0]:.4g} |")
     dead = []
-    for k in f["runs_index"][:]:
-        k = k.decode()
-        if k.endswith("/rep") and "dead_fraction" in f["runs/" + k]:
-            df = f["runs/" + k]["dead_fraction"][:]
-            env, variant = k.split("/")[0], k.split("/")[2]
-            dead.append((env, variant, float(df[-1]) if len(df) else 0.0))
+    recs = res.records
+    if not recs.empty and "variant" in recs:
+        reps = recs[(recs.kind == "rep") & recs.arrays.str.split(",").map(lambda a: "dead_fraction" in a)]
+        for row in reps.itertuples():
+            df = res.array(row.key, "dead_fraction")
+            dead.append((row.env, row.variant, float(df[-1]) if len(df) else 0.0))
     if dead:
         d = pd.DataFrame(dead, columns=["env", "variant", "dead"])
         L += ["", "## Dead units", "",
@@ -493,8 +481,8 @@ def rested_on(tr, env, N, variants, tpa_cells):
     t = tr[(tr.env == env) & (tr.teacher == "")] if "teacher" in tr else tr[tr.env == env]
     use = ((t.kind == "rep") & (t.N == N) & t.variant.isin(variants)) | (t.kind == "vae")
     if tpa_cells:
-        main = (t.variant == "sirl") == (t.frozen == 1)
-        use |= (t.kind == "tpa") & (t.N.isin([N, 0])) & t.variant.isin(variants) & main
+        use |= ((t.kind == "tpa") & ((t.N == N) | t.N.isna()) & t.variant.isin(variants)
+                & t.best_mode).fillna(False)
     return t[use]
 
 
@@ -509,7 +497,7 @@ def hypotheses(fpe, tpa, envs, training=None):
             nmax = d.N.max()
 
             def fpe_at(v):
-                x = d[(d.variant == v) & ((d.N == nmax) | (d.N == 0))]
+                x = d[(d.variant == v) & ((d.N == nmax) | d.N.isna())]
                 return x.set_index("seed").fpe
 
             claim(H, env, f"H1 — SIRL's FPE is lower than every baseline's at N = {nmax}",
@@ -521,7 +509,7 @@ def hypotheses(fpe, tpa, envs, training=None):
             nmax = m.N.max()
 
             def tpa_at(v):
-                x = m[(m.variant == v) & ((m.N == nmax) | (m.N == 0))]
+                x = m[(m.variant == v) & ((m.N == nmax) | m.N.isna())]
                 return x.groupby("seed").tpa.mean()
 
             claim(H, env, f"H2 — SIRL's TPA (frozen, mean over M) is higher than every baseline's "
@@ -615,8 +603,8 @@ def detail_lines(H, envs):
     return L
 
 
-def compute_lines(f, tim):
-    a = f.attrs
+def compute_lines(res, tim):
+    a = res.provenance
     if not len(tim):
         return []
     tim = tim.copy()
@@ -686,14 +674,14 @@ FIGURES = [("fig3_grid_similar", "Fig. 3"), ("fig4_fpe", "Fig. 4"), ("fig5_tpa",
            ("fig7_ablation", "Fig. 7")]
 
 
-def report(f, t, envs, out, notes, fig3_key, beyond=None):
+def report(res, t, envs, out, notes, fig3_key, beyond=None):
     """report.md and report.html: the summary table of claims first, then the figures, the
     learning curves with their convergence table, the claims in detail, compute, diagnostics,
     notes, and the profile's text last."""
     fpe, tpa, tim = t["fpe"], t["tpa"], t["timings"]
     beyond = beyond or {}
     envs = [e for e in envs if ENV.get(e, {}).get("in_claims", 1)]  # e.g. Fig. 3's own env
-    a = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+    a = res.provenance
     H = hypotheses(fpe, tpa, envs, t.get("training"))
     title = f"sirl-bench report: profile `{a.get('profile_name')}`"
     L = [f"# {title}", ""] + summary_lines(H)
@@ -714,8 +702,8 @@ def report(f, t, envs, out, notes, fig3_key, beyond=None):
         L += ["![Learning curves](fig_learning_curves.png)", ""]
     L += convergence_lines(t)
     L += detail_lines(H, envs)
-    L += compute_lines(f, tim)
-    L += vae_lines(f, t)
+    L += compute_lines(res, tim)
+    L += vae_lines(res, t)
     if fig3_key:
         L += ["", f"Fig. 3 uses the representation `{fig3_key}`."]
     if notes:
@@ -775,28 +763,31 @@ def main():
     if not os.path.exists(a.results):
         sys.exit(f"plot_figures: {a.results}: no such file")
     os.makedirs(a.out, exist_ok=True)
-    f, t = load(a.results)
-    load_envs(f)
+    try:
+        res, t = load(a.results)
+    except sirl_bench.ResultsError as e:
+        sys.exit(f"plot_figures: {e}")
+    load_envs(res)
     envs = [e for e in ENV if any(not t[k].empty and (t[k].env == e).any()
                                   for k in ("fpe", "tpa", "training"))] or list(ENV)[:1]
     notes = []
-    if not f.attrs.get("complete", 1):
-        notes.append(f"partial run: {f.attrs.get('tasks_done')} of {f.attrs.get('tasks_total')} "
+    prov = res.provenance
+    if not prov.get("complete", 1):
+        notes.append(f"partial run: {prov.get('tasks_done')} of {prov.get('tasks_total')} "
                      "tasks; missing cells are gaps, not zeros")
-    shard = f.attrs.get("shard", b"")
-    shard = shard.decode() if isinstance(shard, bytes) else shard
+    shard = prov.get("shard", "")
     if shard:
         notes.append(f"this file is shard {shard} of a run: missing cells are in the other shards "
                      "(combine them with `sirl merge`)")
-    fig3_key = plot_fig3(f, a.out, notes)
+    fig3_key = plot_fig3(res, a.out, notes)
     plot_fig4(t["fpe"], envs, a.out, notes)
     plot_fig5(t["tpa"], envs, a.out, notes)
     plot_fig7(t["tpa"], envs, a.out, notes)
-    plot_learning_curves(f, t, envs, a.out, notes)
+    plot_learning_curves(res, t, envs, a.out, notes)
     beyond = {"active": plot_beyond.plot_active(t["fpe"], t["tpa"], a.out, notes, DRAWN),
               "robustness": plot_beyond.plot_robustness(t["fpe"], t["tpa"], t["robust_fpe"],
                                                         t["robust_tpa"], a.out, notes, DRAWN)}
-    report(f, t, envs, a.out, notes, fig3_key, beyond)
+    report(res, t, envs, a.out, notes, fig3_key, beyond)
     with open(os.path.join(a.out, "figures.json"), "w") as fh:
         json.dump(DRAWN, fh, indent=1)
     print(f"plot_figures: wrote figures and report.md to {a.out}/")

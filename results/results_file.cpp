@@ -78,6 +78,27 @@ std::pair<int64_t, double> final_loss_of(const TaskRecord& r) {
   return {E, last};
 }
 
+// The cell fields a per-training table carries beside each row's own values, written from the
+// record (never from its key): the method, its VAE pre-training and query selection, and whether
+// a TPA cell is in the paper's best mode (Fig. 5: SIRL frozen, every other method unfrozen; 0 for
+// a training that is not a TPA cell).
+struct CellFieldColumns {
+  H5Table::Column *method, *vae, *selection, *best_mode;
+  explicit CellFieldColumns(H5Table& t)
+      : method(&t.add("method", C::String)),
+        vae(&t.add("vae", C::Int)),
+        selection(&t.add("selection", C::String)),
+        best_mode(&t.add("best_mode", C::Int)) {}
+  void push(const TaskRecord& r) {
+    auto m = r.text.find("method"), s = r.text.find("selection");
+    // A VAE record trains the VAE baseline's encoder: its method is "vae".
+    method->strings.push_back(m != r.text.end() ? m->second : r.kind == "vae" ? "vae" : "");
+    vae->ints.push_back(int64_t(num_or(r, "vae", 0)));
+    selection->strings.push_back(s != r.text.end() ? s->second : "uniform");
+    best_mode->ints.push_back(int64_t(num_or(r, "best_mode", 0)));
+  }
+};
+
 // One row per TPA reward head (every "tpa" and robustness TPA record): its held-out and training
 // accuracy, the epochs it trained and whether it stopped before the schedule's end by the stopping
 // rule (tpa.stop = "converged"; `stop` names the cell's rule), its final loss and how far its copy
@@ -92,6 +113,7 @@ H5Table tpa_heads_table(const std::vector<TaskRecord>& records) {
        &epochs = t.add("epochs", C::Int), &cap = t.add("max_epochs", C::Int),
        &stopped = t.add("stopped", C::Int), &stop = t.add("stop", C::String),
        &loss = t.add("final_loss", C::Double), &drift = t.add("phi_drift", C::Double);
+  CellFieldColumns cell(t);
   for (const auto& r : records) {
     auto a = r.arrays.find("accuracy"), tr = r.arrays.find("train_accuracy"),
          lc = r.arrays.find("loss_curves");
@@ -125,6 +147,7 @@ H5Table tpa_heads_table(const std::vector<TaskRecord>& records) {
       loss.doubles.push_back(last_finite(lc->second.data.data() + k * size_t(E), E));
       drift.doubles.push_back(
           pd != r.arrays.end() && pd->second.data.size() == R ? double(pd->second.data[k]) : 0.0);
+      cell.push(r);
     }
   }
   return t;
@@ -144,6 +167,7 @@ H5Table training_table(const std::vector<TaskRecord>& records) {
        &rel = t.add("loss_relative_change", C::Double), &conv = t.add("converged", C::Int),
        &frac = t.add("converged_fraction", C::Double), &dead = t.add("dead_fraction", C::Double),
        &teacher = t.add("teacher", C::String);
+  CellFieldColumns cell(t);
   for (const auto& r : records) {
     if (!r.num.count("converged")) continue;  // FPE, Random and the VAE method train nothing
     const auto [E, last] = final_loss_of(r);
@@ -165,6 +189,7 @@ H5Table training_table(const std::vector<TaskRecord>& records) {
                                                                             : -1.0);
     auto tt = r.text.find("teacher");  // "" = the main teacher ([robustness] cells name theirs)
     teacher.strings.push_back(tt == r.text.end() ? "" : tt->second);
+    cell.push(r);
   }
   return t;
 }
@@ -209,7 +234,20 @@ H5Table timings_table(const std::vector<TaskRecord>& records, const Roofs& roofs
        &th = t.add("threads", C::Int), &mem = t.add("memory_roof_gflops", C::Double),
        &att = t.add("attainable_percent", C::Double), &prec = t.add("precision", C::String),
        &croof = t.add("compute_roof_gflops", C::Double), &pfl = t.add("protocol_flops", C::Double);
+  // The task's cell, from its record ("" and -1 where a kind has no such field).
+  auto &env = t.add("env", C::String), &seed = t.add("seed", C::Int),
+       &teacher = t.add("teacher", C::String), &variant = t.add("variant", C::String);
+  CellFieldColumns cell(t);
+  auto text_or = [](const TaskRecord& r, const char* k) {
+    auto it = r.text.find(k);
+    return it == r.text.end() ? std::string() : it->second;
+  };
   for (const auto& r : records) {
+    env.strings.push_back(text_or(r, "env"));
+    seed.ints.push_back(int64_t(num_or(r, "seed", -1)));
+    teacher.strings.push_back(text_or(r, "teacher"));
+    variant.strings.push_back(r.kind == "vae" ? "vae" : text_or(r, "variant"));
+    cell.push(r);
     kind.strings.push_back(r.kind);
     key.strings.push_back(r.key);
     const double s = num_or(r, "seconds", 0), f = num_or(r, "flops", 0);

@@ -1,0 +1,12 @@
+"""sirl_bench: read sirl-bench results files as typed pandas DataFrames.
+
+    import sirl_bench
+    r = sirl_bench.open("out/quick.h5")
+    r.tables["tpa"]     # or r.tpa: one row per TPA cell, typed
+    r.curves            # learning curves, long format
+    r.provenance        # engine version, commit, CPU class, profile text, ...
+"""
+from .results import (FLAG_COLUMNS, SCHEMA_VERSIONS, Results, ResultsError, claims, open,  # noqa: F401
+                      typed)
+
+__version__ = "0.7.0"

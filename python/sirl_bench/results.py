@@ -1,0 +1,313 @@
+"""A sirl-bench results file (`sirl run --out X.h5`) as typed pandas DataFrames.
+
+The engine writes every table row with its cell's fields (env, seed, teacher, method, variant,
+vae, selection, N, M, frozen, best_mode) as columns, and every task record in /runs/<key> with
+the same fields as attributes. This module only converts types: it never takes a task key apart
+and never restates a rule the engine decides (which cells are the paper's best mode, which
+method a variant is). Task keys are opaque identifiers here.
+
+Types, the same in every table:
+  names (env, method, variant, selection, teacher, kind, key, ...)  str; teacher "" is the
+                                                                   profile's main teacher
+  flags (vae, frozen, in_main, in_ablation, best_mode, converged,   bool ("boolean", with <NA>,
+         stopped)                                                   where a row has no such field)
+  N, M                                   Int64; <NA> where the cell has none (a method that uses
+                                         no queries has no N; a training that is not a TPA cell
+                                         has no M and no frozen)
+  dead_fraction                          float; NaN where it was not measured
+"""
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+
+import h5py
+import numpy as np
+import pandas as pd
+
+# Results-file schema versions this reader understands (results/results_file.h).
+SCHEMA_VERSIONS = (1, 2)
+
+FLAG_COLUMNS = ("vae", "frozen", "in_main", "in_ablation", "best_mode", "converged", "stopped")
+# Integer-valued numbers of a record (the file stores a record's numbers as float64).
+INT_FIELDS = ("N", "M", "seed", "threads", "queries", "head", "epoch", "epochs", "max_epochs",
+              "dim", "latent", "tasks_done", "tasks_total", "schema_version")
+
+
+class ResultsError(ValueError):
+    """A file this reader cannot read: not a results file, or a schema it does not know."""
+
+
+def _text(v):
+    return v.decode("utf-8") if isinstance(v, bytes) else v
+
+
+def _texts(a):
+    return [_text(x) for x in a]
+
+
+def typed(df: pd.DataFrame) -> pd.DataFrame:
+    """Converts a raw table or record frame to the types above (a copy)."""
+    df = df.copy()
+    for c in df.columns:
+        if df[c].dtype == object:
+            df[c] = df[c].map(_text)
+    absent_m = None
+    if "M" in df:
+        absent_m = df["M"].isna() | (df["M"] == 0)
+    for c in ("N", "M"):
+        if c in df:
+            x = df[c].to_numpy(dtype=float)
+            df[c] = _ints(x, np.isnan(x) | (x == 0))
+    for c in INT_FIELDS:
+        if c in df and c not in ("N", "M") and df[c].dtype != object:
+            x = df[c].to_numpy(dtype=float)
+            if c == "seed" and (x < 0).any():  # -1: a task with no seed (timings)
+                x = np.where(x < 0, np.nan, x)
+            if np.isnan(x).any():
+                df[c] = _ints(x, np.isnan(x))
+            elif len(x) == 0 or np.all(np.mod(x, 1) == 0):
+                df[c] = x.astype("int64")
+    for c in FLAG_COLUMNS:
+        if c in df and df[c].dtype != object:
+            b = pd.array(df[c].to_numpy(dtype=float) != 0, dtype="boolean")
+            b[np.asarray(df[c].isna())] = pd.NA
+            if c == "frozen" and absent_m is not None:
+                b[np.asarray(absent_m)] = pd.NA
+            df[c] = b
+    if "dead_fraction" in df:
+        df["dead_fraction"] = df["dead_fraction"].where(df["dead_fraction"] >= 0)
+    return df
+
+
+def _ints(x, missing):
+    """Int64 (nullable) from floats x, <NA> where missing."""
+    return pd.arrays.IntegerArray(np.where(missing, 0, x).astype("int64"), np.asarray(missing))
+
+
+class _LazyTables(Mapping):
+    def __init__(self, f):
+        self._f = f
+        self._names = sorted(f["tables"].keys()) if "tables" in f else []
+        self._cache = {}
+
+    def __getitem__(self, name):
+        if name not in self._names:
+            raise KeyError(f"no table '{name}' in this file (it has: {', '.join(self._names)})")
+        if name not in self._cache:
+            self._cache[name] = typed(pd.DataFrame(self._f["tables/" + name][:]))
+        return self._cache[name]
+
+    def __iter__(self):
+        return iter(self._names)
+
+    def __len__(self):
+        return len(self._names)
+
+
+class Results:
+    """One results file, open for reading. Use as a context manager or call close()."""
+
+    def __init__(self, path):
+        self.path = str(path)
+        try:
+            self._f = h5py.File(self.path, "r")
+        except OSError as e:
+            raise ResultsError(f"{self.path}: cannot open as HDF5 ({e})") from None
+        f = self._f
+        if "runs" not in f or "engine_version" not in f.attrs:
+            kind = "a dataset file" if "datasets" in f else "not a results file"
+            self._f.close()
+            raise ResultsError(f"{self.path}: {kind} (no /runs or engine_version); "
+                               f"a results file is what `sirl run --out` writes")
+        v = int(f.attrs.get("schema_version", 1))  # version 1 files carry no number
+        if v not in SCHEMA_VERSIONS:
+            self._f.close()
+            raise ResultsError(f"{self.path}: results schema version {v}; this reader reads "
+                               f"versions {SCHEMA_VERSIONS[0]} to {SCHEMA_VERSIONS[-1]}")
+        self.schema_version = v
+        self.tables = _LazyTables(f)
+        self._records = None
+        self._curves = None
+
+    # --- context manager ---
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def close(self):
+        self._f.close()
+
+    def __getattr__(self, name):
+        # r.tpa, r.fpe, ...: the tables by attribute
+        if name.startswith("_") or name not in self.__dict__.get("tables", {}):
+            raise AttributeError(name)
+        return self.tables[name]
+
+    # --- provenance ---
+    @property
+    def provenance(self) -> dict:
+        """The run's root attributes: engine version, git commit, CPU class, host, threads,
+        profile name and text, start and finish times, wall seconds, tasks done and total."""
+        out = {}
+        for k, v in self._f.attrs.items():
+            v = _text(v)
+            if isinstance(v, np.generic):
+                v = v.item()
+            out[k] = v
+        return out
+
+    @property
+    def complete(self) -> bool:
+        return bool(self.provenance.get("complete", 0))
+
+    # --- task records ---
+    def keys(self):
+        """Every task key in the file, in the order the run committed them."""
+        return _texts(self._f["runs_index"][:]) if "runs_index" in self._f else []
+
+    def record(self, key) -> dict:
+        """A task record's scalar fields (numbers and texts) and the names of its arrays."""
+        g = self._f["runs/" + key]
+        a = g.attrs
+        out = {"key": key, "kind": _text(a.get("task_kind", ""))}
+        for k in _texts(a.get("record_texts", [])):
+            out[k] = _text(a[k])
+        for k in _texts(a.get("record_numbers", [])):
+            out[k] = float(a[k])
+        out["arrays"] = _texts(a.get("record_arrays", []))
+        return out
+
+    @property
+    def records(self) -> pd.DataFrame:
+        """One row per task: key, kind, its cell fields and scalar results (columns a kind does
+        not have are missing values). Long texts (hyper-parameters) stay in record(key)."""
+        if self._records is None:
+            rows = []
+            for k in self.keys():
+                r = self.record(k)
+                r.pop("hyper", None)
+                r["arrays"] = ",".join(r["arrays"])
+                rows.append(r)
+            df = pd.DataFrame(rows)
+            self._records = typed(df) if len(df) else df
+        return self._records
+
+    def array(self, key, name) -> np.ndarray:
+        """One array of a task record: e.g. array(key, "embedding") is φ(Ξ) [T, d]."""
+        g = self._f["runs/" + key]
+        if name not in g:
+            raise KeyError(f"task {key} has no array '{name}' (it has: {', '.join(g.keys())})")
+        return g[name][:]
+
+    def embedding(self, key) -> np.ndarray:
+        """φ(Ξ) [T, d] of a representation record (kind "rep")."""
+        return self.array(key, "embedding")
+
+    # --- learning curves ---
+    def curves_of(self, records: pd.DataFrame | None = None) -> pd.DataFrame:
+        """The learning curves of the given records (a filtered `records` frame; default every
+        record), one row per (task, head, epoch): the record's cell fields, head (<NA> for a
+        training with one curve), epoch (from 1), and one column per curve it stores: loss and,
+        for the VAE, kl and reconstruction. A reward head stopped by tpa.stop has no rows after
+        its stop."""
+        recs = self.records if records is None else records
+        fields = [c for c in ("key", "kind", "env", "seed", "teacher", "method", "variant", "vae",
+                              "selection", "N", "M", "frozen", "best_mode") if c in recs]
+        parts = []
+        for _, row in recs.iterrows():
+            names = [n for n in str(row.get("arrays", "")).split(",") if n.endswith(("_curve", "_curves"))]
+            if not names:
+                continue
+            cols = {}
+            for n in names:
+                a = self.array(row.key, n).astype(float)
+                col = n.rsplit("_", 1)[0]
+                cols[col] = a if a.ndim == 2 else a[None, :]
+            R, E = cols.get("loss", next(iter(cols.values()))).shape
+            d = {"head": np.repeat(np.arange(R), E), "epoch": np.tile(np.arange(1, E + 1), R)}
+            for col, a in cols.items():
+                if a.shape == (R, E):
+                    d[col] = a.reshape(-1)
+            part = pd.DataFrame(d)
+            if "loss" in part:
+                part = part[np.isfinite(part["loss"].to_numpy())]
+            if R == 1 and not any(n.endswith("_curves") for n in names):
+                part["head"] = pd.NA
+            for c in fields:
+                part[c] = row[c]
+            parts.append(part)
+        if not parts:
+            return pd.DataFrame(columns=fields + ["head", "epoch", "loss"])
+        out = pd.concat(parts, ignore_index=True)
+        out["head"] = out["head"].astype("Int64")
+        lead = fields + ["head", "epoch"]
+        out = out[lead + [c for c in out.columns if c not in lead]]
+        for c in ("N", "M"):
+            if c in out:
+                out[c] = out[c].astype("Int64")
+        for c in ("vae", "frozen", "best_mode"):
+            if c in out:
+                out[c] = out[c].astype("boolean")
+        return out
+
+    @property
+    def curves(self) -> pd.DataFrame:
+        """Every learning curve in the file (curves_of every record); for a large file, filter
+        `records` first and call curves_of."""
+        if self._curves is None:
+            self._curves = self.curves_of()
+        return self._curves
+
+    # --- datasets ---
+    @property
+    def datasets(self) -> dict:
+        """Per environment: {"attrs": its registration (title, trajectories, teacher, ...),
+        "inputs": Ξ [T, input_dim], "features": the true features [T, F], "queries": {...},
+        "rewards": {...}, ...}; every array of /datasets/<env>, nested as stored."""
+        out = {}
+        if "datasets" not in self._f:
+            return out
+        for env, g in self._f["datasets"].items():
+            out[env] = _group_dict(g)
+        return out
+
+
+def _group_dict(g):
+    """A group as a dict: its arrays and subgroups by name, and "attrs": the group's attributes
+    plus each array's own, as "<array>.<attribute>" (e.g. "features.feature_names")."""
+    d = {"attrs": {k: _attr(v) for k, v in g.attrs.items()}}
+    for name, o in g.items():
+        if isinstance(o, h5py.Group):
+            d[name] = _group_dict(o)
+        else:
+            d[name] = o[:]
+            for k, v in o.attrs.items():
+                d["attrs"][f"{name}.{k}"] = _attr(v)
+    return d
+
+
+def _attr(v):
+    v = _text(v)
+    if isinstance(v, np.ndarray) and v.dtype == object:
+        return _texts(v)
+    if isinstance(v, np.generic):
+        return v.item()
+    return v
+
+
+def open(path) -> Results:  # noqa: A001 (the package's entry point: sirl_bench.open)
+    """Opens a results file; raises ResultsError with one clear line if it is not one."""
+    return Results(path)
+
+
+def claims(figures_dir) -> pd.DataFrame:
+    """The report's verdicts, one row per hypothesis (env, name, verdict, comparisons, power,
+    ...), from claims.json in the folder `sirl reproduce --figures` (or results/plot_figures.py)
+    wrote."""
+    import builtins
+    import os
+    with builtins.open(os.path.join(figures_dir, "claims.json")) as fh:
+        return pd.DataFrame(json.load(fh))
