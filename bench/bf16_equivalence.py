@@ -28,9 +28,12 @@ import subprocess
 import sys
 import tomllib
 
-import h5py
 import pandas as pd
 from scipy import stats
+
+# The reader package: installed by scripts/setup.sh, or beside this folder in a checkout.
+sys.path.insert(1, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+import sirl_bench  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MARGINS = {"fpe": 0.005, "tpa": 0.02}
@@ -60,10 +63,7 @@ def run(sirl, profile, out, threads):
 
 
 def per_seed_means(path, kind):
-    with h5py.File(path, "r") as f:
-        d = pd.DataFrame(f["tables/" + kind][:])
-    for c in ("env", "variant"):
-        d[c] = d[c].str.decode("utf-8")
+    d = sirl_bench.open(path).tables[kind]
     return d.groupby(["env", "variant", "seed"])[kind].mean()
 
 

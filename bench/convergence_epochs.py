@@ -23,9 +23,12 @@ import argparse
 import os
 import sys
 
-import h5py
 import numpy as np
 import pandas as pd
+
+# The reader package: installed by scripts/setup.sh, or beside this folder in a checkout.
+sys.path.insert(1, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+import sirl_bench  # noqa: E402
 
 TOL = 0.05
 
@@ -46,38 +49,37 @@ def e95(curve):
     return int(np.nonzero(outside)[0][-1]) + 2  # 1-based epoch after the last one outside
 
 
-def label(attrs, key):
-    kind, env = attrs["task_kind"], attrs["env"]
-    if kind == "vae":
-        return f"{env}: VAE"
-    if kind == "rep":
-        return f"{env}: φ {attrs['variant']} N={int(attrs['N'])}"
-    if kind == "tpa":
-        mode = "frozen" if attrs["frozen"] else "unfrozen"
-        return f"{env}: TPA heads, {mode}, M={int(attrs['M'])}"
-    return None
+def label(r):
+    """What a training is, from its record's fields (a row of sirl_bench's records)."""
+    if r.kind == "vae":
+        return f"{r.env}: VAE"
+    if r.kind == "rep":
+        return f"{r.env}: φ {r.variant} N={int(r.N)}"
+    mode = "frozen" if r.frozen else "unfrozen"
+    return f"{r.env}: TPA heads, {mode}, M={int(r.M)}"
 
 
 def curves(path):
+    res = sirl_bench.open(path)
+    recs = res.records
+    # the VAE, every φ but the VAE baseline's own encoder (its curve is the VAE's), TPA cells
+    recs = recs[recs.kind.isin(["vae", "rep", "tpa"])]
+    if "variant" in recs:
+        recs = recs[~((recs.kind == "rep") & (recs.variant == "vae"))]
     rows = []
-    with h5py.File(path, "r") as f:
-        for key in f["runs_index"][:]:
-            key = key.decode()
-            g = f["runs/" + key]
-            kind = g.attrs.get("task_kind")
-            if kind in ("vae", "rep") and "loss_curve" in g:
-                c = g["loss_curve"][:]
-            elif kind == "tpa" and "loss_curves" in g:
-                c = g["loss_curves"][:]
-                c = np.nanmean(c[:, ~np.isnan(c).all(0)], axis=0)  # stopped heads: NaN after
-            else:
-                continue
-            if len(c) < 2 or key.startswith("study/"):
-                continue
-            if kind == "rep" and g.attrs.get("variant") == "vae":
-                continue  # the VAE's own encoder: its curve is the VAE's
-            rows.append({"label": label(g.attrs, key), "key": key, "epochs": len(c),
-                         "e95": e95(c), "converged": bool(g.attrs.get("converged", 0))})
+    for r in recs.itertuples():
+        names = r.arrays.split(",")
+        if "loss_curve" in names:
+            c = res.array(r.key, "loss_curve")
+        elif "loss_curves" in names:
+            c = res.array(r.key, "loss_curves")
+            c = np.nanmean(c[:, ~np.isnan(c).all(0)], axis=0)  # stopped heads: NaN after
+        else:
+            continue
+        if len(c) < 2:
+            continue
+        rows.append({"label": label(r), "key": r.key, "epochs": len(c), "e95": e95(c),
+                     "converged": bool(r.converged) if "converged" in recs else False})
     return pd.DataFrame(rows)
 
 
@@ -86,11 +88,8 @@ def metric_deltas(long_path, short_path):
     for kind, by in (("fpe", ["env", "variant", "N"]), ("tpa", ["env", "variant", "N", "M", "frozen"])):
         frames = []
         for p in (long_path, short_path):
-            with h5py.File(p, "r") as f:
-                d = pd.DataFrame(f["tables/" + kind][:])
-            for c in ("env", "variant"):
-                d[c] = d[c].str.decode("utf-8")
-            frames.append(d.groupby(by)[kind].mean())
+            d = sirl_bench.open(p).tables[kind]
+            frames.append(d.groupby(by, dropna=False)[kind].mean())
         delta = (frames[1] - frames[0]).dropna()
         out.append((kind, pd.DataFrame({"long": frames[0], "short": frames[1], "short − long": delta}).dropna()))
     return out

@@ -28,11 +28,14 @@ import subprocess
 import sys
 import tomllib
 
-import h5py
 import pandas as pd
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bf16_equivalence import ALPHA, run, tost  # noqa: E402  (the same test, the same runner)
+
+# The reader package: installed by scripts/setup.sh, or beside this folder in a checkout.
+sys.path.insert(1, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+import sirl_bench  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MARGIN = 0.02
@@ -51,15 +54,8 @@ def profile_text(base_text, stop):
 
 
 def tables(path):
-    out = {}
-    with h5py.File(path, "r") as f:
-        for k in ("tpa", "timings", "tpa_heads"):
-            d = pd.DataFrame(f["tables/" + k][:])
-            for c in d.columns:
-                if d[c].dtype == object:
-                    d[c] = d[c].str.decode("utf-8")
-            out[k] = d
-    return out
+    res = sirl_bench.open(path)
+    return {k: res.tables[k] for k in ("tpa", "timings", "tpa_heads")}
 
 
 CELL = ["env", "variant", "N", "M", "frozen", "seed"]
@@ -88,25 +84,20 @@ def check_stops(fixed_path, conv_path, conv_profile):
     Returns the number of heads checked."""
     prof = tomllib.load(open(conv_profile, "rb"))
     checked = 0
-    with h5py.File(fixed_path, "r") as fa, h5py.File(conv_path, "r") as fb:
-        for key in fb["runs_index"][:]:
-            key = key.decode()
-            g = fb["runs/" + key]
-            if "head_epochs" not in g:
-                continue
-            env = g.attrs["env"]  # the record's own field, not a piece of its key
-            env = env.decode() if isinstance(env, bytes) else str(env)
-            hy = prof.get("hyper", {}).get(env, {})
-            min_epochs = int(hy.get("tpa.stop_min_epochs", 100))
-            rel_tol = float(hy.get("tpa.stop_rel_tol", 0.01))
-            curves = fa["runs/" + key]["loss_curves"][:]
-            got = g["head_epochs"][:]
-            for r, c in enumerate(curves):
-                want = rule_stop(c, min_epochs, rel_tol)
-                if int(got[r]) != want:
-                    sys.exit(f"stop_equivalence: {key} head {r} stopped after {int(got[r])} "
-                             f"epochs; the rule on its fixed-run curve says {want}")
-                checked += 1
+    fixed, conv = sirl_bench.open(fixed_path), sirl_bench.open(conv_path)
+    recs = conv.records
+    for r in recs[recs.arrays.str.split(",").map(lambda a: "head_epochs" in a)].itertuples():
+        hy = prof.get("hyper", {}).get(r.env, {})
+        min_epochs = int(hy.get("tpa.stop_min_epochs", 100))
+        rel_tol = float(hy.get("tpa.stop_rel_tol", 0.01))
+        curves = fixed.array(r.key, "loss_curves")
+        got = conv.array(r.key, "head_epochs")
+        for h, c in enumerate(curves):
+            want = rule_stop(c, min_epochs, rel_tol)
+            if int(got[h]) != want:
+                sys.exit(f"stop_equivalence: {r.key} head {h} stopped after {int(got[h])} "
+                         f"epochs; the rule on its fixed-run curve says {want}")
+            checked += 1
     return checked
 
 
@@ -117,7 +108,7 @@ def compare(fixed_path, conv_path):
         sys.exit("stop_equivalence: the two runs' TPA cells differ")
     cells = pd.DataFrame({"fixed": ta, "converged": tb.reindex(ta.index)})
     cells["d"] = cells.converged - cells.fixed
-    heads = b["tpa_heads"].groupby(CELL).agg(
+    heads = b["tpa_heads"].groupby(CELL, dropna=False).agg(
         epochs_min=("epochs", "min"), epochs_median=("epochs", "median"),
         epochs_max=("epochs", "max"), stopped=("stopped", "mean"))
     cells = cells.join(heads).reset_index()
@@ -170,7 +161,8 @@ def report(rows, cells, cost, profile):
               "min / median / max | stopped |",
               "|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|"]
     for _, r in cells.sort_values(CELL).iterrows():
-        lines.append(f"| {r.env} | {r.variant} | {r.N} | {r.M} | {r.frozen} | {r.seed} | "
+        n = "—" if pd.isna(r.N) else int(r.N)  # a method that uses no queries has no N
+        lines.append(f"| {r.env} | {r.variant} | {n} | {r.M} | {int(r.frozen)} | {r.seed} | "
                      f"{r.fixed:.4f} | {r.converged:.4f} | {r.d:+.4f} | {r.epochs_min:.0f} / "
                      f"{r.epochs_median:.0f} / {r.epochs_max:.0f} | {100 * r.stopped:.0f} % |")
     return "\n".join(lines) + "\n", ok

@@ -11,7 +11,6 @@ import argparse
 import os
 import sys
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
@@ -21,21 +20,24 @@ from scipy import stats  # noqa: E402
 
 SIRL, RANDOM = "#d62728", "#7f7f7f"
 
+# The reader package: installed by scripts/setup.sh, or beside this folder in a checkout.
+sys.path.insert(1, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+import sirl_bench  # noqa: E402
+
 ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 ap.add_argument("analysis")
 ap.add_argument("--out", required=True)
 a = ap.parse_args()
 try:
-    f = h5py.File(a.analysis, "r")
-    g = f["study_analysis"]
-except (OSError, KeyError) as e:
-    sys.exit(f"plot_study: {a.analysis}: not a study analysis file ({e})")
-v = {k: g[k][:] for k in ("fpe_sirl", "fpe_random", "real_sirl", "real_random", "heldout_sirl",
-                          "heldout_random", "simulated_sirl", "simulated_random",
-                          "real_random_other", "heldout_random_other", "simulated_random_other")
+    g = sirl_bench.study_analysis(a.analysis)
+except sirl_bench.ResultsError as e:
+    sys.exit(f"plot_study: {e}")
+v = {k: g[k] for k in ("fpe_sirl", "fpe_random", "real_sirl", "real_random", "heldout_sirl",
+                       "heldout_random", "simulated_sirl", "simulated_random",
+                       "real_random_other", "heldout_random_other", "simulated_random_other")
      if k in g}
-both = g["both_features"][:].astype(bool)
-attrs = {k: (x.decode() if isinstance(x, bytes) else x) for k, x in g.attrs.items()}
+both = g["both_features"].astype(bool)
+attrs = g["attrs"]
 MODE = attrs.get("random_mode", "frozen")  # files of older engines evaluated Random frozen
 OTHER = "frozen" if MODE == "unfrozen" else "unfrozen"
 

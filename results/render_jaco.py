@@ -5,14 +5,18 @@ file written by `sirl dataset --env jaco` (or a results file): a sanity check fo
     /usr/bin/python3 results/render_jaco.py FILE.h5 --out traj.png [--ids 0,1,2] [--env jaco]
 """
 import argparse
+import os
 import sys
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
+# The reader package: installed by scripts/setup.sh, or beside this folder in a checkout.
+sys.path.insert(1, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+import sirl_bench  # noqa: E402
 
 ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 ap.add_argument("file")
@@ -22,10 +26,11 @@ ap.add_argument("--env", default="jaco", help="an environment with an arm view (
 a = ap.parse_args()
 
 try:
-    f = h5py.File(a.file, "r")
-    g = f["datasets/" + a.env]
-except (OSError, KeyError) as e:
-    sys.exit(f"render_jaco: {a.file}: no /datasets/{a.env} ({e})")
+    g = sirl_bench.datasets(a.file)[a.env]
+except sirl_bench.ResultsError as e:
+    sys.exit(f"render_jaco: {e}")
+except KeyError:
+    sys.exit(f"render_jaco: {a.file}: no /datasets/{a.env}")
 X = g["inputs"]
 T = X.shape[0]
 try:
@@ -35,8 +40,8 @@ except ValueError:
 bad = [i for i in ids if not 0 <= i < T]
 if bad:
     sys.exit(f"render_jaco: --ids {bad} outside [0, {T})")
-objects = g["objects"][:]
-names = [n.decode() if isinstance(n, bytes) else n for n in g["objects"].attrs["names"]]
+objects = g["objects"]
+names = list(g["attrs"]["objects.names"])
 
 fig = plt.figure(figsize=(11, 5))
 ax = fig.add_subplot(1, 2, 1, projection="3d")

@@ -52,9 +52,24 @@ if ! command -v npm >/dev/null 2>&1 && [[ ! " ${missing[*]} " =~ " npm " ]]; the
   missing+=(npm)
 fi
 
+# The results reader (python/sirl_bench) on the path of Debian's /usr/bin/python3: a .pth file
+# in the user's site-packages naming this checkout's python/ folder (no network, no pip). Rewritten
+# only when it names another folder.
+python_reader() {
+  local site pth want
+  want="$(cd "$(dirname "$0")/.." && pwd)/python"
+  site="$(/usr/bin/python3 -c 'import site; print(site.getusersitepackages())')"
+  pth="$site/sirl_bench.pth"
+  if [ "$(cat "$pth" 2>/dev/null)" != "$want" ]; then
+    mkdir -p "$site" && printf '%s\n' "$want" > "$pth"
+    echo "setup: sirl_bench reader → $pth"
+  fi
+}
+
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#packages[@]} packages present"
   npm_install
+  python_reader
   exit 0
 fi
 
@@ -68,4 +83,5 @@ export DEBIAN_FRONTEND=noninteractive
 $sudo apt-get update -qq
 $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 npm_install
+python_reader
 echo "setup: done"

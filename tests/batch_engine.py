@@ -147,7 +147,8 @@ with tempfile.TemporaryDirectory() as tmp:
         assert len(seeded) == 4 and all(0 < f[f"runs/{k}"].attrs["fpe"] < 1 for k in seeded), \
             "every study φ of a training seed has its FPE"
         for k in reps:
-            env = k.split("/")[0]
+            env = f[f"runs/{k}"].attrs["env"]  # the record's field, not a piece of its key
+            env = env.decode() if isinstance(env, bytes) else env
             T = f[f"datasets/{env}/inputs"].shape[0]
             e = f[f"runs/{k}/embedding"]
             assert e.shape == (T, 6), (k, e.shape)

@@ -188,6 +188,14 @@ def main():
                   "## Beyond the paper: robustness to noisy teachers", "| grid | vote |"):
             if h not in report:
                 fail(f"report.md lacks {h!r}")
+        # The dead-units table: one row per (env, method variant), whatever teachers the φ
+        # learned from (a noisy teacher's name is no method), and every variant the run trained.
+        sec = report.split("## Dead units", 1)[1].split("\n## ", 1)[0]
+        rows = [ln.split("|")[1:3] for ln in sec.splitlines() if ln.startswith("| grid |")]
+        got = [v.strip() for _, v in rows]
+        want = sorted(set(T["tpa"].variant) | set(T["fpe"].variant))
+        if sorted(got) != want:
+            fail(f"dead units: variants {sorted(got)}, expected one row each of {want}")
     print("beyond_pipeline: OK")
 
 

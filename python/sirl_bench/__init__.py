@@ -6,7 +6,7 @@
     r.curves            # learning curves, long format
     r.provenance        # engine version, commit, CPU class, profile text, ...
 """
-from .results import (FLAG_COLUMNS, SCHEMA_VERSIONS, Results, ResultsError, claims, open,  # noqa: F401
-                      typed)
+from .results import (FLAG_COLUMNS, SCHEMA_VERSIONS, Results, ResultsError, claims,  # noqa: F401
+                      datasets, open, study_analysis, typed)
 
 __version__ = "0.7.0"

@@ -146,6 +146,17 @@ class Results:
             raise AttributeError(name)
         return self.tables[name]
 
+    def raw_table(self, name) -> pd.DataFrame:
+        """A table as stored (strings decoded, numbers untyped: flags 0/1, N and M 0 where a cell
+        has none): for digests and bit-level comparisons across engine versions."""
+        if name not in self.tables:
+            raise KeyError(f"no table '{name}' in this file")
+        df = pd.DataFrame(self._f["tables/" + name][:])
+        for c in df.columns:
+            if df[c].dtype == object:
+                df[c] = df[c].map(_text)
+        return df
+
     # --- provenance ---
     @property
     def provenance(self) -> dict:
@@ -296,6 +307,30 @@ def _attr(v):
     if isinstance(v, np.generic):
         return v.item()
     return v
+
+
+def _open_h5(path, what):
+    try:
+        return h5py.File(str(path), "r")
+    except OSError as e:
+        raise ResultsError(f"{path}: cannot open as HDF5 ({e})") from None
+
+
+def datasets(path) -> dict:
+    """/datasets of any sirl-bench file (a results file or `sirl dataset --out`), as
+    Results.datasets: {env: {"attrs": ..., "inputs": Ξ, ...}}."""
+    with _open_h5(path, "datasets") as f:
+        if "datasets" not in f:
+            raise ResultsError(f"{path}: no /datasets (not a sirl-bench results or dataset file)")
+        return {env: _group_dict(g) for env, g in f["datasets"].items()}
+
+
+def study_analysis(path) -> dict:
+    """The user-study analysis (`sirl study analyze --out`): its arrays by name and "attrs"."""
+    with _open_h5(path, "study") as f:
+        if "study_analysis" not in f:
+            raise ResultsError(f"{path}: not a study analysis file (no /study_analysis)")
+        return _group_dict(f["study_analysis"])
 
 
 def open(path) -> Results:  # noqa: A001 (the package's entry point: sirl_bench.open)

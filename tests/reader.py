@@ -1,0 +1,174 @@
+#!/usr/bin/python3
+"""The Python reader (python/sirl_bench) against the raw file (ctest; Debian's python3):
+
+- every /tables/* through sirl_bench equals the raw h5py read, column by column: strings equal
+  the decoded bytes, flags are booleans equal to the stored 0/1, N and M are <NA> exactly where
+  the stored value is 0 and equal elsewhere, every other number is bit-identical;
+- the learning curves: each TPA cell's rows are its heads' stored curves up to each head's stop
+  (the number of rows is the sum of head_epochs), and every row carries its record's fields;
+- records carry the fields the tables do (no key is taken apart anywhere);
+- the schema-1 fixture (engine 0.1.0) opens; a dataset file, a file of a future schema version
+  and a non-HDF5 file are refused with one line naming the file;
+- the README's one-liner works;
+- examples/analysis.py runs on the smoke file.
+"""
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+import h5py
+import numpy as np
+import pandas as pd
+
+SIRL = os.environ["SIRL"]
+SRC = os.environ["SIRL_SOURCE_DIR"]
+sys.path.insert(0, os.path.join(SRC, "python"))
+import sirl_bench  # noqa: E402
+
+FLAGS = set(sirl_bench.FLAG_COLUMNS)
+
+
+def fail(msg):
+    print("reader: FAIL:", msg)
+    sys.exit(1)
+
+
+def check_tables(path):
+    r = sirl_bench.open(path)
+    with h5py.File(path, "r") as f:
+        names = sorted(f["tables"].keys())
+        if sorted(r.tables) != names:
+            fail(f"tables {sorted(r.tables)} != {names}")
+        for name in names:
+            raw = f["tables/" + name][:]
+            t = r.tables[name]
+            if list(t.columns) != list(raw.dtype.names) or len(t) != len(raw):
+                fail(f"{name}: columns or length differ")
+            for c in raw.dtype.names:
+                a, b = raw[c], t[c]
+                if raw.dtype[c].kind == "S":
+                    if b.dtype != object or list(b) != [x.decode() for x in a]:
+                        fail(f"{name}.{c}: strings differ")
+                    if len(b) and not isinstance(b.iloc[0], str):
+                        fail(f"{name}.{c}: not str")
+                elif c in FLAGS:
+                    if str(b.dtype) != "boolean":
+                        fail(f"{name}.{c}: dtype {b.dtype}, expected boolean")
+                    known = ~b.isna().to_numpy()
+                    if not np.array_equal(b[known].to_numpy(dtype=bool), a[known] != 0):
+                        fail(f"{name}.{c}: flags differ")
+                    # <NA> only for frozen where a training has no M (not a TPA cell)
+                    if (~known).any() and not (c == "frozen" and (raw["M"][~known] == 0).all()):
+                        fail(f"{name}.{c}: <NA> where the row has the field")
+                elif c in ("N", "M"):
+                    if str(b.dtype) != "Int64":
+                        fail(f"{name}.{c}: dtype {b.dtype}, expected Int64")
+                    na = b.isna().to_numpy()
+                    if not np.array_equal(na, a == 0):
+                        fail(f"{name}.{c}: <NA> not exactly where the stored value is 0")
+                    if not np.array_equal(b[~na].to_numpy(dtype=np.int64), a[~na]):
+                        fail(f"{name}.{c}: values differ")
+                elif c == "seed":
+                    na = b.isna().to_numpy()
+                    if not np.array_equal(na, a < 0) or \
+                            not np.array_equal(b[~na].to_numpy(dtype=np.int64), a[~na]):
+                        fail(f"{name}.seed: differs")
+                elif c == "dead_fraction":
+                    x = b.to_numpy()
+                    if not np.array_equal(np.isnan(x), a < 0) or \
+                            not np.array_equal(x[a >= 0], a[a >= 0]):
+                        fail(f"{name}.dead_fraction: differs")
+                else:
+                    if b.dtype != a.dtype:
+                        fail(f"{name}.{c}: dtype {b.dtype} != stored {a.dtype}")
+                    if a.tobytes() != b.to_numpy().tobytes():
+                        fail(f"{name}.{c}: values differ")
+    print(f"ok: {len(names)} tables equal the raw read, column by column")
+    return r
+
+
+def check_curves(r, path):
+    recs = r.records
+    if recs.key.tolist() != r.keys():
+        fail("records are not the file's tasks in order")
+    tpa = recs[recs.kind == "tpa"].head(12)
+    c = r.curves_of(tpa)
+    with h5py.File(path, "r") as f:
+        for row in tpa.itertuples():
+            g = f["runs/" + row.key]
+            L, E = g["loss_curves"][:], g["head_epochs"][:]
+            mine = c[c.key == row.key]
+            if len(mine) != int(E.sum()):
+                fail(f"{row.key}: {len(mine)} curve rows, expected {int(E.sum())}")
+            for h in range(L.shape[0]):
+                got = mine[mine["head"] == h].sort_values("epoch").loss.to_numpy()
+                if not np.array_equal(got, L[h, :int(E[h])].astype(float)):
+                    fail(f"{row.key} head {h}: curve differs")
+            for fld in ("env", "variant", "method", "seed", "M", "frozen", "best_mode"):
+                if (mine[fld] != getattr(row, fld)).any():
+                    fail(f"{row.key}: curve rows' {fld} differs from the record's")
+            env = g.attrs["env"]
+            if (env.decode() if isinstance(env, bytes) else env) != row.env:
+                fail(f"{row.key}: record env differs")
+    # A 1-D curve (φ, VAE): head is <NA>, epochs 1..E
+    rep = recs[recs.kind == "rep"].head(1)
+    cr = r.curves_of(rep)
+    if not cr["head"].isna().all() or cr.epoch.tolist() != list(range(1, len(cr) + 1)):
+        fail("a φ's curve: head must be <NA> and epochs 1..E")
+    print(f"ok: curves of {len(tpa)} TPA cells equal their stored heads up to each stop")
+
+
+def check_refusals(smoke, tmp):
+    v1 = sirl_bench.open(os.path.join(SRC, "tests", "data", "results_v1.h5"))
+    if v1.schema_version != 1 or len(v1.tables["tpa"]) != 1 or len(v1.records) != 5:
+        fail("the schema-1 fixture does not open as written")
+    v1.curves  # noqa: B018 (reads every curve)
+    future = os.path.join(tmp, "future.h5")
+    shutil.copy(smoke, future)
+    with h5py.File(future, "r+") as f:
+        f.attrs["schema_version"] = 99
+    text = os.path.join(tmp, "notes.h5")
+    open(text, "w").write("not hdf5\n")
+    ds = os.path.join(tmp, "ds.h5")
+    subprocess.run([SIRL, "dataset", "--env", "grid", "--out", ds], check=True,
+                   stdout=subprocess.DEVNULL)
+    for path, want in ((future, "schema version 99"), (text, "cannot open as HDF5"),
+                       (ds, "a dataset file")):
+        try:
+            sirl_bench.open(path)
+        except sirl_bench.ResultsError as e:
+            msg = str(e)
+            if path not in msg or want not in msg or "\n" in msg:
+                fail(f"refusal of {path}: {msg!r}")
+        else:
+            fail(f"{path} was not refused")
+    print("ok: v1 fixture opens; a future schema, a dataset file and a text file are refused by name")
+
+
+def main():
+    with tempfile.TemporaryDirectory() as tmp:
+        smoke = os.path.join(tmp, "smoke.h5")
+        subprocess.run([SIRL, "run", "smoke", "--out", smoke, "--threads", "2"], check=True,
+                       stdout=subprocess.DEVNULL)
+        r = check_tables(smoke)
+        check_curves(r, smoke)
+        check_refusals(smoke, tmp)
+        p = subprocess.run(["/usr/bin/python3", "-c",
+                            f"import sirl_bench as s; t = s.open({smoke!r}).tables['tpa']; "
+                            "assert isinstance(t.env.iloc[0], str)"],
+                           env=dict(os.environ, PYTHONPATH=os.path.join(SRC, "python")))
+        if p.returncode:
+            fail("README's one-liner")
+        ex = subprocess.run(["/usr/bin/python3", os.path.join(SRC, "examples", "analysis.py"),
+                             smoke, smoke, "--out", os.path.join(tmp, "ex.png")],
+                            capture_output=True, text=True)
+        if ex.returncode or not os.path.exists(os.path.join(tmp, "ex.png")):
+            fail(f"examples/analysis.py: {ex.stderr[-2000:]}")
+        print("ok: the README's one-liner and examples/analysis.py")
+    print("reader: OK")
+
+
+if __name__ == "__main__":
+    main()
