@@ -101,6 +101,26 @@ def main_tpa(tpa):
     return t[t["best_mode"]] if "best_mode" in t else t.iloc[0:0]
 
 
+def fpe_dots(ax, d, env, Ns):
+    """Fig. 4's panel for an environment run at one N: each method's mean FPE as a dot with its
+    95 % CI, methods along the x-axis (an N axis with one point would read as a curve)."""
+    variants = [v for v in ORDER if (d.variant == v).any()]
+    for i, v in enumerate(variants):
+        colour, label = STYLE[v]
+        m, ci = mean_ci(d[d.variant == v].fpe)
+        DRAWN.setdefault("fig4", {}).setdefault(env, {})[v] = {
+            str(Ns[0]) if Ns and d[d.variant == v].N.notna().all() else "0": float(m)}
+        ax.errorbar([i], [m], yerr=[ci if np.isfinite(ci) else 0], fmt="o", color=colour,
+                    capsize=3, ms=6, label=label)
+    ax.set_xticks(range(len(variants)))
+    ax.set_xticklabels([STYLE[v][1] for v in variants], rotation=35, ha="right", fontsize=8)
+    ax.set_xlim(-0.6, len(variants) - 0.4)
+    ax.set_title(f"{env_title(env)}" + (f", N = {Ns[0]}" if Ns else ""))
+    ax.set_ylim(bottom=0)
+    ax.set_ylabel("FPE (test MSE, normalised features)")
+    ax.grid(alpha=0.3, axis="y")
+
+
 def plot_fig4(fpe, envs, out, notes):
     envs = [e for e in envs if not fpe.empty and (fpe.env == e).any()]
     if not envs:
@@ -111,6 +131,9 @@ def plot_fig4(fpe, envs, out, notes):
     for ax, env in zip(axes[0], envs):
         d = fpe[fpe.env == env]
         Ns = sorted(int(n) for n in d.N.dropna().unique())
+        if len(Ns) <= 1:  # one N (the simplified GridRobot): a dot per method, not a curve
+            fpe_dots(ax, d, env, Ns)
+            continue
         for v in ORDER:
             dv = d[d.variant == v]
             if dv.empty:
