@@ -171,7 +171,9 @@ void register_study(CLI::App& app, Runner& run) {
   sim->add_option("--preference", s_pref, "Preference queries each")
       ->check(CLI::Range(int64_t(0), int64_t(100000)))
       ->capture_default_str();
-  sim->add_option("--beta", s_beta, "Boltzmann rationality (inf = perfect)")->capture_default_str();
+  sim->add_option("--beta", s_beta, "Boltzmann rationality (inf = perfect)")
+      ->check(positive_number())
+      ->capture_default_str();
   sim->add_option("--mistake", s_mistake, "Probability of a flipped answer")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();

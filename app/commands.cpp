@@ -23,51 +23,101 @@ std::map<std::string, Runner>& runners() {
 
 namespace {
 
-// Options that take a count, a seed or a port: decimal digits only. CLI11 alone reads "0x10" as
-// 16 and "-1" as 2⁶⁴ − 1 for an unsigned seed.
-const std::set<std::string> kIntegerOptions{
-    "--threads",    "--seed",       "--trajectories", "--users",   "--similarity",
-    "--preference", "--tpa-pairs",  "--fpe",          "--seeds",   "--splits",
-    "--epochs",     "--tpa-epochs", "--port",         "--practice"};
-
-void enforce_decimal_integers(CLI::App& app) {
-  for (CLI::Option* o : app.get_options())
-    if (kIntegerOptions.count(o->get_name())) o->check(decimal_integer());
-  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
-    enforce_decimal_integers(*sub);
+// Every integer option (CLI11 type INT or UINT) takes decimal digits only, without a sign or
+// leading zeros: CLI11 alone reads "0x10" as 16, "010" as 8 and "-1" as 2⁶⁴ − 1 for an unsigned
+// seed. Every real option (FLOAT) takes a plain decimal number ("0.5", "1e3"), never "nan",
+// "0x1p3" or " 3"; the few that mean something by "inf" say so with positive_number().
+bool has_validator(CLI::Option& o, const std::string& name) {
+  try {
+    o.get_validator(name);
+    return true;
+  } catch (const CLI::OptionNotFound&) {
+    return false;
+  }
 }
 
-CLI::Validator number_check(const char* what, bool (*ok)(double)) {
+void enforce_decimal_numbers(CLI::App& app) {
+  for (CLI::Option* o : app.get_options()) {
+    const std::string type = o->get_type_name();
+    if (type.rfind("INT", 0) == 0 || type.rfind("UINT", 0) == 0)
+      o->check(decimal_integer());
+    else if (type.rfind("FLOAT", 0) == 0 && !has_validator(*o, "number"))
+      o->check(decimal_number());
+  }
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
+    enforce_decimal_numbers(*sub);
+}
+
+CLI::Validator number_check(const char* what, bool (*ok)(double), bool allow_inf) {
   return CLI::Validator(
-      [what, ok](std::string& v) -> std::string {
+      [what, ok, allow_inf](std::string& v) -> std::string {
+        if (allow_inf && v == "inf") return "";
         double x = 0;
         const auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), x);
         const bool parsed = ec == std::errc() && p == v.data() + v.size();
-        if (v == "inf" || v == "infinity") return "";
-        if (!parsed || !ok(x)) return std::string("must be ") + what + ", got '" + v + "'";
+        if (!is_decimal_number(v) || !parsed || !ok(x))
+          return std::string("must be ") + what + ", got '" + v + "'";
         return "";
       },
-      "NUMBER");
+      "NUMBER", "number");
 }
 
 }  // namespace
 
+bool is_decimal_integer(const std::string& v) {
+  return !v.empty() && v.size() <= 19 && v.find_first_not_of("0123456789") == std::string::npos &&
+         (v[0] != '0' || v.size() == 1);
+}
+
+bool is_decimal_number(const std::string& v) {
+  size_t i = 0;
+  auto digits = [&] {
+    const size_t from = i;
+    while (i < v.size() && v[i] >= '0' && v[i] <= '9') ++i;
+    return i - from;
+  };
+  if (i < v.size() && v[i] == '-') ++i;
+  const size_t first = i, whole = digits();
+  if (whole == 0 || (whole > 1 && v[first] == '0')) return false;  // "", ".5", "010"
+  if (i < v.size() && v[i] == '.') {
+    ++i;
+    if (digits() == 0) return false;  // "3."
+  }
+  if (i < v.size() && (v[i] == 'e' || v[i] == 'E')) {
+    ++i;
+    if (i < v.size() && (v[i] == '+' || v[i] == '-')) ++i;
+    if (digits() == 0) return false;
+  }
+  return i == v.size();
+}
+
 CLI::Validator decimal_integer() {
   return CLI::Validator(
       [](std::string& v) -> std::string {
-        if (v.empty() || v.size() > 19 || v.find_first_not_of("0123456789") != std::string::npos)
-          return "must be a non-negative decimal integer, got '" + v + "'";
+        if (!is_decimal_integer(v))
+          return "must be a non-negative decimal integer (digits, no leading zero), got '" + v +
+                 "'";
         return "";
       },
-      "INT");
+      "DECIMAL", "decimal");
+}
+
+CLI::Validator decimal_number() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        if (!is_decimal_number(v))
+          return "must be a decimal number (e.g. 0.5, 2, 1e3), got '" + v + "'";
+        return "";
+      },
+      "DECIMAL", "decimal");
 }
 
 CLI::Validator positive_number() {
-  return number_check("a number > 0 (inf allowed)", [](double x) { return x > 0; });
+  return number_check("a number > 0 (inf allowed)", [](double x) { return x > 0; }, true);
 }
 
 CLI::Validator non_negative_number() {
-  return number_check("a number >= 0", [](double x) { return x >= 0; });
+  return number_check("a number >= 0", [](double x) { return x >= 0; }, false);
 }
 
 void register_all(CLI::App& app) {
@@ -81,7 +131,7 @@ void register_all(CLI::App& app) {
   register_run(app, runners()["run"]);
   register_export(app, runners()["export"]);
   register_merge(app, runners()["merge"]);
-  enforce_decimal_integers(app);
+  enforce_decimal_numbers(app);
 }
 
 int run_selected(CLI::App& app) {

@@ -43,8 +43,13 @@ std::string sh_quote(const std::string& s);
 void check_replaceable(const std::string& out, const std::string& kind, bool force);
 
 // Validators with one readable line ("must be a number > 0, got '-1'") instead of CLI11's
-// ranges that print DBL_MAX in full; decimal_integer refuses "0x10", "-1", " 3".
+// ranges that print DBL_MAX in full; decimal_integer refuses "0x10", "010", "-1", " 3", "+3";
+// decimal_number refuses those and "nan", "inf", "3.", ".5" (positive_number accepts "inf").
+// register_all puts one of the two on every integer and real option.
+bool is_decimal_integer(const std::string& v);
+bool is_decimal_number(const std::string& v);
 CLI::Validator decimal_integer();
+CLI::Validator decimal_number();
 CLI::Validator positive_number();
 CLI::Validator non_negative_number();
 

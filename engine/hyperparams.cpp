@@ -2,7 +2,9 @@
 
 #include <charconv>
 #include <cmath>
+#include <optional>
 #include <sstream>
+#include <type_traits>
 #include <stdexcept>
 
 #include "datasets/environments.h"
@@ -122,6 +124,38 @@ void set_hyper(Hyper& h, const std::string& key, const std::string& value) {
     for (const auto& k : hyper_keys()) keys += (keys.empty() ? "" : ", ") + k;
     throw std::invalid_argument("unknown hyper-parameter '" + key + "' (known: " + keys + ")");
   }
+}
+
+HyperType hyper_type(const std::string& key) {
+  Hyper h;
+  std::optional<HyperType> type;
+  for_each_field(h, [&](const std::string& name, auto& field) {
+    if (name != key) return;
+    using T = std::decay_t<decltype(field)>;
+    if constexpr (std::is_same_v<T, bool>)
+      type = HyperType::boolean;
+    else if constexpr (std::is_integral_v<T>)
+      type = HyperType::integer;
+    else if constexpr (std::is_floating_point_v<T>)
+      type = HyperType::number;
+    else if constexpr (std::is_same_v<T, std::vector<int>>)
+      type = HyperType::integer_list;
+    else
+      type = HyperType::word;
+  });
+  if (!type) throw std::invalid_argument("unknown hyper-parameter '" + key + "'");
+  return *type;
+}
+
+const char* hyper_type_name(HyperType t) {
+  switch (t) {
+    case HyperType::integer: return "an integer";
+    case HyperType::number: return "a number";
+    case HyperType::boolean: return "true or false";
+    case HyperType::integer_list: return "an array of integers";
+    case HyperType::word: return "a string";
+  }
+  return "?";
 }
 
 std::vector<std::string> hyper_keys() {

@@ -74,6 +74,13 @@ Hyper paper_hyper(const std::string& env);
 // Throws std::invalid_argument naming the key and what was expected.
 void set_hyper(Hyper& h, const std::string& key, const std::string& value);
 
+// What a key's value is, so a profile can refuse a value of the wrong kind (30.0 or [30] for an
+// epoch count) before it becomes text: integer, number (integer or real), boolean, a list of
+// integers (widths) or a word. Throws std::invalid_argument for an unknown key.
+enum class HyperType { integer, number, boolean, integer_list, word };
+HyperType hyper_type(const std::string& key);
+const char* hyper_type_name(HyperType t);
+
 // Every key, in a fixed order (what set_hyper accepts).
 std::vector<std::string> hyper_keys();
 

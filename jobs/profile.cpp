@@ -198,8 +198,25 @@ class Reader {
   std::string path_;
 };
 
-// A TOML scalar or array as the text set_hyper parses.
+// A TOML scalar or array as the text set_hyper parses, refused unless its TOML type is the key's
+// (an integer key takes 30, not 30.0, "30" or [30]; a number key takes 30 or 0.5).
 std::string hyper_text(const Reader& r, const toml::node& n, const std::string& key) {
+  HyperType want{};
+  try {
+    want = hyper_type(key);
+  } catch (const std::invalid_argument&) {
+    r.fail(&n, "unknown hyper-parameter '" + key + "' (known: " + [] {
+      std::string keys;
+      for (const auto& k : hyper_keys()) keys += (keys.empty() ? "" : ", ") + k;
+      return keys;
+    }() + ")");
+  }
+  const bool ok = want == HyperType::integer        ? n.is_integer()
+                  : want == HyperType::number       ? n.is_integer() || n.is_floating_point()
+                  : want == HyperType::boolean      ? n.is_boolean()
+                  : want == HyperType::integer_list ? n.is_array() || n.is_integer()
+                                                    : n.is_string();
+  if (!ok) r.fail(&n, key + " must be " + hyper_type_name(want));
   if (auto v = n.value<int64_t>(); v && n.is_integer()) return std::to_string(*v);
   if (n.is_floating_point()) {
     std::ostringstream o;
