@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "app/commands.h"
+#include "results/file_lock.h"
 #include "build_info.h"
 #include "datasets/environments.h"
 #include "datasets/grid_robot.h"
@@ -83,6 +84,10 @@ int run_dataset(const DatasetArgs& a) {
   qc.teacher = make_teacher(a, d);
   const QueryBundle q = make_query_bundle(d, qc, a.seed);
   check_replaceable(a.out, "dataset", a.force);  // after the arguments are checked
+  if (const auto dir = std::filesystem::path(a.out).parent_path(); !dir.empty())
+    std::filesystem::create_directories(dir);
+  // One writer: a run or server holding a.out refuses this (naming its pid), --force or not.
+  const FileLock lock(a.out, "sirl dataset", "wait for it to finish, or choose another --out");
   // Write to a temporary name and rename: a crash never leaves a half-written file at --out.
   const std::string tmp = a.out + ".partial";
   if (const auto dir = std::filesystem::path(a.out).parent_path(); !dir.empty())

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "app/commands.h"
+#include "results/file_lock.h"
 #include "jobs/estimate.h"
 #include "jobs/plan.h"
 #include "jobs/profile.h"
@@ -340,9 +341,24 @@ void register_merge(CLI::App& app, Runner& run) {
       "Refuses files from different profiles or engine versions, and conflicting results.");
   static std::string out;
   static std::vector<std::string> inputs;
-  cmd->add_option("out", out, "Merged results file")->required();
+  static bool force = false;
+  cmd->add_option("out", out, "Merged results file (a new file: see --force)")->required();
   cmd->add_option("inputs", inputs, "Shard files")->required()->check(CLI::ExistingFile);
+  cmd->add_flag("--force", force, "Replace OUT if it already exists (never one of the inputs)");
   run = [] {
+    // A forgotten output name makes the first shard the output: never write over an input, and
+    // never replace an existing file unless asked. The lock keeps a run writing OUT out.
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    for (const auto& in : inputs)
+      if (fs::equivalent(out, in, ec))
+        throw UsageError(out + " is also one of the inputs; merge writes a new file: "
+                         "sirl merge OUT SHARD...");
+    if (fs::exists(out, ec) && !force)
+      throw UsageError(out + " already exists; merge writes a new file (sirl merge OUT "
+                       "SHARD...): choose another name, or --force to replace it");
+    if (const auto dir = fs::path(out).parent_path(); !dir.empty()) fs::create_directories(dir);
+    const FileLock lock(out, "sirl merge", "wait for it to finish, or choose another output");
     RunInfo first = read_run_info(inputs.front());
     std::map<std::string, TaskRecord> all;
     double wall = 0;
@@ -385,8 +401,6 @@ void register_merge(CLI::App& app, Runner& run) {
     std::vector<RunDataset> ds;
     for (const auto& env : p.envs)
       ds.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
-    if (const auto dir = std::filesystem::path(out).parent_path(); !dir.empty())
-      std::filesystem::create_directories(dir);
     write_results_file(out, info, ds, records, result_tables(records, info.roofs()));
     std::printf("merged %zu files: %zu of %zu tasks%s → %s\n", inputs.size(), records.size(),
                 plan.tasks.size(), info.complete ? " (complete)" : " (INCOMPLETE)", out.c_str());

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "app/commands.h"
+#include "results/file_lock.h"
 #include "app/study_server.h"
 #include "datasets/study.h"
 #include "engine/study_analysis.h"
@@ -44,6 +45,10 @@ int study_simulate(const std::string& env, int64_t trajectories, int users, int6
     throw UsageError(e.what());
   }
   check_replaceable(out, "study", force);  // after the arguments are checked
+  if (const auto dir = std::filesystem::path(out).parent_path(); !dir.empty())
+    std::filesystem::create_directories(dir);
+  // One writer: a run or server holding out refuses this (naming its pid), --force or not.
+  const FileLock lock(out, "sirl study simulate", "wait for it to finish, or choose another --out");
   const Study s = simulate_cohort(c);
   const auto parent = std::filesystem::path(out).parent_path();
   if (!parent.empty()) std::filesystem::create_directories(parent);

@@ -441,6 +441,20 @@ void drop_columns(CellTableSpec& t, std::initializer_list<std::string_view> name
 
 }  // namespace
 
+bool lacks_cell_fields(const TaskRecord& r) {
+  return r.kind != "vae" && r.text.count("variant") && !r.text.count("selection");
+}
+
+bool complete_cell_fields(TaskRecord& r) {
+  if (!lacks_cell_fields(r)) return false;
+  const Variant variant = parse_variant(r.text.at("variant"));
+  r.text["selection"] = selection_name(variant.selection);
+  r.text.emplace("teacher", "");  // a robustness record names its own
+  if (r.num.count("frozen") && !r.num.count("best_mode"))
+    r.num["best_mode"] = is_best_mode(variant, r.num.at("frozen") != 0);
+  return true;
+}
+
 TaskKindSpec vae_kind() {
   return {
       .kind = TaskKind::vae,

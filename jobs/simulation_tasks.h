@@ -37,4 +37,10 @@ std::string rep_key(const std::string& env, int64_t seed, const Variant& v, int6
 Task experiment_cell(TaskKind kind, const std::string& env, int64_t seed, const Variant& v,
                      int64_t N, const std::string& teacher = "");
 
+// Fills the cell fields engines before 0.8.0 did not record (selection, teacher, best_mode) from
+// the record's variant and frozen flag, so their files still merge and export. Returns whether it
+// changed anything (lacks_cell_fields said it would).
+bool lacks_cell_fields(const TaskRecord& r);
+bool complete_cell_fields(TaskRecord& r);
+
 }  // namespace sirl

@@ -54,6 +54,14 @@ ResultTables result_tables(const std::vector<TaskRecord>& records, const Roofs& 
   std::vector<CellTableSpec> cells;
   for (const TaskKindSpec& k : task_kinds())
     if (!k.table.name.empty()) cells.push_back(k.table);
+  // Records of an older engine (a merge or export of its files) lack fields the tables now
+  // carry: complete a copy of them (only then, so a large current file is not copied).
+  for (const TaskRecord& r : records) {
+    if (!lacks_cell_fields(r)) continue;
+    std::vector<TaskRecord> completed = records;
+    for (TaskRecord& c : completed) complete_cell_fields(c);
+    return build_tables(completed, cells, roofs);
+  }
   return build_tables(records, cells, roofs);
 }
 

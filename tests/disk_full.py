@@ -48,7 +48,7 @@ with tempfile.TemporaryDirectory() as tmp:
                 "ann,preference,7,8,,1,700,1700000002,,\n")
     cases = [
         ("dataset", lambda out: ["dataset", "--env", "grid", "--out", out, "--force"]),
-        ("merge", lambda out: ["merge", out, *shards]),
+        ("merge", lambda out: ["merge", "--force", out, *shards]),
         ("study simulate", lambda out: ["study", "simulate", "--env", "grid", "--users", "2",
                                         "--out", out, "--force"]),
         ("study import", lambda out: ["study", "import", answers, "--env", "grid", "--out", out]),
