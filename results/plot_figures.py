@@ -794,6 +794,14 @@ def main():
     envs = [e for e in ENV if any(not t[k].empty and (t[k].env == e).any()
                                   for k in ("fpe", "tpa", "training"))] or list(ENV)[:1]
     notes = []
+    if not t["tpa"].empty and "best_mode" not in t["tpa"]:
+        # Which cells are a method's best mode is a column the engine writes (from 0.8.0 on);
+        # this file predates it, and the rule is not restated here.
+        msg = ("this file was written by an engine before 0.8.0: its tables carry no best_mode "
+               "column, so Fig. 5 and H2 are not drawn; `sirl merge NEW.h5 THIS.h5` rewrites its "
+               "tables with the current engine")
+        notes.append(msg)
+        print(f"plot_figures: {msg}", file=sys.stderr)
     prov = res.provenance
     if not prov.get("complete", 1):
         notes.append(f"partial run: {prov.get('tasks_done')} of {prov.get('tasks_total')} "
