@@ -322,8 +322,9 @@ void register_export(CLI::App& app, Runner& run) {
   cmd->add_option("file", file, "Results file (HDF5)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--csv", dir, "Directory for the CSV files (one per table)")->required();
   run = [] {
-    const auto records = read_results_records(file);
     const RunInfo info = read_run_info(file);
+    if (!info.verified) std::fprintf(stderr, "sirl export: %s\n", unverified_note(file).c_str());
+    const auto records = read_results_records(file);
     const ResultTables tables = result_tables(records, info.roofs());
     export_csv(tables, dir);
     std::string names;
@@ -364,6 +365,7 @@ void register_merge(CLI::App& app, Runner& run) {
     double wall = 0;
     for (const auto& in : inputs) {
       const RunInfo info = read_run_info(in);
+      if (!info.verified) std::fprintf(stderr, "sirl merge: %s\n", unverified_note(in).c_str());
       if (info.profile_text != first.profile_text)
         throw UsageError(in + " was run under profile '" + info.profile_name + "', " +
                          inputs.front() + " under '" + first.profile_name +

@@ -121,7 +121,15 @@ std::string slurp(const std::string& path) {
 }  // namespace
 
 void import_study_csv(const std::string& path, const Dataset& d, Study& s) {
-  std::istringstream in(slurp(path));
+  std::string text = slurp(path);
+  // A NUL byte would silently end a field where C code reads it: refuse the file, naming the line.
+  if (const size_t nul = text.find('\0'); nul != std::string::npos)
+    throw std::invalid_argument(
+        path + ":" + std::to_string(1 + std::count(text.begin(), text.begin() + nul, '\n')) +
+        ": a NUL byte (a binary file, or a broken export?)");
+  // A spreadsheet saves UTF-8 CSV with a byte-order mark by default: accept it.
+  if (text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);
+  std::istringstream in(text);
   std::string line;
   std::getline(in, line);
   const std::string header =

@@ -164,6 +164,13 @@ std::map<std::string, TaskRecord> load_prior(const Profile& p, const RunOptions&
       refuse(o.out, "with " + part(info.shard) + " (" + std::to_string(info.tasks_done) +
                         " tasks), and this run is " + part(shard));
   }
+  // Records are reused only from a file a checksum verified: the new file's checksum would
+  // otherwise vouch for bytes nobody checked.
+  if (!info.verified) {
+    std::fprintf(stderr, "sirl run: %s; its tasks are computed again\n",
+                 unverified_note(o.out).c_str());
+    return prior;
+  }
   if (info.profile_text == p.text && info.engine_version == o.engine_version && info.shard == shard)
     for (auto& r : read_results_records(o.out)) prior[r.key] = std::move(r);
   return prior;

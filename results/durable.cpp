@@ -1,5 +1,7 @@
 #include "results/durable.h"
 
+#include <xxhash.h>
+
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -9,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <stdexcept>
 #include <vector>
 
@@ -50,6 +53,41 @@ uint64_t file_checksum(const std::string& path, uint64_t offset) {
   }
   return h;
 }
+
+namespace {
+
+std::string canonical_hex(XXH128_hash_t h) {
+  XXH128_canonical_t c;
+  XXH128_canonicalFromHash(&c, h);
+  static const char* digits = "0123456789abcdef";
+  std::string s(32, '0');
+  for (int i = 0; i < 16; ++i) {
+    s[2 * i] = digits[c.digest[i] >> 4];
+    s[2 * i + 1] = digits[c.digest[i] & 15];
+  }
+  return s;
+}
+
+}  // namespace
+
+std::string file_digest(const std::string& path, uint64_t offset) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot read");
+  in.seekg(std::streamoff(offset));
+  std::unique_ptr<XXH3_state_t, XXH_errorcode (*)(XXH3_state_t*)> state(XXH3_createState(),
+                                                                         XXH3_freeState);
+  if (!state || XXH3_128bits_reset(state.get()) != XXH_OK)
+    throw std::runtime_error(path + ": cannot start the digest");
+  std::vector<char> buf(1 << 20);
+  while (in) {
+    in.read(buf.data(), std::streamsize(buf.size()));
+    XXH3_128bits_update(state.get(), buf.data(), size_t(in.gcount()));
+  }
+  if (in.bad()) throw std::runtime_error(path + ": read error");
+  return canonical_hex(XXH3_128bits_digest(state.get()));
+}
+
+std::string bytes_digest(const void* data, size_t n) { return canonical_hex(XXH3_128bits(data, n)); }
 
 std::string hex64(uint64_t v) {
   char b[17];

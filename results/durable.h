@@ -1,6 +1,7 @@
 // Making a finished file survive a crash: its bytes (and then its directory entry) reach the disk
 // before anyone is told it exists. Used by every atomic "write temporary, fsync, rename" here.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -16,9 +17,17 @@ void fsync_path(const std::string& path);
 // every crash point of a run and checks that each resumes to the file an uninterrupted run writes.
 void crash_point();
 
-// A fast checksum of a file's bytes from `offset` on: FNV-1a over 64-bit little-endian words (the
-// tail zero-padded). ~0.1 s per 100 MB here, and any flipped byte changes it. Throws
-// std::runtime_error if the file cannot be read.
+// The digest every file written from engine 0.8.0 on carries: XXH3-128 (xxHash, a hash designed
+// to catch corruption: every single and paired bit flip changes it) of the file's bytes from
+// `offset` on, as 32 lowercase hex digits in xxHash's canonical order (what `xxh128sum` prints
+// for offset 0). Throws std::runtime_error if the file cannot be read.
+std::string file_digest(const std::string& path, uint64_t offset = 0);
+// The same over bytes in memory.
+std::string bytes_digest(const void* data, size_t n);
+
+// The checksum of engines up to 0.7.0, still read to verify their files: FNV-1a over 64-bit
+// little-endian words (the tail zero-padded). Blind to some paired bit flips (two flips of one
+// bit position in words of equal offset mod 8 can cancel); never written any more.
 uint64_t file_checksum(const std::string& path, uint64_t offset = 0);
 // 16 lowercase hex digits.
 std::string hex64(uint64_t v);

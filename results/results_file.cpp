@@ -8,6 +8,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 #include "results/dataset_store.h"
 #include "results/durable.h"
@@ -294,13 +295,47 @@ ResultTables build_tables(const std::vector<TaskRecord>& records,
   return t;
 }
 
+namespace {
+
+// Every results file from engine 0.8.0 on starts with a userblock HDF5 leaves alone, holding the
+// file's own digest, so a copied .h5 verifies without its .sum (files of older engines start with
+// HDF5's signature and are verified by their .sum alone):
+//   "SIRLRESULTS2\nxxh3-128 " <file_digest of bytes [kResultsFrameBytes, end)> "\n" NUL…
+constexpr uint64_t kResultsFrameBytes = 1024;
+constexpr std::string_view kResultsMagic = "SIRLRESULTS2\nxxh3-128 ";
+
+std::string results_frame(const std::string& digest) {
+  std::string head = std::string(kResultsMagic) + digest + "\n";
+  head.resize(kResultsFrameBytes, '\0');
+  return head;
+}
+
+std::string digest_of(const std::string& path, uint64_t offset = 0) {
+  try {
+    return file_digest(path, offset);
+  } catch (const std::runtime_error& e) {
+    throw H5Error(e.what());
+  }
+}
+
+void write_frame(const std::string& path) {
+  const std::string head = results_frame(digest_of(path, kResultsFrameBytes));
+  std::fstream out(path, std::ios::in | std::ios::out | std::ios::binary);
+  out.seekp(0);
+  out.write(head.data(), std::streamsize(head.size()));
+  out.flush();
+  if (!out) throw H5Error(path + ": cannot write the file's checksum frame");
+}
+
+}  // namespace
+
 void write_results_file(const std::string& path, const RunInfo& info,
                         const std::vector<RunDataset>& datasets,
                         const std::vector<TaskRecord>& records, const ResultTables& tables) {
   const std::string partial = path + ".partial";
   try {
     {
-      H5File f = H5File::create(partial);
+      H5File f = H5File::create(partial, kResultsFrameBytes);
       f.set_compression(true);  // regenerable datasets, embeddings and curves: shuffle + deflate
       f.set_attr("/", "schema_version", kResultsSchemaVersion);
       f.set_attr("/", "profile_name", info.profile_name);
@@ -331,6 +366,7 @@ void write_results_file(const std::string& path, const RunInfo& info,
       for (const auto& t : tables.tables) f.write_table("/tables/" + t.name, t.table);
       f.flush();  // a full disk shows here, not silently in the destructor
     }
+    write_frame(partial);
   } catch (const std::exception& e) {
     // Nothing half-written stays behind (a full disk would keep failing on a stale .partial).
     std::error_code ec;
@@ -348,24 +384,12 @@ void write_results_file(const std::string& path, const RunInfo& info,
   write_checksum(path);
 }
 
-namespace {
-
-// The file's checksum (results/durable.h) in hex; an unreadable file is an H5Error.
-std::string checksum_hex(const std::string& path) {
-  try {
-    return hex64(file_checksum(path));
-  } catch (const std::runtime_error& e) {
-    throw H5Error(e.what());
-  }
-}
-
-}  // namespace
-
+// The sidecar FILE.sum: the whole file's digest, in the format `xxh128sum -c` checks.
 void write_checksum(const std::string& path) {
   const std::string tmp = path + ".sum.tmp";
   {
     std::ofstream out(tmp, std::ios::trunc);
-    out << checksum_hex(path) << "  " << fs::path(path).filename().string() << "\n";
+    out << digest_of(path) << "  " << fs::path(path).filename().string() << "\n";
     if (!out) throw H5Error(tmp + ": cannot write the checksum");
   }
   fsync_path(tmp);
@@ -374,17 +398,55 @@ void write_checksum(const std::string& path) {
   if (ec) throw H5Error(path + ".sum: cannot write the checksum: " + ec.message());
 }
 
-void verify_checksum(const std::string& path) {
-  std::ifstream in(path + ".sum");
-  if (!in) return;  // no checksum (written by engine 0.1.0, or a crash right after the rename)
+bool verify_checksum(const std::string& path) {
+  auto mismatch = [&](const std::string& what, const std::string& got, const std::string& want) {
+    return H5Error(path + ": " + what + " mismatch (" + got + ", recorded " + want +
+                   "): the file changed after it was written (corrupted?); restore it, or rerun "
+                   "with --force to recompute");
+  };
+  std::string head(kResultsFrameBytes, '\0');
+  {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw H5Error(path + ": cannot read");
+    in.read(head.data(), std::streamsize(head.size()));
+    head.resize(size_t(in.gcount()));
+  }
+  const bool framed = head.starts_with("SIRLRESULTS");
+  if (framed) {
+    const size_t d = kResultsMagic.size();
+    const std::string want = head.size() > d + 32 ? head.substr(d, 32) : "";
+    if (!head.starts_with(kResultsMagic) || head.size() != kResultsFrameBytes ||
+        results_frame(want) != head)
+      throw H5Error(path + ": its checksum frame (the first " + std::to_string(kResultsFrameBytes) +
+                    " bytes) is damaged: corrupted or truncated; restore it, or rerun with "
+                    "--force to recompute");
+    const std::string got = digest_of(path, kResultsFrameBytes);
+    if (got != want) throw mismatch("checksum", got, want);
+  }
+  std::ifstream sum(path + ".sum");
+  if (!sum) return framed;  // a file of engine ≤ 0.7.0 without its .sum cannot be verified
   std::string want;
-  in >> want;
-  if (want.size() != 16) throw H5Error(path + ".sum: not a checksum file");
-  const std::string got = checksum_hex(path);
-  if (got != want)
-    throw H5Error(path + ": checksum mismatch (" + got + ", recorded " + want +
-                  "): the file changed after it was written (corrupted?); restore it, or rerun "
-                  "with --force to recompute");
+  sum >> want;
+  if (want.size() == 32) {
+    const std::string got = digest_of(path);
+    if (got != want) throw mismatch(".sum checksum", got, want);
+  } else if (want.size() == 16) {  // engines up to 0.7.0
+    std::string got;
+    try {
+      got = hex64(file_checksum(path));
+    } catch (const std::runtime_error& e) {
+      throw H5Error(e.what());
+    }
+    if (got != want) throw mismatch(".sum checksum", got, want);
+  } else {
+    throw H5Error(path + ".sum: not a checksum file");
+  }
+  return true;
+}
+
+std::string unverified_note(const std::string& path) {
+  return "warning: " + path + " cannot be verified: it carries no checksum (a file of engine " +
+         "0.7.0 or older, without its .sum beside it); its numbers are read as they are";
 }
 
 int64_t check_results_schema(const H5File& f) {
@@ -400,9 +462,10 @@ int64_t check_results_schema(const H5File& f) {
 }
 
 RunInfo read_run_info(const std::string& path) {
-  verify_checksum(path);
+  const bool verified = verify_checksum(path);
   H5File f = H5File::open_read(path);
   RunInfo i;
+  i.verified = verified;
   i.schema_version = check_results_schema(f);
   i.profile_name = f.attr_string("/", "profile_name");
   i.profile_text = f.attr_string("/", "profile_text");

@@ -27,8 +27,10 @@ namespace sirl {
 
 // The results file's layout version (docs/RESULTS.md), stored as /@schema_version. Version 1
 // (engine 0.1.0, no attribute) lacks the environment attributes of /datasets/<env>; it is still
-// read. A file of a newer version is refused with one line naming both versions.
-inline constexpr int64_t kResultsSchemaVersion = 2;
+// read. Version 3 (engine 0.8.0) starts with its checksum frame and its tables carry each cell's
+// fields (selection, teacher, best_mode). A file of a newer version is refused with one line
+// naming both versions.
+inline constexpr int64_t kResultsSchemaVersion = 3;
 // The file's version (1 when the attribute is missing); throws H5Error for a version this engine
 // cannot read.
 int64_t check_results_schema(const H5File& f);
@@ -46,6 +48,7 @@ struct RunInfo {
   double roof_bf16_gflops = 0;  // one core's bf16 roof, measured by a bf16 run's writer (else 0)
   double stream_gbs = 0;  // one core's main-memory bandwidth, measured by the writer (0: unknown)
   std::string cpu_class;  // kernels/cpu_class.h ("" in files of engines before 0.3.0)
+  bool verified = true;   // read_run_info: false when no checksum covered the file
   std::string started, finished;  // ISO 8601 UTC
   std::string shard;              // "i/n" for a shard file, "" for a whole run
   int64_t threads = 0, tasks_total = 0, tasks_done = 0;
@@ -94,15 +97,21 @@ struct RunDataset {
 void write_results_file(const std::string& path, const RunInfo& info,
                         const std::vector<RunDataset>& datasets,
                         const std::vector<TaskRecord>& records, const ResultTables& tables);
-// Both verify the file against its checksum (FILE.sum, written with the file) before HDF5 reads
-// a byte of it: a corrupted file is one clear H5Error, not a crash inside the HDF5 library.
+// Both verify the file against its checksums before HDF5 reads a byte of it: a corrupted file is
+// one clear H5Error, not a crash inside the HDF5 library. RunInfo::verified says whether it could
+// be verified at all (a file of engine ≤ 0.7.0 copied without its .sum cannot).
 RunInfo read_run_info(const std::string& path);
 std::vector<TaskRecord> read_results_records(const std::string& path);
 
-// FILE.sum: the file's checksum (a fast 64-bit FNV-1a over its bytes). verify_checksum throws
-// H5Error on a mismatch and does nothing when there is no FILE.sum (files of engine 0.1.0).
+// A results file carries its digest in its first 1024 bytes (an HDF5 userblock; engines from 0.8.0
+// on); FILE.sum beside it holds the whole file's (`xxh128sum -c FILE.sum` checks it; a 16-digit
+// .sum is an older engine's FNV checksum). verify_checksum throws H5Error on any mismatch or a
+// damaged frame, and returns whether anything verified the file (false: an unframed file without
+// its .sum).
 void write_checksum(const std::string& path);
-void verify_checksum(const std::string& path);
+bool verify_checksum(const std::string& path);
+// One line for a file verify_checksum could not verify.
+std::string unverified_note(const std::string& path);
 
 // One CSV per table (<name>.csv: fpe.csv, tpa.csv, timings.csv, training.csv, …) in dir.
 void export_csv(const ResultTables& t, const std::string& dir);

@@ -20,16 +20,24 @@ namespace {
 
 // Every commit starts with a userblock HDF5 leaves alone, holding what is needed to trust the
 // file before the HDF5 library reads a byte of it (a corrupted HDF5 file can crash the library):
-//   "SIRLTASK1\n" <checksum of bytes [kFrameBytes, end), 16 hex> "\n" <task key> "\n" NUL…
-// Commits of engine 0.2.0 without it (they start with HDF5's signature) are still read.
+//   "SIRLTASK2\n" <file_digest of bytes [kFrameBytes, end), 32 hex> "\n" <task key> "\n" NUL…
+// Commits of engines 0.3.0–0.7.0 ("SIRLTASK1\n", a 16-digit FNV checksum) and of 0.2.0 (no
+// userblock: they start with HDF5's signature) are still read.
 constexpr uint64_t kFrameBytes = 1024;
-constexpr std::string_view kFrameMagic = "SIRLTASK1\n";
+constexpr std::string_view kFrameMagic = "SIRLTASK2\n", kFrameMagicV1 = "SIRLTASK1\n";
 constexpr std::string_view kHdf5Signature = "\x89HDF\r\n\x1a\n";
 
 struct Frame {
   bool framed = false;  // false: a commit of engine 0.2.0 (plain HDF5)
-  std::string checksum, key;
+  std::string checksum, key, head;  // checksum: 32 hex (SIRLTASK2) or 16 (SIRLTASK1)
 };
+
+std::string frame_text(std::string_view magic, const std::string& checksum, const std::string& key) {
+  std::string head = std::string(magic) + checksum + "\n" + key + "\n";
+  if (head.size() > kFrameBytes) throw H5Error("task key too long for a commit: " + key);
+  head.resize(kFrameBytes, '\0');
+  return head;
+}
 
 // Throws H5Error if the file is neither a framed commit nor plain HDF5.
 Frame read_frame(const fs::path& p) {
@@ -39,22 +47,34 @@ Frame read_frame(const fs::path& p) {
   head.resize(size_t(in.gcount()));
   Frame f;
   if (head.starts_with(kHdf5Signature)) return f;
-  const size_t sum_end = kFrameMagic.size() + 16, key_end = head.find('\n', sum_end + 1);
-  if (!head.starts_with(kFrameMagic) || head.size() < kFrameBytes || head[sum_end] != '\n' ||
+  const bool v2 = head.starts_with(kFrameMagic), v1 = head.starts_with(kFrameMagicV1);
+  const size_t digits = v2 ? 32 : 16, sum_end = kFrameMagic.size() + digits,
+               key_end = head.find('\n', sum_end + 1);
+  if ((!v1 && !v2) || head.size() < kFrameBytes || head[sum_end] != '\n' ||
       key_end == std::string::npos)
     throw H5Error(p.string() + ": not a task commit (corrupted or truncated)");
   f.framed = true;
-  f.checksum = head.substr(kFrameMagic.size(), 16);
+  f.checksum = head.substr(kFrameMagic.size(), digits);
   f.key = head.substr(sum_end + 1, key_end - sum_end - 1);
+  // Every byte of the frame is accounted for: a flipped bit in its padding is damage too.
+  if (frame_text(v2 ? kFrameMagic : kFrameMagicV1, f.checksum, f.key) != head)
+    throw H5Error(p.string() + ": not a task commit (corrupted frame)");
   return f;
+}
+
+// The digest a frame of this kind records (SIRLTASK1: the old FNV checksum).
+std::string frame_checksum(const fs::path& p, size_t digits) {
+  try {
+    return digits == 32 ? file_digest(p.string(), kFrameBytes)
+                        : hex64(file_checksum(p.string(), kFrameBytes));
+  } catch (const std::runtime_error& e) {
+    throw H5Error(e.what());
+  }
 }
 
 // Fills the userblock of a closed commit file for `key`.
 void write_frame(const fs::path& p, const std::string& key) {
-  std::string head =
-      std::string(kFrameMagic) + hex64(file_checksum(p.string(), kFrameBytes)) + "\n" + key + "\n";
-  if (head.size() > kFrameBytes) throw H5Error("task key too long for a commit: " + key);
-  head.resize(kFrameBytes, '\0');
+  const std::string head = frame_text(kFrameMagic, frame_checksum(p, 32), key);
   std::fstream out(p, std::ios::in | std::ios::out | std::ios::binary);
   out.seekp(0);
   out.write(head.data(), std::streamsize(head.size()));
@@ -81,16 +101,18 @@ TaskRecord read_commit(const fs::path& p, const std::string& key, bool remove_if
   }
   if (frame.framed) {
     if (frame.key != key) throw H5Error(p.string() + ": holds task " + frame.key + ", not " + key);
-    if (hex64(file_checksum(p.string(), kFrameBytes)) != frame.checksum)
+    if (frame_checksum(p, frame.checksum.size()) != frame.checksum)
       throw corrupted("checksum mismatch");
   }
   H5File f = H5File::open_read(p.string());
   TaskRecord r = read_record(f, "/r");
   r.text.erase("record_checksum");  // written beside the record, not part of it
   if (r.key != key) throw H5Error(p.string() + ": holds task " + r.key + ", not " + key);
-  if (f.has_attr("/r", "record_checksum") &&
-      f.attr_string("/r", "record_checksum") != record_checksum(r))
-    throw corrupted("record checksum mismatch");
+  if (f.has_attr("/r", "record_checksum")) {
+    const std::string want = f.attr_string("/r", "record_checksum");
+    if (want != (want.size() == 16 ? record_checksum_fnv(r) : record_checksum(r)))
+      throw corrupted("record checksum mismatch");
+  }
   return r;
 }
 
@@ -227,13 +249,16 @@ TaskRecord TaskStore::load(const std::string& key) const {
 }
 
 std::string record_checksum(const TaskRecord& r) {
-  // FNV-1a 64 over the record's canonical serialisation (every key, number and array byte).
+  // XXH3-128 over the record's canonical serialisation (every key, number and array byte).
+  const std::string bytes = serialize(r);
+  return bytes_digest(bytes.data(), bytes.size());
+}
+
+std::string record_checksum_fnv(const TaskRecord& r) {
   const std::string bytes = serialize(r);
   uint64_t h = 0xCBF29CE484222325ull;
   for (unsigned char c : bytes) h = (h ^ c) * 0x100000001B3ull;
-  char b[17];
-  std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(h));
-  return b;
+  return hex64(h);
 }
 
 void TaskStore::write_manifest(const std::string& name, const std::string& text) {

@@ -40,8 +40,10 @@ class TaskStore {
 };
 
 // The checksum each commit stores beside its record (attribute /r@record_checksum) and load()
-// verifies: a corrupted task file is removed and refused with its task's name.
+// verifies: a corrupted task file is removed and refused with its task's name. XXH3-128 (32 hex);
+// record_checksum_fnv is the 16-digit one of engines up to 0.7.0, still verified.
 std::string record_checksum(const TaskRecord& r);
+std::string record_checksum_fnv(const TaskRecord& r);
 
 // Test hook: with SIRL_CRASH_AFTER_COMMITS=k in the environment the process ends abruptly (exit
 // code 137, no cleanup) right after its k-th commit, so crash tests kill at an exact point.

@@ -10,6 +10,7 @@ packages=(
   # engine dependencies
   libeigen3-dev libtbb-dev libhdf5-dev libsuitesparse-dev libmujoco-dev
   libcli11-dev libtomlplusplus-dev libfmt-dev nlohmann-json3-dev
+  libxxhash-dev xxhash  # XXH3-128 checksums (the library; xxh128sum checks a .sum by hand)
   libbenchmark-dev libgtest-dev libgmock-dev
   # the GEMM libraries bench/bench_gemm_candidates.cpp measures against our kernels
   libdnnl-dev libxsmm-dev

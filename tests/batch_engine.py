@@ -392,10 +392,13 @@ with tempfile.TemporaryDirectory() as tmp:
     assert p.returncode == 1 and "checksum mismatch" in p.stderr and p.stderr.count("\n") == 1, \
         p.stderr
     print("ok: an edited results file is refused by its checksum:", p.stderr.strip()[:120])
-    # A file of another engine version (its checksum dropped, as engine 0.1.0 wrote none).
+    # A file of another engine version, without checksums as engine 0.1.0 wrote it: no .sum, and
+    # its first 1024 bytes (the checksum frame) blank; HDF5 finds its superblock at 1024 either way.
     with h5py.File(one, "r+") as f:
         f.attrs["engine_version"] = "0.0.1"
     os.remove(one + ".sum")
+    with open(one, "r+b") as f:
+        f.write(bytes(1024))
     p = run("run", SMOKE, "--out", one, "--quiet", check=False)
     assert p.returncode == 2 and "by engine 0.0.1" in p.stderr and "--force" in p.stderr, p.stderr
     out = run("run", SMOKE, "--out", one, "--force").stdout

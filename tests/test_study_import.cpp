@@ -92,6 +92,31 @@ TEST(StudyImport, CsvAndJsonGiveTheSameStudy) {
   EXPECT_EQ(tokens.size(), a.participants.size() + b.participants.size());
 }
 
+// A spreadsheet's UTF-8 export starts with a byte-order mark: the same study as without it. A NUL
+// byte in a field is refused with its line (it used to cut the field short silently).
+TEST(StudyImport, ByteOrderMarkIsAcceptedAndNulIsRefused) {
+  Study base;
+  base.env = "grid";
+  const Dataset d = study_dataset(base);
+  const std::string body =
+      "participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features\n"
+      "ann,similarity,1,2,3,2,1500,1700000000.5,Stay away,laptop_distance\n"
+      "ann,preference,7,8,,1,700,1700000002,,\n";
+  Study plain = base, bom = base;
+  import_study_csv(write_temp("plain.csv", body), d, plain);
+  import_study_csv(write_temp("bom.csv", "\xEF\xBB\xBF" + body), d, bom);
+  ASSERT_EQ(plain.participants.size(), 1u);
+  EXPECT_EQ(bom.participants.size(), 1u);
+  EXPECT_EQ(bom.participants[0].id, "ann");
+  EXPECT_EQ(bom.participants[0].similarity, plain.participants[0].similarity);
+  EXPECT_EQ(bom.participants[0].preference_answer, plain.participants[0].preference_answer);
+  EXPECT_EQ(bom.participants[0].scenario_features, plain.participants[0].scenario_features);
+  std::string with_nul = body;
+  with_nul.insert(with_nul.find("Stay away") + 4, 1, '\0');  // line 2
+  const std::string m = import_error(false, with_nul, d);
+  EXPECT_NE(m.find("sirl_bad.csv:2: a NUL byte"), std::string::npos) << m;
+}
+
 TEST(StudyImport, BadRecordsNameTheLineAndTheProblem) {
   Study base;
   base.env = "grid";

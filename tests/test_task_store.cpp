@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "results/h5.h"
+#include "results/durable.h"
 #include "results/task_store.h"
 #include "tests/scratch_dir.h"
 
@@ -120,6 +121,39 @@ TEST(TaskStore, ACommitWithoutAFrameIsStillRead) {
   ASSERT_TRUE(s.has(r.key));
   EXPECT_EQ(s.load(r.key), r);
   EXPECT_EQ(TaskStore::load_from(dir, r.key), r);
+}
+
+// A commit of engines 0.3.0-0.7.0 (frame SIRLTASK1 with the 16-digit FNV checksum, an FNV record
+// checksum) is still read and still verified.
+TEST(TaskStore, ACommitOfTheFnvFrameIsStillReadAndVerified) {
+  namespace fs = std::filesystem;
+  const test::ScratchDir scratch;
+  const fs::path dir = scratch.path() / "tasks";
+  TaskRecord r;
+  r.key = "grid/s0/vae";
+  r.kind = "vae";
+  r.num["seed"] = 0;
+  r.arrays["loss_curve"] = {{3}, {3, 2, 1}};
+  TaskStore(dir).commit(r);
+  const fs::path file = the_commit(dir);
+  {
+    H5File f = H5File::create(file.string(), 1024);  // rewritten as engine 0.7.0 wrote it
+    write_record(f, "/r", r);
+    f.set_attr("/r", "record_checksum", record_checksum_fnv(r));
+  }
+  std::string head = "SIRLTASK1\n" + hex64(file_checksum(file.string(), 1024)) + "\n" + r.key + "\n";
+  head.resize(1024, '\0');
+  {
+    std::fstream out(file, std::ios::in | std::ios::out | std::ios::binary);
+    out.write(head.data(), std::streamsize(head.size()));
+  }
+  EXPECT_EQ(TaskStore::load_from(dir, r.key), r);
+  {
+    std::fstream out(file, std::ios::in | std::ios::out | std::ios::binary);
+    out.seekp(std::streamoff(fs::file_size(file) - 100));
+    out.put('\x5a');
+  }
+  EXPECT_THROW(TaskStore::load_from(dir, r.key), H5Error);
 }
 
 // (Durability under a crash is batch_engine.py's kill -9 test; this one is the file format.)

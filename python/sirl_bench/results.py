@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 # Results-file schema versions this reader understands (results/results_file.h).
-SCHEMA_VERSIONS = (1, 2)
+SCHEMA_VERSIONS = (1, 2, 3)
 
 FLAG_COLUMNS = ("vae", "frozen", "in_main", "in_ablation", "best_mode", "converged", "stopped")
 # Integer-valued numbers of a record (the file stores a record's numbers as float64).
