@@ -305,6 +305,7 @@ std::vector<TaskRecord> finished_records(const Profile& p, const Plan& plan,
 RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   // One writer per output, taken before reading anything of it.
   const FileLock lock(o.out, "sirl run", "wait for it to finish, or choose another --out");
+  for (const char* beside : {".tasks", ".partial", ".sum.tmp"}) refuse_symlink(o.out + beside);
   const auto t0 = std::chrono::steady_clock::now();
   const std::string started = now_iso();
   const Plan plan = make_plan(p);

@@ -3,6 +3,7 @@
 #include <xxhash.h>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -52,6 +53,13 @@ uint64_t file_checksum(const std::string& path, uint64_t offset) {
     }
   }
   return h;
+}
+
+void refuse_symlink(const std::string& path) {
+  struct stat st;
+  if (::lstat(path.c_str(), &st) == 0 && S_ISLNK(st.st_mode))
+    throw std::runtime_error(path + " is a symbolic link; sirl creates this file itself and does "
+                             "not write through links: remove it");
 }
 
 namespace {

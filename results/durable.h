@@ -7,6 +7,11 @@
 
 namespace sirl {
 
+// Throws std::runtime_error if `path` is a symbolic link. Every file and folder sirl creates
+// beside an output (OUT.partial, OUT.lock, OUT.sum.tmp, OUT.tasks, a commit's .tmp) is checked
+// first: a link planted there would make sirl write, lock or delete whatever it points to.
+void refuse_symlink(const std::string& path);
+
 // fsync of a file or a directory; silently does nothing if it cannot be opened. Every durable
 // write here (write a temporary file, fsync it, rename, fsync the directory) goes through it, so
 // it holds the crash points: one before the fsync (the bytes written, not yet durable), one after.

@@ -11,7 +11,11 @@ namespace sirl {
 
 FileLock::FileLock(const std::string& file, const std::string& holder, const std::string& advice)
     : path_(file + ".lock") {
-  fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  // O_NOFOLLOW: a link planted at OUT.lock must not make us write our pid into its target.
+  fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+  if (fd_ < 0 && errno == ELOOP)
+    throw std::runtime_error(path_ + " is a symbolic link; sirl creates this file itself and does "
+                             "not write through links: remove it");
   if (fd_ < 0)
     throw std::runtime_error(path_ + ": cannot create the lock file: " + std::strerror(errno));
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {

@@ -1,5 +1,7 @@
 #include "results/h5.h"
 
+#include "results/durable.h"
+
 #include <hdf5.h>
 
 #include <algorithm>
@@ -158,6 +160,11 @@ Hid vlen_string_type() {
 
 H5File H5File::create(const std::string& path, uint64_t userblock_bytes) {
   quiet();
+  try {
+    refuse_symlink(path);  // H5Fcreate would truncate the link's target
+  } catch (const std::runtime_error& e) {
+    throw H5Error(e.what());
+  }
   errno = 0;
   hid_t fcpl = H5P_DEFAULT;
   if (userblock_bytes > 0) {

@@ -1,5 +1,7 @@
 #include "results/results_file.h"
 
+#include <cerrno>
+#include <unistd.h>
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
@@ -387,6 +389,11 @@ void write_results_file(const std::string& path, const RunInfo& info,
 // The sidecar FILE.sum: the whole file's digest, in the format `xxh128sum -c` checks.
 void write_checksum(const std::string& path) {
   const std::string tmp = path + ".sum.tmp";
+  try {
+    refuse_symlink(tmp);
+  } catch (const std::runtime_error& e) {
+    throw H5Error(e.what());
+  }
   {
     std::ofstream out(tmp, std::ios::trunc);
     out << digest_of(path) << "  " << fs::path(path).filename().string() << "\n";
@@ -500,29 +507,71 @@ std::vector<TaskRecord> read_results_records(const std::string& path) {
 }
 
 void export_csv(const ResultTables& t, const std::string& dir) {
-  fs::create_directories(dir);
+  // Every CSV is written in full into a folder of our own inside `dir` first, then each is renamed
+  // into place (renames need no space): a full disk leaves the old CSVs as they were, never a
+  // truncated one beside new ones. Other files in `dir` are left alone.
+  const fs::path staging = fs::path(dir) / ".sirl-export.partial";
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw H5Error(dir + ": cannot create the folder: " + ec.message());
+  refuse_symlink(staging.string());
+  fs::remove_all(staging, ec);
+  fs::create_directory(staging, ec);
+  if (ec) throw H5Error(staging.string() + ": cannot create: " + ec.message());
   auto write = [&](const H5Table& tab, const std::string& name) {
-    const fs::path p = fs::path(dir) / (name + ".csv");
-    std::ofstream out(p);
-    for (size_t k = 0; k < tab.columns.size(); ++k) out << (k ? "," : "") << tab.columns[k].name;
-    out << "\n";
-    out.precision(17);
+    const fs::path p = staging / (name + ".csv");
+    std::FILE* out = std::fopen(p.c_str(), "w");
+    if (!out) throw H5Error(p.string() + ": cannot write: " + std::strerror(errno));
+    std::string line;
+    char num[32];
+    auto put = [&](const std::string& s) {
+      if (std::fwrite(s.data(), 1, s.size(), out) != s.size()) {
+        const int err = errno;
+        std::fclose(out);
+        throw H5Error((fs::path(dir) / (name + ".csv")).string() + ": cannot write: " +
+                      std::strerror(err));
+      }
+    };
+    for (size_t k = 0; k < tab.columns.size(); ++k) line += (k ? "," : "") + tab.columns[k].name;
+    put(line + "\n");
     for (size_t r = 0; r < tab.rows(); ++r) {
+      line.clear();
       for (size_t k = 0; k < tab.columns.size(); ++k) {
         const auto& c = tab.columns[k];
-        if (k) out << ",";
-        if (c.type == H5Table::Column::Int)
-          out << c.ints[r];
-        else if (c.type == H5Table::Column::Double)
-          out << c.doubles[r];
-        else
-          out << c.strings[r];  // keys and names never contain commas or quotes
+        if (k) line += ',';
+        if (c.type == H5Table::Column::Int) {
+          line += std::to_string(c.ints[r]);
+        } else if (c.type == H5Table::Column::Double) {
+          std::snprintf(num, sizeof num, "%.17g", c.doubles[r]);
+          line += num;
+        } else {
+          line += c.strings[r];  // keys and names never contain commas or quotes
+        }
       }
-      out << "\n";
+      put(line + "\n");
     }
-    if (!out) throw H5Error(p.string() + ": cannot write");
+    if (std::fflush(out) != 0 || ::fsync(::fileno(out)) != 0) {
+      const int err = errno;
+      std::fclose(out);
+      throw H5Error((fs::path(dir) / (name + ".csv")).string() + ": cannot write: " +
+                    std::strerror(err));
+    }
+    if (std::fclose(out) != 0)
+      throw H5Error((fs::path(dir) / (name + ".csv")).string() + ": cannot write: " +
+                    std::strerror(errno));
   };
-  for (const auto& tab : t.tables) write(tab.table, tab.name);
+  try {
+    for (const auto& tab : t.tables) write(tab.table, tab.name);
+    for (const auto& tab : t.tables) {
+      fs::rename(staging / (tab.name + ".csv"), fs::path(dir) / (tab.name + ".csv"), ec);
+      if (ec) throw H5Error(dir + "/" + tab.name + ".csv: cannot move into place: " + ec.message());
+    }
+  } catch (...) {
+    fs::remove_all(staging, ec);
+    throw;
+  }
+  fs::remove_all(staging, ec);
+  fsync_path(dir);
 }
 
 }  // namespace sirl

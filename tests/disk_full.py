@@ -21,14 +21,16 @@ MICRO = os.path.join(SRC, "tests", "data", "micro.toml")
 LIMIT = 8_192  # bytes: below every output here (the smallest, an imported study, is ~14 KB)
 
 
-def limited():
-    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
-    resource.setrlimit(resource.RLIMIT_FSIZE, (LIMIT, LIMIT))
+def limited(n=LIMIT):
+    def set_limit():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (n, n))
+    return set_limit
 
 
-def sirl(args, limit=False):
+def sirl(args, limit=False, size=LIMIT):
     return subprocess.run([SIRL, *args], capture_output=True, text=True, stdin=subprocess.DEVNULL,
-                          preexec_fn=limited if limit else None)
+                          preexec_fn=limited(size) if limit else None)
 
 
 def digest(path):
@@ -69,3 +71,22 @@ with tempfile.TemporaryDirectory() as tmp:
         assert again.returncode == 0, (name, again.stderr)
         print(f"ok: {name} on a full disk: {p.stderr.strip()[:110]}...; the file at --out kept; "
               "succeeds with room again")
+
+    # `sirl export` on a full disk: the CSVs already in the folder stay as they were (every CSV is
+    # written in full before any replaces its old copy), nothing of the attempt is left behind,
+    # and the line says why.
+    merged = os.path.join(tmp, "merge.h5")
+    csv = os.path.join(tmp, "csv")
+    assert sirl(["export", merged, "--csv", csv]).returncode == 0
+    open(os.path.join(csv, "notes.txt"), "w").write("the user's own file\n")
+    before = {n: digest(os.path.join(csv, n)) for n in os.listdir(csv)}
+    # below the largest CSV, above the smallest: some tables fit, one does not
+    sizes = sorted(os.path.getsize(os.path.join(csv, n)) for n in before if n.endswith(".csv"))
+    p = sirl(["export", merged, "--csv", csv], limit=True, size=sizes[-1] - 1)
+    assert p.returncode == 1, (p.returncode, p.stderr[-800:])
+    assert p.stderr.count("\n") == 1 and "File too large" in p.stderr, p.stderr[-800:]
+    after = {n: digest(os.path.join(csv, n)) for n in os.listdir(csv)}
+    assert after == before, "export on a full disk changed the folder's files"
+    assert sirl(["export", merged, "--csv", csv]).returncode == 0
+    assert open(os.path.join(csv, "notes.txt")).read() == "the user's own file\n"
+    print(f"ok: export on a full disk: {p.stderr.strip()[:110]}...; the old CSVs kept")
