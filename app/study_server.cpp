@@ -32,6 +32,10 @@
 namespace sirl::app {
 
 namespace {
+constexpr size_t kMaxBody = 64 * 1024;  // an answer is a few form fields
+}  // namespace
+
+namespace {
 
 namespace fs = std::filesystem;
 
@@ -130,7 +134,29 @@ int run_serve() {
     throw UsageError("cannot listen on " + a.host + ":" + std::to_string(a.port) +
                      " (in use? try --port, or --port 0 for any free port)");
   // Answers are a few form fields: a larger body is refused (413) before it is read.
-  srv.set_payload_max_length(64 * 1024);
+  srv.set_payload_max_length(kMaxBody);
+  // Framing headers a proxy and this server could read differently are refused before any body
+  // is read: two Content-Length headers, a Content-Length that is not decimal digits ("0x10" was
+  // read as 0), or a Content-Length beside Transfer-Encoding.
+  srv.set_pre_routing_handler([](const httplib::Request& r, httplib::Response& res) {
+    const size_t lengths = r.get_header_value_count("Content-Length");
+    std::string why;
+    if (lengths > 1) {
+      why = "more than one Content-Length header";
+    } else if (lengths == 1) {
+      const std::string v = r.get_header_value("Content-Length");
+      if (v.empty() || v.size() > 18 || v.find_first_not_of("0123456789") != std::string::npos)
+        why = "Content-Length must be decimal digits";
+      else if (r.has_header("Transfer-Encoding"))
+        why = "Content-Length beside Transfer-Encoding";
+    }
+    if (why.empty()) return httplib::Server::HandlerResponse::Unhandled;
+    const Reply reply = error_reply(400, why);
+    res.status = 400;
+    res.set_header("Connection", "close");
+    res.set_content(reply.body, "application/json");
+    return httplib::Server::HandlerResponse::Handled;
+  });
   // Slow or idle clients must not starve a participant: each connection holds a worker thread
   // while it is read, so reads time out after 1 s of silence, keep-alive is short, and the pool
   // is large enough that 64 trickling clients plus a crowd of idle ones leave threads free
@@ -188,7 +214,39 @@ int run_serve() {
           });
   srv.Get("/api/state", api(&StudyService::state));
   srv.Get("/api/trajectory", api(&StudyService::trajectory));
-  srv.Post("/api/answer", api(&StudyService::answer));
+  // The answer's form body is read here, chunk by chunk, and refused past 64 KiB: cpp-httplib
+  // bounds a body whose length is declared, but reads a chunked one whole before any handler.
+  srv.Post("/api/answer", [&service](const httplib::Request& r, httplib::Response& res,
+                                     const httplib::ContentReader& read_body) {
+    std::string body;
+    bool too_large = false;
+    const bool whole = read_body([&](const char* data, size_t n) {
+      if (body.size() + n > kMaxBody) {
+        too_large = true;
+        return false;  // stop reading: the rest of the body is never buffered
+      }
+      body.append(data, n);
+      return true;
+    });
+    // A declared length past the limit: cpp-httplib skips the body without calling us.
+    // (The pre-routing handler has made sure it is decimal digits.)
+    if (!whole && r.has_header("Content-Length") &&
+        std::stoull(r.get_header_value("Content-Length")) > kMaxBody)
+      too_large = true;
+    if (too_large || !whole) {
+      res.status = too_large ? 413 : 400;
+      res.set_header("Connection", "close");  // the unread rest must not be parsed as a request
+      const Reply reply = error_reply(res.status, too_large ? "the request body is over 64 KiB"
+                                                            : "the request body was cut short");
+      res.set_content(reply.body, "application/json");
+      return;
+    }
+    RequestParams params = r.params;  // the URL's query; the form body's fields are added
+    httplib::detail::parse_query_text(body, params);
+    const Reply reply = service.answer(params);
+    res.status = reply.status;
+    res.set_content(reply.body, "application/json");
+  });
   std::printf(
       "sirl study serve: participant %s on %s; answers go to %s\n"
       "open: http://%s:%d/?p=%s&t=%s\n",

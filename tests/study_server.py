@@ -176,6 +176,66 @@ with tempfile.TemporaryDirectory() as tmp:
     assert answers(study, "alice")[0] == [2, 0]
     print("ok: strict numbers, a 200 KiB body refused with 413, nothing written")
 
+    # Raw requests through the server's own socket path. A chunked upload of 100 MB (1600 chunks
+    # of 64 KiB, no token) is refused past 64 KiB: the server's resident memory stays within a few
+    # MB of what it was (cpp-httplib alone buffers a chunked body whole before any handler).
+    import socket
+
+    def rss_kib(pid):
+        for line in open(f"/proc/{pid}/status"):
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+        return 0
+
+    def raw(head, body_chunks=(), read=True):
+        c = socket.create_connection(("127.0.0.1", port), timeout=10)
+        c.sendall(head)
+        sent = 0
+        try:
+            for ch in body_chunks:
+                c.sendall(ch)
+                sent += 1
+        except OSError:
+            pass  # the server closed after refusing: the rest is never read
+        reply = b""
+        if read:
+            try:
+                while b"\r\n\r\n" not in reply:
+                    part = c.recv(65536)
+                    if not part:
+                        break
+                    reply += part
+            except OSError:
+                pass
+        c.close()
+        return reply, sent
+
+    before = rss_kib(srv.pid)
+    chunk = b"10000\r\n" + b"x" * 0x10000 + b"\r\n"
+    reply, sent = raw(b"POST /api/answer HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n"
+                      b"Content-Type: application/x-www-form-urlencoded\r\n\r\n",
+                      (chunk for _ in range(1600)))
+    after = rss_kib(srv.pid)
+    assert reply.startswith(b"HTTP/1.1 413"), reply[:200]
+    assert after - before < 8 * 1024, f"resident memory grew {after - before} KiB"
+    print(f"ok: a chunked 100 MB upload refused with 413 after {sent} chunks sent; resident "
+          f"memory {before} → {after} KiB")
+    # Framing headers two readers could disagree on: 400, whatever the body.
+    for head in (b"Content-Length: 5\r\nContent-Length: 7\r\n", b"Content-Length: 0x10\r\n",
+                 b"Content-Length: +5\r\n", b"Content-Length: 5\r\nTransfer-Encoding: chunked\r\n"):
+        reply, _ = raw(b"POST /api/answer HTTP/1.1\r\nHost: x\r\n" + head + b"\r\nindex=0")
+        assert reply.startswith(b"HTTP/1.1 400"), (head, reply[:200])
+    # A chunked answer within the limit is an answer like any other.
+    form = urllib.parse.urlencode(dict(p="alice", t=token, kind="similarity", index=2, answer=0,
+                                       response_ms=5)).encode()
+    reply, _ = raw(b"POST /api/answer HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n"
+                   b"Content-Type: application/x-www-form-urlencoded\r\n\r\n"
+                   + b"%x\r\n" % len(form) + form + b"\r\n0\r\n\r\n")
+    assert reply.startswith(b"HTTP/1.1 200"), reply[:300]
+    assert answers(study, "alice")[0] == [2, 0, 0], answers(study, "alice")[0]
+    print("ok: duplicate, non-decimal and conflicting Content-Length refused (400); a chunked "
+          "answer within 64 KiB accepted")
+
     # Slow and idle clients cannot starve a participant: 64 connections trickling one header line
     # per 0.5 s and 200 connected but silent ones, then a real request must be answered in < 2 s.
     import socket
