@@ -146,7 +146,7 @@ void register_dataset(CLI::App& app, Runner& run) {
   cmd->add_option("--env", a.env, "Environment")
       ->check(CLI::IsMember(env_choices()))
       ->capture_default_str();
-  cmd->add_option("--out", a.out, "Output HDF5 file (written atomically)")->required();
+  cmd->add_option("--out", a.out, "Output HDF5 file (written atomically)")->required()->check(output_file());
   cmd->add_flag("--force", a.force,
                 "Replace --out even if it is not a dataset file (a results or study file)");
   cmd->add_option("--trajectories", a.trajectories,
@@ -232,7 +232,7 @@ void register_render(CLI::App& app, Runner& run) {
   cmd->add_option("file", file, "HDF5 file with /datasets/<env>")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_option("--out", out, "PNG to write")->required();
+  cmd->add_option("--out", out, "PNG to write")->required()->check(output_file());
   cmd->add_option("--ids", ids, "Trajectory rows, comma-separated")->capture_default_str();
   run = [] {
     const auto q = sh_quote;

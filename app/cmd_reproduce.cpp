@@ -25,7 +25,7 @@ void register_reproduce(CLI::App& app, Runner& run) {
   cmd->add_option("--profile", profile,
                   "Profile: a name in configs/ (" + bundled_profile_names() + ") or a .toml path")
       ->capture_default_str();
-  cmd->add_option("--out", out, "Results file (default: out/<profile>.h5)");
+  cmd->add_option("--out", out, "Results file (default: out/<profile>.h5)")->check(output_file());
   cmd->add_option("--figures", figures, "Figure directory (default: out/<profile>-figures)");
   cmd->add_option("--threads", threads, "Worker threads (default: every core)")
       ->check(CLI::Range(1, 4096));

@@ -87,7 +87,7 @@ void register_run(CLI::App& app, Runner& run) {
   cmd->add_option("profile", profile,
                   "Profile: a name in configs/ (" + bundled_profile_names() + ") or a .toml path")
       ->required();
-  cmd->add_option("--out", out, "Results file (HDF5)")->required();
+  cmd->add_option("--out", out, "Results file (HDF5)")->required()->check(output_file());
   cmd->add_option("--threads", threads, "Worker threads (default: every core)")
       ->check(CLI::Range(1, 4096));
   cmd->add_option("--shard", shard,
@@ -320,7 +320,7 @@ void register_export(CLI::App& app, Runner& run) {
                                  "<table>.csv into a directory.");
   static std::string file, dir;
   cmd->add_option("file", file, "Results file (HDF5)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--csv", dir, "Directory for the CSV files (one per table)")->required();
+  cmd->add_option("--csv", dir, "Directory for the CSV files (one per table)")->required()->check(CLI::Validator([](std::string& v) { return v.empty() ? std::string("must name a folder, got an empty path") : std::string(); }, "DIR"));
   run = [] {
     const RunInfo info = read_run_info(file);
     if (!info.verified) std::fprintf(stderr, "sirl export: %s\n", unverified_note(file).c_str());
@@ -343,7 +343,7 @@ void register_merge(CLI::App& app, Runner& run) {
   static std::string out;
   static std::vector<std::string> inputs;
   static bool force = false;
-  cmd->add_option("out", out, "Merged results file (a new file: see --force)")->required();
+  cmd->add_option("out", out, "Merged results file (a new file: see --force)")->required()->check(output_file());
   cmd->add_option("inputs", inputs, "Shard files")->required()->check(CLI::ExistingFile);
   cmd->add_flag("--force", force, "Replace OUT if it already exists (never one of the inputs)");
   run = [] {

@@ -183,7 +183,7 @@ void register_study(CLI::App& app, Runner& run) {
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   sim->add_option("--seed", s_seed, "Seed of the data, queries and answers")->capture_default_str();
-  sim->add_option("--out", s_out, "Study file to write")->required();
+  sim->add_option("--out", s_out, "Study file to write")->required()->check(output_file());
   sim->add_flag("--force", s_force, "Replace --out even if it is not a study file");
   sim->callback([] {});
 

@@ -112,6 +112,18 @@ CLI::Validator decimal_number() {
       "DECIMAL", "decimal");
 }
 
+CLI::Validator output_file() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        std::error_code ec;
+        if (v.empty()) return "must name a file, got an empty path";
+        if (v.back() == '/' || std::filesystem::is_directory(v, ec))
+          return "must name a file, got the folder '" + v + "'";
+        return "";
+      },
+      "FILE", "output_file");
+}
+
 CLI::Validator positive_number() {
   return number_check("a number > 0 (inf allowed)", [](double x) { return x > 0; }, true);
 }

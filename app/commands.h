@@ -50,6 +50,8 @@ bool is_decimal_integer(const std::string& v);
 bool is_decimal_number(const std::string& v);
 CLI::Validator decimal_integer();
 CLI::Validator decimal_number();
+// An output file's path: not empty, not an existing folder, not ending in '/'.
+CLI::Validator output_file();
 CLI::Validator positive_number();
 CLI::Validator non_negative_number();
 

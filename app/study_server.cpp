@@ -317,7 +317,7 @@ void register_study_serve(CLI::App& study) {
   c->add_option("--scenario-features", a.scenario_features,
                 "Features the scenario's preference involves (e.g. table,laptop)")
       ->delimiter(',');
-  c->add_option("--out", a.out, "Study file (created, or resumed)")->required();
+  c->add_option("--out", a.out, "Study file (created, or resumed)")->required()->check(output_file());
   c->add_option("--port", a.port, "TCP port (0: any free port; the URL printed names it)")
       ->check(CLI::Range(0, 65535))
       ->capture_default_str();
@@ -351,7 +351,7 @@ void register_study_import(CLI::App& study) {
   c->add_option("--format", a.format, "csv, json, or auto (by extension)")
       ->check(CLI::IsMember({"auto", "csv", "json"}))
       ->capture_default_str();
-  c->add_option("--out", a.out, "Study file to write")->required();
+  c->add_option("--out", a.out, "Study file to write")->required()->check(output_file());
   c->add_option("--env", a.env, "Environment: " + study_env_names())
       ->check(CLI::IsMember(study_env_choices()))
       ->capture_default_str();

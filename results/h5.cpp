@@ -183,10 +183,12 @@ H5File H5File::create(const std::string& path, uint64_t userblock_bytes) {
 H5File H5File::open_read(const std::string& path) {
   quiet();
   if (H5Fis_hdf5(path.c_str()) <= 0) {
+    errno = 0;
     FILE* probe = std::fopen(path.c_str(), "rb");
     if (!probe) fail(path, "no such file or not readable");
     std::fclose(probe);
-    fail(path, "not an HDF5 file, or truncated/corrupt");
+    // About the content, not the OS: an errno left by HDF5's probing would only mislead.
+    throw H5Error(path + ": not an HDF5 file, or truncated/corrupt");
   }
   hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   if (f < 0) fail(path, "cannot open (truncated or corrupt HDF5 file?)");

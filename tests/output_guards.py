@@ -72,6 +72,24 @@ def main():
                 if digest(m) != held or os.path.exists(m + ".partial"):
                     fail(f"sirl {' '.join(args[:2])} changed {m} while the lock was held")
         print("ok: merge, dataset and study simulate honour the output's lock, --force or not")
+    # An empty or folder output path: one line, exit 2, nothing written where we stand.
+    with tempfile.TemporaryDirectory() as cwd:
+        for args in (["dataset", "--out", ""], ["dataset", "--out", cwd + "/"],
+                     ["run", "smoke", "--out", ""], ["merge", "", FIXTURE],
+                     ["study", "simulate", "--out", ""], ["export", FIXTURE, "--csv", ""]):
+            p = subprocess.run([SIRL, *args], capture_output=True, text=True, cwd=cwd,
+                               stdin=subprocess.DEVNULL, timeout=60)
+            if p.returncode != 2 or "must name a" not in p.stderr or p.stderr.count("\n") != 1:
+                fail(f"sirl {' '.join(args)}: rc {p.returncode}, {p.stderr!r}")
+            if os.listdir(cwd):
+                fail(f"sirl {' '.join(args)} left {os.listdir(cwd)}")
+        # A file that exists but is not HDF5: the reason is its content, not a stale OS error.
+        text = os.path.join(cwd, "notes.h5")
+        open(text, "w").write("not hdf5\n")
+        p = subprocess.run([SIRL, "inspect", text], capture_output=True, text=True, timeout=60)
+        if p.returncode == 0 or "not an HDF5 file" not in p.stderr or "No such file" in p.stderr:
+            fail(f"inspect on a text file: {p.stderr!r}")
+    print("ok: empty and folder output paths refused in one line; no stale OS reason")
     print("output_guards: OK")
 
 
