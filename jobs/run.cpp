@@ -131,6 +131,28 @@ RunSummary run_profile(const Profile& p, const RunOptions& o) {
   }
 }
 
+ResumeDecision resume_decision(const RunInfo& existing, const std::string& profile_text,
+                               const std::string& engine_version, const std::string& shard,
+                               bool force) {
+  auto part = [](const std::string& s) { return s.empty() ? "the whole run" : "shard " + s; };
+  ResumeDecision d;
+  const bool same_profile = existing.profile_text == profile_text,
+             same_engine = existing.engine_version == engine_version,
+             same_part = existing.shard == shard;
+  if (!force) {
+    if (!same_profile)
+      d.refusal = "under a different profile ('" + existing.profile_name + "')";
+    else if (!same_engine)
+      d.refusal = "by engine " + existing.engine_version + " (this is " + engine_version + ")";
+    else if (!same_part)  // writing another part would replace this file's tasks with that part's
+      d.refusal = "with " + part(existing.shard) + " (" + std::to_string(existing.tasks_done) +
+                  " tasks), and this run is " + part(shard);
+    if (!d.refusal.empty()) return d;
+  }
+  d.reuse = same_profile && same_engine && same_part && existing.verified;
+  return d;
+}
+
 namespace {
 
 [[noreturn]] void refuse(const std::string& where, const std::string& what) {
@@ -153,25 +175,14 @@ std::map<std::string, TaskRecord> load_prior(const Profile& p, const RunOptions&
     std::fprintf(stderr, "sirl run: %s; --force: computing every task again\n", e.what());
     return prior;
   }
-  auto part = [](const std::string& s) { return s.empty() ? "the whole run" : "shard " + s; };
-  if (!o.force) {
-    if (info.profile_text != p.text)
-      refuse(o.out, "under a different profile ('" + info.profile_name + "')");
-    if (info.engine_version != o.engine_version)
-      refuse(o.out, "by engine " + info.engine_version + " (this is " + o.engine_version + ")");
-    // Writing another part of the grid would replace this file's tasks with that part's.
-    if (info.shard != shard)
-      refuse(o.out, "with " + part(info.shard) + " (" + std::to_string(info.tasks_done) +
-                        " tasks), and this run is " + part(shard));
-  }
+  const ResumeDecision d = resume_decision(info, p.text, o.engine_version, shard, o.force);
+  if (!d.refusal.empty()) refuse(o.out, d.refusal);
   // Records are reused only from a file a checksum verified: the new file's checksum would
   // otherwise vouch for bytes nobody checked.
-  if (!info.verified) {
+  if (!info.verified)
     std::fprintf(stderr, "sirl run: %s; its tasks are computed again\n",
                  unverified_note(o.out).c_str());
-    return prior;
-  }
-  if (info.profile_text == p.text && info.engine_version == o.engine_version && info.shard == shard)
+  if (d.reuse)
     for (auto& r : read_results_records(o.out)) prior[r.key] = std::move(r);
   return prior;
 }

@@ -2,6 +2,8 @@
 #pragma once
 #include <string>
 
+#include "results/results_file.h"
+
 #include "jobs/plan.h"
 #include "jobs/profile.h"
 
@@ -31,6 +33,18 @@ struct RunSummary {
 };
 
 RunSummary run_profile(const Profile& p, const RunOptions& o);
+
+// The resume policy for an existing results file, as one decision: its records are reused when it
+// was written by this profile text, this engine and this part of the grid (shard "" = the whole
+// run) and a checksum verified it. Otherwise, without --force, the run is refused (`refusal`
+// says why, one line); with --force, or for an unverified file, every task is computed again.
+struct ResumeDecision {
+  bool reuse = false;
+  std::string refusal;  // non-empty: refuse the run with this text
+};
+ResumeDecision resume_decision(const RunInfo& existing, const std::string& profile_text,
+                               const std::string& engine_version, const std::string& shard,
+                               bool force);
 
 // Which of the plan's tasks belong to shard i of n: tasks are grouped by the representation
 // they evaluate (a rep with its FPE/TPA cells stays together), groups are dealt by a hash of the

@@ -28,6 +28,25 @@ TEST(BradleyTerry, HandComputedCases) {
   EXPECT_NEAR(bradley_terry_loss(big.data(), wrong.data(), 1, 0.0, g.data()), 1600.0, 1e-9);
 }
 
+TEST(BradleyTerry, BatchOfThreeWithATieAtANonZeroMarginIsTheMean) {
+  // z = r_A − r_B: pair 0 z = 2 (label 1), pair 1 z = −1 (label 0), pair 2 z = 1 (label 0.5).
+  //   −log σ(2) = log(1+e^−2); −log σ(1) = log(1+e^−1) (label 0 at z = −1);
+  //   the tie: −½ log σ(1) − ½ log σ(−1) = ½ log(1+e^−1) + ½ log(1+e) .
+  const double a = std::log1p(std::exp(-2.0)), b = std::log1p(std::exp(-1.0)),
+               c = 0.5 * std::log1p(std::exp(-1.0)) + 0.5 * std::log1p(std::exp(1.0));
+  std::vector<double> r = {2, 0, 1, 0, 1, 0}, l = {1, 0, 0.5}, g(6);
+  EXPECT_NEAR(bradley_terry_loss(r.data(), l.data(), 3, 0.0, g.data()), (a + b + c) / 3, 1e-15);
+  // ∂L/∂r_A = (σ(z) − ℓ)/B: the tie's is (σ(1) − 0.5)/3 > 0, not (σ(1) − 1)/3.
+  const double s1 = 1 / (1 + std::exp(-1.0));
+  EXPECT_NEAR(g[2], (s1 - 0.5) / 3, 1e-15);
+  EXPECT_NEAR(g[5], -(s1 - 0.5) / 3, 1e-15);
+  // With L2 weight 0.25: + 0.25 · (4 + 0 + 1 + 0 + 1 + 0) / 3.
+  EXPECT_NEAR(bradley_terry_loss(r.data(), l.data(), 3, 0.25, g.data()),
+              (a + b + c) / 3 + 0.25 * 6 / 3, 1e-15);
+  // Accuracy: pair 0 right, pair 1 right (z < 0, label 0), the tie skipped: 2 of 2.
+  EXPECT_DOUBLE_EQ(preference_accuracy(r.data(), l.data(), 3), 1.0);
+}
+
 TEST(BradleyTerry, GradientMatchesFiniteDifferences) {
   Rng rng(9);
   const int B = 8;

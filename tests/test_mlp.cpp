@@ -52,6 +52,35 @@ TEST(Mlp, ForwardMatchesHandComputation) {
   EXPECT_FLOAT_EQ(t.output()[1], 0.25f);
 }
 
+// Each shape flag changes a hand-computed forward value, observed directly.
+TEST(Mlp, ReluOnOutputClampsAHandComputedNegativeOutput) {
+  // 2 → 2 → 1: W0 = [[1, −1], [2, 0.5]], b0 = [0, −1]; W1 = [[1, −3]], b1 = [0.25]
+  // sample x = (1, 2): h = relu([−1, 2]) = [0, 2] → −6 + 0.25 = −5.75; relu → 0.
+  MlpShape s{{2, 2, 1}};
+  std::vector<float> p = {1, -1, 2, 0.5f, 0, -1, 1, -3, 0.25f};
+  std::vector<float> x = {1, 2};
+  MlpTape<float> t;
+  mlp_forward(s, p.data(), x.data(), 1, t);
+  EXPECT_FLOAT_EQ(t.output()[0], -5.75f);
+  s.relu_on_output = true;
+  mlp_forward(s, p.data(), x.data(), 1, t);
+  EXPECT_FLOAT_EQ(t.output()[0], 0.f);
+}
+
+TEST(Mlp, Bf16ProductsRoundOperandsByHand) {
+  // 1 → 1 linear, W = 1 + 2⁻⁸: halfway between its bf16 neighbours 1 and 1 + 2⁻⁷ (bf16 keeps 7
+  // mantissa bits), so round-to-nearest-even makes it 1. x = 3 is exact in bf16. fp32 products
+  // give 3 + 3·2⁻⁸ exactly; bf16 products give 3.
+  MlpShape s{{1, 1}};
+  std::vector<float> p = {1.f + 1.f / 256, 0.f}, x = {3.f};
+  MlpTape<float> t;
+  mlp_forward(s, p.data(), x.data(), 1, t);
+  EXPECT_FLOAT_EQ(t.output()[0], 3.f + 3.f / 256);
+  s.bf16_products = true;
+  mlp_forward(s, p.data(), x.data(), 1, t);
+  EXPECT_FLOAT_EQ(t.output()[0], 3.f);
+}
+
 TEST(Mlp, GradientsMatchFiniteDifferences) {
   check_mlp_gradients(MlpShape{{5, 7, 4, 3}}, 4);
 }
@@ -204,6 +233,14 @@ TEST(Mlp, InitFollowsPyTorchLinearBounds) {
   mean_abs /= double(s.bias_offset(0));
   EXPECT_NEAR(mean_abs, bound0 / 2, 0.002);  // |U(−b, b)| has mean b/2
   for (size_t i = s.weight_offset(1); i < p.size(); ++i) ASSERT_LE(std::abs(p[i]), bound1);
+  // The first layer's biases too: U(−1/√in, 1/√in) like its weights, not zeros.
+  double bias_abs = 0;
+  for (size_t i = s.bias_offset(0); i < s.weight_offset(1); ++i) {
+    ASSERT_LE(std::abs(p[i]), bound0);
+    bias_abs += std::abs(p[i]);
+  }
+  EXPECT_NEAR(bias_abs / 400, bound0 / 2, 0.01);
+  EXPECT_NE(p[s.bias_offset(1)], 0.f);  // the output bias is drawn as well
   // Same seed → same weights; different seed → different.
   std::vector<float> q(p.size()), r(p.size());
   Rng a(11), b(12);

@@ -90,9 +90,10 @@ TEST(ResultsFile, TheCurrentEngineWritesItsVersionAndReadsItBack) {
   fs::remove(p);
 }
 
-// A results file carries its checksum (FILE.sum): one flipped byte anywhere, and reading it is
-// one clear error before HDF5 parses anything (a flipped byte in a string heap used to crash the
-// HDF5 library); without FILE.sum (engine 0.1.0's files) it is read unverified.
+// A results file carries its checksum (in its first 1024 bytes, and FILE.sum beside it): one
+// flipped byte anywhere, and reading it is one clear error before HDF5 parses anything (a flipped
+// byte in a string heap used to crash the HDF5 library), with or without FILE.sum; a file of
+// engine 0.1.0 (neither) is read unverified.
 TEST(ResultsFile, AFlippedByteIsRefusedByTheChecksumBeforeHdf5ReadsIt) {
   const std::string p = temp_copy("checksummed.h5");
   const auto records = read_results_records(kFixture);
@@ -115,6 +116,14 @@ TEST(ResultsFile, AFlippedByteIsRefusedByTheChecksumBeforeHdf5ReadsIt) {
     } catch (const H5Error& e) {
       EXPECT_NE(std::string(e.what()).find("checksum mismatch"), std::string::npos) << e.what();
     }
+  }
+  // Without its .sum (a copied .h5) the digest inside the file refuses it just the same.
+  fs::remove(p + ".sum");
+  try {
+    (void)read_run_info(p);
+    ADD_FAILURE() << "a corrupted copy without its .sum was read";
+  } catch (const H5Error& e) {
+    EXPECT_NE(std::string(e.what()).find("checksum mismatch"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(fs::exists(kFixture + ".sum"));  // the v1 fixture has none and still reads
   EXPECT_NO_THROW(read_run_info(kFixture));

@@ -196,6 +196,33 @@ MUTANTS = [
      "Vae.Fused*", "fused VAE step: the decoder's pass does not return ∂L/∂z"),
     ("engine/representation.cpp", "  s.bf16_products = bf16_products(h);\n", "",
      "Profile.PrecisionReachesEveryNetwork", "precision = bf16 never reaches φ"),
+    # Weak spots of one kind (tests that compared two paths sharing the helper under test, or
+    # hand cases too small to tell two behaviours apart), each now observed directly (0.8.0)
+    ("kernels/mlp.cpp", "      if ((bf16 = s.bf16_products)) {\n        tape.in16.resize(L);",
+     "      if ((bf16 = false)) {\n        tape.in16.resize(L);", "Mlp.Bf16ProductsRoundOperandsByHand",
+     "bf16 flag ignored in the forward pass"),
+    ("kernels/mlp.cpp", "  if (layer + 1 == layers()) return relu_on_output;",
+     "  if (layer + 1 == layers()) return false;", "Mlp.ReluOnOutput*",
+     "relu_on_output ignored"),
+    ("kernels/triplet_loss.cpp", "  return loss * inv_b;", "  return loss;",
+     "TripletLoss.BatchOfThree*", "triplet loss a sum over the batch, not a mean"),
+    ("kernels/triplet_loss.cpp", "      g1[k] = a * inv_b;", "      g1[k] = a;",
+     "TripletLoss.BatchOfThree*", "first anchor's gradient not averaged over the batch"),
+    ("kernels/bradley_terry_loss.cpp", "    const T z = r[i] - r[B + i], l = label[i];",
+     "    const T z = r[i] - r[B + i], l = label[i] > T(0.25) ? T(1) : T(0);",
+     "BradleyTerry.BatchOfThree*", "a tie label learned as a win for A"),
+    ("kernels/mlp.cpp", "    for (int j = 0; j < no; ++j) b[j] = float(rng.uniform(-bound, bound));",
+     "    for (int j = 0; j < no; ++j) b[j] = l == 0 ? 0.f : float(rng.uniform(-bound, bound));",
+     "Mlp.InitFollowsPyTorchLinearBounds", "the first layer's biases start at zero"),
+    ("jobs/run.cpp", "    else if (!same_engine)\n",
+     "    else if (false)\n", "ResumeDecision.*", "a file of another engine resumed"),
+    ("jobs/run.cpp", "  d.reuse = same_profile && same_engine && same_part && existing.verified;",
+     "  d.reuse = same_profile && same_engine && same_part;", "ResumeDecision.*",
+     "an unverified file's records reused"),
+    ("results/results_file.cpp", "    if (got != want) throw mismatch(\"checksum\", got, want);",
+     "", "ResultsFile.*", "the embedded digest not compared"),
+    ("app/commands.cpp", "         (v[0] != '0' || v.size() == 1);", "         true;",
+     "ctest:cli_numbers", "leading zeros accepted in integer options"),
 ]
 
 # Mutations the suite cannot catch because they do not change behaviour (none so far).

@@ -65,7 +65,9 @@ for n, (path, old, new, filt, what) in enumerate(MUTANTS, 1):
     t0 = time.time()
     open(target, "w").write(text.replace(old, new))
     try:
-        b = sh(["cmake", "--build", "--preset", "release", "--target", "sirl_tests"], a.scratch)
+        # an end-to-end test runs the `sirl` binary: rebuild it too
+        targets = ["sirl_tests"] + (["sirl"] if filt.startswith("ctest:") else [])
+        b = sh(["cmake", "--build", "--preset", "release", "--target", *targets], a.scratch)
         if b.returncode:
             verdict, detail = "compile error", "the mutant does not compile"
             broken += 1
@@ -90,7 +92,7 @@ for n, (path, old, new, filt, what) in enumerate(MUTANTS, 1):
     print(f"{n:3d} {verdict:13s} {time.time() - t0:5.0f} s  {path}: {what} — {detail}", flush=True)
 
 # Restore the scratch build to the unmutated code.
-sh(["cmake", "--build", "--preset", "release", "--target", "sirl_tests"], a.scratch)
+sh(["cmake", "--build", "--preset", "release", "--target", "sirl_tests", "sirl"], a.scratch)
 applied = caught + survived
 lines = [f"# Mutation check ({time.strftime('%Y-%m-%d')})", "",
          f"{caught} of {applied} applied mutants caught ({100.0 * caught / max(1, applied):.0f} %); "
