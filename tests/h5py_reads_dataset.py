@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""ctest: `sirl dataset` output loads with plain h5py exactly as README.md shows."""
+"""ctest: `sirl dataset` output loads with plain h5py exactly as docs/results-file.md shows."""
 import os
 import subprocess
 import tempfile
@@ -10,7 +10,7 @@ import numpy as np
 with tempfile.TemporaryDirectory() as d:
     path = os.path.join(d, "grid.h5")
     subprocess.run([os.environ["SIRL"], "dataset", "--env", "grid", "--out", path], check=True)
-    # --- the README snippet ---
+    # --- the snippet of docs/results-file.md ---
     with h5py.File(path, "r") as f:
         g = f["datasets/grid"]
         X = g["inputs"][:]                 # [1960, 19] float32
