@@ -1,12 +1,5 @@
-// The study's web server (cpp-httplib): one page running the paper's protocol, a small JSON API,
-// every answer committed to the study file before the reply.
-//
-//   GET  /                       the page (app/study_web/index.html)
-//   GET  /static/<file>          the page's scripts; /vendor/three/… three.js from npm
-//   GET  /api/state?p=ID&t=TOK   stage, progress, the next query, practice queries, scenario
-//   GET  /api/trajectory?p&t&id  what to draw for one trajectory (EE path / grid cells, objects)
-//   POST /api/answer             form fields p, t, kind (similarity|preference), index, answer,
-//                                response_ms → 200, or 400/403 with a message and nothing written
+// The study's web server (cpp-httplib): one page running the paper's protocol, a small JSON API
+// (app/study_http.h lists the routes), every answer committed to the study file before the reply.
 #include "app/study_server.h"
 
 #include <arpa/inet.h>
@@ -21,6 +14,7 @@
 #include <sstream>
 
 #include "app/commands.h"
+#include "app/study_http.h"
 #include "app/study_service.h"
 #include "datasets/environments.h"
 #include "datasets/study.h"
@@ -31,9 +25,6 @@
 
 namespace sirl::app {
 
-namespace {
-constexpr size_t kMaxBody = 64 * 1024;  // an answer is a few form fields
-}  // namespace
 
 namespace {
 
@@ -55,13 +46,6 @@ struct ImportArgs {
 
 CLI::App* g_serve_cmd = nullptr;
 CLI::App* g_import_cmd = nullptr;
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 // The host to listen on: an IPv4 or IPv6 literal or "localhost" (checked before anything is
 // written). Returns whether it is a loopback address; the URL host goes into `url_host`.
@@ -133,39 +117,6 @@ int run_serve() {
   if (port <= 0 || (a.port != 0 && !srv.bind_to_port(a.host, a.port)))
     throw UsageError("cannot listen on " + a.host + ":" + std::to_string(a.port) +
                      " (in use? try --port, or --port 0 for any free port)");
-  // Answers are a few form fields: a larger body is refused (413) before it is read.
-  srv.set_payload_max_length(kMaxBody);
-  // Framing headers a proxy and this server could read differently are refused before any body
-  // is read: two Content-Length headers, a Content-Length that is not decimal digits ("0x10" was
-  // read as 0), or a Content-Length beside Transfer-Encoding.
-  srv.set_pre_routing_handler([](const httplib::Request& r, httplib::Response& res) {
-    const size_t lengths = r.get_header_value_count("Content-Length");
-    std::string why;
-    if (lengths > 1) {
-      why = "more than one Content-Length header";
-    } else if (lengths == 1) {
-      const std::string v = r.get_header_value("Content-Length");
-      if (v.empty() || v.size() > 18 || v.find_first_not_of("0123456789") != std::string::npos)
-        why = "Content-Length must be decimal digits";
-      else if (r.has_header("Transfer-Encoding"))
-        why = "Content-Length beside Transfer-Encoding";
-    }
-    if (why.empty()) return httplib::Server::HandlerResponse::Unhandled;
-    const Reply reply = error_reply(400, why);
-    res.status = 400;
-    res.set_header("Connection", "close");
-    res.set_content(reply.body, "application/json");
-    return httplib::Server::HandlerResponse::Handled;
-  });
-  // Slow or idle clients must not starve a participant: each connection holds a worker thread
-  // while it is read, so reads time out after 1 s of silence, keep-alive is short, and the pool
-  // is large enough that 64 trickling clients plus a crowd of idle ones leave threads free
-  // (study_server.py opens 64 slow and 200 idle connections and times a real request).
-  srv.set_read_timeout(1, 0);
-  srv.set_write_timeout(5, 0);
-  srv.set_keep_alive_timeout(1);
-  srv.set_keep_alive_max_count(20);
-  srv.new_task_queue = [] { return new httplib::ThreadPool(256); };
   if (!s.find(a.participant)) {
     const Dataset d = study_dataset(s);
     StudyParticipant p = plan_participant(d, a.participant, a.similarity, a.preference, a.seed);
@@ -181,72 +132,7 @@ int run_serve() {
   const std::string path = a.out;
   StudyService service(s, std::make_shared<const Dataset>(study_dataset(s)), a.participant,
                        a.practice, [path](const Study& st) { write_study(path, st); });
-  // Each API call: the service's reply as JSON.
-  const auto api = [&service](Reply (StudyService::*handler)(const RequestParams&)) {
-    return [&service, handler](const httplib::Request& r, httplib::Response& res) {
-      const Reply reply = (service.*handler)(r.params);
-      res.status = reply.status;
-      res.set_content(reply.body, "application/json");
-    };
-  };
-  const auto not_found = [](httplib::Response& res, const std::string& msg) {
-    const Reply reply = error_reply(404, msg);
-    res.status = reply.status;
-    res.set_content(reply.body, "application/json");
-  };
-  const fs::path web = fs::path(SIRL_SOURCE_DIR) / "app" / "study_web";
-  const fs::path three = web / "node_modules" / "three";
-
-  srv.Get("/", [&](const httplib::Request&, httplib::Response& res) {
-    res.set_content(read_file(web / "index.html"), "text/html; charset=utf-8");
-  });
-  srv.Get(R"(/static/([A-Za-z0-9_.-]+))", [&](const httplib::Request& r, httplib::Response& res) {
-    const fs::path f = web / r.matches[1].str();
-    if (!fs::is_regular_file(f)) return not_found(res, "no such file");
-    res.set_content(read_file(f), f.extension() == ".js" ? "text/javascript" : "text/css");
-  });
-  srv.Get(R"(/vendor/three/((build|examples/jsm/controls)/[A-Za-z0-9_.]+\.js))",
-          [&](const httplib::Request& r, httplib::Response& res) {
-            const fs::path f = three / r.matches[1].str();
-            if (!fs::is_regular_file(f))
-              return not_found(res, "three.js is not installed (scripts/setup.sh)");
-            res.set_content(read_file(f), "text/javascript");
-          });
-  srv.Get("/api/state", api(&StudyService::state));
-  srv.Get("/api/trajectory", api(&StudyService::trajectory));
-  // The answer's form body is read here, chunk by chunk, and refused past 64 KiB: cpp-httplib
-  // bounds a body whose length is declared, but reads a chunked one whole before any handler.
-  srv.Post("/api/answer", [&service](const httplib::Request& r, httplib::Response& res,
-                                     const httplib::ContentReader& read_body) {
-    std::string body;
-    bool too_large = false;
-    const bool whole = read_body([&](const char* data, size_t n) {
-      if (body.size() + n > kMaxBody) {
-        too_large = true;
-        return false;  // stop reading: the rest of the body is never buffered
-      }
-      body.append(data, n);
-      return true;
-    });
-    // A declared length past the limit: cpp-httplib skips the body without calling us.
-    // (The pre-routing handler has made sure it is decimal digits.)
-    if (!whole && r.has_header("Content-Length") &&
-        std::stoull(r.get_header_value("Content-Length")) > kMaxBody)
-      too_large = true;
-    if (too_large || !whole) {
-      res.status = too_large ? 413 : 400;
-      res.set_header("Connection", "close");  // the unread rest must not be parsed as a request
-      const Reply reply = error_reply(res.status, too_large ? "the request body is over 64 KiB"
-                                                            : "the request body was cut short");
-      res.set_content(reply.body, "application/json");
-      return;
-    }
-    RequestParams params = r.params;  // the URL's query; the form body's fields are added
-    httplib::detail::parse_query_text(body, params);
-    const Reply reply = service.answer(params);
-    res.status = reply.status;
-    res.set_content(reply.body, "application/json");
-  });
+  configure_study_http(srv, service, fs::path(SIRL_SOURCE_DIR) / "app" / "study_web");
   std::printf(
       "sirl study serve: participant %s on %s; answers go to %s\n"
       "open: http://%s:%d/?p=%s&t=%s\n",
