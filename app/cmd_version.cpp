@@ -4,6 +4,7 @@
 
 #include "app/commands.h"
 #include "build_info.h"
+#include "jobs/provenance.h"
 #include "kernels/cpu_class.h"
 #include "kernels/gemm_bf16.h"
 #include "kernels/roofline.h"
@@ -32,6 +33,10 @@ void register_version(CLI::App& app, Runner& run) {
     std::printf("flags:     %s\n", SIRL_CXX_FLAGS);
     std::printf("eigen:     %d.%d.%d (SIMD: %s)\n", EIGEN_WORLD_VERSION, EIGEN_MAJOR_VERSION,
                 EIGEN_MINOR_VERSION, Eigen::SimdInstructionSetsInUse());
+    // Every library whose code produces results' bits (also in every results file: /@libraries).
+    for (const auto& [name, version] : library_versions())
+      if (name != "compiler" && name != "eigen")
+        std::printf("%-10s %s\n", (name + ":").c_str(), version.c_str());
     // What results depend on besides their inputs, and this core's roof (both in every results
     // file a run writes).
     std::printf("cpu class: %s\n", cpu_class().c_str());

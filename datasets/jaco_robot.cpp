@@ -306,4 +306,7 @@ Dataset make_jaco_dataset(const JacoConfig& cfg) {
   return d;
 }
 
+std::string mujoco_version() {
+  return mj_versionString();
+}
 }  // namespace sirl

@@ -80,4 +80,6 @@ class JacoKinematics {
 std::array<double, 4> jaco_state_features(const JacoConfig& cfg, const double* ee_pos,
                                           const double* ee_rot);
 
+// MuJoCo's version at run time, for provenance.
+std::string mujoco_version();
 }  // namespace sirl

@@ -15,6 +15,7 @@
 
 #include "jobs/mpi_run.h"
 #include "jobs/progress.h"
+#include "jobs/provenance.h"
 #include "jobs/scheduler.h"
 #include "jobs/task_checkpoints.h"
 #include "jobs/task_kinds.h"
@@ -390,6 +391,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   info.git_commit = o.git_commit;
   info.host = hostname();
   info.cpu_class = cpu_class();
+  info.libraries = library_versions_text();
   // bf16 products run natively or emulated: different bits, so a different class.
   if (runs_bf16(p)) info.cpu_class += std::string(", bf16 ") + bf16_backend();
   info.roof_fp32_gflops = fp32_roof_gflops_per_core();

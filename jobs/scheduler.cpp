@@ -3,6 +3,7 @@
 #include "jobs/ready_queue.h"
 
 #include <tbb/info.h>
+#include <tbb/version.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
@@ -98,4 +99,7 @@ void run_dag(const Plan& plan, const std::vector<char>& pending, int threads,
   run_dag(plan, pending, threads, 1, [&](int i, int) { work(i); });
 }
 
+std::string tbb_version() {
+  return TBB_runtime_version();
+}
 }  // namespace sirl

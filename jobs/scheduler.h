@@ -6,6 +6,7 @@
 // a long VAE → representation → TPA chain on a many-core node). Every kernel gives the same
 // bits on any thread count, so widths change timing only.
 #pragma once
+#include <string>
 #include <functional>
 #include <vector>
 
@@ -63,4 +64,6 @@ int usable_cores();
 // The priority used above, exposed for `sirl plan` and tests.
 std::vector<double> upward_rank(const Plan& plan);
 
+// oneTBB's version at run time, for provenance.
+std::string tbb_version();
 }  // namespace sirl

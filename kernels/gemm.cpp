@@ -488,4 +488,12 @@ SIRL_INSTANTIATE(float)
 SIRL_INSTANTIATE(double)
 #undef SIRL_INSTANTIATE
 
+std::string libxsmm_version() {
+  return LIBXSMM_VERSION;
+}
+
+std::string eigen_version() {
+  return std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) + "." +
+         std::to_string(EIGEN_MINOR_VERSION);
+}
 }  // namespace sirl

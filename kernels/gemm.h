@@ -5,6 +5,7 @@
 // slices; `threads` > 1 spreads the slices over OpenMP threads, and the result is bit-identical
 // for any thread count (not across backends or CPU classes: their summation orders differ).
 #pragma once
+#include <string>
 
 namespace sirl {
 
@@ -68,4 +69,7 @@ void matmul_tn_rows(float* Cr, const float* A, const float* B, int M, int N, int
 // "libxsmm+onednn", "libxsmm" or "eigen": what float products run on in this process.
 const char* gemm_backend();
 
+// Versions of the libraries behind the products, as this build links them (provenance).
+std::string libxsmm_version();
+std::string eigen_version();
 }  // namespace sirl

@@ -110,4 +110,8 @@ bool onednn_amx_bf16() {
 
 #endif
 
+std::string onednn_version() {
+  const dnnl_version_t* v = dnnl_version();
+  return std::to_string(v->major) + "." + std::to_string(v->minor) + "." + std::to_string(v->patch);
+}
 }  // namespace sirl

@@ -3,6 +3,7 @@
 // With one thread oneDNN's blocking (and any split of K) is fixed by the shape, so the bits are
 // too. Without oneDNN in the build every call returns false and the caller computes the product.
 #pragma once
+#include <string>
 #include <cstdint>
 
 namespace sirl {
@@ -26,4 +27,6 @@ bool onednn_native_bf16();
 // Whether those products run on AMX tiles (Sapphire Rapids and later: `tdpbf16ps`).
 bool onednn_amx_bf16();
 
+// oneDNN's version at run time (major.minor.patch), for provenance.
+std::string onednn_version();
 }  // namespace sirl

@@ -77,4 +77,8 @@ void SparseCholesky::solve(double* B, int k) const {
   cholmod_finish(&c);
 }
 
+std::string cholmod_version() {
+  return std::to_string(CHOLMOD_MAIN_VERSION) + "." + std::to_string(CHOLMOD_SUB_VERSION) + "." +
+         std::to_string(CHOLMOD_SUBSUB_VERSION);
+}
 }  // namespace sirl

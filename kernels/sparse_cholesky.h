@@ -1,6 +1,7 @@
 // A sparse symmetric positive-definite matrix factored once with SuiteSparse CHOLMOD (LLᵀ with a
 // fill-reducing ordering) and solved many times. Used for the trajectory-deformation norm.
 #pragma once
+#include <string>
 #include <memory>
 #include <vector>
 
@@ -26,4 +27,6 @@ class SparseCholesky {
   std::unique_ptr<Impl> impl_;
 };
 
+// CHOLMOD's version as this build compiled against it, for provenance.
+std::string cholmod_version();
 }  // namespace sirl

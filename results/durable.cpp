@@ -103,4 +103,9 @@ std::string hex64(uint64_t v) {
   return b;
 }
 
+std::string xxhash_version() {
+  const unsigned v = XXH_versionNumber();  // major·10000 + minor·100 + release
+  return std::to_string(v / 10000) + "." + std::to_string(v / 100 % 100) + "." +
+         std::to_string(v % 100);
+}
 }  // namespace sirl

@@ -37,4 +37,6 @@ uint64_t file_checksum(const std::string& path, uint64_t offset = 0);
 // 16 lowercase hex digits.
 std::string hex64(uint64_t v);
 
+// xxHash's version at run time, for provenance.
+std::string xxhash_version();
 }  // namespace sirl

@@ -399,4 +399,9 @@ int64_t H5File::attr_int(const std::string& o, const std::string& a) const {
   return v;
 }
 
+std::string hdf5_version() {
+  unsigned major = 0, minor = 0, release = 0;
+  H5get_libversion(&major, &minor, &release);
+  return std::to_string(major) + "." + std::to_string(minor) + "." + std::to_string(release);
+}
 }  // namespace sirl

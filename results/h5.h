@@ -92,4 +92,6 @@ class H5File {
   std::string path_;
 };
 
+// The HDF5 library's version at run time, for provenance.
+std::string hdf5_version();
 }  // namespace sirl

@@ -49,6 +49,7 @@ struct RunInfo {
   double stream_gbs = 0;  // one core's main-memory bandwidth, measured by the writer (0: unknown)
   std::string cpu_class;  // kernels/cpu_class.h ("" in files of engines before 0.3.0)
   bool verified = true;   // read_run_info: false when no checksum covered the file
+  std::string libraries;  // compiler and library versions ("" in files before engine 0.8.0)
   std::string started, finished;  // ISO 8601 UTC
   std::string shard;              // "i/n" for a shard file, "" for a whole run
   int64_t threads = 0, tasks_total = 0, tasks_done = 0;

@@ -153,6 +153,15 @@ def main():
         subprocess.run([SIRL, "run", "smoke", "--out", smoke, "--threads", "2"], check=True,
                        stdout=subprocess.DEVNULL)
         r = check_tables(smoke)
+        prov = r.provenance
+        libs = prov.get("libraries", "")
+        for name in ("compiler", "eigen", "libxsmm", "onednn", "cholmod", "mujoco", "hdf5",
+                     "onetbb", "xxhash"):
+            if f"{name} " not in libs:
+                fail(f"provenance lacks {name}'s version: {libs!r}")
+        if prov.get("schema_version") != 3 or not prov.get("cpu_class"):
+            fail(f"provenance: {prov}")
+        print(f"ok: provenance names the libraries: {libs}")
         check_curves(r, smoke)
         check_refusals(smoke, tmp)
         p = subprocess.run(["/usr/bin/python3", "-c",
