@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "app/commands.h"
+#include "jobs/install_paths.h"
 #include "results/file_lock.h"
 #include "build_info.h"
 #include "datasets/environments.h"
@@ -237,7 +238,7 @@ void register_render(CLI::App& app, Runner& run) {
   run = [] {
     const auto q = sh_quote;
     const std::string cmdline =
-        "/usr/bin/python3 " + q(std::string(SIRL_SOURCE_DIR) + "/results/render_jaco.py") + " " +
+        q(python_interpreter()) + " " + q((data_dir() / "results" / "render_jaco.py").string()) + " " +
         q(file) + " --out " + q(out) + " --ids " + q(ids) + " --env " + q(env);
     const int rc = std::system(cmdline.c_str());
     return rc == 0 ? 0 : 1;

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "app/commands.h"
+#include "jobs/install_paths.h"
 #include "jobs/mpi_run.h"
 #include "jobs/profile.h"
 #include "jobs/study_tasks.h"
@@ -38,10 +39,10 @@ void register_reproduce(CLI::App& app, Runner& run) {
     if (figures.empty()) figures = "out/" + stem + "-figures";
     const int rc = run_command(profile, out, threads, force, "", false, no_study);
     if (rc != 0 || mpi_rank_from_env() > 0) return rc;  // MPI workers do not plot
-    const std::string script = std::string(SIRL_SOURCE_DIR) + "/results/plot_figures.py";
+    const std::string script = (data_dir() / "results" / "plot_figures.py").string();
     if (!std::filesystem::exists(script))
       throw std::runtime_error("plotting script not found: " + script);
-    const std::string command = "/usr/bin/python3 " + sh_quote(script) + " " + sh_quote(out) +
+    const std::string command = sh_quote(python_interpreter()) + " " + sh_quote(script) + " " + sh_quote(out) +
                                 " --out " + sh_quote(figures);
     std::fprintf(stderr, "sirl reproduce: drawing figures: %s\n", command.c_str());
     const int status = std::system(command.c_str());

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "app/commands.h"
+#include "jobs/install_paths.h"
 #include "results/file_lock.h"
 #include "app/study_server.h"
 #include "datasets/study.h"
@@ -136,8 +137,8 @@ void write_study_analysis(const std::string& study_file, const std::string& env,
     throw;
   }
   std::filesystem::rename(h5 + ".partial", h5);
-  const std::string cmd = "/usr/bin/python3 " +
-                          sh_quote(std::string(SIRL_SOURCE_DIR) + "/results/plot_study.py") + " " +
+  const std::string cmd = sh_quote(python_interpreter()) + " " +
+                          sh_quote((data_dir() / "results" / "plot_study.py").string()) + " " +
                           sh_quote(h5) + " --out " + sh_quote(out);
   if (std::system(cmd.c_str()) != 0) throw std::runtime_error("plotting failed: " + cmd);
 }

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "app/commands.h"
+#include "jobs/install_paths.h"
 #include "app/study_http.h"
 #include "app/study_service.h"
 #include "datasets/environments.h"
@@ -132,7 +133,7 @@ int run_serve() {
   const std::string path = a.out;
   StudyService service(s, std::make_shared<const Dataset>(study_dataset(s)), a.participant,
                        a.practice, [path](const Study& st) { write_study(path, st); });
-  configure_study_http(srv, service, fs::path(SIRL_SOURCE_DIR) / "app" / "study_web");
+  configure_study_http(srv, service, data_dir() / "app" / "study_web");
   std::printf(
       "sirl study serve: participant %s on %s; answers go to %s\n"
       "open: http://%s:%d/?p=%s&t=%s\n",

@@ -4,8 +4,9 @@
 // encodings, duplicate headers, bodies: whatever the bytes say), the write side is shut, and the
 // reply is read to the end. Contract, checked after each input:
 //   - the server answers or closes, within the read timeout (no hang: libFuzzer's -timeout);
-//   - its resident memory stays within 64 MiB of what it was after the first inputs (a body the
-//     server buffered whole, chunked or not, would break it; ASan's own pools are counted too).
+//   - its resident memory stays within 128 MiB of what it was after the first inputs (a body the
+//     server buffered whole, chunked or not, would break it; ctest runs it with ASan's quarantine
+//     of freed memory cut to 16 MiB, which otherwise grows to 256 MiB by design).
 #include <arpa/inet.h>
 #include <httplib.h>
 #include <netinet/in.h>
@@ -102,7 +103,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   exchange(s.port, data, size);
   ++runs;
   if (runs == 64) baseline = resident_kib();
-  if (baseline > 0 && runs % 64 == 0 && resident_kib() > baseline + 64 * 1024) {
+  if (baseline > 0 && runs % 64 == 0 && resident_kib() > baseline + 128 * 1024) {
     std::fprintf(stderr, "contract broken: resident memory %ld KiB, %ld after the first inputs\n",
                  resident_kib(), baseline);
     std::abort();

@@ -1,5 +1,7 @@
 #include "jobs/profile.h"
 
+#include "jobs/install_paths.h"
+
 #include "datasets/environments.h"
 #include "datasets/study.h"
 
@@ -662,20 +664,33 @@ std::string bundled_profile_names() {
   namespace fs = std::filesystem;
   std::vector<std::string> names;
   std::error_code ec;
-  for (const auto& e : fs::directory_iterator(SIRL_CONFIG_DIR, ec))
+  fs::path dir;
+  try {
+    dir = data_dir() / "configs";
+  } catch (const std::runtime_error& e) {
+    return std::string("none: ") + e.what();
+  }
+  for (const auto& e : fs::directory_iterator(dir, ec))
     if (e.path().extension() == ".toml") names.push_back(e.path().stem().string());
   std::sort(names.begin(), names.end());
   std::string s;
   for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s.empty() ? "none found in " + std::string(SIRL_CONFIG_DIR) : s;
+  return s.empty() ? "none found in " + dir.string() : s;
 }
 
 Profile load_profile(const std::string& path_or_name) {
   namespace fs = std::filesystem;
   std::vector<fs::path> candidates{path_or_name};
+  fs::path bundled;
+  std::string missing_data;
   if (fs::path(path_or_name).extension() != ".toml") {
     candidates.push_back(fs::path("configs") / (path_or_name + ".toml"));
-    candidates.push_back(fs::path(SIRL_CONFIG_DIR) / (path_or_name + ".toml"));
+    try {
+      bundled = data_dir() / "configs";
+      candidates.push_back(bundled / (path_or_name + ".toml"));
+    } catch (const std::runtime_error& e) {  // no bundled profiles: said in the error below
+      missing_data = e.what();
+    }
   }
   for (const auto& c : candidates) {
     std::error_code ec;
@@ -688,10 +703,12 @@ Profile load_profile(const std::string& path_or_name) {
   }
   throw ProfileError(
       "profile '" + path_or_name + "' not found (looked for " + candidates.front().string() +
-      (candidates.size() > 1 ? ", configs/" + path_or_name + ".toml and " +
-                                   std::string(SIRL_CONFIG_DIR) + "/" + path_or_name + ".toml"
+      (candidates.size() > 1 ? ", configs/" + path_or_name + ".toml" +
+                                   (bundled.empty() ? std::string()
+                                                    : " and " + (bundled / path_or_name).string() +
+                                                          ".toml")
                              : std::string()) +
-      ")");
+      ")" + (missing_data.empty() ? std::string() : "; " + missing_data));
 }
 
 }  // namespace sirl

@@ -489,7 +489,11 @@ SIRL_INSTANTIATE(double)
 #undef SIRL_INSTANTIATE
 
 std::string libxsmm_version() {
+#ifdef SIRL_HAVE_XSMM
   return LIBXSMM_VERSION;
+#else
+  return "not in this build";
+#endif
 }
 
 std::string eigen_version() {

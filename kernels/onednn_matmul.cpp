@@ -111,7 +111,11 @@ bool onednn_amx_bf16() {
 #endif
 
 std::string onednn_version() {
+#ifdef SIRL_HAVE_DNNL
   const dnnl_version_t* v = dnnl_version();
   return std::to_string(v->major) + "." + std::to_string(v->minor) + "." + std::to_string(v->patch);
+#else
+  return "not in this build";
+#endif
 }
 }  // namespace sirl

@@ -1,0 +1,80 @@
+#!/usr/bin/python3
+"""An installed sirl works without its source folder (ctest):
+
+`cmake --install BUILD --prefix P`, then P is moved elsewhere and, with SIRL_INSTALLED_ONLY=1 (no
+falling back to the build's source folder), from an unrelated working folder:
+- `sirl run --help` lists the bundled profiles; `sirl reproduce --profile smoke` runs, draws the
+  figures and writes the report, with the figure scripts run by the interpreter $SIRL_PYTHON
+  names (a wrapper that records it was used);
+- the installed reader imports from P/share/sirl-bench/python and opens the results file;
+- a missing data folder is one clear line.
+"""
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+SIRL_BUILD = os.environ["SIRL_BUILD_DIR"]
+
+
+def fail(msg):
+    print("install: FAIL:", msg)
+    sys.exit(1)
+
+
+def main():
+    with tempfile.TemporaryDirectory() as tmp:
+        prefix = os.path.join(tmp, "prefix")
+        p = subprocess.run(["cmake", "--install", SIRL_BUILD, "--prefix", prefix],
+                           capture_output=True, text=True)
+        if p.returncode:
+            fail(f"cmake --install: {p.stderr}")
+        moved = os.path.join(tmp, "elsewhere", "sirl")
+        os.makedirs(os.path.dirname(moved))
+        shutil.move(prefix, moved)
+        sirl = os.path.join(moved, "bin", "sirl")
+        log = os.path.join(tmp, "python-used")
+        wrapper = os.path.join(tmp, "python")
+        open(wrapper, "w").write(f"#!/bin/sh\necho used >> {log}\nexec /usr/bin/python3 \"$@\"\n")
+        os.chmod(wrapper, 0o755)
+        env = dict(os.environ, SIRL_INSTALLED_ONLY="1", SIRL_PYTHON=wrapper)
+        env.pop("SIRL_DATA_DIR", None)
+        work = os.path.join(tmp, "work")
+        os.makedirs(work)
+
+        h = subprocess.run([sirl, "run", "--help"], capture_output=True, text=True, env=env, cwd=work)
+        if "quick" not in h.stdout or "smoke" not in h.stdout:
+            fail(f"`sirl run --help` does not list the bundled profiles:\n{h.stdout[:800]}")
+        out = os.path.join(work, "smoke.h5")
+        r = subprocess.run([sirl, "reproduce", "--profile", "smoke", "--out", out, "--figures",
+                            os.path.join(work, "figs"), "--no-study"],
+                           capture_output=True, text=True, env=env, cwd=work, timeout=900)
+        if r.returncode:
+            fail(f"installed sirl reproduce: rc {r.returncode}\n{r.stderr[-2000:]}")
+        for f in ("report.md", "fig4_fpe.png", "fig5_tpa.png"):
+            if not os.path.exists(os.path.join(work, "figs", f)):
+                fail(f"the installed run drew no {f}")
+        if not os.path.exists(log):
+            fail("the figure scripts did not run under $SIRL_PYTHON")
+        print("ok: the installed, moved sirl ran smoke and drew its figures with $SIRL_PYTHON")
+
+        code = f"import sirl_bench; print(len(sirl_bench.open({out!r}).tables['tpa']))"
+        p = subprocess.run(["/usr/bin/python3", "-c", code], capture_output=True, text=True,
+                           env=dict(os.environ, PYTHONPATH=os.path.join(moved, "share", "sirl-bench",
+                                                                       "python")), cwd=work)
+        if p.returncode or int(p.stdout) < 1:
+            fail(f"the installed reader: {p.stderr}")
+        print("ok: the installed reader opens the results file")
+
+        shutil.rmtree(os.path.join(moved, "share"))
+        p = subprocess.run([sirl, "reproduce", "--profile", "smoke", "--out", out], capture_output=True,
+                           text=True, env=env, cwd=work)
+        if p.returncode == 0 or "SIRL_DATA_DIR" not in p.stderr or p.stderr.count("\n") != 1:
+            fail(f"without its data folder: rc {p.returncode}, {p.stderr!r}")
+        print("ok: without its data folder, one line saying what to set")
+    print("install: OK")
+
+
+if __name__ == "__main__":
+    main()
