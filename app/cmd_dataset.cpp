@@ -10,13 +10,13 @@
 #include <sstream>
 
 #include "app/commands.h"
-#include "jobs/install_paths.h"
-#include "results/file_lock.h"
 #include "build_info.h"
 #include "datasets/environments.h"
 #include "datasets/grid_robot.h"
 #include "datasets/jaco_robot.h"
+#include "jobs/install_paths.h"
 #include "results/dataset_store.h"
+#include "results/file_lock.h"
 #include "results/h5.h"
 
 namespace sirl::app {
@@ -147,7 +147,9 @@ void register_dataset(CLI::App& app, Runner& run) {
   cmd->add_option("--env", a.env, "Environment")
       ->check(CLI::IsMember(env_choices()))
       ->capture_default_str();
-  cmd->add_option("--out", a.out, "Output HDF5 file (written atomically)")->required()->check(output_file());
+  cmd->add_option("--out", a.out, "Output HDF5 file (written atomically)")
+      ->required()
+      ->check(output_file());
   cmd->add_flag("--force", a.force,
                 "Replace --out even if it is not a dataset file (a results or study file)");
   cmd->add_option("--trajectories", a.trajectories,
@@ -238,8 +240,8 @@ void register_render(CLI::App& app, Runner& run) {
   run = [] {
     const auto q = sh_quote;
     const std::string cmdline =
-        q(python_interpreter()) + " " + q((data_dir() / "results" / "render_jaco.py").string()) + " " +
-        q(file) + " --out " + q(out) + " --ids " + q(ids) + " --env " + q(env);
+        q(python_interpreter()) + " " + q((data_dir() / "results" / "render_jaco.py").string()) +
+        " " + q(file) + " --out " + q(out) + " --ids " + q(ids) + " --env " + q(env);
     const int rc = std::system(cmdline.c_str());
     return rc == 0 ? 0 : 1;
   };

@@ -42,8 +42,8 @@ void register_reproduce(CLI::App& app, Runner& run) {
     const std::string script = (data_dir() / "results" / "plot_figures.py").string();
     if (!std::filesystem::exists(script))
       throw std::runtime_error("plotting script not found: " + script);
-    const std::string command = sh_quote(python_interpreter()) + " " + sh_quote(script) + " " + sh_quote(out) +
-                                " --out " + sh_quote(figures);
+    const std::string command = sh_quote(python_interpreter()) + " " + sh_quote(script) + " " +
+                                sh_quote(out) + " --out " + sh_quote(figures);
     std::fprintf(stderr, "sirl reproduce: drawing figures: %s\n", command.c_str());
     const int status = std::system(command.c_str());
     if (status != 0) throw std::runtime_error("the plotting script failed (" + command + ")");

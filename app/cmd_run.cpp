@@ -8,7 +8,6 @@
 #include <thread>
 
 #include "app/commands.h"
-#include "results/file_lock.h"
 #include "jobs/estimate.h"
 #include "jobs/plan.h"
 #include "jobs/profile.h"
@@ -17,6 +16,7 @@
 #include "jobs/schedule_sim.h"
 #include "jobs/task_kinds.h"
 #include "jobs/task_runner.h"
+#include "results/file_lock.h"
 #include "results/results_file.h"
 
 namespace sirl::app {
@@ -320,7 +320,13 @@ void register_export(CLI::App& app, Runner& run) {
                                  "<table>.csv into a directory.");
   static std::string file, dir;
   cmd->add_option("file", file, "Results file (HDF5)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--csv", dir, "Directory for the CSV files (one per table)")->required()->check(CLI::Validator([](std::string& v) { return v.empty() ? std::string("must name a folder, got an empty path") : std::string(); }, "DIR"));
+  cmd->add_option("--csv", dir, "Directory for the CSV files (one per table)")
+      ->required()
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            return v.empty() ? std::string("must name a folder, got an empty path") : std::string();
+          },
+          "DIR"));
   run = [] {
     const RunInfo info = read_run_info(file);
     if (!info.verified) std::fprintf(stderr, "sirl export: %s\n", unverified_note(file).c_str());
@@ -343,7 +349,9 @@ void register_merge(CLI::App& app, Runner& run) {
   static std::string out;
   static std::vector<std::string> inputs;
   static bool force = false;
-  cmd->add_option("out", out, "Merged results file (a new file: see --force)")->required()->check(output_file());
+  cmd->add_option("out", out, "Merged results file (a new file: see --force)")
+      ->required()
+      ->check(output_file());
   cmd->add_option("inputs", inputs, "Shard files")->required()->check(CLI::ExistingFile);
   cmd->add_flag("--force", force, "Replace OUT if it already exists (never one of the inputs)");
   run = [] {
@@ -353,10 +361,12 @@ void register_merge(CLI::App& app, Runner& run) {
     std::error_code ec;
     for (const auto& in : inputs)
       if (fs::equivalent(out, in, ec))
-        throw UsageError(out + " is also one of the inputs; merge writes a new file: "
+        throw UsageError(out +
+                         " is also one of the inputs; merge writes a new file: "
                          "sirl merge OUT SHARD...");
     if (fs::exists(out, ec) && !force)
-      throw UsageError(out + " already exists; merge writes a new file (sirl merge OUT "
+      throw UsageError(out +
+                       " already exists; merge writes a new file (sirl merge OUT "
                        "SHARD...): choose another name, or --force to replace it");
     if (const auto dir = fs::path(out).parent_path(); !dir.empty()) fs::create_directories(dir);
     const FileLock lock(out, "sirl merge", "wait for it to finish, or choose another output");

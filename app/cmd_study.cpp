@@ -11,11 +11,11 @@
 #include <string>
 
 #include "app/commands.h"
-#include "jobs/install_paths.h"
-#include "results/file_lock.h"
 #include "app/study_server.h"
 #include "datasets/study.h"
 #include "engine/study_analysis.h"
+#include "jobs/install_paths.h"
+#include "results/file_lock.h"
 #include "results/h5.h"
 #include "results/study_store.h"
 

@@ -125,11 +125,13 @@ CLI::Validator output_file() {
 }
 
 CLI::Validator positive_number() {
-  return number_check("a number > 0 (inf allowed)", [](double x) { return x > 0; }, true);
+  return number_check(
+      "a number > 0 (inf allowed)", [](double x) { return x > 0; }, true);
 }
 
 CLI::Validator non_negative_number() {
-  return number_check("a number >= 0", [](double x) { return x >= 0; }, false);
+  return number_check(
+      "a number >= 0", [](double x) { return x >= 0; }, false);
 }
 
 void register_all(CLI::App& app) {

@@ -79,7 +79,8 @@ void configure_study_http(httplib::Server& srv, StudyService& service, const fs:
           [three](const httplib::Request& r, httplib::Response& res) {
             const fs::path f = three / r.matches[1].str();
             if (!fs::is_regular_file(f))
-              return json_reply(res, error_reply(404, "three.js is not installed (scripts/setup.sh)"));
+              return json_reply(res,
+                                error_reply(404, "three.js is not installed (scripts/setup.sh)"));
             res.set_content(read_file(f), "text/javascript");
           });
   srv.Get("/api/state", api(&StudyService::state));
@@ -105,9 +106,9 @@ void configure_study_http(httplib::Server& srv, StudyService& service, const fs:
       too_large = true;
     if (too_large || !whole) {
       res.set_header("Connection", "close");  // the unread rest must not be parsed as a request
-      return json_reply(res, error_reply(too_large ? 413 : 400,
-                                         too_large ? "the request body is over 64 KiB"
-                                                   : "the request body was cut short"));
+      return json_reply(
+          res, error_reply(too_large ? 413 : 400, too_large ? "the request body is over 64 KiB"
+                                                            : "the request body was cut short"));
     }
     RequestParams params = r.params;  // the URL's query; the form body's fields are added
     httplib::detail::parse_query_text(body, params);

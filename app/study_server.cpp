@@ -14,18 +14,17 @@
 #include <sstream>
 
 #include "app/commands.h"
-#include "jobs/install_paths.h"
 #include "app/study_http.h"
 #include "app/study_service.h"
 #include "datasets/environments.h"
 #include "datasets/study.h"
 #include "datasets/study_import.h"
+#include "jobs/install_paths.h"
 #include "results/file_lock.h"
 #include "results/h5.h"
 #include "results/study_store.h"
 
 namespace sirl::app {
-
 
 namespace {
 
@@ -204,7 +203,9 @@ void register_study_serve(CLI::App& study) {
   c->add_option("--scenario-features", a.scenario_features,
                 "Features the scenario's preference involves (e.g. table,laptop)")
       ->delimiter(',');
-  c->add_option("--out", a.out, "Study file (created, or resumed)")->required()->check(output_file());
+  c->add_option("--out", a.out, "Study file (created, or resumed)")
+      ->required()
+      ->check(output_file());
   c->add_option("--port", a.port, "TCP port (0: any free port; the URL printed names it)")
       ->check(CLI::Range(0, 65535))
       ->capture_default_str();

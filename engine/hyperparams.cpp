@@ -4,8 +4,8 @@
 #include <cmath>
 #include <optional>
 #include <sstream>
-#include <type_traits>
 #include <stdexcept>
+#include <type_traits>
 
 #include "datasets/environments.h"
 
@@ -149,11 +149,16 @@ HyperType hyper_type(const std::string& key) {
 
 const char* hyper_type_name(HyperType t) {
   switch (t) {
-    case HyperType::integer: return "an integer";
-    case HyperType::number: return "a number";
-    case HyperType::boolean: return "true or false";
-    case HyperType::integer_list: return "an array of integers";
-    case HyperType::word: return "a string";
+    case HyperType::integer:
+      return "an integer";
+    case HyperType::number:
+      return "a number";
+    case HyperType::boolean:
+      return "true or false";
+    case HyperType::integer_list:
+      return "an array of integers";
+    case HyperType::word:
+      return "a string";
   }
   return "?";
 }

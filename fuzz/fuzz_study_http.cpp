@@ -45,8 +45,8 @@ Served& served() {
     sirl::StudyParticipant p = sirl::plan_participant(*data, "ann", 3, 2, 7);
     p.token = "tok";
     study.participants.push_back(std::move(p));
-    s->service = std::make_unique<sirl::app::StudyService>(study, data, "ann", 1,
-                                                          [](const sirl::Study&) {});
+    s->service =
+        std::make_unique<sirl::app::StudyService>(study, data, "ann", 1, [](const sirl::Study&) {});
     sirl::app::configure_study_http(s->srv, *s->service, SIRL_SOURCE_DIR "/app/study_web");
     // One connection at a time comes from here: 4 workers instead of the 256 that serve slow
     // clients, so every worker's stack is resident before the memory baseline is taken.

@@ -31,9 +31,10 @@ fs::path data_dir() {
   }
   if (const char* only = std::getenv("SIRL_INSTALLED_ONLY"); !(only && *only))
     if (holds_configs(SIRL_SOURCE_DIR)) return SIRL_SOURCE_DIR;
-  throw std::runtime_error("cannot find sirl-bench's data folder (configs/, results/, python/): "
-                           "not beside the binary (" +
-                           exe.string() + " → ../share/sirl-bench); set SIRL_DATA_DIR");
+  throw std::runtime_error(
+      "cannot find sirl-bench's data folder (configs/, results/, python/): "
+      "not beside the binary (" +
+      exe.string() + " → ../share/sirl-bench); set SIRL_DATA_DIR");
 }
 
 std::string python_interpreter() {

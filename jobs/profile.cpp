@@ -52,7 +52,9 @@ std::vector<bool> frozen_settings(const TpaGrid& grid, const Variant& v) {
   return {is_best_mode(v, true)};
 }
 
-bool is_best_mode(const Variant& v, bool frozen) { return frozen == (v.method == Method::sirl); }
+bool is_best_mode(const Variant& v, bool frozen) {
+  return frozen == (v.method == Method::sirl);
+}
 
 namespace {
 
@@ -207,11 +209,12 @@ std::string hyper_text(const Reader& r, const toml::node& n, const std::string& 
   try {
     want = hyper_type(key);
   } catch (const std::invalid_argument&) {
-    r.fail(&n, "unknown hyper-parameter '" + key + "' (known: " + [] {
-      std::string keys;
-      for (const auto& k : hyper_keys()) keys += (keys.empty() ? "" : ", ") + k;
-      return keys;
-    }() + ")");
+    r.fail(
+        &n, "unknown hyper-parameter '" + key + "' (known: " + [] {
+          std::string keys;
+          for (const auto& k : hyper_keys()) keys += (keys.empty() ? "" : ", ") + k;
+          return keys;
+        }() + ")");
   }
   const bool ok = want == HyperType::integer        ? n.is_integer()
                   : want == HyperType::number       ? n.is_integer() || n.is_floating_point()
@@ -703,11 +706,11 @@ Profile load_profile(const std::string& path_or_name) {
   }
   throw ProfileError(
       "profile '" + path_or_name + "' not found (looked for " + candidates.front().string() +
-      (candidates.size() > 1 ? ", configs/" + path_or_name + ".toml" +
-                                   (bundled.empty() ? std::string()
-                                                    : " and " + (bundled / path_or_name).string() +
-                                                          ".toml")
-                             : std::string()) +
+      (candidates.size() > 1
+           ? ", configs/" + path_or_name + ".toml" +
+                 (bundled.empty() ? std::string()
+                                  : " and " + (bundled / path_or_name).string() + ".toml")
+           : std::string()) +
       ")" + (missing_data.empty() ? std::string() : "; " + missing_data));
 }
 

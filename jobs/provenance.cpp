@@ -25,11 +25,10 @@ std::string compiler() {
 }  // namespace
 
 std::vector<std::pair<std::string, std::string>> library_versions() {
-  return {{"compiler", compiler()},        {"eigen", eigen_version()},
-          {"libxsmm", libxsmm_version()},  {"onednn", onednn_version()},
-          {"cholmod", cholmod_version()},  {"mujoco", mujoco_version()},
-          {"hdf5", hdf5_version()},        {"onetbb", tbb_version()},
-          {"xxhash", xxhash_version()}};
+  return {
+      {"compiler", compiler()},     {"eigen", eigen_version()},     {"libxsmm", libxsmm_version()},
+      {"onednn", onednn_version()}, {"cholmod", cholmod_version()}, {"mujoco", mujoco_version()},
+      {"hdf5", hdf5_version()},     {"onetbb", tbb_version()},      {"xxhash", xxhash_version()}};
 }
 
 std::string library_versions_text() {

@@ -3,9 +3,9 @@
 #include "jobs/ready_queue.h"
 
 #include <tbb/info.h>
-#include <tbb/version.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
+#include <tbb/version.h>
 
 #include <algorithm>
 #include <exception>

@@ -6,8 +6,8 @@
 // a long VAE → representation → TPA chain on a many-core node). Every kernel gives the same
 // bits on any thread count, so widths change timing only.
 #pragma once
-#include <string>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "jobs/plan.h"

@@ -3,8 +3,8 @@
 // With one thread oneDNN's blocking (and any split of K) is fixed by the shape, so the bits are
 // too. Without oneDNN in the build every call returns false and the caller computes the product.
 #pragma once
-#include <string>
 #include <cstdint>
+#include <string>
 
 namespace sirl {
 

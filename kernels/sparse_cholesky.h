@@ -1,8 +1,8 @@
 // A sparse symmetric positive-definite matrix factored once with SuiteSparse CHOLMOD (LLᵀ with a
 // fill-reducing ordering) and solved many times. Used for the trajectory-deformation norm.
 #pragma once
-#include <string>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace sirl {

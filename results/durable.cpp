@@ -58,7 +58,8 @@ uint64_t file_checksum(const std::string& path, uint64_t offset) {
 void refuse_symlink(const std::string& path) {
   struct stat st;
   if (::lstat(path.c_str(), &st) == 0 && S_ISLNK(st.st_mode))
-    throw std::runtime_error(path + " is a symbolic link; sirl creates this file itself and does "
+    throw std::runtime_error(path +
+                             " is a symbolic link; sirl creates this file itself and does "
                              "not write through links: remove it");
 }
 
@@ -83,7 +84,7 @@ std::string file_digest(const std::string& path, uint64_t offset) {
   if (!in) throw std::runtime_error(path + ": cannot read");
   in.seekg(std::streamoff(offset));
   std::unique_ptr<XXH3_state_t, XXH_errorcode (*)(XXH3_state_t*)> state(XXH3_createState(),
-                                                                         XXH3_freeState);
+                                                                        XXH3_freeState);
   if (!state || XXH3_128bits_reset(state.get()) != XXH_OK)
     throw std::runtime_error(path + ": cannot start the digest");
   std::vector<char> buf(1 << 20);
@@ -95,7 +96,9 @@ std::string file_digest(const std::string& path, uint64_t offset) {
   return canonical_hex(XXH3_128bits_digest(state.get()));
 }
 
-std::string bytes_digest(const void* data, size_t n) { return canonical_hex(XXH3_128bits(data, n)); }
+std::string bytes_digest(const void* data, size_t n) {
+  return canonical_hex(XXH3_128bits(data, n));
+}
 
 std::string hex64(uint64_t v) {
   char b[17];

@@ -14,7 +14,8 @@ FileLock::FileLock(const std::string& file, const std::string& holder, const std
   // O_NOFOLLOW: a link planted at OUT.lock must not make us write our pid into its target.
   fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
   if (fd_ < 0 && errno == ELOOP)
-    throw std::runtime_error(path_ + " is a symbolic link; sirl creates this file itself and does "
+    throw std::runtime_error(path_ +
+                             " is a symbolic link; sirl creates this file itself and does "
                              "not write through links: remove it");
   if (fd_ < 0)
     throw std::runtime_error(path_ + ": cannot create the lock file: " + std::strerror(errno));

@@ -1,8 +1,8 @@
 #include "results/results_file.h"
 
-#include <cerrno>
 #include <unistd.h>
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -530,8 +530,8 @@ void export_csv(const ResultTables& t, const std::string& dir) {
       if (std::fwrite(s.data(), 1, s.size(), out) != s.size()) {
         const int err = errno;
         std::fclose(out);
-        throw H5Error((fs::path(dir) / (name + ".csv")).string() + ": cannot write: " +
-                      std::strerror(err));
+        throw H5Error((fs::path(dir) / (name + ".csv")).string() +
+                      ": cannot write: " + std::strerror(err));
       }
     };
     for (size_t k = 0; k < tab.columns.size(); ++k) line += (k ? "," : "") + tab.columns[k].name;
@@ -555,12 +555,12 @@ void export_csv(const ResultTables& t, const std::string& dir) {
     if (std::fflush(out) != 0 || ::fsync(::fileno(out)) != 0) {
       const int err = errno;
       std::fclose(out);
-      throw H5Error((fs::path(dir) / (name + ".csv")).string() + ": cannot write: " +
-                    std::strerror(err));
+      throw H5Error((fs::path(dir) / (name + ".csv")).string() +
+                    ": cannot write: " + std::strerror(err));
     }
     if (std::fclose(out) != 0)
-      throw H5Error((fs::path(dir) / (name + ".csv")).string() + ": cannot write: " +
-                    std::strerror(errno));
+      throw H5Error((fs::path(dir) / (name + ".csv")).string() +
+                    ": cannot write: " + std::strerror(errno));
   };
   try {
     for (const auto& tab : t.tables) write(tab.table, tab.name);

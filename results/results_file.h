@@ -83,10 +83,10 @@ struct ResultTables {
   const H5Table& at(const std::string& name) const;
 };
 // The cell tables in the order given, then the tables every kind contributes to: timings,
-// training (each training's convergence), vae_latents, tpa_heads (one row per reward head). The roofs give /tables/timings its
-// roof_percent column (a task whose record says bf16_products against the bf16 roof where there
-// is one, every other against the fp32 roof) and the memory roofs of the tasks that stream (their
-// records' stream_bytes).
+// training (each training's convergence), vae_latents, tpa_heads (one row per reward head). The
+// roofs give /tables/timings its roof_percent column (a task whose record says bf16_products
+// against the bf16 roof where there is one, every other against the fp32 roof) and the memory roofs
+// of the tasks that stream (their records' stream_bytes).
 ResultTables build_tables(const std::vector<TaskRecord>& records,
                           const std::vector<CellTableSpec>& cells, const Roofs& roofs = {});
 

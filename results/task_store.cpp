@@ -28,11 +28,12 @@ constexpr std::string_view kFrameMagic = "SIRLTASK2\n", kFrameMagicV1 = "SIRLTAS
 constexpr std::string_view kHdf5Signature = "\x89HDF\r\n\x1a\n";
 
 struct Frame {
-  bool framed = false;  // false: a commit of engine 0.2.0 (plain HDF5)
+  bool framed = false;              // false: a commit of engine 0.2.0 (plain HDF5)
   std::string checksum, key, head;  // checksum: 32 hex (SIRLTASK2) or 16 (SIRLTASK1)
 };
 
-std::string frame_text(std::string_view magic, const std::string& checksum, const std::string& key) {
+std::string frame_text(std::string_view magic, const std::string& checksum,
+                       const std::string& key) {
   std::string head = std::string(magic) + checksum + "\n" + key + "\n";
   if (head.size() > kFrameBytes) throw H5Error("task key too long for a commit: " + key);
   head.resize(kFrameBytes, '\0');

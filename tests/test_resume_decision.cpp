@@ -46,8 +46,8 @@ TEST(ResumeDecision, AnotherPartOfTheGridIsRefused) {
 }
 
 TEST(ResumeDecision, ForceNeverRefusesAndNeverReusesAnotherRun) {
-  for (const RunInfo& other : {written("Q", "0.8.0", ""), written("P", "0.7.0", ""),
-                               written("P", "0.8.0", "0/2")}) {
+  for (const RunInfo& other :
+       {written("Q", "0.8.0", ""), written("P", "0.7.0", ""), written("P", "0.8.0", "0/2")}) {
     const ResumeDecision d = resume_decision(other, "P", "0.8.0", "", true);
     EXPECT_EQ(d.refusal, "");
     EXPECT_FALSE(d.reuse);

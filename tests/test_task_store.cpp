@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "results/h5.h"
 #include "results/durable.h"
+#include "results/h5.h"
 #include "results/task_store.h"
 #include "tests/scratch_dir.h"
 
@@ -141,7 +141,8 @@ TEST(TaskStore, ACommitOfTheFnvFrameIsStillReadAndVerified) {
     write_record(f, "/r", r);
     f.set_attr("/r", "record_checksum", record_checksum_fnv(r));
   }
-  std::string head = "SIRLTASK1\n" + hex64(file_checksum(file.string(), 1024)) + "\n" + r.key + "\n";
+  std::string head =
+      "SIRLTASK1\n" + hex64(file_checksum(file.string(), 1024)) + "\n" + r.key + "\n";
   head.resize(1024, '\0');
   {
     std::fstream out(file, std::ios::in | std::ios::out | std::ios::binary);
