@@ -512,7 +512,9 @@ void export_csv(const ResultTables& t, const std::string& dir) {
   // Every CSV is written in full into a folder of our own inside `dir` first, then each is renamed
   // into place (renames need no space): a full disk leaves the old CSVs as they were, never a
   // truncated one beside new ones. Other files in `dir` are left alone.
-  const fs::path staging = fs::path(dir) / ".sirl-export.partial";
+  // Named by our pid: two exports into one folder never share (or delete) each other's staging.
+  const fs::path staging =
+      fs::path(dir) / (".sirl-export." + std::to_string(::getpid()) + ".partial");
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw H5Error(dir + ": cannot create the folder: " + ec.message());
