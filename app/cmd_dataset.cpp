@@ -18,6 +18,7 @@
 #include "results/dataset_store.h"
 #include "results/file_lock.h"
 #include "results/h5.h"
+#include "results/results_file.h"
 
 namespace sirl::app {
 namespace {
@@ -117,6 +118,9 @@ int run_dataset(const DatasetArgs& a) {
 }
 
 int run_inspect(const std::string& file, const std::string& env) {
+  // A results file carries a checksum (a dataset file has none: nothing to check): verified
+  // before HDF5 reads a byte, as every other reader of results files does.
+  verify_checksum(file);
   const H5File f = H5File::open_read(file);
   const StoredDataset s = read_dataset(f, env);
   const Dataset& d = s.data;

@@ -69,6 +69,11 @@ def main():
                 refused += 1
         print(f"ok: {refused} corrupted copies ({SINGLE} single, {PAIRS} paired flips; with and "
               "without the sidecar) refused")
+        # `inspect` reads a results file's datasets: the last corrupted copy is refused there too.
+        flipped(good, bad, cases[0])
+        p = subprocess.run([SIRL, "inspect", bad], capture_output=True, text=True, timeout=60)
+        if p.returncode == 0 or "checksum" not in p.stderr:
+            fail(f"inspect read a corrupted results file: rc {p.returncode}, {p.stderr!r}")
 
         copy = os.path.join(tmp, "copied.h5")
         shutil.copy(good, copy)  # the .h5 alone, as a user copies it
