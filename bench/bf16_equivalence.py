@@ -28,7 +28,6 @@ import subprocess
 import sys
 import tomllib
 
-import pandas as pd
 from scipy import stats
 
 # The reader package: installed by scripts/setup.sh, or beside this folder in a checkout.

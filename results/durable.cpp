@@ -55,6 +55,14 @@ uint64_t file_checksum(const std::string& path, uint64_t offset) {
   return h;
 }
 
+void overwrite_head(const std::string& path, const std::string& head) {
+  std::fstream out(path, std::ios::in | std::ios::out | std::ios::binary);
+  out.seekp(0);
+  out.write(head.data(), std::streamsize(head.size()));
+  out.flush();
+  if (!out) throw std::runtime_error(path + ": cannot write its checksum frame");
+}
+
 void refuse_symlink(const std::string& path) {
   struct stat st;
   if (::lstat(path.c_str(), &st) == 0 && S_ISLNK(st.st_mode))

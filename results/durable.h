@@ -12,6 +12,10 @@ namespace sirl {
 // first: a link planted there would make sirl write, lock or delete whatever it points to.
 void refuse_symlink(const std::string& path);
 
+// Overwrites the first bytes of a closed file with `head` (a checksum frame in an HDF5 userblock:
+// results files and task commits). Throws std::runtime_error naming the file if it cannot.
+void overwrite_head(const std::string& path, const std::string& head);
+
 // fsync of a file or a directory; silently does nothing if it cannot be opened. Every durable
 // write here (write a temporary file, fsync it, rename, fsync the directory) goes through it, so
 // it holds the crash points: one before the fsync (the bytes written, not yet durable), one after.

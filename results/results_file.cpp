@@ -321,12 +321,11 @@ std::string digest_of(const std::string& path, uint64_t offset = 0) {
 }
 
 void write_frame(const std::string& path) {
-  const std::string head = results_frame(digest_of(path, kResultsFrameBytes));
-  std::fstream out(path, std::ios::in | std::ios::out | std::ios::binary);
-  out.seekp(0);
-  out.write(head.data(), std::streamsize(head.size()));
-  out.flush();
-  if (!out) throw H5Error(path + ": cannot write the file's checksum frame");
+  try {
+    overwrite_head(path, results_frame(digest_of(path, kResultsFrameBytes)));
+  } catch (const std::runtime_error& e) {
+    throw H5Error(e.what());
+  }
 }
 
 }  // namespace

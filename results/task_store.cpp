@@ -75,12 +75,11 @@ std::string frame_checksum(const fs::path& p, size_t digits) {
 
 // Fills the userblock of a closed commit file for `key`.
 void write_frame(const fs::path& p, const std::string& key) {
-  const std::string head = frame_text(kFrameMagic, frame_checksum(p, 32), key);
-  std::fstream out(p, std::ios::in | std::ios::out | std::ios::binary);
-  out.seekp(0);
-  out.write(head.data(), std::streamsize(head.size()));
-  out.flush();
-  if (!out) throw H5Error(p.string() + ": cannot write the commit's frame");
+  try {
+    overwrite_head(p.string(), frame_text(kFrameMagic, frame_checksum(p, 32), key));
+  } catch (const std::runtime_error& e) {
+    throw H5Error(e.what());
+  }
 }
 
 // The record committed in `p` for `key`, verified before HDF5 opens the file (framed commits)

@@ -20,7 +20,6 @@ import tempfile
 
 import h5py
 import numpy as np
-import pandas as pd
 
 SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]

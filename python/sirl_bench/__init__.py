@@ -9,4 +9,6 @@
 from .results import (FLAG_COLUMNS, SCHEMA_VERSIONS, Results, ResultsError, claims,  # noqa: F401
                       datasets, open, study_analysis, typed)
 
+__all__ = ["FLAG_COLUMNS", "SCHEMA_VERSIONS", "Results", "ResultsError", "claims", "datasets",
+           "open", "study_analysis", "typed"]
 __version__ = "0.8.0"

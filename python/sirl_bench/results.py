@@ -309,7 +309,7 @@ def _attr(v):
     return v
 
 
-def _open_h5(path, what):
+def _open_h5(path):
     try:
         return h5py.File(str(path), "r")
     except OSError as e:
@@ -319,7 +319,7 @@ def _open_h5(path, what):
 def datasets(path) -> dict:
     """/datasets of any sirl-bench file (a results file or `sirl dataset --out`), as
     Results.datasets: {env: {"attrs": ..., "inputs": Ξ, ...}}."""
-    with _open_h5(path, "datasets") as f:
+    with _open_h5(path) as f:
         if "datasets" not in f:
             raise ResultsError(f"{path}: no /datasets (not a sirl-bench results or dataset file)")
         return {env: _group_dict(g) for env, g in f["datasets"].items()}
@@ -327,7 +327,7 @@ def datasets(path) -> dict:
 
 def study_analysis(path) -> dict:
     """The user-study analysis (`sirl study analyze --out`): its arrays by name and "attrs"."""
-    with _open_h5(path, "study") as f:
+    with _open_h5(path) as f:
         if "study_analysis" not in f:
             raise ResultsError(f"{path}: not a study analysis file (no /study_analysis)")
         return _group_dict(f["study_analysis"])
