@@ -15,6 +15,8 @@
 #include "datasets/grid_robot.h"
 #include "datasets/jaco_robot.h"
 #include "jobs/install_paths.h"
+#include "jobs/profile.h"
+#include "jobs/task_runner.h"
 #include "results/dataset_store.h"
 #include "results/file_lock.h"
 #include "results/h5.h"
@@ -34,6 +36,7 @@ struct DatasetArgs {
   std::vector<double> jaco_laptop{0.0, -0.8, 0.0}, jaco_human{-0.2, -0.5, 0.6};
   int threads = 0;
   bool force = false;
+  std::string profile;  // --profile: a profile's training data instead
 };
 
 Teacher make_teacher(const DatasetArgs& a, const Dataset& d) {
@@ -114,6 +117,59 @@ int run_dataset(const DatasetArgs& a) {
       a.out.c_str(), d.env.c_str(), (long long)d.count, d.input_dim, build_s, d.feature_count(),
       (long long)q.similarity.count, (long long)q.similarity.skipped, (long long)qc.preference,
       q.rewards.test.count, (long long)qc.tpa_pairs, q.fpe.train.size(), q.fpe.test.size());
+  return 0;
+}
+
+// `sirl dataset --profile`: what a method trained elsewhere needs, built as `sirl run` builds it
+// (the same RunContext): per environment of the profile, Ξ with its true features and every
+// seed's rewards and query sets (the triplets with their answers, the preference pairs with
+// their labels, the TPA pairs and the FPE split).
+int run_profile_dataset(const std::string& profile, const std::string& out, bool force) {
+  Profile p;
+  try {
+    p = load_profile(profile);
+  } catch (const ProfileError& e) {
+    throw UsageError(e.what());
+  }
+  check_replaceable(out, "dataset", force);
+  if (const auto dir = std::filesystem::path(out).parent_path(); !dir.empty())
+    std::filesystem::create_directories(dir);
+  const FileLock lock(out, "sirl dataset", "wait for it to finish, or choose another --out");
+  RunContext ctx(p, [](const std::string& key) -> TaskRecord {
+    throw std::logic_error("sirl dataset reads no task (" + key + ")");
+  });
+  const std::string tmp = out + ".partial";
+  std::string summary;
+  try {
+    H5File f = H5File::create(tmp);
+    f.set_compression(true);
+    f.set_attr("/", "engine_version", std::string(SIRL_VERSION));
+    f.set_attr("/", "git_commit", std::string(SIRL_GIT_COMMIT));
+    f.set_attr("/", "profile_name", p.name);
+    f.set_attr("/", "profile_text", p.text);
+    for (const auto& env : p.envs) {
+      const std::vector<int64_t>& seeds = p.axes.at(env).seeds;
+      if (seeds.empty()) continue;
+      const Dataset& d = ctx.dataset(env);
+      write_dataset(f, d, ctx.bundle(env, seeds.front()), SIRL_VERSION);
+      f.set_attr("/datasets/" + env, "seeds", std::vector<std::string>([&] {
+                   std::vector<std::string> v;
+                   for (int64_t s : seeds) v.push_back(std::to_string(s));
+                   return v;
+                 }()));
+      for (int64_t seed : seeds) write_seed_queries(f, env, seed, ctx.bundle(env, seed));
+      summary += (summary.empty() ? "" : "; ") + env + ": " + std::to_string(d.count) +
+                 " trajectories, " + std::to_string(seeds.size()) + " seeds";
+    }
+    f.close();
+  } catch (const std::exception&) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw;
+  }
+  std::filesystem::rename(tmp, out);
+  std::printf("wrote %s: profile %s's training data (%s)\n", out.c_str(), p.name.c_str(),
+              summary.c_str());
   return 0;
 }
 
@@ -217,7 +273,24 @@ void register_dataset(CLI::App& app, Runner& run) {
       ->delimiter(',')
       ->expected(2)
       ->capture_default_str();
-  run = [] { return run_dataset(a); };
+  cmd->add_option("--profile", a.profile,
+                  "Write the training data of a profile's run instead: per environment Ξ and "
+                  "every seed's query sets under /datasets/<env>/seeds/s<seed>, built exactly as "
+                  "`sirl run` builds them (what a method trained elsewhere learns from before "
+                  "`sirl evaluate`). Excludes the options above but --out and --force")
+      ->excludes(cmd->get_option("--env"))
+      ->excludes(cmd->get_option("--seed"))
+      ->excludes(cmd->get_option("--trajectories"))
+      ->excludes(cmd->get_option("--similarity"))
+      ->excludes(cmd->get_option("--preference"))
+      ->excludes(cmd->get_option("--tpa-pairs"))
+      ->excludes(cmd->get_option("--fpe"))
+      ->excludes(cmd->get_option("--beta"))
+      ->excludes(cmd->get_option("--mistake"))
+      ->excludes(cmd->get_option("--features"));
+  run = [] {
+    return a.profile.empty() ? run_dataset(a) : run_profile_dataset(a.profile, a.out, a.force);
+  };
 }
 
 std::vector<std::string> arm_envs() {

@@ -14,6 +14,17 @@
 
 namespace sirl::app {
 
+void draw_figures(const std::string& results, const std::string& figures) {
+  const std::string script = (data_dir() / "results" / "plot_figures.py").string();
+  if (!std::filesystem::exists(script))
+    throw std::runtime_error("plotting script not found: " + script);
+  const std::string command = sh_quote(python_interpreter()) + " " + sh_quote(script) + " " +
+                              sh_quote(results) + " --out " + sh_quote(figures);
+  std::fprintf(stderr, "sirl: drawing figures: %s\n", command.c_str());
+  const int status = std::system(command.c_str());
+  if (status != 0) throw std::runtime_error("the plotting script failed (" + command + ")");
+}
+
 void register_reproduce(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "reproduce",
@@ -39,14 +50,7 @@ void register_reproduce(CLI::App& app, Runner& run) {
     if (figures.empty()) figures = "out/" + stem + "-figures";
     const int rc = run_command(profile, out, threads, force, "", false, no_study);
     if (rc != 0 || mpi_rank_from_env() > 0) return rc;  // MPI workers do not plot
-    const std::string script = (data_dir() / "results" / "plot_figures.py").string();
-    if (!std::filesystem::exists(script))
-      throw std::runtime_error("plotting script not found: " + script);
-    const std::string command = sh_quote(python_interpreter()) + " " + sh_quote(script) + " " +
-                                sh_quote(out) + " --out " + sh_quote(figures);
-    std::fprintf(stderr, "sirl reproduce: drawing figures: %s\n", command.c_str());
-    const int status = std::system(command.c_str());
-    if (status != 0) throw std::runtime_error("the plotting script failed (" + command + ")");
+    draw_figures(out, figures);
     // The user-study pipeline on a simulated cohort (Fig. 6), when the profile asks for it.
     const Profile p = load_profile(profile);
     std::string study_line;

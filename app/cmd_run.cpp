@@ -40,7 +40,13 @@ int default_threads() {
 int run_command(const std::string& profile_name, const std::string& out, int threads, bool force,
                 const std::string& shard, bool quiet, bool skip_study, double checkpoint_minutes,
                 int max_task_threads) {
-  Profile p = load_or_usage(profile_name);
+  return run_loaded_profile(load_or_usage(profile_name), out, threads, force, shard, quiet,
+                            skip_study, checkpoint_minutes, max_task_threads);
+}
+
+int run_loaded_profile(Profile p, const std::string& out, int threads, bool force,
+                       const std::string& shard, bool quiet, bool skip_study,
+                       double checkpoint_minutes, int max_task_threads) {
   if (skip_study) p.study.enabled = false;
   RunOptions o;
   o.out = out;

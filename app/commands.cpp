@@ -145,6 +145,7 @@ void register_all(CLI::App& app) {
   register_run(app, runners()["run"]);
   register_export(app, runners()["export"]);
   register_merge(app, runners()["merge"]);
+  register_evaluate(app, runners()["evaluate"]);
   enforce_decimal_numbers(app);
 }
 

@@ -9,6 +9,9 @@
 
 #include "engine/study_analysis.h"
 
+namespace sirl {
+struct Profile;
+}
 namespace CLI {
 class App;
 class Validator;
@@ -33,6 +36,7 @@ void register_run(CLI::App& app, Runner& run);
 void register_plan(CLI::App& app, Runner& run);
 void register_export(CLI::App& app, Runner& run);
 void register_merge(CLI::App& app, Runner& run);
+void register_evaluate(CLI::App& app, Runner& run);
 
 // Single-quotes a string for /bin/sh (the plotting scripts are run through std::system).
 std::string sh_quote(const std::string& s);
@@ -80,6 +84,14 @@ void write_study_analysis(const std::string& study_file, const std::string& env,
 int run_command(const std::string& profile, const std::string& out, int threads, bool force,
                 const std::string& shard, bool quiet, bool skip_study = false,
                 double checkpoint_minutes = 5, int max_task_threads = 0);
+
+// The same for a profile already loaded (`sirl evaluate` adds its [external] section first).
+int run_loaded_profile(Profile p, const std::string& out, int threads, bool force,
+                       const std::string& shard, bool quiet, bool skip_study = false,
+                       double checkpoint_minutes = 5, int max_task_threads = 0);
+// Draws every figure and writes the report of a results file into `figures`
+// (results/plot_figures.py through Debian's python3); throws std::runtime_error if it fails.
+void draw_figures(const std::string& results, const std::string& figures);
 
 void register_all(CLI::App& app);
 int run_selected(CLI::App& app);

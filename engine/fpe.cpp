@@ -22,13 +22,8 @@ FpeResult evaluate_fpe(const Representation& rep, const Dataset& d, const FpeSpl
   if (split.train.empty() || split.test.empty())
     throw std::invalid_argument("FPE split needs train and test trajectories");
   const int dim = rep.dim(), F = d.feature_count();
-  auto embed_rows = [&](const std::vector<int32_t>& idx) {
-    const std::vector<float> x = rows(d.inputs.data(), d.input_dim, idx);
-    std::vector<float> e(idx.size() * size_t(dim));
-    embed(rep, x.data(), int64_t(idx.size()), e.data(), threads);
-    return e;
-  };
-  const auto e_tr = embed_rows(split.train), e_te = embed_rows(split.test);
+  const auto e_tr = embed_rows(rep, d, split.train, threads);
+  const auto e_te = embed_rows(rep, d, split.test, threads);
   const auto y_tr = rows(d.features.data(), F, split.train);
   const auto y_te = rows(d.features.data(), F, split.test);
   require_finite(e_tr, "FPE embedding");

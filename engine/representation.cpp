@@ -25,6 +25,8 @@ const char* method_name(Method m) {
       return "singlepref";
     case Method::random:
       return "random";
+    case Method::external:
+      return "external";
   }
   return "?";
 }
@@ -32,6 +34,7 @@ const char* method_name(Method m) {
 Method parse_method(const std::string& name) {
   for (Method m : kAll)
     if (name == method_name(m)) return m;
+  if (name == method_name(Method::external)) return Method::external;
   std::string known;
   for (Method m : kAll) known += (known.empty() ? "" : ", ") + std::string(method_name(m));
   throw std::invalid_argument("unknown method '" + name + "' (expected one of " + known + ")");
@@ -41,7 +44,27 @@ bool uses_queries(Method m) {
   return m != Method::vae && m != Method::random;
 }
 bool accepts_vae_pretrain(Method m) {
-  return uses_queries(m);
+  return uses_queries(m) && m != Method::external;
+}
+
+Representation table_representation(std::vector<float> table, int64_t T, int d, int input_dim) {
+  if (d < 1 || T < 1)
+    throw std::invalid_argument("an external embedding needs T >= 1 rows of d >= 1 values, got [" +
+                                std::to_string(T) + ", " + std::to_string(d) + "]");
+  if (table.size() != size_t(T) * size_t(d))
+    throw std::invalid_argument("an external embedding [" + std::to_string(T) + ", " +
+                                std::to_string(d) + "] needs " + std::to_string(T * d) +
+                                " values, got " + std::to_string(table.size()));
+  for (size_t i = 0; i < table.size(); ++i)
+    if (!std::isfinite(table[i]))
+      throw std::invalid_argument("an external embedding holds " + std::to_string(table[i]) +
+                                  " at row " + std::to_string(i / size_t(d)) + ", column " +
+                                  std::to_string(i % size_t(d)) + " (every value must be finite)");
+  Representation r;
+  r.method = Method::external;
+  r.shape.widths = {input_dim, d};
+  r.table = std::move(table);
+  return r;
 }
 
 MlpShape phi_shape(int in, const Hyper& h) {
@@ -56,6 +79,8 @@ MlpShape phi_shape(int in, const Hyper& h) {
 }
 
 void embed(const Representation& rep, const float* X, int64_t n, float* out, int threads) {
+  if (rep.is_table())
+    throw std::logic_error("embed: an external representation has no weights to apply");
   constexpr int64_t kChunk = 1024;
   MlpTape<float> tape;
   const int in = rep.shape.in(), d = rep.dim();
@@ -66,7 +91,29 @@ void embed(const Representation& rep, const float* X, int64_t n, float* out, int
   }
 }
 
+std::vector<float> embed_rows(const Representation& rep, const Dataset& d,
+                              const std::vector<int32_t>& rows, int threads) {
+  const int dim = rep.dim();
+  std::vector<float> out(rows.size() * size_t(dim));
+  if (!rep.table.empty()) {
+    if (rep.table.size() != size_t(d.count) * size_t(dim))
+      throw std::invalid_argument("φ(Ξ) holds " + std::to_string(rep.table.size() / size_t(dim)) +
+                                  " rows of " + std::to_string(dim) + ", the dataset " +
+                                  std::to_string(d.count) + " trajectories");
+    for (size_t i = 0; i < rows.size(); ++i)
+      std::copy_n(rep.table.begin() + ptrdiff_t(rows[i]) * dim, dim, out.begin() + i * dim);
+    return out;
+  }
+  std::vector<float> x(rows.size() * size_t(d.input_dim));
+  for (size_t i = 0; i < rows.size(); ++i)
+    std::copy_n(d.input(rows[i]), d.input_dim, x.begin() + i * d.input_dim);
+  embed(rep, x.data(), int64_t(rows.size()), out.data(), threads);
+  return out;
+}
+
 EmbeddingPass embed_all(const Representation& rep, const float* X, int64_t n, int threads) {
+  if (rep.is_table())
+    throw std::logic_error("embed_all: an external representation has no weights to apply");
   constexpr int64_t kChunk = 1024;
   const MlpShape& s = rep.shape;
   const int in = s.in(), d = rep.dim();

@@ -4,18 +4,23 @@
 #include <string>
 #include <vector>
 
+#include "datasets/dataset.h"
 #include "engine/hyperparams.h"
 #include "kernels/mlp.h"
 
 namespace sirl {
 
-enum class Method { sirl, vae, multipref10, multipref50, singlepref, random };
+// `external`: a representation learned outside the engine and handed in as its embedding of Ξ
+// (a profile's [external.<name>], `sirl evaluate`); it has no weights, so its TPA cells are frozen.
+enum class Method { sirl, vae, multipref10, multipref50, singlepref, random, external };
 
-// "sirl", "vae", "multipref10", "multipref50", "singlepref", "random".
+// "sirl", "vae", "multipref10", "multipref50", "singlepref", "random", "external".
 const char* method_name(Method m);
-// Inverse of method_name; throws std::invalid_argument listing the valid names.
+// Inverse of method_name; throws std::invalid_argument listing the valid names (the built-in
+// six; "external" is accepted too, as records of external methods carry it).
 Method parse_method(const std::string& name);
-// Methods whose φ is trained on human queries (N matters).
+// Methods whose φ is trained on human queries (N matters). An external method hands in one
+// embedding per N, so N matters for it too.
 bool uses_queries(Method m);
 // Methods that accept VAE pre-training as a switch (SIRL+VAE, MultiPref+VAE, SinglePref+VAE).
 bool accepts_vae_pretrain(Method m);
@@ -34,13 +39,26 @@ struct Representation {
   // What the epochs skipped at a fixed point would have cost (SIRL's exact skip,
   // engine/methods.cpp): train_flops + skipped_flops is the protocol's count.
   double skipped_flops = 0;
+  // φ(Ξ) [T, d] when it is known: a learned φ's embedding of Ξ as its task stored it, or an
+  // external representation's as handed in (then params are empty and shape is {input width, d},
+  // a placeholder for the sizes). FPE and frozen TPA look rows up here when it is not empty, so
+  // they probe exactly the embedding the results file holds, and an external method's cells run
+  // the same code as a built-in one's.
+  std::vector<float> table;
   int dim() const { return shape.out(); }
+  bool is_table() const { return method == Method::external; }
 };
+
+// An external representation: φ(Ξ) given as the rows [T, d] of `table` for a dataset whose inputs
+// are `input_dim` wide. Throws std::invalid_argument if table is not T·d floats, d < 1, or a value
+// is NaN or ±Inf (naming the first).
+Representation table_representation(std::vector<float> table, int64_t T, int d, int input_dim);
 
 // φ's shape for an input width: in → phi_hidden… → embedding_dim.
 MlpShape phi_shape(int in, const Hyper& h);
 
-// out [n, d] = φ(X [n, in]), in chunks so memory stays bounded for any n.
+// out [n, d] = φ(X [n, in]), in chunks so memory stays bounded for any n. A learned φ only (an
+// external one has no weights: std::logic_error).
 void embed(const Representation& rep, const float* X, int64_t n, float* out, int threads = 1);
 
 // φ over a whole trajectory space in one pass: the embedding out [n, d] and, for each hidden
@@ -52,6 +70,13 @@ struct EmbeddingPass {
   std::vector<float> dead_fraction;  // [hidden layers with a ReLU]
 };
 EmbeddingPass embed_all(const Representation& rep, const float* X, int64_t n, int threads = 1);
+
+// φ(ξ) for the rows `rows` of Ξ = d, [rows, dim]: the rows of rep.table when it holds φ(Ξ), else
+// d's inputs of those rows embedded (in chunks, as embed). The two can differ in the last bits:
+// the GEMM kernels pick their blocking by row count, so a row computed among 200 others need not
+// equal the same row computed in embed_all's chunks of 1024.
+std::vector<float> embed_rows(const Representation& rep, const Dataset& d,
+                              const std::vector<int32_t>& rows, int threads = 1);
 
 // Throws std::runtime_error naming `what` if any value is NaN or ±Inf.
 void require_finite(const std::vector<float>& v, const std::string& what);

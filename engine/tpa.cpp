@@ -73,16 +73,14 @@ CellRows compact_rows(const Representation& rep, const Dataset& d, const std::ve
     for (int64_t i = 2 * sets[r].train; i < 2 * sets[r].pairs.count; ++i)
       c.test[r].push_back(remap(p[i]));
   }
-  const int64_t U = int64_t(used.size());
-  std::vector<float> raw(size_t(U) * d.input_dim);
-  for (int64_t u = 0; u < U; ++u)
-    std::copy(d.input(used[u]), d.input(used[u]) + d.input_dim, raw.begin() + u * d.input_dim);
   if (cfg.frozen) {
-    c.X.resize(size_t(U) * rep.dim());
-    embed(rep, raw.data(), U, c.X.data(), cfg.threads);
+    c.X = embed_rows(rep, d, used, cfg.threads);
     require_finite(c.X, "TPA: φ(ξ)");
   } else {
-    c.X = std::move(raw);
+    const int64_t U = int64_t(used.size());
+    c.X.resize(size_t(U) * d.input_dim);
+    for (int64_t u = 0; u < U; ++u)
+      std::copy(d.input(used[u]), d.input(used[u]) + d.input_dim, c.X.begin() + u * d.input_dim);
   }
   return c;
 }
@@ -109,6 +107,9 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
                        const TpaConfig& cfg, uint64_t seed) {
   validate(cfg.hyper);
   check_sets(sets, cfg.M);
+  if (rep.is_table() && !cfg.frozen)
+    throw std::invalid_argument(
+        "TPA: an external representation has no weights to fine-tune (frozen cells only)");
   const int R = int(sets.size());
   const int64_t M = cfg.M;
   const CellRows rows = compact_rows(rep, d, sets, cfg);

@@ -18,6 +18,7 @@
 namespace sirl {
 
 std::string Variant::name() const {
+  if (method == Method::external) return external;
   return std::string(method_name(method)) + (vae ? "+vae" : "") +
          (selection == Selection::uniform ? "" : std::string("@") + selection_name(selection));
 }
@@ -40,6 +41,10 @@ Variant parse_variant(const std::string& name) {
     base.resize(base.size() - suffix.size());
   }
   v.method = parse_method(base);
+  if (v.method == Method::external)
+    throw std::invalid_argument(
+        "'external' is not a method name: declare a representation "
+        "trained elsewhere as [external.<name>] (or use `sirl evaluate`)");
   if (v.vae && !accepts_vae_pretrain(v.method))
     throw std::invalid_argument("'" + name +
                                 "': VAE pre-training applies only to sirl, multipref10, "
@@ -48,12 +53,33 @@ Variant parse_variant(const std::string& name) {
 }
 
 std::vector<bool> frozen_settings(const TpaGrid& grid, const Variant& v) {
+  if (v.method == Method::external) return {true};  // no weights to fine-tune
   if (!grid.frozen.empty()) return grid.frozen;
   return {is_best_mode(v, true)};
 }
 
 bool is_best_mode(const Variant& v, bool frozen) {
-  return frozen == (v.method == Method::sirl);
+  return frozen == (v.method == Method::sirl || v.method == Method::external);
+}
+
+std::string external_name_problem(const std::string& name) {
+  if (name.empty() || name.size() > 40 || !(name[0] >= 'a' && name[0] <= 'z'))
+    return "an external method's name is 1 to 40 characters, starting with a-z";
+  for (char c : name)
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-'))
+      return "an external method's name holds only a-z, 0-9, '_' and '-' (got '" + name + "')";
+  try {
+    parse_method(name);
+    return "'" + name + "' is a built-in method's name; choose another for an external method";
+  } catch (const std::invalid_argument&) {
+  }
+  return "";
+}
+
+const ExternalMethod& external_method(const Profile& p, const std::string& name) {
+  for (const auto& e : p.external)
+    if (e.name == name) return e;
+  throw std::invalid_argument("profile " + p.name + " has no external method '" + name + "'");
 }
 
 namespace {
@@ -455,6 +481,39 @@ void parse_cells(Reader& r, const toml::table& root, Profile& p) {
   }
 }
 
+// [external.<name>]: representations trained elsewhere, each joining [fpe] and [tpa] (frozen).
+void parse_external(Reader& r, const toml::table& root, Profile& p) {
+  const auto* ext = r.table(root, "external", false);
+  if (!ext) return;
+  namespace fs = std::filesystem;
+  const fs::path base =
+      p.path.empty() || p.path[0] == '<' ? fs::current_path() : fs::absolute(p.path).parent_path();
+  for (auto&& [k, node] : *ext) {
+    const std::string name(k.str());
+    if (!node.is_table()) r.fail(&node, "[external." + name + "] must be a table");
+    const toml::table& t = *node.as_table();
+    if (const std::string why = external_name_problem(name); !why.empty()) r.fail(&node, why);
+    r.only_keys(t, "[external." + name + "]", {"embeddings", "xxh3", "description"});
+    ExternalMethod m;
+    m.name = name;
+    m.embeddings = r.string(t, "embeddings", "", true);
+    if (m.embeddings.empty()) r.fail(t.get("embeddings"), "embeddings must name a file");
+    m.embeddings = (base / m.embeddings).lexically_normal().string();
+    m.xxh3 = r.string(t, "xxh3", "", true);
+    if (m.xxh3.size() != 32 || m.xxh3.find_first_not_of("0123456789abcdef") != std::string::npos)
+      r.fail(t.get("xxh3"),
+             "xxh3 must be the file's XXH3-128 as 32 lowercase hex digits (`xxh128sum " +
+                 m.embeddings + "` prints it)");
+    m.description = r.string(t, "description", "");
+    Variant v;
+    v.method = Method::external;
+    v.external = name;
+    if (!p.fpe_N.empty()) p.fpe_methods.push_back(v);
+    if (!p.tpa.N.empty()) p.tpa.methods.push_back(v);
+    p.external.push_back(std::move(m));
+  }
+}
+
 // Per environment: the top-level axes unless its own table overrides them.
 void parse_env_axes(Reader& r, const toml::table& root, Profile& p) {
   for (const auto& env : p.envs) {
@@ -607,9 +666,9 @@ Profile parse_profile(const std::string& text, const std::string& path) {
                        std::string(e.description()));
   }
   Reader r(root, path);
-  std::set<std::string> top{"name",    "description", "envs",   "seeds",    "queries",
-                            "teacher", "fpe",         "tpa",    "ablation", "hyper",
-                            "study",   "robustness",  "active", "precision"};
+  std::set<std::string> top{"name",    "description", "envs",   "seeds",     "queries",
+                            "teacher", "fpe",         "tpa",    "ablation",  "hyper",
+                            "study",   "robustness",  "active", "precision", "external"};
   for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
   r.only_keys(root, "the profile", top);
   Profile p;
@@ -635,6 +694,7 @@ Profile parse_profile(const std::string& text, const std::string& path) {
   p.seeds = r.int_list(root, "seeds", 0, 1'000'000'000, true);
   parse_queries(r, root, p);
   parse_cells(r, root, p);
+  parse_external(r, root, p);
   parse_robustness(r, root, p);
   parse_active(r, root, p);
   parse_env_axes(r, root, p);

@@ -28,11 +28,13 @@ struct Variant {
   Method method = Method::sirl;
   bool vae = false;
   Selection selection = Selection::uniform;  // "@vote", "@infogain": engine/active_queries.h
+  std::string external;  // Method::external: its name, [external.<name>] (the variant's name)
   std::string name() const;
   bool operator==(const Variant&) const = default;
 };
 // Throws std::invalid_argument for unknown names, "+vae" on vae/random, or a selection on a
-// method other than SIRL.
+// method other than SIRL. External methods are not parsed from names: [external.<name>] declares
+// them.
 Variant parse_variant(const std::string& name);
 
 struct TpaGrid {
@@ -90,6 +92,16 @@ struct ActivePlan {
   double mu = 0.05;
 };
 
+// [external.<name>]: a representation trained outside the engine, handed in as its embedding of
+// Ξ per environment × seed × N (results/external_embeddings.h). It joins [fpe]'s and [tpa]'s
+// methods under its own name; its TPA cells are frozen only (it has no weights to fine-tune).
+struct ExternalMethod {
+  std::string name;
+  std::string embeddings;  // the file, absolute (a relative path is the profile file's folder's)
+  std::string xxh3;  // the file's XXH3-128, as `xxh128sum` prints it: a changed file is refused
+  std::string description;
+};
+
 struct Profile {
   std::string path, text;  // where it came from, and its exact text (recorded in results)
   std::string name, description;
@@ -112,7 +124,14 @@ struct Profile {
   StudyPlan study;
   RobustnessGrid robustness;
   std::map<std::string, ActivePlan> active;  // per env (every env has one)
+  std::vector<ExternalMethod> external;
 };
+
+// The [external.<name>] of profile p; throws std::invalid_argument for an unknown name.
+const ExternalMethod& external_method(const Profile& p, const std::string& name);
+// Whether `name` may name an external method: [a-z][a-z0-9_-]{0,39}, not a built-in method's.
+// Returns "" if so, else why not.
+std::string external_name_problem(const std::string& name);
 
 // The queries a cell's teacher answers: the profile's own for "" (the main teacher), else those
 // of the robustness teacher with that tag. Throws std::invalid_argument for an unknown tag.
@@ -136,7 +155,8 @@ std::string bundled_profile_names();
 // The frozen settings a TPA cell of this variant runs with under `grid`.
 std::vector<bool> frozen_settings(const TpaGrid& grid, const Variant& v);
 // The paper's best mode of a method's TPA cells (Fig. 5): SIRL, with or without VAE pre-training
-// and whatever its query selection, frozen; every other method unfrozen.
+// and whatever its query selection, frozen; every other method unfrozen, but an external method,
+// which has frozen cells only.
 bool is_best_mode(const Variant& v, bool frozen);
 
 }  // namespace sirl

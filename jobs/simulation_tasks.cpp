@@ -13,6 +13,7 @@
 #include "jobs/expected_epochs.h"
 #include "jobs/task_outputs.h"
 #include "kernels/vae.h"
+#include "results/external_embeddings.h"
 
 namespace sirl {
 
@@ -221,6 +222,11 @@ bool reads_vae(const Variant& v) {
 void rep_cost(Task& t, const Profile& p) {
   const EnvSizes z = env_sizes(t, p);
   t.flops = 0;
+  if (t.variant.method == Method::external) {  // reads its embedding of Ξ: no arithmetic
+    t.protocol_flops = 0;
+    t.bytes = 4.0 * double(z.trajectories) * double(z.h.embedding_dim);
+    return;
+  }
   if (t.variant.method == Method::sirl) {
     t.protocol_flops = train_flops(z.phi, 3 * t.N, z.h.sirl.epochs);
     // Trainings end at their fixed point (the exact skip): what they are expected to run.
@@ -239,7 +245,25 @@ void rep_cost(Task& t, const Profile& p) {
   t.protocol_flops += z.phi.forward_flops(int(z.trajectories));
 }
 
+// An external method's "training" is reading its embedding of Ξ for this (env, seed, N): the
+// record holds it as a learned φ's holds its own, so FPE and TPA read it the same way.
+void run_external_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const ExternalMethod& m = external_method(ctx.profile(), t.variant.external);
+  const Dataset& d = ctx.dataset(t.env);
+  ExternalEmbedding e = read_external_embedding(m.embeddings, m.xxh3, t.env, t.seed, t.N, d.count);
+  const Representation rep = table_representation(std::move(e.values), d.count, e.dim, d.input_dim);
+  put_representation(rep, r);
+  r.arrays["embedding"] = TaskRecord::Array::of(rep.table, {uint64_t(d.count), uint64_t(e.dim)});
+  r.text["embeddings_file"] = m.embeddings;
+  r.text["embeddings_xxh3"] = m.xxh3;
+  r.num["flops"] = 0;
+  r.num["protocol_flops"] = 0;
+  if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
+  ctx.keep(t.key, std::make_shared<const Representation>(get_representation(r)));
+}
+
 void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
+  if (t.variant.method == Method::external) return run_external_rep(t, ctx, r);
   const Hyper& h = ctx.profile().hyper.at(t.env);
   const Dataset& d = ctx.dataset(t.env);
   std::shared_ptr<const VaeModel> vae;
@@ -271,10 +295,18 @@ void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
 
 // ---- fpe ----
 
+// FPE reads φ(ξ) from its representation's stored embedding of Ξ; what it computes is the
+// linear probe: the normal equations [d+1, d+1] and [d+1, F] over the training rows, and the
+// predictions of every row (d = embedding width, F ≤ 8 features: the count is an estimate).
+double probe_flops(int64_t rows, int d) {
+  constexpr int kFeatures = 8;
+  return 2.0 * double(rows) * (d + 1) * (d + 1 + 2 * kFeatures);
+}
+
 void fpe_cost(Task& t, const Profile& p) {
   const EnvSizes z = env_sizes(t, p);
-  t.flops = z.phi.forward_flops(int(p.queries.fpe_trajectories));
-  t.bytes = 4.0 * double(p.queries.fpe_trajectories) * (z.input_dim + 16);
+  t.flops = probe_flops(p.queries.fpe_trajectories, z.h.embedding_dim);
+  t.bytes = 4.0 * double(p.queries.fpe_trajectories) * (z.h.embedding_dim + 16);
 }
 
 // FPE's labelled trajectories are the true features whoever the teacher (its split is drawn
@@ -285,8 +317,7 @@ void run_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
   const FpeResult f = evaluate_fpe(*rep, ctx.dataset(t.env), split);
   r.num["fpe"] = f.fpe;
   r.num["train_mse"] = f.train_mse;
-  // φ over its rows; the probe is tiny
-  r.num["flops"] = rep->shape.forward_flops(int(split.train.size() + split.test.size()));
+  r.num["flops"] = probe_flops(int64_t(split.train.size() + split.test.size()), rep->dim());
 }
 // The same, and what a robustness row says of its teacher's answers.
 void run_robust_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {

@@ -92,8 +92,13 @@ void put_representation(const Representation& r, TaskRecord& rec) {
 Representation get_representation(const TaskRecord& rec) {
   Representation r;
   r.shape = get_shape(rec, "");
-  r.params = need_array(rec, "params");
-  check_size(rec, r.params.size(), r.shape.param_count(), "φ");
+  // An external representation has no weights, only its embedding of Ξ; a learned φ has both
+  // (records of any engine version store the embedding: FPE and frozen TPA read its rows).
+  if (auto e = rec.arrays.find("embedding"); e != rec.arrays.end()) r.table = e->second.data;
+  if (need_text(rec, "method") != method_name(Method::external)) {
+    r.params = need_array(rec, "params");
+    check_size(rec, r.params.size(), r.shape.param_count(), "φ");
+  }
   r.loss_curve = need_array(rec, "loss_curve");
   try {
     r.method = parse_method(need_text(rec, "method"));

@@ -253,6 +253,19 @@ void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q, const std:
   f.flush();
 }
 
+void write_seed_queries(H5File& f, const std::string& env, int64_t seed, const QueryBundle& q) {
+  const std::string g = "/datasets/" + env + "/seeds/s" + std::to_string(seed);
+  f.group(g);
+  f.set_attr(g, "seed", seed);
+  f.set_attr(g, "query_seed", int64_t(q.seed));
+  f.set_attr(g, "description",
+             "seed " + std::to_string(seed) +
+                 "'s rewards and query sets, answered by the profile's teacher (rows of "
+                 "/datasets/" +
+                 env + "/inputs)");
+  write_query_bundle(f, g, q);
+}
+
 StoredDataset read_dataset(const H5File& f, const std::string& env) {
   const std::string g = "/datasets/" + env;
   if (!f.exists(g))

@@ -6,6 +6,7 @@
 // Every array carries a `description` attribute (meaning, units, shape); the group carries the
 // generator seed, engine version and the teacher. The reader checks every shape and type.
 #pragma once
+#include <cstdint>
 #include <string>
 
 #include "datasets/query_bundle.h"
@@ -16,6 +17,11 @@ class H5File;
 
 void write_dataset(H5File& f, const Dataset& d, const QueryBundle& q,
                    const std::string& engine_version);
+
+// One seed's query sets of an environment whose /datasets/<env> is written already:
+// /datasets/<env>/seeds/s<seed>/{rewards, queries} in the layout above, with @query_seed (the
+// training data a method trained elsewhere needs, per seed: `sirl dataset --profile`).
+void write_seed_queries(H5File& f, const std::string& env, int64_t seed, const QueryBundle& q);
 
 struct StoredDataset {
   Dataset data;

@@ -98,7 +98,8 @@ std::vector<T> read_any(hid_t file, const std::string& path, const std::string& 
   if (ds < 0) fail(path, "cannot open dataset " + name + " (file corrupt?)");
   Hid ftype(H5Dget_type(ds), H5Tclose);
   if (H5Tget_class(ftype) != cls || H5Tget_size(ftype) != sizeof(T))
-    fail(path, name + " has the wrong element type (expected " + type_name + ")");
+    // What the file holds, not a failed system call: no errno reason (a stale one misleads).
+    throw H5Error(path + ": " + name + " has the wrong element type (expected " + type_name + ")");
   Hid space(H5Dget_space(ds), H5Sclose);
   const int rank = H5Sget_simple_extent_ndims(space);
   std::vector<hsize_t> d(std::max(rank, 0));
@@ -113,7 +114,9 @@ std::vector<T> read_any(hid_t file, const std::string& path, const std::string& 
   bool ok = any_shape || size_t(rank) == expect.size();
   for (size_t i = 0; ok && !any_shape && i < d.size(); ++i)
     ok = expect[i] < 0 || hsize_t(expect[i]) == d[i];
-  if (!ok) fail(path, name + " has shape " + shape_str(d) + ", expected " + shape_str(expect));
+  if (!ok)
+    throw H5Error(path + ": " + name + " has shape " + shape_str(d) + ", expected " +
+                  shape_str(expect));
   size_t n = 1;
   for (auto x : d) n *= x;
   std::vector<T> out(n);

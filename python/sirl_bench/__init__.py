@@ -1,14 +1,17 @@
-"""sirl_bench: read sirl-bench results files as typed pandas DataFrames.
+"""sirl_bench: read sirl-bench results files as typed pandas DataFrames, and write the embeddings
+file `sirl evaluate` scores.
 
     import sirl_bench
     r = sirl_bench.open("out/quick.h5")
     r.tables["tpa"]     # or r.tpa: one row per TPA cell, typed
     r.curves            # learning curves, long format
     r.provenance        # engine version, commit, CPU class, profile text, ...
+    sirl_bench.datasets("train.h5")["grid"]["seeds"]["s0"]["queries"]["similarity"]
+    sirl_bench.write_embeddings("emb.h5", {("grid", 0, 100): Z})   # Z [T, d]
 """
 from .results import (FLAG_COLUMNS, SCHEMA_VERSIONS, Results, ResultsError, claims,  # noqa: F401
-                      datasets, open, study_analysis, typed)
+                      datasets, embedding_name, open, study_analysis, typed, write_embeddings)
 
 __all__ = ["FLAG_COLUMNS", "SCHEMA_VERSIONS", "Results", "ResultsError", "claims", "datasets",
-           "open", "study_analysis", "typed"]
+           "embedding_name", "open", "study_analysis", "typed", "write_embeddings"]
 __version__ = "0.8.0"

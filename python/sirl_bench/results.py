@@ -19,6 +19,7 @@ Types, the same in every table:
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Mapping
 
 import h5py
@@ -323,6 +324,33 @@ def datasets(path) -> dict:
         if "datasets" not in f:
             raise ResultsError(f"{path}: no /datasets (not a sirl-bench results or dataset file)")
         return {env: _group_dict(g) for env, g in f["datasets"].items()}
+
+
+def embedding_name(env, seed, N) -> str:
+    """Where `sirl evaluate` looks for the embedding of Ξ of (env, seed, N): "/grid/s0/N100"."""
+    return f"/{env}/s{int(seed)}/N{int(N)}"
+
+
+def write_embeddings(path, embeddings, method=None) -> None:
+    """Writes the file `sirl evaluate` reads: {(env, seed, N): array [T, d]} (row i = φ(ξ_i), Ξ in
+    the order of /datasets/<env>/inputs), each stored float32 at embedding_name(env, seed, N).
+    Refuses NaN or ±Inf and arrays that are not 2-D, with one line naming the array."""
+    arrays = {}
+    for (env, seed, N), z in embeddings.items():
+        a = np.asarray(z, dtype=np.float32)
+        name = embedding_name(env, seed, N)
+        if a.ndim != 2 or a.shape[1] < 1:
+            raise ResultsError(f"{name}: an embedding is [T, d], got shape {a.shape}")
+        if not np.isfinite(a).all():
+            raise ResultsError(f"{name}: holds NaN or ±Inf")
+        arrays[name] = a
+    tmp = f"{path}.partial"
+    with h5py.File(tmp, "w") as f:
+        if method:
+            f.attrs["method"] = method
+        for name, a in arrays.items():
+            f.create_dataset(name, data=a)
+    os.replace(tmp, path)
 
 
 def study_analysis(path) -> dict:
