@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <set>
 #include <sstream>
 
 #include "app/commands.h"
@@ -152,11 +153,21 @@ int run_profile_dataset(const std::string& profile, const std::string& out, bool
       if (seeds.empty()) continue;
       const Dataset& d = ctx.dataset(env);
       write_dataset(f, d, ctx.bundle(env, seeds.front()), SIRL_VERSION);
-      f.set_attr("/datasets/" + env, "seeds", std::vector<std::string>([&] {
-                   std::vector<std::string> v;
-                   for (int64_t s : seeds) v.push_back(std::to_string(s));
-                   return v;
-                 }()));
+      // What a method trained elsewhere needs to know of the run it joins: the seeds, the N
+      // values `sirl evaluate` will ask it for (those of this environment's FPE and TPA cells),
+      // and the hyper-parameters the built-in methods train with ("key = value" lines).
+      const EnvAxes& axes = p.axes.at(env);
+      std::set<int64_t> Ns(axes.fpe_N.begin(), axes.fpe_N.end());
+      Ns.insert(axes.tpa_N.begin(), axes.tpa_N.end());
+      auto texts = [](const auto& values) {
+        std::vector<std::string> v;
+        for (int64_t x : values) v.push_back(std::to_string(x));
+        return v;
+      };
+      const std::string g = "/datasets/" + env;
+      f.set_attr(g, "seeds", texts(seeds));
+      f.set_attr(g, "evaluate_N", texts(Ns));
+      f.set_attr(g, "hyper", describe(p.hyper.at(env)));
       for (int64_t seed : seeds) write_seed_queries(f, env, seed, ctx.bundle(env, seed));
       summary += (summary.empty() ? "" : "; ") + env + ": " + std::to_string(d.count) +
                  " trajectories, " + std::to_string(seeds.size()) + " seeds";

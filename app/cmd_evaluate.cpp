@@ -45,7 +45,7 @@ void check_embeddings(const Profile& p, const ExternalMethod& m) {
   for (const auto& v : p.fpe_methods) in_fpe |= v.external == m.name;
   for (const auto& v : p.tpa.methods) in_tpa |= v.external == m.name;
   int arrays = 0;
-  for (const auto& env : p.envs) {
+  for (const auto& env : m.envs) {
     const EnvAxes& a = p.axes.at(env);
     std::set<int64_t> Ns;
     if (in_fpe) Ns.insert(a.fpe_N.begin(), a.fpe_N.end());
@@ -78,6 +78,7 @@ void check_embeddings(const Profile& p, const ExternalMethod& m) {
 
 struct EvaluateArgs {
   std::string embeddings, name, profile = "quick", out, figures;
+  std::vector<std::string> envs;
   int threads = 0;
   bool force = false, quiet = false, with_study = false;
 };
@@ -105,8 +106,13 @@ int run_evaluate(const EvaluateArgs& a) {
     throw UsageError(e.what());
   }
   // The profile as run and recorded: the base's text with the method declared at its end.
-  const std::string text = base.text + "\n\n# added by `sirl evaluate`\n[external." + a.name +
-                           "]\nembeddings = " + toml_string(path) + "\nxxh3 = \"" + digest + "\"\n";
+  std::string text = base.text + "\n\n# added by `sirl evaluate`\n[external." + a.name +
+                     "]\nembeddings = " + toml_string(path) + "\nxxh3 = \"" + digest + "\"\n";
+  if (!a.envs.empty()) {
+    text += "envs = [";
+    for (size_t i = 0; i < a.envs.size(); ++i) text += (i ? ", " : "") + toml_string(a.envs[i]);
+    text += "]\n";
+  }
   Profile p;
   try {
     p = parse_profile(text, base.path);
@@ -156,6 +162,10 @@ void register_evaluate(CLI::App& app, Runner& run) {
   cmd->add_option("--figures", a.figures,
                   "Also draw the figures and the report (the method next to the built-in ones) "
                   "into this folder");
+  cmd->add_option("--envs", a.envs,
+                  "The environments the file has embeddings for (default: every one of the "
+                  "profile's); the method has no cells in the others")
+      ->delimiter(',');
   cmd->add_option("--threads", a.threads, "Worker threads (default: every core)")
       ->check(CLI::Range(1, 4096));
   cmd->add_flag("--force", a.force, "Overwrite results from another profile or engine version");

@@ -86,9 +86,10 @@ Plan make_plan(const Profile& p) {
     for (int64_t seed : axes.seeds) {
       for (const auto& v : p.fpe_methods)
         for (int64_t N : axes.fpe_N)
-          add_task(plan, p, experiment_cell(TaskKind::fpe, env, seed, v, N));
+          if (runs_in(p, v, env))
+            add_task(plan, p, experiment_cell(TaskKind::fpe, env, seed, v, N));
       for (const auto& v : p.tpa.methods)
-        for (int64_t N : axes.tpa_N)
+        for (int64_t N : runs_in(p, v, env) ? axes.tpa_N : std::vector<int64_t>{})
           for (int64_t M : axes.tpa_M)
             for (bool fr : frozen_settings(p.tpa, v))
               add_tpa_cell(plan, p, env, seed, v, N, M, fr, false);

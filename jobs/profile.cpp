@@ -76,6 +76,12 @@ std::string external_name_problem(const std::string& name) {
   return "";
 }
 
+bool runs_in(const Profile& p, const Variant& v, const std::string& env) {
+  if (v.method != Method::external) return true;
+  const auto& envs = external_method(p, v.external).envs;
+  return std::find(envs.begin(), envs.end(), env) != envs.end();
+}
+
 const ExternalMethod& external_method(const Profile& p, const std::string& name) {
   for (const auto& e : p.external)
     if (e.name == name) return e;
@@ -493,7 +499,7 @@ void parse_external(Reader& r, const toml::table& root, Profile& p) {
     if (!node.is_table()) r.fail(&node, "[external." + name + "] must be a table");
     const toml::table& t = *node.as_table();
     if (const std::string why = external_name_problem(name); !why.empty()) r.fail(&node, why);
-    r.only_keys(t, "[external." + name + "]", {"embeddings", "xxh3", "description"});
+    r.only_keys(t, "[external." + name + "]", {"embeddings", "xxh3", "description", "envs"});
     ExternalMethod m;
     m.name = name;
     m.embeddings = r.string(t, "embeddings", "", true);
@@ -505,6 +511,10 @@ void parse_external(Reader& r, const toml::table& root, Profile& p) {
              "xxh3 must be the file's XXH3-128 as 32 lowercase hex digits (`xxh128sum " +
                  m.embeddings + "` prints it)");
     m.description = r.string(t, "description", "");
+    m.envs = t.get("envs") ? r.string_list(t, "envs", true) : p.envs;
+    for (const auto& e : m.envs)
+      if (std::find(p.envs.begin(), p.envs.end(), e) == p.envs.end())
+        r.fail(t.get("envs"), "envs: '" + e + "' is not one of the profile's envs");
     Variant v;
     v.method = Method::external;
     v.external = name;

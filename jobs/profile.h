@@ -100,6 +100,7 @@ struct ExternalMethod {
   std::string embeddings;  // the file, absolute (a relative path is the profile file's folder's)
   std::string xxh3;  // the file's XXH3-128, as `xxh128sum` prints it: a changed file is refused
   std::string description;
+  std::vector<std::string> envs;  // the environments it has embeddings for (default: all)
 };
 
 struct Profile {
@@ -127,6 +128,9 @@ struct Profile {
   std::vector<ExternalMethod> external;
 };
 
+// Whether variant v has cells in environment env: every method has, but an external method only
+// in the environments its [external.<name>] lists.
+bool runs_in(const Profile& p, const Variant& v, const std::string& env);
 // The [external.<name>] of profile p; throws std::invalid_argument for an unknown name.
 const ExternalMethod& external_method(const Profile& p, const std::string& name);
 // Whether `name` may name an external method: [a-z][a-z0-9_-]{0,39}, not a built-in method's.

@@ -42,6 +42,23 @@ STYLE = {
     "random": ("#7f7f7f", "Random"),
 }
 ORDER = list(STYLE)
+# Methods evaluated from outside the engine (`sirl evaluate`: method "external", the variant is
+# the name the user gave), drawn after the built-in ones in these colours.
+EXTERNAL_COLOURS = ["#8c564b", "#e377c2", "#bcbd22", "#000000", "#ff7f0e", "#aec7e8"]
+
+
+def add_external_styles(t):
+    """Gives every external method of the file a colour and its own name as label."""
+    names = []
+    for k in ("fpe", "tpa"):
+        d = t.get(k)
+        if d is not None and not d.empty and "method" in d:
+            names += [v for v in d[d.method == "external"].variant.unique() if v not in names]
+    for i, v in enumerate(sorted(names)):
+        if v not in STYLE:
+            STYLE[v] = (EXTERNAL_COLOURS[i % len(EXTERNAL_COLOURS)], v)
+            ORDER.append(v)
+    return sorted(names)
 # Each environment's registration as the run stored it (attributes of /datasets/<env>: title,
 # in_claims, fig3_rank, vae_weak_claim, view), so no environment name is spelled out here.
 ENV = {}
@@ -211,7 +228,9 @@ def plot_fig5(tpa, envs, out, notes):
                 ax.set_ylabel("TPA (held-out accuracy)")
             ax.grid(alpha=0.3)
     axes[0][-1].legend(fontsize=8, loc="lower right")
-    fig.suptitle("Fig. 5: test preference accuracy (SIRL frozen, others unfrozen; mean ± 95 % CI)",
+    frozen = "SIRL" + (" and external methods" if (t.method == "external").any() else "")
+    fig.suptitle(f"Fig. 5: test preference accuracy ({frozen} frozen, others unfrozen; "
+                 "mean ± 95 % CI)",
                  fontsize=11)
     save(fig, out, "fig5_tpa")
 
@@ -423,9 +442,9 @@ def convergence_lines(t):
     if tr.empty:
         return []
     L = ["", "## Did every training converge?", "",
-         f"Converged: the mean loss over the last 10 % of the epochs differs from the 10 % before "
-         f"by less than 1 % (+1e-4 absolute); a TPA cell counts when all of its heads did. "
-         f"Per-task values: /tables/training.", "",
+         "Converged: the mean loss over the last 10 % of the epochs differs from the 10 % before "
+         "by less than 1 % (+1e-4 absolute); a TPA cell counts when all of its heads did. "
+         "Per-task values: /tables/training.", "",
          "| env | training | variant | epochs | converged | median Δ over the last 10 % |",
          "|---|---|---|---:|---:|---:|"]
     if "teacher" in tr:  # the [robustness] cells' trainings, one line per method
@@ -720,6 +739,7 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
     L += plot_beyond.active_lines(fpe, tim, beyond.get("active", []))
     L += plot_beyond.robustness_lines(fpe, tpa, t["robust_fpe"], t["robust_tpa"],
                                       beyond.get("robustness", []))
+    L += external_lines(fpe, tpa, envs)
     L += ["", "## Learning curves and convergence", ""]
     if os.path.exists(os.path.join(out, "fig_learning_curves.png")):
         L += ["![Learning curves](fig_learning_curves.png)", ""]
@@ -745,6 +765,45 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
         json.dump(json_safe([{k: v for k, v in h.items() if k != "deciding"} for h in H]), fh,
                   indent=1)
     return text
+
+
+def external_lines(fpe, tpa, envs):
+    """Each external method next to SIRL, per environment: FPE at the largest N and TPA (Fig. 5's
+    cells, mean over M) at the largest N, paired over seeds. Reported, not decided: these are not
+    claims of the paper."""
+    ext = sorted({v for d in (fpe, tpa) if not d.empty
+                  for v in d[d.method == "external"].variant.unique()})
+    if not ext:
+        return []
+    L = ["", "## Methods evaluated from outside the engine (`sirl evaluate`)", "",
+         "Each method's embeddings of Ξ ran through the engine's own FPE and frozen TPA cells (the "
+         "same rows, test rewards, pairs, M values, head initialisations and seeds as SIRL's), "
+         "so the difference from SIRL is paired by seed: Δ = method − SIRL with its 95 % t "
+         "interval and the two-sided paired t-test's p. No verdict: these are not claims of the "
+         "paper.", "",
+         "| env | method | metric | N | method | SIRL | Δ [95 % CI] | p | seeds |",
+         "|---|---|---|---:|---:|---:|---|---:|---:|"]
+    m = main_tpa(tpa)
+    for env in envs:
+        for v in ext:
+            rows = []
+            d = fpe[fpe.env == env] if not fpe.empty else fpe
+            if not d.empty and (d.variant == v).any():
+                N = d[d.variant == v].N.max()
+                at = [d[(d.variant == x) & (d.N == N)].set_index("seed").fpe for x in (v, "sirl")]
+                rows.append(("FPE (lower is better)", N, at))
+            d = m[m.env == env] if not m.empty else m
+            if not d.empty and (d.variant == v).any():
+                N = d[d.variant == v].N.max()
+                at = [d[(d.variant == x) & (d.N == N)].groupby("seed").tpa.mean()
+                      for x in (v, "sirl")]
+                rows.append(("TPA (frozen, mean over M)", N, at))
+            for metric, N, (a, b) in rows:
+                c = claims_stats.paired(v, a, b)
+                L.append(f"| {env_title(env)} | {v} | {metric} | {N} | {fmt(a.mean())} | "
+                         f"{fmt(b.mean())} | {fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, "
+                         f"{fmt(c['hi'], '+.4f')}] | {fmt(c['p'], '.3g')} | {c['n']} |")
+    return L
 
 
 def json_safe(x):
@@ -791,6 +850,7 @@ def main():
     except sirl_bench.ResultsError as e:
         sys.exit(f"plot_figures: {e}")
     load_envs(res)
+    add_external_styles(t)
     envs = [e for e in ENV if any(not t[k].empty and (t[k].env == e).any()
                                   for k in ("fpe", "tpa", "training"))] or list(ENV)[:1]
     notes = []

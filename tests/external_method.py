@@ -1,0 +1,222 @@
+#!/usr/bin/python3
+"""Bring your own representation, end to end (ctest; Debian's python3 with torch):
+
+- `sirl dataset --profile smoke` writes what `sirl run smoke` trains on: Ξ equal to the results
+  file's, seed 0's query sets equal to the results file's (which stores its first seed), every
+  seed's sets, the N values and seeds of the FPE/TPA cells, the hyper-parameters the rep records
+  state;
+- the engine's own SIRL embeddings fed back through `sirl evaluate` give bit-identical FPE and
+  TPA cells to SIRL's, and leave every built-in cell bit-identical to the plain run's;
+- bad input is one line, exit code 2, nothing written: a missing seed, wrong T, d changing, NaN,
+  an integer array, a built-in name, a file changed after a profile named it, an unknown env;
+- --envs restricts the method to the environments it has embeddings for;
+- examples/torch_sirl.py (SIRL in PyTorch) trains on the exported data, `sirl evaluate` scores
+  it with figures, and the report compares it with SIRL.
+"""
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+import h5py
+import numpy as np
+
+SIRL = os.environ["SIRL"]
+SRC = os.environ["SIRL_SOURCE_DIR"]
+sys.path.insert(0, os.path.join(SRC, "python"))
+import sirl_bench  # noqa: E402
+
+KEYS = ["env", "seed", "N"]
+
+
+def fail(msg):
+    print("external_method: FAIL:", msg)
+    sys.exit(1)
+
+
+def run(*args, expect=0):
+    p = subprocess.run([SIRL, *args], capture_output=True, text=True)
+    if p.returncode != expect:
+        fail(f"sirl {' '.join(args)}: exit {p.returncode}, expected {expect}\n{p.stdout}{p.stderr}")
+    return p
+
+
+def check_training_data(d, results):
+    train = sirl_bench.datasets(f"{d}/train.h5")
+    with sirl_bench.open(results) as r:
+        ds, fpe, tpa, rec = r.datasets, r.fpe, r.tpa, r.records
+        for env, g in train.items():
+            if not np.array_equal(g["inputs"], ds[env]["inputs"]):
+                fail(f"{env}: Ξ differs from the run's")
+            s0 = g["seeds"]["s0"]
+            for q in ("similarity",):
+                if not np.array_equal(s0["queries"][q], ds[env]["queries"][q]):
+                    fail(f"{env}: seed 0's {q} differs from the run's")
+            for q in ("singlepref", "multipref10"):
+                for a in ("pairs", "label"):
+                    if not np.array_equal(s0["queries"][q][a], ds[env]["queries"][q][a]):
+                        fail(f"{env}: seed 0's {q}/{a} differs from the run's")
+            if not np.array_equal(s0["queries"]["tpa"]["pairs"], ds[env]["queries"]["tpa"]["pairs"]):
+                fail(f"{env}: seed 0's TPA pairs differ")
+            seeds = sorted(int(s) for s in g["attrs"]["seeds"])
+            if seeds != sorted(fpe[fpe.env == env].seed.unique()):
+                fail(f"{env}: seeds {seeds} are not the run's")
+            if sorted(k for k in g["seeds"] if k != "attrs") != [f"s{s}" for s in seeds]:
+                fail(f"{env}: seed groups {sorted(g['seeds'])}")
+            if len(seeds) > 1 and np.array_equal(g["seeds"][f"s{seeds[1]}"]["queries"]["similarity"],
+                                                 s0["queries"]["similarity"]):
+                fail(f"{env}: seed {seeds[1]} has seed 0's triplets")
+            Ns = set(fpe[fpe.env == env].N.dropna()) | set(tpa[tpa.env == env].N.dropna())
+            if sorted(int(n) for n in g["attrs"]["evaluate_N"]) != sorted(int(n) for n in Ns):
+                fail(f"{env}: evaluate_N {g['attrs']['evaluate_N']} != the cells' N {sorted(Ns)}")
+            hyper = rec[(rec.kind == "rep") & (rec.env == env) & (rec.variant == "sirl")]
+            if hyper.empty or r.record(hyper.key.iloc[0])["hyper"] != g["attrs"]["hyper"]:
+                fail(f"{env}: hyper attribute differs from the rep record's")
+
+
+def sirl_embeddings(results):
+    with sirl_bench.open(results) as r:
+        rec = r.records
+        reps = rec[(rec.kind == "rep") & (rec.variant == "sirl") & (rec.teacher == "")]
+        return {(x.env, int(x.seed), int(x.N)): r.embedding(x.key) for x in reps.itertuples()}
+
+
+def check_mirror(d, plain):
+    emb = sirl_embeddings(plain)
+    sirl_bench.write_embeddings(f"{d}/mirror.h5", emb)
+    run("evaluate", f"{d}/mirror.h5", "--name", "mirror", "--profile", "smoke", "--out",
+        f"{d}/mirror-run.h5", "--quiet")
+    with sirl_bench.open(f"{d}/mirror-run.h5") as r, sirl_bench.open(plain) as p:
+        f, t = r.fpe, r.tpa
+        m = f[f.variant == "mirror"].set_index(KEYS).sort_index()
+        s = f[f.variant == "sirl"].set_index(KEYS).loc[m.index]
+        if len(m) != len(emb) or not (m.fpe.to_numpy() == s.fpe.to_numpy()).all() \
+                or not (m.train_mse.to_numpy() == s.train_mse.to_numpy()).all():
+            fail("mirror's FPE is not SIRL's bit for bit")
+        if not (m.method == "external").all():
+            fail("an external cell's method is not 'external'")
+        k = KEYS + ["M"]
+        m = t[t.variant == "mirror"].set_index(k).sort_index()
+        s = t[(t.variant == "sirl") & t.frozen & t.in_main].set_index(k).loc[m.index]
+        if m.empty or not m.frozen.all() or not m.best_mode.all():
+            fail("mirror's TPA cells are not frozen best-mode cells")
+        for c in ("tpa", "tpa_std", "tpa_train"):
+            if not (m[c].to_numpy() == s[c].to_numpy()).all():
+                fail(f"mirror's TPA {c} is not SIRL's bit for bit")
+        for name in ("fpe", "tpa"):
+            a = getattr(r, name)
+            a = a[a.variant != "mirror"].reset_index(drop=True)
+            b = getattr(p, name).reset_index(drop=True)
+            if not a.equals(b):
+                fail(f"built-in {name} cells changed when an external method joined")
+    return emb
+
+
+def check_bad_inputs(d, emb):
+    def variant(name, edit):
+        arrays = {}
+        for key, z in emb.items():
+            z = edit(key, z.copy())
+            if z is not None:
+                arrays[key] = z
+        with h5py.File(f"{d}/{name}.h5", "w") as f:  # raw h5py: the writer refuses some of these
+            for (env, seed, N), z in arrays.items():
+                f[sirl_bench.embedding_name(env, seed, N)] = z
+        return f"{d}/{name}.h5"
+
+    last = sorted(emb)[-1]
+    first = sorted(emb)[0]
+
+    def nan(k, z):
+        if k == first:
+            z[3, 1] = np.nan
+        return z
+
+    cases = [
+        (variant("missing", lambda k, z: None if k == last else z), "no array"),
+        (variant("short", lambda k, z: z[:-1] if k == last else z), "rows;"),
+        (variant("nan", nan), "nan at row 3, column 1"),
+        (variant("ints", lambda k, z: z.astype(np.int32) if k == last else z), "not a 2-D float32"),
+        (variant("width", lambda k, z: z[:, :2] if k == last else z), "has d = 2"),
+    ]
+    out = f"{d}/bad.h5"
+    for path, words in cases:
+        p = run("evaluate", path, "--name", "x", "--profile", "smoke", "--out", out, expect=2)
+        lines = p.stderr.strip().splitlines()
+        if len(lines) != 1 or words not in lines[0]:
+            fail(f"{os.path.basename(path)}: expected one line with {words!r}, got {p.stderr!r}")
+        if os.path.exists(out):
+            fail(f"{os.path.basename(path)}: wrote {out}")
+    for name, words in (("sirl", "built-in"), ("9lives", "starting with a-z"), ("a+b", "only a-z")):
+        p = run("evaluate", f"{d}/mirror.h5", "--name", name, "--profile", "smoke", "--out", out,
+                expect=2)
+        if words not in p.stderr:
+            fail(f"--name {name}: {p.stderr!r}")
+    p = run("evaluate", f"{d}/mirror.h5", "--name", "x", "--envs", "grid,nowhere", "--profile",
+            "smoke", "--out", out, expect=2)
+    if "not one of the profile's envs" not in p.stderr:
+        fail(f"--envs nowhere: {p.stderr!r}")
+    # A profile naming a file by its digest refuses the file once it changed.
+    prof = f"{d}/ext.toml"
+    with open(os.path.join(SRC, "configs", "smoke.toml")) as fh:
+        text = fh.read()
+    shutil.copy(f"{d}/mirror.h5", f"{d}/moving.h5")
+    digest = sirl_bench_digest(f"{d}/moving.h5")
+    with open(prof, "w") as fh:
+        fh.write(text + f'\n[external.moving]\nembeddings = "moving.h5"\nxxh3 = "{digest}"\n'
+                 'envs = ["grid2"]\n')
+    run("run", prof, "--out", f"{d}/moving-run.h5", "--quiet")
+    with sirl_bench.open(f"{d}/moving-run.h5") as r:
+        envs = set(r.fpe[r.fpe.variant == "moving"].env)
+        if envs != {"grid2"}:
+            fail(f"envs = [\"grid2\"] gave cells in {envs}")
+    with h5py.File(f"{d}/moving.h5", "a") as f:
+        f.attrs["changed"] = 1
+    p = run("run", prof, "--out", f"{d}/moving-run2.h5", "--quiet", expect=1)
+    if "the file changed since" not in p.stderr:
+        fail(f"a changed embeddings file: {p.stderr!r}")
+
+
+def sirl_bench_digest(path):
+    """XXH3-128 as xxh128sum prints it (the xxhash package setup installs)."""
+    out = subprocess.run(["xxh128sum", path], capture_output=True, text=True, check=True).stdout
+    return out.split()[0]
+
+
+def check_torch_example(d):
+    ex = os.path.join(SRC, "examples", "torch_sirl.py")
+    p = subprocess.run(["/usr/bin/python3", ex, f"{d}/train.h5", "--out", f"{d}/torch.h5",
+                        "--threads", "2"], capture_output=True, text=True)
+    if p.returncode != 0:
+        fail(f"examples/torch_sirl.py: {p.stderr[-2000:]}")
+    run("evaluate", f"{d}/torch.h5", "--name", "torch_sirl", "--profile", "smoke", "--out",
+        f"{d}/torch-run.h5", "--figures", f"{d}/figs", "--quiet")
+    with open(f"{d}/figs/report.md") as fh:
+        report = fh.read()
+    if "| torch_sirl | FPE" not in report or "| torch_sirl | TPA" not in report:
+        fail("the report does not compare torch_sirl with SIRL")
+    import json
+    with open(f"{d}/figs/figures.json") as fh:
+        drawn = json.load(fh)
+    if not any("torch_sirl" in panel for env in drawn["fig5"].values() for panel in env.values()):
+        fail("Fig. 5 does not draw torch_sirl")
+
+
+def main():
+    d = tempfile.mkdtemp(prefix="sirl-external-")
+    try:
+        plain = f"{d}/smoke.h5"
+        run("run", "smoke", "--out", plain, "--quiet")
+        run("dataset", "--profile", "smoke", "--out", f"{d}/train.h5")
+        check_training_data(d, plain)
+        emb = check_mirror(d, plain)
+        check_bad_inputs(d, emb)
+        check_torch_example(d)
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
+    print("external_method: OK")
+
+
+if __name__ == "__main__":
+    main()
