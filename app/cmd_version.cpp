@@ -40,6 +40,8 @@ void register_version(CLI::App& app, Runner& run) {
     // What results depend on besides their inputs, and this core's roof (both in every results
     // file a run writes).
     std::printf("cpu class: %s\n", cpu_class().c_str());
+    std::printf("kernels:   %s (LIBXSMM_TARGET=hsw ONEDNN_MAX_CPU_ISA=AVX2 keep them at AVX2)\n",
+                kernel_paths().c_str());
     std::printf(
         "bf16:      %s (precision = \"bf16\" products; SIRL_BF16=emulate forces the "
         "emulation)\n",

@@ -392,6 +392,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   info.host = hostname();
   info.cpu_class = cpu_class();
   info.libraries = library_versions_text();
+  info.kernel_paths = kernel_paths();
   // bf16 products run natively or emulated: different bits, so a different class.
   if (runs_bf16(p)) info.cpu_class += std::string(", bf16 ") + bf16_backend();
   info.roof_fp32_gflops = fp32_roof_gflops_per_core();

@@ -469,6 +469,16 @@ void matmul_nn_k_block(float* C, const float* A, const float* B, int M, int N, i
     nn_k_block_slice(C + j0, N, A, B, M, N, K, acc, k0, kn, j0, std::min(w, N - j0));
 }
 
+std::string libxsmm_target() {
+#ifdef SIRL_HAVE_XSMM
+  if (!use_xsmm()) return "";
+  const char* arch = libxsmm_get_target_arch();
+  return arch ? arch : "";
+#else
+  return "";
+#endif
+}
+
 const char* gemm_backend() {
 #ifdef SIRL_HAVE_DNNL
   return use_xsmm() ? "libxsmm+onednn" : "eigen";

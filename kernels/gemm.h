@@ -69,6 +69,10 @@ void matmul_tn_rows(float* Cr, const float* A, const float* B, int M, int N, int
 // "libxsmm+onednn", "libxsmm" or "eigen": what float products run on in this process.
 const char* gemm_backend();
 
+// The instruction set libxsmm generates its kernels for in this process ("skx", "hsw", …: its
+// target architecture, the CPU's best unless LIBXSMM_TARGET lowers it); "" without libxsmm.
+std::string libxsmm_target();
+
 // Versions of the libraries behind the products, as this build links them (provenance).
 std::string libxsmm_version();
 std::string eigen_version();

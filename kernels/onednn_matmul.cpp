@@ -5,7 +5,9 @@
 
 #include <map>
 #include <oneapi/dnnl/dnnl.hpp>
+#include <string>
 #include <tuple>
+#include <utility>
 #endif
 
 namespace sirl {
@@ -95,6 +97,25 @@ bool onednn_native_bf16() {
 bool onednn_amx_bf16() {
   return effective_isa_has(dnnl::cpu_isa::avx512_core_amx);
 }
+bool onednn_avx512() {
+  return effective_isa_has(dnnl::cpu_isa::avx512_core);
+}
+
+std::string onednn_isa() {
+  // The richest of oneDNN's x86 ISA levels the effective one includes.
+  using I = dnnl::cpu_isa;
+  const std::pair<I, const char*> levels[] = {{I::avx512_core_amx, "avx512_core_amx"},
+                                              {I::avx512_core_bf16, "avx512_core_bf16"},
+                                              {I::avx512_core_vnni, "avx512_core_vnni"},
+                                              {I::avx512_core, "avx512_core"},
+                                              {I::avx2_vnni, "avx2_vnni"},
+                                              {I::avx2, "avx2"},
+                                              {I::avx, "avx"},
+                                              {I::sse41, "sse41"}};
+  for (const auto& [isa, name] : levels)
+    if (effective_isa_has(isa)) return name;
+  return "any";
+}
 
 #else
 
@@ -106,6 +127,12 @@ bool onednn_native_bf16() {
 }
 bool onednn_amx_bf16() {
   return false;
+}
+bool onednn_avx512() {
+  return false;
+}
+std::string onednn_isa() {
+  return "";
 }
 
 #endif

@@ -27,6 +27,12 @@ bool onednn_native_bf16();
 // Whether those products run on AMX tiles (Sapphire Rapids and later: `tdpbf16ps`).
 bool onednn_amx_bf16();
 
+// The instruction set oneDNN's kernels use in this process: the CPU's best unless
+// ONEDNN_MAX_CPU_ISA lowers it ("avx512_core_bf16", "avx2", …; "" without oneDNN).
+std::string onednn_isa();
+// Whether that instruction set includes AVX-512 (oneDNN's avx512_core).
+bool onednn_avx512();
+
 // oneDNN's version at run time (major.minor.patch), for provenance.
 std::string onednn_version();
 }  // namespace sirl

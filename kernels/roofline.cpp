@@ -1,5 +1,7 @@
 #include "kernels/roofline.h"
 
+#include "kernels/cpu_class.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -30,7 +32,7 @@ double best_of_probes(Loop&& loop, double flops) {
 constexpr int64_t kIters = 1 << 16;
 
 double measure_fp32() {
-  const bool wide = __builtin_cpu_supports("avx512f");
+  const bool wide = avx512_in_use();                      // the width the products run at
   if (!wide && !__builtin_cpu_supports("fma")) return 0;  // no FMA: no roof to report
   return best_of_probes(
       [&] { return wide ? fma_loop_avx512(kIters, 1.f) : fma_loop_avx2(kIters, 1.f); },

@@ -346,6 +346,7 @@ void write_results_file(const std::string& path, const RunInfo& info,
       f.set_attr("/", "host", info.host);
       f.set_attr("/", "cpu_class", info.cpu_class);
       f.set_attr("/", "libraries", info.libraries);
+      f.set_attr("/", "kernel_paths", info.kernel_paths);
       f.set_attr("/", "roof_fp32_gflops_per_core", info.roof_fp32_gflops);
       if (info.roof_bf16_gflops > 0)  // a bf16 run on a CPU with a bf16 unit
         f.set_attr("/", "roof_bf16_gflops_per_core", info.roof_bf16_gflops);
@@ -481,6 +482,7 @@ RunInfo read_run_info(const std::string& path) {
   i.host = f.attr_string("/", "host");
   if (f.has_attr("/", "cpu_class")) i.cpu_class = f.attr_string("/", "cpu_class");
   if (f.has_attr("/", "libraries")) i.libraries = f.attr_string("/", "libraries");
+  if (f.has_attr("/", "kernel_paths")) i.kernel_paths = f.attr_string("/", "kernel_paths");
   if (f.has_attr("/", "roof_fp32_gflops_per_core"))
     i.roof_fp32_gflops = f.attr_double("/", "roof_fp32_gflops_per_core");
   if (f.has_attr("/", "roof_bf16_gflops_per_core"))

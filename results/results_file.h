@@ -50,6 +50,8 @@ struct RunInfo {
   std::string cpu_class;  // kernels/cpu_class.h ("" in files of engines before 0.3.0)
   bool verified = true;   // read_run_info: false when no checksum covered the file
   std::string libraries;  // compiler and library versions ("" in files before engine 0.8.0)
+  std::string kernel_paths;  // the instruction sets and backends that ran (kernels/cpu_class.h;
+                             // "" in files before engine 0.9.0)
   std::string started, finished;  // ISO 8601 UTC
   std::string shard;              // "i/n" for a shard file, "" for a whole run
   int64_t threads = 0, tasks_total = 0, tasks_done = 0;
