@@ -156,8 +156,13 @@ def main():
         libs = prov.get("libraries", "")
         for name in ("compiler", "eigen", "libxsmm", "onednn", "cholmod", "mujoco", "hdf5",
                      "onetbb", "xxhash"):
-            if f"{name} " not in libs:
-                fail(f"provenance lacks {name}'s version: {libs!r}")
+            if f"{name} " not in libs or not r.libraries.get(name):
+                fail(f"provenance lacks {name}'s version: {libs!r} / {r.libraries}")
+        paths = prov.get("kernel_paths", "")
+        if not paths.startswith("build ") or "; gemm " not in paths or "; bf16 " not in paths:
+            fail(f"provenance: kernel_paths {paths!r}")
+        if f"build {paths.split(';')[0].split()[1]}" not in prov.get("cpu_class", ""):
+            fail(f"cpu_class {prov.get('cpu_class')!r} does not name the build of {paths!r}")
         if prov.get("schema_version") != 3 or not prov.get("cpu_class"):
             fail(f"provenance: {prov}")
         print(f"ok: provenance names the libraries: {libs}")

@@ -161,14 +161,27 @@ class Results:
     # --- provenance ---
     @property
     def provenance(self) -> dict:
-        """The run's root attributes: engine version, git commit, CPU class, host, threads,
-        profile name and text, start and finish times, wall seconds, tasks done and total."""
+        """The run's root attributes: engine version, git commit, CPU class, kernel paths,
+        libraries, host, threads, profile name and text, start and finish times, wall seconds,
+        tasks done and total."""
         out = {}
         for k, v in self._f.attrs.items():
             v = _text(v)
             if isinstance(v, np.generic):
                 v = v.item()
             out[k] = v
+        return out
+
+    @property
+    def libraries(self) -> dict:
+        """The compiler and library versions the run's bits depend on, {name: version} (from
+        /@libraries, "compiler GCC 12.2.0; eigen 3.4.0; ..."); {} for files before engine 0.8.0.
+        Which code paths ran is provenance["kernel_paths"] (engine 0.9.0 on)."""
+        text = self.provenance.get("libraries", "")
+        out = {}
+        for part in filter(None, (p.strip() for p in text.split(";"))):
+            name, _, version = part.partition(" ")
+            out[name] = version
         return out
 
     @property
