@@ -128,7 +128,7 @@ int run_dataset(const DatasetArgs& a) {
 int run_profile_dataset(const std::string& profile, const std::string& out, bool force) {
   Profile p;
   try {
-    p = load_profile(profile);
+    p = load_profile(profile, profile_settings());
   } catch (const ProfileError& e) {
     throw UsageError(e.what());
   }
@@ -299,6 +299,8 @@ void register_dataset(CLI::App& app, Runner& run) {
       ->excludes(cmd->get_option("--beta"))
       ->excludes(cmd->get_option("--mistake"))
       ->excludes(cmd->get_option("--features"));
+  add_set_option(cmd);
+  cmd->get_option("--set")->needs(cmd->get_option("--profile"));
   run = [] {
     return a.profile.empty() ? run_dataset(a) : run_profile_dataset(a.profile, a.out, a.force);
   };

@@ -88,7 +88,7 @@ int run_evaluate(const EvaluateArgs& a) {
     throw UsageError("--name: " + why);
   Profile base;
   try {
-    base = load_profile(a.profile);
+    base = load_profile(a.profile, profile_settings());
   } catch (const ProfileError& e) {
     throw UsageError(e.what());
   }
@@ -173,6 +173,7 @@ void register_evaluate(CLI::App& app, Runner& run) {
   cmd->add_flag("--with-study", a.with_study,
                 "Also run the profile's simulated user study (skipped by default: an external "
                 "method has no part in it)");
+  add_set_option(cmd);
   run = [] { return run_evaluate(a); };
 }
 

@@ -43,6 +43,7 @@ void register_reproduce(CLI::App& app, Runner& run) {
       ->check(CLI::Range(1, 4096));
   cmd->add_flag("--force", force, "Overwrite results from another profile or engine version");
   cmd->add_flag("--no-study", no_study, "Skip the simulated user study (Fig. 6)");
+  add_set_option(cmd);
   run = [] {
     const std::string stem = std::filesystem::path(profile).stem().string();
     // out/ (git-ignored; run_command makes it) is the default home of results.
@@ -52,7 +53,7 @@ void register_reproduce(CLI::App& app, Runner& run) {
     if (rc != 0 || mpi_rank_from_env() > 0) return rc;  // MPI workers do not plot
     draw_figures(out, figures);
     // The user-study pipeline on a simulated cohort (Fig. 6), when the profile asks for it.
-    const Profile p = load_profile(profile);
+    const Profile p = load_profile(profile, profile_settings());
     std::string study_line;
     if (p.study.enabled && !no_study) {
       // The study ran as tasks of the plan (committed and resumable like the rest); here its

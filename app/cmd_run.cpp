@@ -25,7 +25,7 @@ namespace {
 
 Profile load_or_usage(const std::string& name) {
   try {
-    return load_profile(name);
+    return load_profile(name, profile_settings());
   } catch (const ProfileError& e) {
     throw UsageError(e.what());
   }
@@ -121,6 +121,7 @@ void register_run(CLI::App& app, Runner& run) {
                   "it to the same result. 0: after every epoch; -1: never")
       ->check(CLI::Range(-1.0, 1e6))
       ->capture_default_str();
+  add_set_option(cmd);
   run = [] {
     return run_command(profile, out, threads, force, shard, quiet, false, checkpoint_minutes,
                        task_threads);
@@ -258,6 +259,7 @@ void register_plan(CLI::App& app, Runner& run) {
                 "Amdahl serial fraction of one task on several cores")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
+  add_set_option(cmd);
   run = [] {
     const Profile p = load_or_usage(profile);
     const Plan plan = make_plan(p);

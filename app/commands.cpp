@@ -134,6 +134,21 @@ CLI::Validator non_negative_number() {
       "a number >= 0", [](double x) { return x >= 0; }, false);
 }
 
+std::vector<std::string>& profile_settings() {
+  static std::vector<std::string> settings;
+  return settings;
+}
+
+void add_set_option(CLI::App* cmd) {
+  cmd->add_option("--set", profile_settings(),
+                  "Set one profile value for this run, KEY=VALUE with VALUE in TOML, KEY dotted "
+                  "(repeatable, applied in order on top of the profile and its parents): "
+                  "--set seeds=[0,1] --set 'hyper.grid.\"sirl.epochs\"=100' --set "
+                  "jaco.trajectories=2000. The results file records the resolved profile")
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false);
+}
+
 void register_all(CLI::App& app) {
   register_version(app, runners()["version"]);
   register_reproduce(app, runners()["reproduce"]);

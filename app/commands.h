@@ -38,6 +38,11 @@ void register_export(CLI::App& app, Runner& run);
 void register_merge(CLI::App& app, Runner& run);
 void register_evaluate(CLI::App& app, Runner& run);
 
+// The `--set KEY=VALUE` overrides of the command being run (jobs/profile.h, load_profile), and
+// the option that fills them, for every command that takes a profile.
+std::vector<std::string>& profile_settings();
+void add_set_option(CLI::App* cmd);
+
 // Single-quotes a string for /bin/sh (the plotting scripts are run through std::system).
 std::string sh_quote(const std::string& s);
 

@@ -96,7 +96,8 @@ class Reader {
   Reader(const toml::table& root, std::string path) : root_(root), path_(std::move(path)) {}
 
   [[noreturn]] void fail(const toml::node* n, const std::string& what) const {
-    std::string where = path_;
+    // The file that set the value: a parent profile's (extends) or "--set", not always this one.
+    std::string where = n && n->source().path ? *n->source().path : path_;
     if (n && n->source().begin.line > 0) where += ":" + std::to_string(n->source().begin.line);
     throw ProfileError(where + ": " + what);
   }
@@ -667,14 +668,35 @@ void check_budgets(Reader& r, const toml::table& root, const Profile& p) {
 
 }  // namespace
 
-Profile parse_profile(const std::string& text, const std::string& path) {
-  toml::table root;
+namespace {
+
+toml::table parse_toml(const std::string& text, const std::string& path) {
   try {
-    root = toml::parse(text, path);
+    return toml::parse(text, path);
   } catch (const toml::parse_error& e) {
     throw ProfileError(path + ":" + std::to_string(e.source().begin.line) + ": " +
                        std::string(e.description()));
   }
+}
+
+Profile parse_profile_table(const toml::table& root, const std::string& text,
+                            const std::string& path);
+
+}  // namespace
+
+Profile parse_profile(const std::string& text, const std::string& path) {
+  const toml::table root = parse_toml(text, path);
+  if (root.contains("extends"))
+    throw ProfileError(path +
+                       ": `extends` needs the profile's file (load_profile resolves it); "
+                       "a stored profile text is always resolved");
+  return parse_profile_table(root, text, path);
+}
+
+namespace {
+
+Profile parse_profile_table(const toml::table& root, const std::string& text,
+                            const std::string& path) {
   Reader r(root, path);
   std::set<std::string> top{"name",    "description", "envs",   "seeds",     "queries",
                             "teacher", "fpe",         "tpa",    "ablation",  "hyper",
@@ -714,6 +736,8 @@ Profile parse_profile(const std::string& text, const std::string& path) {
   return p;
 }
 
+}  // namespace
+
 const QueryBundleConfig& queries_for(const Profile& p, const std::string& teacher) {
   if (teacher.empty()) return p.queries;
   for (const auto& t : p.robustness.teachers)
@@ -751,7 +775,113 @@ std::string bundled_profile_names() {
   return s.empty() ? "none found in " + dir.string() : s;
 }
 
-Profile load_profile(const std::string& path_or_name) {
+namespace {
+
+// over's keys on top of base's: tables merge key by key, any other value (arrays included)
+// replaces base's. Nodes keep their source (file and line), so errors still point at the file
+// that set the value.
+// (Nodes are moved, never copied: toml++ keeps a node's source only when it moves.)
+void merge_into(toml::table& base, toml::table&& over) {
+  for (auto&& [k, v] : over) {
+    toml::node* b = base.get(k.str());
+    if (b && b->is_table() && v.is_table())
+      merge_into(*b->as_table(), std::move(*v.as_table()));
+    else
+      base.insert_or_assign(k, std::move(v));
+  }
+}
+
+// The file of a profile named by path or bare name ("quick": configs/quick.toml here or among the
+// installed profiles); `near` is the folder of the profile that names it (extends), searched first.
+std::filesystem::path find_profile(const std::string& path_or_name,
+                                   const std::filesystem::path& near = {});
+
+// A profile file with its parents (`extends = "quick"` or a list, merged left to right, then the
+// file's own keys on top), resolved recursively; `chain` catches a cycle.
+toml::table resolve_profile(const std::filesystem::path& file, std::vector<std::string>& chain,
+                            bool& composed) {
+  namespace fs = std::filesystem;
+  const std::string id = fs::weakly_canonical(file).string();
+  if (std::find(chain.begin(), chain.end(), id) != chain.end())
+    throw ProfileError(file.string() + ": `extends` makes a cycle (" + chain.front() + " → … → " +
+                       id + ")");
+  chain.push_back(id);
+  std::ifstream in(file);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  if (!in && !in.eof()) throw ProfileError(file.string() + ": cannot read");
+  toml::table own = parse_toml(ss.str(), file.string());
+  const toml::node* ext = own.get("extends");
+  if (!ext) {
+    chain.pop_back();
+    return own;
+  }
+  composed = true;
+  std::vector<std::string> parents;
+  auto bad = [&] {
+    throw ProfileError(file.string() + ":" + std::to_string(ext->source().begin.line) +
+                       ": extends must be a profile name or path, or a list of them");
+  };
+  if (ext->is_string()) {
+    parents.push_back(*ext->value<std::string>());
+  } else if (const auto* a = ext->as_array()) {
+    for (auto&& e : *a) {
+      if (!e.is_string()) bad();
+      parents.push_back(*e.value<std::string>());
+    }
+  } else {
+    bad();
+  }
+  if (parents.empty()) bad();
+  toml::table merged;
+  for (const auto& parent : parents)
+    merge_into(merged, resolve_profile(find_profile(parent, file.parent_path()), chain, composed));
+  own.erase("extends");
+  merge_into(merged, std::move(own));
+  chain.pop_back();
+  return merged;
+}
+
+// "KEY=VALUE" as a one-line TOML document (KEY may be dotted: hyper.grid."sirl.epochs").
+toml::table parse_setting(const std::string& setting) {
+  const size_t eq = setting.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw ProfileError("--set " + setting + ": expected KEY=VALUE, e.g. seeds=[0,1] or " +
+                       "hyper.grid.\"sirl.epochs\"=100");
+  try {
+    return toml::parse(setting.substr(0, eq) + " = " + setting.substr(eq + 1), "--set " + setting);
+  } catch (const toml::parse_error& e) {
+    throw ProfileError("--set " + setting + ": " + std::string(e.description()) +
+                       " (VALUE is TOML: a number, true/false, a \"string\" or an [array])");
+  }
+}
+
+}  // namespace
+
+Profile load_profile(const std::string& path_or_name, const std::vector<std::string>& settings) {
+  const std::filesystem::path file = find_profile(path_or_name);
+  std::vector<std::string> chain;
+  bool composed = false;
+  toml::table root = resolve_profile(file, chain, composed);
+  if (!composed && settings.empty()) {  // the file as written is the profile's text
+    std::ifstream in(file);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return parse_profile(ss.str(), file.string());
+  }
+  for (const auto& s : settings) merge_into(root, parse_setting(s));
+  // The resolved profile is the one recorded (results, resume, merge): one self-contained text.
+  std::ostringstream text;
+  text << "# " << file.string() << (composed ? " with its parents (extends)" : "");
+  for (const auto& s : settings) text << ", --set " << s;
+  text << ", resolved\n" << root << "\n";
+  return parse_profile_table(root, text.str(), file.string());
+}
+
+namespace {
+
+std::filesystem::path find_profile(const std::string& path_or_name,
+                                   const std::filesystem::path& near) {
   namespace fs = std::filesystem;
   std::vector<fs::path> candidates{path_or_name};
   fs::path bundled;
@@ -765,14 +895,15 @@ Profile load_profile(const std::string& path_or_name) {
       missing_data = e.what();
     }
   }
+  if (!near.empty()) {
+    const fs::path rel = near / path_or_name;
+    candidates.insert(candidates.begin(), rel);
+    if (rel.extension() != ".toml")
+      candidates.insert(candidates.begin() + 1, rel.string() + ".toml");
+  }
   for (const auto& c : candidates) {
     std::error_code ec;
-    if (!fs::is_regular_file(c, ec)) continue;
-    std::ifstream in(c);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    if (!in && !in.eof()) throw ProfileError(c.string() + ": cannot read");
-    return parse_profile(ss.str(), c.string());
+    if (fs::is_regular_file(c, ec)) return c;
   }
   throw ProfileError(
       "profile '" + path_or_name + "' not found (looked for " + candidates.front().string() +
@@ -783,5 +914,7 @@ Profile load_profile(const std::string& path_or_name) {
            : std::string()) +
       ")" + (missing_data.empty() ? std::string() : "; " + missing_data));
 }
+
+}  // namespace
 
 }  // namespace sirl

@@ -149,9 +149,15 @@ bool runs_bf16(const Profile& p);
 // The precision the networks of environment `env` run in (the top-level one for an environment
 // the profile has no [hyper] entry for, such as the study's tasks).
 const std::string& precision_of(const Profile& p, const std::string& env);
-// Reads the file; a bare name ("quick") resolves to configs/<name>.toml beside the binary's
-// source tree or the working directory. Throws ProfileError.
-Profile load_profile(const std::string& path_or_name);
+// Reads the file; a bare name ("quick") resolves to configs/<name>.toml in the working directory
+// or among the installed profiles. `extends = "quick"` (or a list) in a file makes it its parents'
+// tables with its own keys on top (tables merge key by key; arrays and values replace), a parent
+// named relative to the file's folder first; each of `settings` ("KEY=VALUE", VALUE in TOML, KEY
+// dotted: hyper.grid."sirl.epochs"=100, seeds=[0,1]) goes on top of that, in order. A composed
+// profile's text (what results files record) is the resolved TOML. Errors name the file and line
+// that set the bad value (or "--set KEY=VALUE"). Throws ProfileError.
+Profile load_profile(const std::string& path_or_name,
+                     const std::vector<std::string>& settings = {});
 
 // The names of the profiles shipped in configs/ ("beyond, jaco-fig5, paper, …"), for --help.
 std::string bundled_profile_names();

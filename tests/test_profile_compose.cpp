@@ -1,0 +1,121 @@
+// Profiles that compose: `extends` (parents' tables with the file's keys on top) and `--set`
+// (KEY=VALUE on top of that), resolved before validation, errors naming the file that set the
+// bad value, and a recorded text that is the resolved profile.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "jobs/plan.h"
+#include "jobs/profile.h"
+#include "tests/small_profile.h"
+
+namespace sirl {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Dir {
+  fs::path path = fs::temp_directory_path() / ("sirl-compose-" + std::to_string(::getpid()));
+  Dir() { fs::create_directories(path); }
+  ~Dir() { fs::remove_all(path); }
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(path / name) << text;
+    return (path / name).string();
+  }
+};
+
+std::string error_of(const std::string& file, const std::vector<std::string>& sets = {}) {
+  try {
+    load_profile(file, sets);
+  } catch (const ProfileError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+std::vector<std::string> keys(const Profile& p) {
+  std::vector<std::string> k;
+  for (const auto& t : make_plan(p).tasks) k.push_back(t.key);
+  return k;
+}
+
+TEST(ProfileCompose, AChildIsItsParentsTablesWithItsOwnKeysOnTop) {
+  Dir d;
+  d.write("base.toml", test::kSmallProfile);
+  const std::string child = d.write("child.toml", R"(extends = "base"
+name = "child"
+seeds = [4]
+[queries]
+similarity = 400
+[hyper.grid]
+"tpa.epochs" = 11
+)");
+  const Profile p = load_profile(child);
+  EXPECT_EQ(p.name, "child");
+  EXPECT_EQ(p.seeds, (std::vector<int64_t>{4}));  // an array replaces the parent's
+  EXPECT_EQ(p.queries.similarity, 400);           // a table merges key by key:
+  EXPECT_EQ(p.queries.preference, 300);           //   the parent's other keys stay
+  EXPECT_EQ(p.hyper.at("grid").sirl.epochs, 7);   // [hyper.grid] from the parent
+  EXPECT_EQ(p.hyper.at("grid").tpa.epochs, 11);   //   and the child
+  ASSERT_EQ(p.fpe_methods.size(), 4u);            // untouched tables: the parent's
+  // --set goes on top of both, in order; the recorded text is the resolved profile, and parsing
+  // it gives the same plan.
+  const Profile s =
+      load_profile(child, {"seeds=[0,1]", "hyper.grid.\"sirl.epochs\"=9", "seeds=[2]"});
+  EXPECT_EQ(s.seeds, (std::vector<int64_t>{2}));
+  EXPECT_EQ(s.hyper.at("grid").sirl.epochs, 9);
+  EXPECT_EQ(s.hyper.at("grid").tpa.epochs, 11);
+  const Profile again = parse_profile(s.text, "stored");
+  EXPECT_EQ(keys(again), keys(s));
+  EXPECT_EQ(again.hyper.at("grid").sirl.epochs, 9);
+  EXPECT_EQ(again.seeds, s.seeds);
+  // Without extends or --set the text is the file's, byte for byte.
+  const Profile plain = load_profile(d.write("plain.toml", test::kSmallProfile));
+  EXPECT_EQ(plain.text, std::string(test::kSmallProfile));
+}
+
+TEST(ProfileCompose, ParentsMergeLeftToRightAndResolveBesideTheChild) {
+  Dir d;
+  d.write("base.toml", test::kSmallProfile);
+  fs::create_directories(d.path / "sub");
+  d.write("sub/a.toml", "extends = \"../base.toml\"\nname = \"a\"\nseeds = [1]\n");
+  d.write("sub/b.toml",
+          "extends = \"../base.toml\"\nname = \"b\"\nseeds = [2]\n[queries]\n"
+          "similarity = 350\n");
+  const Profile p = load_profile(d.write("sub/c.toml", "extends = [\"a\", \"b.toml\"]\n"));
+  EXPECT_EQ(p.name, "b");  // the later parent wins
+  EXPECT_EQ(p.seeds, (std::vector<int64_t>{2}));
+  EXPECT_EQ(p.queries.similarity, 350);
+}
+
+TEST(ProfileCompose, ErrorsNameTheFileThatSetTheValue) {
+  Dir d;
+  const std::string base = d.write("base.toml", test::kSmallProfile);
+  // base's [fpe] N = 300 exceeds the child's budget: the error points at base.toml's [fpe].
+  const std::string child =
+      d.write("child.toml", "extends = \"base\"\n[queries]\nsimilarity = 250\n");
+  const std::string e = error_of(child);
+  EXPECT_NE(e.find(base + ":9:"), std::string::npos) << e;  // its [fpe] table
+  EXPECT_NE(e.find("N = 300"), std::string::npos) << e;
+  // A bad value from --set names the setting.
+  EXPECT_NE(error_of(child, {"seeds=[0,\"x\"]"}).find("--set seeds=[0,\"x\"]"), std::string::npos);
+  EXPECT_NE(error_of(child, {"nonsense=1"}).find("unknown key 'nonsense'"), std::string::npos);
+  EXPECT_NE(error_of(child, {"seeds"}).find("expected KEY=VALUE"), std::string::npos);
+  EXPECT_NE(error_of(child, {"seeds=[0,"}).find("--set seeds=[0,"), std::string::npos);
+  // Cycles and unknown parents.
+  d.write("x.toml", "extends = \"y\"\nname = \"x\"\n");
+  const std::string y = d.write("y.toml", "extends = \"x\"\nname = \"y\"\n");
+  EXPECT_NE(error_of(y).find("makes a cycle"), std::string::npos);
+  EXPECT_NE(error_of(d.write("z.toml", "extends = \"nowhere\"\n")).find("'nowhere' not found"),
+            std::string::npos);
+  EXPECT_NE(error_of(d.write("w.toml", "extends = 3\n")).find("extends must be"),
+            std::string::npos);
+  // A stored text never holds extends: parse_profile refuses one.
+  EXPECT_THROW(parse_profile("extends = \"base\"\n", "t"), ProfileError);
+}
+
+}  // namespace
+}  // namespace sirl
