@@ -14,7 +14,7 @@ The overall verdict needs every (env, method, metric) to be equivalent. That is 
 intersection-union test: it needs no multiplicity correction (each part at α keeps the whole at α).
 
 Both runs resume (`sirl run` skips committed tasks), so a killed run continues where it stopped.
-Writes OUT/fp32.toml, OUT/bf16.toml, their results files, and OUT/bf16-equivalence.{md,json}.
+Writes the two results files (each recording its resolved profile), and OUT/bf16-equivalence.{md,json}.
 
   /usr/bin/python3 bench/bf16_equivalence.py [--profile bench/mid.toml] [--seeds 10]
                                             [--threads 2] [--out out/bf16-equivalence]
@@ -23,10 +23,8 @@ import argparse
 import json
 import math
 import os
-import re
 import subprocess
 import sys
-import tomllib
 
 from scipy import stats
 
@@ -39,23 +37,16 @@ MARGINS = {"fpe": 0.005, "tpa": 0.02}
 ALPHA = 0.05
 
 
-def profile_text(base_text, precision, seeds, name):
-    """The base profile with its name, seeds and precision replaced (top-level keys)."""
-    text = base_text
-    for key, value in (("name", f'"{name}"'), ("seeds", str(list(range(seeds))))):
-        text, n = re.subn(rf"(?m)^{key}\s*=.*$", f"{key} = {value}", text, count=1)
-        if n != 1:
-            sys.exit(f"bf16_equivalence: the profile has no top-level '{key} = ...' line")
-    text = re.sub(r"(?m)^precision\s*=.*\n", "", text)
-    text = f'precision = "{precision}"\n' + text
-    parsed = tomllib.loads(text)  # refuse now what sirl would refuse later
-    if parsed.get("precision") != precision or parsed.get("seeds") != list(range(seeds)):
-        sys.exit("bf16_equivalence: could not rewrite the profile's top-level keys")
-    return text
+def settings(precision, seeds, name):
+    """What the tool sets on top of the profile (`sirl run --set`): its name, the top-level seeds
+    (an environment's own seeds stay) and the precision of every network."""
+    return [f'name="{name}"', f"seeds={list(range(seeds))}", f'precision="{precision}"']
 
 
-def run(sirl, profile, out, threads):
+def run(sirl, profile, sets, out, threads):
     cmd = [sirl, "run", profile, "--out", out, "--threads", str(threads)]
+    for s in sets:
+        cmd += ["--set", s]
     print("+", " ".join(cmd), flush=True)
     if subprocess.run(cmd).returncode != 0:  # sirl said why (e.g. another --seeds in that --out)
         sys.exit(f"bf16_equivalence: `{' '.join(cmd)}` failed")
@@ -140,16 +131,13 @@ def main():
     if not a.analyse_only and not os.access(a.sirl, os.X_OK):
         sys.exit(f"bf16_equivalence: no sirl binary at {a.sirl} (./scripts/build.sh release)")
     os.makedirs(a.out, exist_ok=True)
-    base = open(a.profile, encoding="utf-8").read()
     stem = os.path.splitext(os.path.basename(a.profile))[0]
     paths = {}
     for precision in ("fp32", "bf16"):
-        prof = os.path.join(a.out, precision + ".toml")
-        with open(prof, "w", encoding="utf-8") as f:
-            f.write(profile_text(base, precision, a.seeds, f"{stem}-{precision}"))
         paths[precision] = os.path.join(a.out, precision + ".h5")
         if not a.analyse_only:
-            run(a.sirl, prof, paths[precision], a.threads)
+            run(a.sirl, a.profile, settings(precision, a.seeds, f"{stem}-{precision}"),
+                paths[precision], a.threads)
     for path in paths.values():
         if not os.path.isfile(path):
             sys.exit(f"bf16_equivalence: {path}: no results file (run without --analyse-only)")

@@ -1,9 +1,8 @@
 #!/usr/bin/python3
 """bench/bf16_equivalence.py's statistics and profile rewriting, against hand-worked cases:
 the TOST p and 90 % CI against the closed-form Student t of 4 degrees of freedom
-(F(t) = 1/2 + (3/4)·x·(1 − x²/3), x = t/√(4 + t²)), the degenerate cases, and the profile text
-it runs (name, seeds and precision replaced, anything else kept, a profile without top-level
-seeds refused)."""
+(F(t) = 1/2 + (3/4)·x·(1 − x²/3), x = t/√(4 + t²)), the degenerate cases, and the settings it
+runs the profile with (name, seeds and precision, which sirl plan accepts)."""
 import math
 import os
 import sys
@@ -38,19 +37,16 @@ assert eq.tost([0.0, 0.0, 0.0], 0.005)[2] == 0.0
 assert eq.tost([0.01, 0.01, 0.01], 0.005)[2] == 1.0
 assert math.isnan(eq.tost([0.001], 0.005)[2])
 
-# The profile the tool runs: name, seeds and precision replaced, the rest kept.
-base = ('# a comment\nname = "mid"\ndescription = "x"\nenvs = ["grid"]\nseeds = [0, 1]\n'
-        '[grid]\nseeds = [5]\n[hyper.grid]\n"sirl.epochs" = 2\n')
-text = eq.profile_text(base, "bf16", 10, "mid-bf16")
-assert text.startswith('precision = "bf16"\n'), text
-assert 'name = "mid-bf16"' in text and "seeds = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9]" in text, text
-assert "[grid]\nseeds = [5]" in text, "an environment's own seeds must stay"
-assert '"sirl.epochs" = 2' in text and "# a comment" in text
-again = eq.profile_text(text, "fp32", 3, "mid-fp32")  # an existing precision line is replaced
-assert again.count("precision") == 1 and again.startswith('precision = "fp32"'), again
-try:
-    eq.profile_text('name = "x"\nenvs = ["grid"]\n', "bf16", 10, "x")
-    raise AssertionError("a profile without top-level seeds was accepted")
-except SystemExit as e:
-    assert "seeds" in str(e), e
-print("ok: TOST p and CI match the closed-form t(4); degenerate cases; the profile rewriting")
+# The profile the tool runs: the base profile with name, seeds and precision set on top (sirl
+# run --set), which sirl accepts: the plan has those seeds and the environment's own ones stay.
+sets = eq.settings("bf16", 10, "mid-bf16")
+assert sets == ['name="mid-bf16"', "seeds=[0, 1, 2, 3, 4, 5, 6, 7, 8, 9]", 'precision="bf16"'], sets
+if os.environ.get("SIRL"):
+    import subprocess
+    cmd = [os.environ["SIRL"], "plan", os.path.join(os.environ["SIRL_SOURCE_DIR"], "bench",
+                                                   "mid.toml")]
+    for s in sets:
+        cmd += ["--set", s]
+    out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
+    assert "profile mid-bf16 " in out and "seeds: 10" in out, out[:300]
+print("ok: TOST p and CI match the closed-form t(4); degenerate cases; the profile settings")
