@@ -23,7 +23,7 @@ Representation as_table(const Representation& phi, const Dataset& d) {
                               phi.dim(), d.input_dim);
 }
 
-bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+bool identical_floats(const std::vector<float>& a, const std::vector<float>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
 
@@ -65,7 +65,7 @@ TEST(ExternalRepresentation, TheEnginesOwnEmbeddingGivesBitIdenticalFpeAndFrozen
     const TpaResult tb = evaluate_tpa(ext, w.d, w.bundle.tpa, c, 3);
     EXPECT_EQ(ta.accuracy, tb.accuracy);
     EXPECT_EQ(ta.train_accuracy, tb.train_accuracy);
-    EXPECT_TRUE(same_bits(ta.loss_curves, tb.loss_curves));
+    EXPECT_TRUE(identical_floats(ta.loss_curves, tb.loss_curves));
     EXPECT_EQ(ta.mean, tb.mean);
   }
 }

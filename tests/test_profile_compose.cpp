@@ -17,17 +17,17 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Dir {
+struct ComposeDir {
   fs::path path = fs::temp_directory_path() / ("sirl-compose-" + std::to_string(::getpid()));
-  Dir() { fs::create_directories(path); }
-  ~Dir() { fs::remove_all(path); }
+  ComposeDir() { fs::create_directories(path); }
+  ~ComposeDir() { fs::remove_all(path); }
   std::string write(const std::string& name, const std::string& text) const {
     std::ofstream(path / name) << text;
     return (path / name).string();
   }
 };
 
-std::string error_of(const std::string& file, const std::vector<std::string>& sets = {}) {
+std::string compose_error(const std::string& file, const std::vector<std::string>& sets = {}) {
   try {
     load_profile(file, sets);
   } catch (const ProfileError& e) {
@@ -36,14 +36,14 @@ std::string error_of(const std::string& file, const std::vector<std::string>& se
   return "no error";
 }
 
-std::vector<std::string> keys(const Profile& p) {
+std::vector<std::string> plan_keys(const Profile& p) {
   std::vector<std::string> k;
   for (const auto& t : make_plan(p).tasks) k.push_back(t.key);
   return k;
 }
 
 TEST(ProfileCompose, AChildIsItsParentsTablesWithItsOwnKeysOnTop) {
-  Dir d;
+  ComposeDir d;
   d.write("base.toml", test::kSmallProfile);
   const std::string child = d.write("child.toml", R"(extends = "base"
 name = "child"
@@ -69,7 +69,7 @@ similarity = 400
   EXPECT_EQ(s.hyper.at("grid").sirl.epochs, 9);
   EXPECT_EQ(s.hyper.at("grid").tpa.epochs, 11);
   const Profile again = parse_profile(s.text, "stored");
-  EXPECT_EQ(keys(again), keys(s));
+  EXPECT_EQ(plan_keys(again), plan_keys(s));
   EXPECT_EQ(again.hyper.at("grid").sirl.epochs, 9);
   EXPECT_EQ(again.seeds, s.seeds);
   // Without extends or --set the text is the file's, byte for byte.
@@ -78,7 +78,7 @@ similarity = 400
 }
 
 TEST(ProfileCompose, ParentsMergeLeftToRightAndResolveBesideTheChild) {
-  Dir d;
+  ComposeDir d;
   d.write("base.toml", test::kSmallProfile);
   fs::create_directories(d.path / "sub");
   d.write("sub/a.toml", "extends = \"../base.toml\"\nname = \"a\"\nseeds = [1]\n");
@@ -92,26 +92,26 @@ TEST(ProfileCompose, ParentsMergeLeftToRightAndResolveBesideTheChild) {
 }
 
 TEST(ProfileCompose, ErrorsNameTheFileThatSetTheValue) {
-  Dir d;
+  ComposeDir d;
   const std::string base = d.write("base.toml", test::kSmallProfile);
   // base's [fpe] N = 300 exceeds the child's budget: the error points at base.toml's [fpe].
   const std::string child =
       d.write("child.toml", "extends = \"base\"\n[queries]\nsimilarity = 250\n");
-  const std::string e = error_of(child);
+  const std::string e = compose_error(child);
   EXPECT_NE(e.find(base + ":9:"), std::string::npos) << e;  // its [fpe] table
   EXPECT_NE(e.find("N = 300"), std::string::npos) << e;
   // A bad value from --set names the setting.
-  EXPECT_NE(error_of(child, {"seeds=[0,\"x\"]"}).find("--set seeds=[0,\"x\"]"), std::string::npos);
-  EXPECT_NE(error_of(child, {"nonsense=1"}).find("unknown key 'nonsense'"), std::string::npos);
-  EXPECT_NE(error_of(child, {"seeds"}).find("expected KEY=VALUE"), std::string::npos);
-  EXPECT_NE(error_of(child, {"seeds=[0,"}).find("--set seeds=[0,"), std::string::npos);
+  EXPECT_NE(compose_error(child, {"seeds=[0,\"x\"]"}).find("--set seeds=[0,\"x\"]"), std::string::npos);
+  EXPECT_NE(compose_error(child, {"nonsense=1"}).find("unknown key 'nonsense'"), std::string::npos);
+  EXPECT_NE(compose_error(child, {"seeds"}).find("expected KEY=VALUE"), std::string::npos);
+  EXPECT_NE(compose_error(child, {"seeds=[0,"}).find("--set seeds=[0,"), std::string::npos);
   // Cycles and unknown parents.
   d.write("x.toml", "extends = \"y\"\nname = \"x\"\n");
   const std::string y = d.write("y.toml", "extends = \"x\"\nname = \"y\"\n");
-  EXPECT_NE(error_of(y).find("makes a cycle"), std::string::npos);
-  EXPECT_NE(error_of(d.write("z.toml", "extends = \"nowhere\"\n")).find("'nowhere' not found"),
+  EXPECT_NE(compose_error(y).find("makes a cycle"), std::string::npos);
+  EXPECT_NE(compose_error(d.write("z.toml", "extends = \"nowhere\"\n")).find("'nowhere' not found"),
             std::string::npos);
-  EXPECT_NE(error_of(d.write("w.toml", "extends = 3\n")).find("extends must be"),
+  EXPECT_NE(compose_error(d.write("w.toml", "extends = 3\n")).find("extends must be"),
             std::string::npos);
   // A stored text never holds extends: parse_profile refuses one.
   EXPECT_THROW(parse_profile("extends = \"base\"\n", "t"), ProfileError);
