@@ -12,9 +12,15 @@
 #include "app/commands.h"
 #include "datasets/environments.h"
 #include "engine/representation.h"
+#include "jobs/plan.h"
 #include "jobs/profile.h"
+#include "jobs/task_kinds.h"
+#include "jobs/task_runner.h"
+#include "kernels/cpu_class.h"
 #include "results/durable.h"
 #include "results/external_embeddings.h"
+#include "results/file_lock.h"
+#include "results/results_file.h"
 
 namespace sirl::app {
 namespace {
@@ -76,8 +82,59 @@ void check_embeddings(const Profile& p, const ExternalMethod& m) {
                arrays, m.embeddings.c_str());
 }
 
+// --against BASE.h5: a finished run of the same profile on this engine and CPU class. Its records
+// become the start of OUT (under the profile with the external method), so the resume that follows
+// computes only the external method's tasks: the built-in cells are the base run's, bit for bit,
+// as a fresh run of this engine on this CPU class would compute them.
+void seed_from_base(const std::string& base_file, const Profile& base, const Profile& p,
+                    const std::string& out, bool force) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::equivalent(base_file, out, ec))
+    throw UsageError("--against " + base_file + " is --out too; evaluate writes a new file");
+  if (fs::exists(out, ec) && !force)
+    throw UsageError(out + " already exists; remove it, choose another --out, or --force");
+  const RunInfo info = read_run_info(base_file);
+  const std::string why =
+      !info.verified ? "no checksum verifies it"
+      : info.profile_text != base.text
+          ? "it was run under another profile text than " + base.path + "'s"
+      : info.engine_version != engine_version() ? "it comes from engine " + info.engine_version
+      : info.cpu_class != cpu_class()
+          ? "it was computed on another CPU class (" + info.cpu_class + ")"
+      : !info.shard.empty() ? "it is shard " + info.shard + " (merge the shards)"
+                            : "";
+  if (!why.empty())
+    throw UsageError("--against " + base_file + ": " + why +
+                     "; without --against the built-in cells are computed here");
+  std::vector<TaskRecord> records = read_results_records(base_file);
+  const Plan plan = make_plan(p);
+  std::set<std::string> wanted;
+  for (const auto& t : plan.tasks) wanted.insert(t.key);
+  std::erase_if(records, [&](const TaskRecord& r) { return !wanted.count(r.key); });
+  RunInfo seeded = info;
+  seeded.profile_text = p.text;
+  seeded.profile_name = p.name;
+  seeded.tasks_total = int64_t(plan.tasks.size());
+  seeded.tasks_done = int64_t(records.size());
+  seeded.complete = false;
+  RunContext ctx(p, [](const std::string& k) -> TaskRecord {
+    throw std::logic_error("seeding reads no task (" + k + ")");
+  });
+  std::vector<RunDataset> ds;
+  for (const auto& env : p.envs)
+    ds.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
+  if (const auto dir = fs::path(out).parent_path(); !dir.empty()) fs::create_directories(dir);
+  {
+    const FileLock lock(out, "sirl evaluate", "wait for it to finish, or choose another --out");
+    write_results_file(out, seeded, ds, records, result_tables(records, info.roofs()));
+  }
+  std::fprintf(stderr, "sirl evaluate: %zu of %zu tasks are %s's\n", records.size(),
+               plan.tasks.size(), base_file.c_str());
+}
+
 struct EvaluateArgs {
-  std::string embeddings, name, profile = "quick", out, figures;
+  std::string embeddings, name, profile = "quick", out, figures, against;
   std::vector<std::string> envs;
   int threads = 0;
   bool force = false, quiet = false, with_study = false;
@@ -122,7 +179,10 @@ int run_evaluate(const EvaluateArgs& a) {
   }
   const std::string stem = std::filesystem::path(a.profile).stem().string();
   const std::string out = a.out.empty() ? "out/" + stem + "+" + a.name + ".h5" : a.out;
-  const int rc = run_loaded_profile(p, out, a.threads, a.force, "", a.quiet, !a.with_study);
+  if (!a.with_study) p.study.enabled = false;
+  if (!a.against.empty()) seed_from_base(a.against, base, p, out, a.force);
+  const int rc = run_loaded_profile(p, out, a.threads, a.force && a.against.empty(), "", a.quiet,
+                                    !a.with_study);
   if (rc != 0) return rc;
   if (!a.figures.empty()) {
     draw_figures(out, a.figures);
@@ -162,6 +222,11 @@ void register_evaluate(CLI::App& app, Runner& run) {
   cmd->add_option("--figures", a.figures,
                   "Also draw the figures and the report (the method next to the built-in ones) "
                   "into this folder");
+  cmd->add_option("--against", a.against,
+                  "A finished results file of the same profile, engine and CPU class (e.g. "
+                  "out/quick.h5 from `sirl reproduce`): its cells are reused, so only the "
+                  "external method's are computed")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--envs", a.envs,
                   "The environments the file has embeddings for (default: every one of the "
                   "profile's); the method has no cells in the others")

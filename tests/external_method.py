@@ -10,6 +10,8 @@
 - bad input is one line, exit code 2, nothing written: a missing seed, wrong T, d changing, NaN,
   an integer array, a built-in name, a file changed after a profile named it, an unknown env;
 - --envs restricts the method to the environments it has embeddings for;
+- --against reuses a finished run's cells and computes only the external method's, giving the
+  tables a full evaluate gives; a base of another profile text is refused;
 - examples/torch_sirl.py (SIRL in PyTorch) trains on the exported data, `sirl evaluate` scores
   it with figures, and the report compares it with SIRL.
 """
@@ -113,6 +115,28 @@ def check_mirror(d, plain):
     return emb
 
 
+def check_against(d, plain):
+    """--against reuses a finished run's cells: only the external method's tasks run, and the
+    file equals the one a full evaluate writes, table for table."""
+    p = run("evaluate", f"{d}/mirror.h5", "--name", "mirror", "--profile", "smoke", "--against",
+            plain, "--out", f"{d}/against.h5", "--quiet")
+    if " of " not in p.stderr or "tasks are" not in p.stderr:
+        fail(f"--against did not say what it reused: {p.stderr!r}")
+    with sirl_bench.open(f"{d}/against.h5") as a, sirl_bench.open(f"{d}/mirror-run.h5") as f:
+        for name in ("fpe", "tpa"):
+            if not getattr(a, name).equals(getattr(f, name)):
+                fail(f"--against: {name} differs from a full evaluate's")
+        if not a.complete:
+            fail("--against: the file is not complete")
+    # A base of another profile text is refused, nothing written.
+    other = f"{d}/other.h5"
+    run("run", "smoke", "--set", "seeds=[0]", "--out", other, "--quiet")
+    p = run("evaluate", f"{d}/mirror.h5", "--name", "mirror", "--profile", "smoke", "--against",
+            other, "--out", f"{d}/against2.h5", expect=2)
+    if "another profile text" not in p.stderr or os.path.exists(f"{d}/against2.h5"):
+        fail(f"--against a file of another profile: {p.stderr!r}")
+
+
 def check_bad_inputs(d, emb):
     def variant(name, edit):
         arrays = {}
@@ -211,6 +235,7 @@ def main():
         run("dataset", "--profile", "smoke", "--out", f"{d}/train.h5")
         check_training_data(d, plain)
         emb = check_mirror(d, plain)
+        check_against(d, plain)
         check_bad_inputs(d, emb)
         check_torch_example(d)
     finally:
