@@ -33,7 +33,16 @@ ExternalEmbedding read_external_embedding(const std::string& file, const std::st
     if (!f.exists(name))
       fail("no array " + name + " (the embedding of Ξ for env " + env + ", seed " +
            std::to_string(seed) + ", N " + std::to_string(N) + ")");
-    std::vector<uint64_t> dims;
+    // The shape first, so a file of the wrong size is refused before anything is allocated.
+    std::vector<uint64_t> dims = f.dims(name);
+    if (dims.size() != 2)
+      fail(name + " has " + std::to_string(dims.size()) + " dimensions; an embedding is [T, d]");
+    if (dims[0] != uint64_t(T))
+      fail(name + " has " + std::to_string(dims[0]) + " rows; Ξ of " + env + " has " +
+           std::to_string(T) + " trajectories");
+    if (dims[1] > uint64_t(kMaxExternalDim))
+      fail(name + " has d = " + std::to_string(dims[1]) + " columns; an embedding has at most " +
+           std::to_string(kMaxExternalDim));
     ExternalEmbedding e;
     try {
       e.values = f.read_f32(name, {-1, -1}, &dims);
@@ -52,6 +61,7 @@ ExternalEmbedding read_external_embedding(const std::string& file, const std::st
       fail(name + " has " + std::to_string(e.rows) + " rows; Ξ of " + env + " has " +
            std::to_string(T) + " trajectories");
     if (e.dim < 1) fail(name + " has no columns");
+
     return e;
   } catch (const H5Error& e) {
     throw std::invalid_argument(e.what());

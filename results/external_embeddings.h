@@ -12,6 +12,9 @@
 
 namespace sirl {
 
+// The widest embedding accepted (a reward head's first layer is d × its width, per test reward).
+inline constexpr int kMaxExternalDim = 4096;
+
 // "/grid/s0/N100".
 std::string external_embedding_name(const std::string& env, int64_t seed, int64_t N);
 

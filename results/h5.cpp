@@ -241,6 +241,18 @@ void H5File::write(const std::string& n, const int32_t* d, const std::vector<uin
 void H5File::write(const std::string& n, const double* d, const std::vector<uint64_t>& dims) {
   write_any(id_, path_, n, H5T_NATIVE_DOUBLE, d, dims, compress_);
 }
+std::vector<uint64_t> H5File::dims(const std::string& name) const {
+  quiet();
+  if (H5Lexists(id_, name.c_str(), H5P_DEFAULT) <= 0) fail(path_, "missing dataset " + name);
+  Hid ds(H5Dopen2(id_, name.c_str(), H5P_DEFAULT), H5Dclose);
+  if (ds < 0) fail(path_, "cannot open dataset " + name + " (file corrupt?)");
+  Hid space(H5Dget_space(ds), H5Sclose);
+  const int rank = H5Sget_simple_extent_ndims(space);
+  std::vector<hsize_t> d(std::max(rank, 0));
+  if (rank > 0) H5Sget_simple_extent_dims(space, d.data(), nullptr);
+  return {d.begin(), d.end()};
+}
+
 std::vector<float> H5File::read_f32(const std::string& n, const std::vector<int64_t>& e,
                                     std::vector<uint64_t>* d) const {
   return read_any<float>(id_, path_, n, H5T_NATIVE_FLOAT, H5T_FLOAT, e, d, "float32");

@@ -65,6 +65,8 @@ class H5File {
   // A "long" table as a 1-D compound dataset, one field per column (strings fixed-length, so
   // pandas.DataFrame(h5py.File(f)[name][:]) reads it directly).
   void write_table(const std::string& name, const struct H5Table& table);
+  // A dataset's extents (without reading it); throws H5Error if it is missing.
+  std::vector<uint64_t> dims(const std::string& name) const;
   // Reads and checks the element type and shape; a dim of -1 in `expect` matches any extent.
   std::vector<float> read_f32(const std::string& name, const std::vector<int64_t>& expect,
                               std::vector<uint64_t>* dims = nullptr) const;

@@ -163,6 +163,7 @@ def check_bad_inputs(d, emb):
         (variant("nan", nan), "nan at row 3, column 1"),
         (variant("ints", lambda k, z: z.astype(np.int32) if k == last else z), "not a 2-D float32"),
         (variant("width", lambda k, z: z[:, :2] if k == last else z), "has d = 2"),
+        (variant("cube", lambda k, z: z[:, :, None] if k == last else z), "3 dimensions"),
     ]
     out = f"{d}/bad.h5"
     for path, words in cases:
