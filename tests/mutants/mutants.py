@@ -220,6 +220,18 @@ MUTANTS = [
      "", "ResultsFile.*", "the embedded digest not compared"),
     ("app/commands.cpp", "         (v[0] != '0' || v.size() == 1);", "         true;",
      "ctest:cli_numbers", "leading zeros accepted in integer options"),
+    # external methods and composed profiles (0.9.0)
+    ("engine/representation.cpp",
+     "std::copy_n(rep.table.begin() + ptrdiff_t(rows[i]) * dim, dim, out.begin() + i * dim);",
+     "std::copy_n(rep.table.begin() + ptrdiff_t(rows[i] ^ 1) * dim, dim, out.begin() + i * dim);",
+     "ExternalRepresentation.*:Fpe.*:Tpa.*", "a neighbouring row of φ(Ξ) looked up"),
+    ("jobs/profile.cpp", "  if (v.method == Method::external) return {true};  // no weights to fine-tune",
+     "", "ctest:external_method", "external methods given the grid's unfrozen cells"),
+    ("jobs/profile.cpp", "      merge_into(*b->as_table(), std::move(*v.as_table()));",
+     "      base.insert_or_assign(k, std::move(v));", "ProfileCompose.*",
+     "a child's table replaces its parent's instead of merging"),
+    ("results/external_embeddings.cpp", "  if (digest != xxh3)", "  if (false)",
+     "ctest:external_method", "an embeddings file that changed is read"),
 ]
 
 # Mutations the suite cannot catch because they do not change behaviour (none so far).
