@@ -101,7 +101,8 @@ TEST(ProfileCompose, ErrorsNameTheFileThatSetTheValue) {
   EXPECT_NE(e.find(base + ":9:"), std::string::npos) << e;  // its [fpe] table
   EXPECT_NE(e.find("N = 300"), std::string::npos) << e;
   // A bad value from --set names the setting.
-  EXPECT_NE(compose_error(child, {"seeds=[0,\"x\"]"}).find("--set seeds=[0,\"x\"]"), std::string::npos);
+  EXPECT_NE(compose_error(child, {"seeds=[0,\"x\"]"}).find("--set seeds=[0,\"x\"]"),
+            std::string::npos);
   EXPECT_NE(compose_error(child, {"nonsense=1"}).find("unknown key 'nonsense'"), std::string::npos);
   EXPECT_NE(compose_error(child, {"seeds"}).find("expected KEY=VALUE"), std::string::npos);
   EXPECT_NE(compose_error(child, {"seeds=[0,"}).find("--set seeds=[0,"), std::string::npos);
@@ -115,6 +116,61 @@ TEST(ProfileCompose, ErrorsNameTheFileThatSetTheValue) {
             std::string::npos);
   // A stored text never holds extends: parse_profile refuses one.
   EXPECT_THROW(parse_profile("extends = \"base\"\n", "t"), ProfileError);
+}
+
+}  // namespace
+}  // namespace sirl
+
+namespace sirl {
+namespace {
+
+// [external.<name>] joins [fpe] and [tpa] with frozen cells only, even where the grid asks for
+// both modes (it has no weights to fine-tune), and only in the environments it lists.
+TEST(ProfileExternal, TakesFrozenCellsOnlyAndOnlyInItsEnvironments) {
+  std::string text = test::kSmallProfile;
+  text.replace(text.find("[tpa]"), 5, "[tpa]\nfrozen = [true, false]");
+  text.replace(text.find("envs = [\"grid\"]"), 15, "envs = [\"grid\", \"grid2\"]");
+  text += "[external.mine]\nembeddings = \"e.h5\"\nxxh3 = \"" + std::string(32, 'a') +
+          "\"\nenvs = [\"grid\"]\n";
+  const Profile p = parse_profile(text, "/tmp/x/p.toml");
+  EXPECT_EQ(external_method(p, "mine").embeddings, "/tmp/x/e.h5");  // beside the profile
+  int frozen = 0, fpe = 0;
+  for (const auto& t : make_plan(p).tasks) {
+    if (t.variant.method != Method::external) continue;
+    EXPECT_EQ(t.env, "grid") << t.key;
+    if (t.kind == TaskKind::tpa) {
+      EXPECT_TRUE(t.frozen) << t.key;
+      frozen += t.frozen;
+    }
+    fpe += t.kind == TaskKind::fpe;
+  }
+  EXPECT_EQ(frozen, 3 * 2 * 2);  // seeds × N × M
+  EXPECT_EQ(fpe, 3 * 3);         // seeds × N
+  // A built-in method of that grid still gets both modes.
+  int sirl_unfrozen = 0;
+  for (const auto& t : make_plan(p).tasks)
+    sirl_unfrozen += t.kind == TaskKind::tpa && t.variant.method == Method::sirl && !t.frozen;
+  EXPECT_GT(sirl_unfrozen, 0);
+  // Names and keys refused with the line that set them.
+  auto error = [&](const std::string& extra) {
+    try {
+      parse_profile(std::string(test::kSmallProfile) + extra, "p.toml");
+    } catch (const ProfileError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string digest = "xxh3 = \"" + std::string(32, 'a') + "\"\n";
+  EXPECT_NE(error("[external.sirl]\nembeddings = \"e.h5\"\n" + digest).find("built-in"),
+            std::string::npos);
+  EXPECT_NE(error("[external.mine]\nembeddings = \"e.h5\"\nxxh3 = \"abc\"\n").find("32 lowercase"),
+            std::string::npos);
+  EXPECT_NE(error("[external.mine]\n" + digest).find("missing key 'embeddings'"),
+            std::string::npos);
+  EXPECT_NE(error("[external.mine]\nembeddings = \"e.h5\"\n" + digest + "envs = [\"jaco\"]\n")
+                .find("not one of the profile's envs"),
+            std::string::npos);
+  EXPECT_NE(error("[fpe2]\n").find("p.toml:"), std::string::npos);
 }
 
 }  // namespace

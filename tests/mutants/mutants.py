@@ -226,7 +226,7 @@ MUTANTS = [
      "std::copy_n(rep.table.begin() + ptrdiff_t(rows[i] ^ 1) * dim, dim, out.begin() + i * dim);",
      "ExternalRepresentation.*:Fpe.*:Tpa.*", "a neighbouring row of φ(Ξ) looked up"),
     ("jobs/profile.cpp", "  if (v.method == Method::external) return {true};  // no weights to fine-tune",
-     "", "ctest:external_method", "external methods given the grid's unfrozen cells"),
+     "", "ProfileExternal.*", "external methods given the grid's unfrozen cells"),
     ("jobs/profile.cpp", "      merge_into(*b->as_table(), std::move(*v.as_table()));",
      "      base.insert_or_assign(k, std::move(v));", "ProfileCompose.*",
      "a child's table replaces its parent's instead of merging"),
