@@ -14,8 +14,7 @@
 #include "engine/representation.h"
 #include "jobs/plan.h"
 #include "jobs/profile.h"
-#include "jobs/task_kinds.h"
-#include "jobs/task_runner.h"
+#include "jobs/run.h"
 #include "kernels/cpu_class.h"
 #include "results/durable.h"
 #include "results/external_embeddings.h"
@@ -107,30 +106,19 @@ void seed_from_base(const std::string& base_file, const Profile& base, const Pro
   if (!why.empty())
     throw UsageError("--against " + base_file + ": " + why +
                      "; without --against the built-in cells are computed here");
-  std::vector<TaskRecord> records = read_results_records(base_file);
-  const Plan plan = make_plan(p);
-  std::set<std::string> wanted;
-  for (const auto& t : plan.tasks) wanted.insert(t.key);
-  std::erase_if(records, [&](const TaskRecord& r) { return !wanted.count(r.key); });
+  std::map<std::string, TaskRecord> records;
+  for (auto& r : read_results_records(base_file)) records.emplace(r.key, std::move(r));
   RunInfo seeded = info;
   seeded.profile_text = p.text;
   seeded.profile_name = p.name;
-  seeded.tasks_total = int64_t(plan.tasks.size());
-  seeded.tasks_done = int64_t(records.size());
-  seeded.complete = false;
-  RunContext ctx(p, [](const std::string& k) -> TaskRecord {
-    throw std::logic_error("seeding reads no task (" + k + ")");
-  });
-  std::vector<RunDataset> ds;
-  for (const auto& env : p.envs)
-    ds.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
   if (const auto dir = fs::path(out).parent_path(); !dir.empty()) fs::create_directories(dir);
+  size_t reused = 0;
   {
     const FileLock lock(out, "sirl evaluate", "wait for it to finish, or choose another --out");
-    write_results_file(out, seeded, ds, records, result_tables(records, info.roofs()));
+    reused = write_plan_records(out, p, seeded, records);
   }
-  std::fprintf(stderr, "sirl evaluate: %zu of %zu tasks are %s's\n", records.size(),
-               plan.tasks.size(), base_file.c_str());
+  std::fprintf(stderr, "sirl evaluate: %zu of %zu tasks are %s's\n", reused,
+               make_plan(p).tasks.size(), base_file.c_str());
 }
 
 struct EvaluateArgs {

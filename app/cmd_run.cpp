@@ -405,25 +405,13 @@ void register_merge(CLI::App& app, Runner& run) {
       }
     }
     const Profile p = parse_profile(first.profile_text, inputs.front() + "@profile_text");
-    const Plan plan = make_plan(p);
-    std::vector<TaskRecord> records;
-    for (const auto& t : plan.tasks)
-      if (auto it = all.find(t.key); it != all.end()) records.push_back(it->second);
     RunInfo info = first;
     info.shard = "";
-    info.tasks_total = int64_t(plan.tasks.size());
-    info.tasks_done = int64_t(records.size());
-    info.complete = records.size() == plan.tasks.size();
     info.wall_seconds = wall;
-    RunContext ctx(p, [](const std::string& k) -> TaskRecord {
-      throw std::runtime_error("merge needs no task inputs (" + k + ")");
-    });
-    std::vector<RunDataset> ds;
-    for (const auto& env : p.envs)
-      ds.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
-    write_results_file(out, info, ds, records, result_tables(records, info.roofs()));
-    std::printf("merged %zu files: %zu of %zu tasks%s → %s\n", inputs.size(), records.size(),
-                plan.tasks.size(), info.complete ? " (complete)" : " (INCOMPLETE)", out.c_str());
+    const size_t written = write_plan_records(out, p, info, all);
+    const size_t total = make_plan(p).tasks.size();
+    std::printf("merged %zu files: %zu of %zu tasks%s → %s\n", inputs.size(), written, total,
+                written == total ? " (complete)" : " (INCOMPLETE)", out.c_str());
     return 0;
   };
 }

@@ -60,6 +60,25 @@ bool keeps_weights(const Profile& p, const Task& t) {
 
 }  // namespace
 
+size_t write_plan_records(const std::string& out, const Profile& p, RunInfo info,
+                          const std::map<std::string, TaskRecord>& all) {
+  const Plan plan = make_plan(p);
+  std::vector<TaskRecord> records;
+  for (const auto& t : plan.tasks)
+    if (auto it = all.find(t.key); it != all.end()) records.push_back(it->second);
+  info.tasks_total = int64_t(plan.tasks.size());
+  info.tasks_done = int64_t(records.size());
+  info.complete = records.size() == plan.tasks.size();
+  RunContext ctx(p, [](const std::string& k) -> TaskRecord {
+    throw std::logic_error("writing gathered records reads no task (" + k + ")");
+  });
+  std::vector<RunDataset> ds;
+  for (const auto& env : p.envs)
+    ds.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
+  write_results_file(out, info, ds, records, result_tables(records, info.roofs()));
+  return records.size();
+}
+
 void parse_shard(const std::string& text, int& index, int& count) {
   const auto slash = text.find('/');
   try {

@@ -1,5 +1,6 @@
 // `sirl run`: plan → resume check → parallel execution with per-task commits → results file.
 #pragma once
+#include <map>
 #include <string>
 
 #include "results/results_file.h"
@@ -50,6 +51,13 @@ ResumeDecision resume_decision(const RunInfo& existing, const std::string& profi
 // they evaluate (a rep with its FPE/TPA cells stays together), groups are dealt by a hash of the
 // rep key, and each shard adds the VAE tasks its groups depend on.
 std::vector<char> shard_tasks(const Plan& plan, int index, int count);
+
+// A results file at `out` from task records gathered elsewhere (`sirl merge`'s shards, the run
+// `sirl evaluate --against` starts from): the records of p's plan, in plan order (others
+// dropped), with p's datasets and tables, and `info` with the task counts and completeness set.
+// Returns the number of records written.
+size_t write_plan_records(const std::string& out, const Profile& p, RunInfo info,
+                          const std::map<std::string, TaskRecord>& records);
 
 // Parses "i/n" (0 ≤ i < n). Throws std::invalid_argument.
 void parse_shard(const std::string& text, int& index, int& count);
