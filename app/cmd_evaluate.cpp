@@ -227,6 +227,7 @@ void register_evaluate(CLI::App& app, Runner& run) {
                 "Also run the profile's simulated user study (skipped by default: an external "
                 "method has no part in it)");
   add_set_option(cmd);
+  add_cache_options(cmd);
   run = [] { return run_evaluate(a); };
 }
 

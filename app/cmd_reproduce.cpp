@@ -44,6 +44,7 @@ void register_reproduce(CLI::App& app, Runner& run) {
   cmd->add_flag("--force", force, "Overwrite results from another profile or engine version");
   cmd->add_flag("--no-study", no_study, "Skip the simulated user study (Fig. 6)");
   add_set_option(cmd);
+  add_cache_options(cmd);
   run = [] {
     const std::string stem = std::filesystem::path(profile).stem().string();
     // out/ (git-ignored; run_command makes it) is the default home of results.

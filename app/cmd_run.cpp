@@ -53,6 +53,8 @@ int run_loaded_profile(Profile p, const std::string& out, int threads, bool forc
   o.threads = threads;
   o.max_task_threads = max_task_threads;
   o.force = force;
+  o.cache = cache_choice().dir;
+  o.any_cpu_class = cache_choice().any_cpu_class;
   o.quiet = quiet;
   o.checkpoint_seconds = checkpoint_minutes * 60;
   o.engine_version = engine_version();
@@ -73,7 +75,9 @@ int run_loaded_profile(Profile p, const std::string& out, int threads, bool forc
     throw UsageError(e.what());
   }
   if (s.worker) return 0;
-  std::printf("sirl run: %d tasks (%d reused, %d computed) in %s → %s\n", s.tasks, s.reused, s.ran,
+  std::printf("sirl run: %d tasks (%d reused, %d computed%s) in %s → %s\n", s.tasks, s.reused,
+              s.ran,
+              s.elsewhere ? (", " + std::to_string(s.elsewhere) + " by another run").c_str() : "",
               format_duration(s.seconds).c_str(), out.c_str());
   return 0;
 }
@@ -82,9 +86,10 @@ void register_run(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "run",
       "Run a profile's experiment grid into an HDF5 results file.\n"
-      "Finished tasks are committed one by one (to OUT.tasks/ until the run ends): rerunning the\n"
-      "same command after a crash or kill skips every finished task. A file written under a\n"
-      "different profile or engine version is refused unless --force.");
+      "Finished tasks are committed one by one to the task cache (OUT.tasks/, or --cache), filed\n"
+      "by what each depends on: rerunning after a crash, or after editing the profile (one more\n"
+      "seed, another method, a changed hyper-parameter), computes only the tasks whose inputs\n"
+      "changed. `sirl plan PROFILE --cache DIR` says how much is already there.");
   static std::string profile, out, shard;
   static int threads = 0;
   static bool force = false, quiet = false;
@@ -104,7 +109,9 @@ void register_run(CLI::App& app, Runner& run) {
             return v.empty() ? std::string("must look like i/n, e.g. 0/4") : "";
           },
           "i/n"));
-  cmd->add_flag("--force", force, "Overwrite results from another profile or engine version");
+  cmd->add_flag("--force", force,
+                "Compute every task again (reusing nothing of the cache or of OUT), and replace "
+                "an OUT written for another --shard");
   cmd->add_flag("--quiet", quiet, "No progress output");
   cmd->add_option("--task-threads", task_threads,
                   "The most cores one big task may use when no other task is ready (the tail\n"
@@ -117,11 +124,12 @@ void register_run(CLI::App& app, Runner& run) {
       ->check(CLI::Range(1, 4096));
   cmd->add_option("--checkpoint-minutes", checkpoint_minutes,
                   "A training running longer saves its state (weights, Adam, random streams, "
-                  "curves) at the next epoch's end, to OUT.tasks/checkpoints/; a rerun continues "
+                  "curves) at the next epoch's end, to the cache's checkpoints/; a rerun continues "
                   "it to the same result. 0: after every epoch; -1: never")
       ->check(CLI::Range(-1.0, 1e6))
       ->capture_default_str();
   add_set_option(cmd);
+  add_cache_options(cmd);
   run = [] {
     return run_command(profile, out, threads, force, shard, quiet, false, checkpoint_minutes,
                        task_threads);
@@ -228,7 +236,8 @@ void register_plan(CLI::App& app, Runner& run) {
       "CPU (MPI ranks pulling tasks from rank 0), with its critical path.");
   static std::string profile;
   static int threads = 0;
-  static bool list_tasks = false;
+  static bool list_tasks = false, resolved = false;
+  static std::string cache;
   static PlanClusterOptions co;
   cmd->add_option("profile", profile,
                   "Profile: a name in configs/ (" + bundled_profile_names() + ") or a .toml path")
@@ -259,9 +268,21 @@ void register_plan(CLI::App& app, Runner& run) {
                 "Amdahl serial fraction of one task on several cores")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
+  cmd->add_flag("--resolved", resolved,
+                "Print the effective profile instead (after `extends` and --set): the TOML a run "
+                "records in its results file");
+  cmd->add_option("--cache", cache,
+                  "A task cache folder (sirl run --cache; a run's default is OUT.tasks): say how "
+                  "many of the plan's tasks it already holds")
+      ->type_name("DIR")
+      ->check(CLI::ExistingDirectory);
   add_set_option(cmd);
   run = [] {
     const Profile p = load_or_usage(profile);
+    if (resolved) {
+      std::fputs(p.text.c_str(), stdout);
+      return 0;
+    }
     const Plan plan = make_plan(p);
     if (list_tasks) {
       for (const Task& t : plan.tasks) {
@@ -299,6 +320,19 @@ void register_plan(CLI::App& app, Runner& run) {
                               [](const auto& kv) { return kv.second.tpa_stop != "fixed"; })
                       ? " and converged reward heads"
                       : "");
+    }
+    if (!cache.empty()) {
+      const CacheHoldings h = cache_holdings(plan, p, cache);
+      std::printf(
+          "\ncache %s: %d of %zu tasks already computed on this CPU class (%.1f of %.1f "
+          "GFLOP)",
+          cache.c_str(), h.tasks, plan.tasks.size(), h.flops * 1e-9, total * 1e-9);
+      if (h.other_class > 0)
+        std::printf(
+            "; %d more on another class (%.1f GFLOP; sirl run --any-cpu-class reuses "
+            "them)",
+            h.other_class, h.other_flops * 1e-9);
+      std::printf("\n");
     }
     std::fflush(stdout);
     std::fprintf(stderr, "calibrating on this machine...\n");

@@ -149,6 +149,23 @@ void add_set_option(CLI::App* cmd) {
       ->allow_extra_args(false);
 }
 
+CacheChoice& cache_choice() {
+  static CacheChoice c;
+  return c;
+}
+
+void add_cache_options(CLI::App* cmd) {
+  cmd->add_option("--cache", cache_choice().dir,
+                  "The task cache: finished tasks filed by what they depend on, reused by any "
+                  "run given this folder whatever else its profile changed (default: OUT.tasks "
+                  "beside the output). Runs may share one at once; `sirl gc` trims it")
+      ->type_name("DIR");
+  cmd->add_flag("--any-cpu-class", cache_choice().any_cpu_class,
+                "Reuse results the cache holds from another CPU class (other bits) when this "
+                "class has none; /tables/timings' cpu_class column says which class computed "
+                "each task");
+}
+
 void register_all(CLI::App& app) {
   register_version(app, runners()["version"]);
   register_reproduce(app, runners()["reproduce"]);
@@ -161,6 +178,7 @@ void register_all(CLI::App& app) {
   register_export(app, runners()["export"]);
   register_merge(app, runners()["merge"]);
   register_evaluate(app, runners()["evaluate"]);
+  register_gc(app, runners()["gc"]);
   enforce_decimal_numbers(app);
 }
 

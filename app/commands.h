@@ -36,6 +36,7 @@ void register_run(CLI::App& app, Runner& run);
 void register_plan(CLI::App& app, Runner& run);
 void register_export(CLI::App& app, Runner& run);
 void register_merge(CLI::App& app, Runner& run);
+void register_gc(CLI::App& app, Runner& run);
 void register_evaluate(CLI::App& app, Runner& run);
 
 // The `--set KEY=VALUE` overrides of the command being run (jobs/profile.h, load_profile), and
@@ -83,6 +84,15 @@ int study_analyze(const std::string& file, const std::string& out, int seeds, in
 void write_study_analysis(const std::string& study_file, const std::string& env,
                           const StudyAnalysis& a, const StudyAnalysisConfig& c,
                           const std::string& out);
+
+// --cache DIR and --any-cpu-class (jobs/run.h's RunOptions), shared by the commands that run
+// or plan a profile.
+struct CacheChoice {
+  std::string dir;  // "" = OUT.tasks
+  bool any_cpu_class = false;
+};
+CacheChoice& cache_choice();
+void add_cache_options(CLI::App* cmd);
 
 // `sirl run` proper, shared with `sirl reproduce`.
 // `skip_study` leaves the profile's [study] tasks out of the plan (`sirl reproduce --no-study`).

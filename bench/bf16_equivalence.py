@@ -43,8 +43,8 @@ def settings(precision, seeds, name):
     return [f'name="{name}"', f"seeds={list(range(seeds))}", f'precision="{precision}"']
 
 
-def run(sirl, profile, sets, out, threads):
-    cmd = [sirl, "run", profile, "--out", out, "--threads", str(threads)]
+def run(sirl, profile, sets, out, threads, extra=()):
+    cmd = [sirl, "run", profile, "--out", out, "--threads", str(threads), *extra]
     for s in sets:
         cmd += ["--set", s]
     print("+", " ".join(cmd), flush=True)

@@ -14,8 +14,10 @@ environment and method whether the two give the same TPA:
 Also reports every cell's difference, each head's stopping epoch (spread per cell), and the
 compute each side took (FLOPs executed and task-seconds, from /tables/timings).
 
-Both runs resume (`sirl run` skips committed tasks). Writes OUT/fixed.toml, OUT/converged.toml,
-their results files and OUT/stop-equivalence.{md,json}.
+Both runs resume and share one task cache, so the converged run reuses every representation the
+fixed run trained (`sirl run --cache`). The converged side is the same profile with
+`--set hyper.<env>."tpa.stop"="converged"`. Writes both results files and
+OUT/stop-equivalence.{md,json}.
 
   /usr/bin/python3 bench/stop_equivalence.py --profile bench/stop-equivalence-jaco.toml
                                              [--threads 2] [--out out/stop-equivalence-jaco]
@@ -23,7 +25,6 @@ their results files and OUT/stop-equivalence.{md,json}.
 import argparse
 import json
 import os
-import re
 import subprocess
 import sys
 import tomllib
@@ -41,16 +42,13 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MARGIN = 0.02
 
 
-def profile_text(base_text, stop):
-    """The base profile with every "tpa.stop" = "fixed" line set to `stop`, renamed."""
-    text, n = re.subn(r'(?m)^"tpa\.stop"\s*=\s*"fixed"\s*$', f'"tpa.stop" = "{stop}"', base_text)
-    if n == 0:
-        sys.exit('stop_equivalence: the profile has no \'"tpa.stop" = "fixed"\' line to vary')
-    text, n = re.subn(r'(?m)^name\s*=\s*"([^"]*)"', rf'name = "\1-{stop}"', text, count=1)
-    if n != 1:
-        sys.exit("stop_equivalence: the profile has no top-level name")
-    tomllib.loads(text)  # refuse now what sirl would refuse later
-    return text
+def converged_settings(resolved):
+    """--set values that turn every environment's "tpa.stop" = "fixed" into "converged"."""
+    envs = [env for env, hy in resolved.get("hyper", {}).items() if hy.get("tpa.stop") == "fixed"]
+    if not envs:
+        sys.exit('stop_equivalence: the profile sets no [hyper.<env>] "tpa.stop" = "fixed" to vary')
+    return [f'hyper.{env}."tpa.stop"="converged"' for env in envs] + \
+        [f'name="{resolved["name"]}-converged"']
 
 
 def tables(path):
@@ -78,13 +76,13 @@ def rule_stop(curve, min_epochs, rel_tol, abs_tol=1e-4):
     return cap
 
 
-def check_stops(fixed_path, conv_path, conv_profile):
+def check_stops(fixed_path, conv_path):
     """Every head of the converged run must have stopped where the rule, applied to the same
     head's curve in the fixed run, says (the two trainings are identical up to the stop).
     Returns the number of heads checked."""
-    prof = tomllib.load(open(conv_profile, "rb"))
     checked = 0
     fixed, conv = sirl_bench.open(fixed_path), sirl_bench.open(conv_path)
+    prof = tomllib.loads(conv.provenance["profile_text"])  # the profile the run resolved
     recs = conv.records
     for r in recs[recs.arrays.str.split(",").map(lambda a: "head_epochs" in a)].itertuples():
         hy = prof.get("hyper", {}).get(r.env, {})
@@ -181,19 +179,20 @@ def main():
     if not a.analyse_only and not os.access(a.sirl, os.X_OK):
         sys.exit(f"stop_equivalence: no sirl binary at {a.sirl} (./scripts/build.sh release)")
     os.makedirs(out, exist_ok=True)
-    base = open(a.profile, encoding="utf-8").read()
-    paths = {}
-    for stop in ("fixed", "converged"):
-        prof = os.path.join(out, stop + ".toml")
-        with open(prof, "w", encoding="utf-8") as f:
-            f.write(base if stop == "fixed" else profile_text(base, stop))
-        paths[stop] = os.path.join(out, stop + ".h5")
-        if not a.analyse_only:
-            run(a.sirl, prof, paths[stop], a.threads)
+    paths = {stop: os.path.join(out, stop + ".h5") for stop in ("fixed", "converged")}
+    if not a.analyse_only:
+        p = subprocess.run([a.sirl, "plan", a.profile, "--resolved"], capture_output=True,
+                           text=True)
+        if p.returncode != 0:
+            sys.exit(f"stop_equivalence: {p.stderr.strip()}")
+        sets = {"fixed": [], "converged": converged_settings(tomllib.loads(p.stdout))}
+        cache = os.path.join(out, "tasks")
+        for stop in ("fixed", "converged"):
+            run(a.sirl, a.profile, sets[stop], paths[stop], a.threads, ["--cache", cache])
     for path in paths.values():
         if not os.path.isfile(path):
             sys.exit(f"stop_equivalence: {path}: no results file (run without --analyse-only)")
-    checked = check_stops(paths["fixed"], paths["converged"], os.path.join(out, "converged.toml"))
+    checked = check_stops(paths["fixed"], paths["converged"])
     print(f"stop_equivalence: {checked} heads stopped where the rule on their fixed-run curves "
           "says", flush=True)
     rows, cells, cost = compare(paths["fixed"], paths["converged"])

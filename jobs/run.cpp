@@ -6,18 +6,23 @@
 #include <cstring>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <ctime>
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <mutex>
+#include <set>
 #include <stdexcept>
 
 #include "jobs/mpi_run.h"
 #include "jobs/progress.h"
 #include "jobs/provenance.h"
 #include "jobs/scheduler.h"
+#include "jobs/task_cache.h"
 #include "jobs/task_checkpoints.h"
+#include "jobs/task_digest.h"
 #include "jobs/task_kinds.h"
 #include "jobs/task_runner.h"
 #include "kernels/cpu_class.h"
@@ -122,17 +127,24 @@ RunSummary run_profile(const Profile& p, const RunOptions& o) {
   if (!launched_under_mpi()) return run_rank0(p, o, 1);
   const auto [rank, size] = mpi_start();
   if (rank > 0) {
-    // A worker: inputs of its tasks come from rank 0's commits (shared file system) or from the
-    // results file of an earlier run.
+    // A worker: inputs of its tasks come from the cache rank 0 commits to (shared file system),
+    // the one filed under this worker's CPU class first, or from the results file of an earlier
+    // run.
     const Plan plan = make_plan(p);
-    const fs::path staging = o.out + ".tasks";
+    const std::vector<std::string> digests = task_digests(plan, p);
+    const fs::path cache = cache_dir(o);
     RunContext ctx(p, [&](const std::string& key) -> TaskRecord {
+      const int i = plan.index.at(key);
+      const std::string& digest = digests[size_t(i)];
+      const std::string own = TaskCache::id(digest, task_cpu_class(plan.tasks[size_t(i)], p));
       try {
-        return TaskStore::load_from(staging, key);
+        return TaskStore::load_from(cache, own, key);
       } catch (const H5Error&) {
-        H5File f = H5File::open_read(o.out);
-        return read_record(f, "/runs/" + key);
       }
+      for (const std::string& id : TaskStore::ids_in(cache))
+        if (id.starts_with(digest + "-")) return TaskStore::load_from(cache, id, key);
+      H5File f = H5File::open_read(o.out);
+      return read_record(f, "/runs/" + key);
     });
     mpi_work(plan, ctx);
     mpi_stop();
@@ -151,26 +163,41 @@ RunSummary run_profile(const Profile& p, const RunOptions& o) {
   }
 }
 
-ResumeDecision resume_decision(const RunInfo& existing, const std::string& profile_text,
-                               const std::string& engine_version, const std::string& shard,
-                               bool force) {
+ResumeDecision resume_decision(const RunInfo& existing, const std::string& shard, bool force) {
   auto part = [](const std::string& s) { return s.empty() ? "the whole run" : "shard " + s; };
   ResumeDecision d;
-  const bool same_profile = existing.profile_text == profile_text,
-             same_engine = existing.engine_version == engine_version,
-             same_part = existing.shard == shard;
-  if (!force) {
-    if (!same_profile)
-      d.refusal = "under a different profile ('" + existing.profile_name + "')";
-    else if (!same_engine)
-      d.refusal = "by engine " + existing.engine_version + " (this is " + engine_version + ")";
-    else if (!same_part)  // writing another part would replace this file's tasks with that part's
-      d.refusal = "with " + part(existing.shard) + " (" + std::to_string(existing.tasks_done) +
-                  " tasks), and this run is " + part(shard);
-    if (!d.refusal.empty()) return d;
+  if (!force && existing.shard != shard) {
+    // writing another part would replace this file's tasks with that part's
+    d.refusal = "with " + part(existing.shard) + " (" + std::to_string(existing.tasks_done) +
+                " tasks), and this run is " + part(shard);
+    return d;
   }
-  d.reuse = same_profile && same_engine && same_part && existing.verified;
+  d.reuse = !force && existing.verified;
   return d;
+}
+
+CacheHoldings cache_holdings(const Plan& plan, const Profile& p, const fs::path& dir) {
+  const std::vector<std::string> ids = TaskStore::ids_in(dir);
+  const std::set<std::string> have(ids.begin(), ids.end());
+  std::set<std::string> digests;  // of any class
+  for (const std::string& id : ids) digests.insert(id.substr(0, id.find('-')));
+  const std::vector<std::string> dig = task_digests(plan, p);
+  CacheHoldings h;
+  for (size_t i = 0; i < plan.tasks.size(); ++i) {
+    const Task& t = plan.tasks[i];
+    if (have.count(TaskCache::id(dig[i], task_cpu_class(t, p)))) {
+      ++h.tasks;
+      h.flops += t.flops;
+    } else if (digests.count(dig[i])) {
+      ++h.other_class;
+      h.other_flops += t.flops;
+    }
+  }
+  return h;
+}
+
+fs::path cache_dir(const RunOptions& o) {
+  return o.cache.empty() ? fs::path(o.out + ".tasks") : fs::path(o.cache);
 }
 
 namespace {
@@ -180,11 +207,12 @@ namespace {
                               "; rerun with --force to discard it, or choose another --out");
 }
 
-// Resume policy for the results file: its records count as done only when it was written by this
-// profile, this engine and this part of the grid; otherwise the run is refused (or, with --force,
-// starts over).
+// Records of an existing results file that this plan can reuse: those whose task digest and
+// CPU class match (files of engine 0.10.0 on). A file of another part of the grid is refused
+// unless --force (which reuses nothing).
 std::map<std::string, TaskRecord> load_prior(const Profile& p, const RunOptions& o,
-                                             const std::string& shard) {
+                                             const std::string& shard, const Plan& plan,
+                                             const std::vector<std::string>& digests) {
   std::map<std::string, TaskRecord> prior;
   if (!fs::exists(o.out)) return prior;
   RunInfo info;
@@ -195,63 +223,84 @@ std::map<std::string, TaskRecord> load_prior(const Profile& p, const RunOptions&
     std::fprintf(stderr, "sirl run: %s; --force: computing every task again\n", e.what());
     return prior;
   }
-  const ResumeDecision d = resume_decision(info, p.text, o.engine_version, shard, o.force);
+  const ResumeDecision d = resume_decision(info, shard, o.force);
   if (!d.refusal.empty()) refuse(o.out, d.refusal);
   // Records are reused only from a file a checksum verified: the new file's checksum would
   // otherwise vouch for bytes nobody checked.
   if (!info.verified)
-    std::fprintf(stderr, "sirl run: %s; its tasks are computed again\n",
+    std::fprintf(stderr, "sirl run: %s; its tasks are not reused\n",
                  unverified_note(o.out).c_str());
-  if (d.reuse)
-    for (auto& r : read_results_records(o.out)) prior[r.key] = std::move(r);
+  if (!d.reuse) return prior;
+  for (auto& r : read_results_records(o.out)) {
+    const auto it = plan.index.find(r.key);
+    if (it == plan.index.end()) continue;
+    const Task& t = plan.tasks[size_t(it->second)];
+    const auto dig = r.text.find("task_digest"), cls = r.text.find("cpu_class");
+    if (dig == r.text.end() || dig->second != digests[size_t(it->second)] || cls == r.text.end() ||
+        (!o.any_cpu_class && cls->second != task_cpu_class(t, p)))
+      continue;
+    prior[r.key] = std::move(r);
+  }
   return prior;
 }
 
-// The staging directory of committed tasks: kept when it belongs to this profile and engine (an
-// interrupted run), refused or (--force) discarded otherwise. One without a committed task holds
-// nothing to lose (a run killed while writing its manifests): it is started again.
-std::unique_ptr<TaskStore> open_staging(const Profile& p, const RunOptions& o) {
-  const fs::path staging = o.out + ".tasks";
-  if (fs::exists(staging)) {
-    TaskStore probe(staging);
-    const std::string prof = probe.read_manifest("profile.toml"),
-                      eng = probe.read_manifest("engine_version");
-    const bool checkpoints =
-        fs::is_directory(staging / "checkpoints") && !fs::is_empty(staging / "checkpoints");
-    if (probe.keys().empty() && !checkpoints) {
-      fs::remove_all(staging);
-    } else if (prof != p.text || eng != o.engine_version) {
-      if (!o.force) refuse(staging.string(), "by another profile or engine (an interrupted run)");
-      fs::remove_all(staging);
-    }
-  }
-  auto store = std::make_unique<TaskStore>(staging);
-  store->write_manifest("profile.toml", p.text);
-  store->write_manifest("engine_version", o.engine_version);
-  return store;
-}
-
 struct PendingSet {
-  std::vector<char> pending;  // [tasks] 1 = to compute in this run
-  int total = 0, reused = 0;  // this shard's tasks, and those already done
-  double flops = 0;           // the pending tasks' FLOPs (for the ETA)
+  std::vector<char> pending;             // [tasks] 1 = to compute in this run
+  int total = 0, reused = 0;             // this shard's tasks, and those already done
+  double flops = 0;                      // the pending tasks' FLOPs (for the ETA)
+  std::vector<std::string> other_class;  // keys of reused results of another CPU class
 };
 
-PendingSet find_pending(const Plan& plan, const std::vector<char>& mine,
-                        const std::map<std::string, TaskRecord>& prior, const TaskStore& store) {
+// Where each finished task of the plan is read from: its id in the cache ("" = the results
+// file's record, or not finished). Written as tasks finish, from several threads.
+class Sources {
+ public:
+  explicit Sources(size_t n) : id_(n) {}
+  void set(size_t i, std::string id) {
+    std::lock_guard lock(mu_);
+    id_[i] = std::move(id);
+  }
+  std::string get(size_t i) const {
+    std::lock_guard lock(mu_);
+    return id_[i];
+  }
+
+ private:
+  mutable std::mutex mu_;
+  std::vector<std::string> id_;
+};
+
+PendingSet find_pending(const Profile& p, const Plan& plan, const std::vector<char>& mine,
+                        const std::vector<std::string>& digests,
+                        const std::map<std::string, TaskRecord>& prior, TaskCache& cache,
+                        Sources& sources, const RunOptions& o) {
   const int n = int(plan.tasks.size());
   PendingSet ps;
   ps.pending.assign(n, 0);
   for (int i = 0; i < n; ++i) {
     if (!mine[i]) continue;
     ++ps.total;
-    const std::string& k = plan.tasks[i].key;
-    if (prior.count(k) || store.has(k)) {
-      ++ps.reused;
-      continue;
+    const Task& t = plan.tasks[i];
+    const std::string cls = task_cpu_class(t, p);
+    if (!o.force) {
+      if (const std::string id = cache.find(digests[i], cls, o.any_cpu_class); !id.empty()) {
+        // Checked before anything reads it: a damaged file is removed and the task computed.
+        const std::string bad = cache.store().verify(id, t.key);
+        if (bad.empty()) {
+          sources.set(size_t(i), id);
+          if (id != TaskCache::id(digests[i], cls)) ps.other_class.push_back(t.key);
+          ++ps.reused;
+          continue;
+        }
+        std::fprintf(stderr, "sirl run: %s; it is computed again\n", bad.c_str());
+      }
+      if (prior.count(t.key)) {
+        ++ps.reused;
+        continue;
+      }
     }
     ps.pending[i] = 1;
-    ps.flops += plan.tasks[i].flops;
+    ps.flops += t.flops;
   }
   // A finished task whose weights were left out of the results file (store_weights = false) is
   // computed again when a pending task needs them (deterministic: the same weights come back).
@@ -260,7 +309,7 @@ PendingSet find_pending(const Plan& plan, const std::vector<char>& mine,
     if (!ps.pending[i]) continue;
     for (int d : plan.tasks[i].deps) {
       const std::string& k = plan.tasks[d].key;
-      if (ps.pending[d] || store.has(k)) continue;
+      if (ps.pending[d] || !sources.get(size_t(d)).empty()) continue;
       auto it = prior.find(k);
       if (it == prior.end() || it->second.arrays.count("params")) continue;
       ps.pending[d] = 1;
@@ -271,63 +320,105 @@ PendingSet find_pending(const Plan& plan, const std::vector<char>& mine,
   return ps;
 }
 
-// Runs the pending tasks (threads, or MPI workers), committing each as it finishes. Returns the
-// first failure instead of throwing, so the caller still writes what finished.
-std::exception_ptr execute(const Plan& plan, const std::vector<char>& pending, RunContext& ctx,
-                           TaskStore& store, CheckpointStore* checkpoints, int threads,
-                           int max_task_threads, int mpi_size, Progress& progress, bool quiet) {
-  const int n = int(plan.tasks.size());
-  // Cached outputs are released when their last pending dependent finishes.
-  std::vector<int> users(n, 0);
-  for (int i = 0; i < n; ++i)
-    if (pending[i])
-      for (int d : plan.tasks[i].deps) ++users[d];
-  std::mutex users_mu;
-  try {
-    if (mpi_size > 1) {
-      const std::vector<int> ran =
-          mpi_dispatch(plan, pending, max_task_threads, [&](int i, const TaskRecord& rec) {
-            store.commit(rec);
-            progress.task_done(rec.key, plan.tasks[i].flops, rec.num.at("seconds"));
-          });
-      if (!quiet) {
-        std::string per;
-        for (size_t w = 1; w < ran.size(); ++w)
-          per += (w > 1 ? ", " : "") + std::string("rank ") + std::to_string(w) + " " +
-                 std::to_string(ran[w]);
-        std::fprintf(stderr, "sirl run: tasks per MPI worker: %s\n", per.c_str());
-      }
-    } else {
-      run_dag(plan, pending, threads, max_task_threads, [&](int i, int cores) {
-        Task t = plan.tasks[i];
-        t.threads = cores;
-        const TaskRecord rec = run_task(t, ctx);
-        store.commit(rec);
-        if (checkpoints) checkpoints->remove(t.key);  // the task's commit supersedes it
-        progress.task_done(t.key, t.flops, rec.num.at("seconds"));
-        std::lock_guard lock(users_mu);
-        for (int d : t.deps)
-          if (--users[d] == 0) ctx.release(plan.tasks[d].key);
-      });
-    }
-  } catch (...) {
-    return std::current_exception();
+// Runs the pending tasks (threads, or MPI workers), committing each to the cache as it
+// finishes. A task another run is computing is waited for and read, not computed twice.
+struct Execution {
+  const Profile& p;
+  const Plan& plan;
+  const std::vector<std::string>& digests;
+  const std::vector<char>& pending;
+  RunContext& ctx;
+  TaskCache& cache;
+  Sources& sources;
+  CheckpointStore* checkpoints;
+  const RunOptions& o;
+  Progress& progress;
+  std::atomic<int> elsewhere{0};  // tasks another run computed while this one waited
+
+  // Files a finished record under its digest and the class that computed it.
+  void commit(size_t i, TaskRecord& rec) {
+    rec.text["task_digest"] = digests[i];
+    const std::string id = TaskCache::id(digests[i], rec.text.at("cpu_class"));
+    cache.store().commit(rec, id);
+    sources.set(i, id);
   }
-  return nullptr;
-}
+
+  void run_one(int i, int cores) {
+    Task t = plan.tasks[size_t(i)];
+    t.threads = cores;
+    const TaskCache::Claim claim = cache.claim(digests[size_t(i)], [&] {
+      if (!o.quiet)
+        std::fprintf(stderr, "sirl run: another run is computing %s; waiting for its result\n",
+                     t.key.c_str());
+    });
+    const std::string done =
+        o.force ? "" : cache.find(digests[size_t(i)], task_cpu_class(t, p), o.any_cpu_class);
+    if (!done.empty()) {  // committed by another run while this one waited
+      sources.set(size_t(i), done);
+      ++elsewhere;
+      progress.task_done(t.key, t.flops, 0);
+      return;
+    }
+    TaskRecord rec = run_task(t, ctx);
+    commit(size_t(i), rec);
+    if (checkpoints) checkpoints->remove(digests[size_t(i)]);  // the commit supersedes it
+    progress.task_done(t.key, t.flops, rec.num.at("seconds"));
+  }
+
+  // Returns the first failure instead of throwing, so the caller still writes what finished.
+  std::exception_ptr run(int threads, int max_task_threads, int mpi_size) {
+    const int n = int(plan.tasks.size());
+    // Cached outputs are released when their last pending dependent finishes.
+    std::vector<int> users(n, 0);
+    for (int i = 0; i < n; ++i)
+      if (pending[i])
+        for (int d : plan.tasks[i].deps) ++users[d];
+    std::mutex users_mu;
+    try {
+      if (mpi_size > 1) {
+        const std::vector<int> ran =
+            mpi_dispatch(plan, pending, max_task_threads, [&](int i, const TaskRecord& r) {
+              TaskRecord rec = r;
+              commit(size_t(i), rec);
+              progress.task_done(rec.key, plan.tasks[i].flops, rec.num.at("seconds"));
+            });
+        if (!o.quiet) {
+          std::string per;
+          for (size_t w = 1; w < ran.size(); ++w)
+            per += (w > 1 ? ", " : "") + std::string("rank ") + std::to_string(w) + " " +
+                   std::to_string(ran[w]);
+          std::fprintf(stderr, "sirl run: tasks per MPI worker: %s\n", per.c_str());
+        }
+      } else {
+        run_dag(plan, pending, threads, max_task_threads, [&](int i, int cores) {
+          run_one(i, cores);
+          std::lock_guard lock(users_mu);
+          for (int d : plan.tasks[size_t(i)].deps)
+            if (--users[d] == 0) ctx.release(plan.tasks[d].key);
+        });
+      }
+    } catch (...) {
+      return std::current_exception();
+    }
+    return nullptr;
+  }
+};
 
 // This shard's finished records in plan order, weights dropped where the profile says so.
 std::vector<TaskRecord> finished_records(const Profile& p, const Plan& plan,
                                          const std::vector<char>& mine,
-                                         std::map<std::string, TaskRecord> prior,
-                                         const TaskStore& store) {
-  std::map<std::string, TaskRecord> all = std::move(prior);
-  for (const auto& k : store.keys()) all[k] = store.load(k);
+                                         const std::map<std::string, TaskRecord>& prior,
+                                         TaskCache& cache, const Sources& sources) {
   std::vector<TaskRecord> records;
   for (size_t i = 0; i < plan.tasks.size(); ++i) {
-    auto it = all.find(plan.tasks[i].key);
-    if (it == all.end() || !mine[i]) continue;
-    records.push_back(it->second);
+    if (!mine[i]) continue;
+    const std::string& key = plan.tasks[i].key;
+    if (const std::string id = sources.get(i); !id.empty())
+      records.push_back(cache.store().load(id, key));
+    else if (auto it = prior.find(key); it != prior.end())
+      records.push_back(it->second);
+    else
+      continue;
     if (!keeps_weights(p, plan.tasks[i])) records.back().arrays.erase("params");
   }
   return records;
@@ -337,9 +428,11 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   // One writer per output, taken before reading anything of it.
   const FileLock lock(o.out, "sirl run", "wait for it to finish, or choose another --out");
   for (const char* beside : {".tasks", ".partial", ".sum.tmp"}) refuse_symlink(o.out + beside);
+  refuse_symlink(cache_dir(o).string());
   const auto t0 = std::chrono::steady_clock::now();
   const std::string started = now_iso();
   const Plan plan = make_plan(p);
+  const std::vector<std::string> digests = task_digests(plan, p);
   const std::vector<char> mine = shard_tasks(plan, o.shard_index, o.shard_count);
   // More threads than cores would not run more tasks at once (oneTBB has no more workers),
   // only claim so in the progress line and the file's metadata: say so and use the cores.
@@ -355,25 +448,42 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   const std::string shard =
       o.shard_count > 1 ? std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count) : "";
 
-  // Earlier results: the results file itself, and the staging directory of an interrupted run.
-  std::map<std::string, TaskRecord> prior = load_prior(p, o, shard);
-  const std::unique_ptr<TaskStore> staged = open_staging(p, o);
-  TaskStore& store = *staged;
-  const PendingSet ps = find_pending(plan, mine, prior, store);
+  // Earlier results: the task cache, and the records of the results file being replaced.
+  const std::map<std::string, TaskRecord> prior = load_prior(p, o, shard, plan, digests);
+  TaskCache cache(cache_dir(o));
+  {
+    std::vector<std::string> needed;
+    for (size_t i = 0; i < plan.tasks.size(); ++i)
+      if (mine[i]) needed.push_back(digests[i]);
+    cache.register_needs(needed);  // sirl gc keeps them while this run lives
+  }
+  Sources sources(plan.tasks.size());
+  const PendingSet ps = find_pending(p, plan, mine, digests, prior, cache, sources, o);
   RunContext ctx(p, [&](const std::string& key) -> TaskRecord {
-    if (store.has(key)) return store.load(key);
+    const size_t i = size_t(plan.index.at(key));
+    if (const std::string id = sources.get(i); !id.empty()) return cache.store().load(id, key);
     auto it = prior.find(key);
     if (it == prior.end()) throw std::runtime_error("missing result of task " + key);
     return it->second;
   });
 
-  // Training checkpoints (not under MPI: its workers may not share this directory).
+  // Training checkpoints, by task digest (not under MPI: its workers may not share this
+  // directory).
   std::unique_ptr<CheckpointStore> checkpoints;
+  std::map<std::string, std::string> key_of;  // digest → key, for this plan's tasks
+  for (size_t i = 0; i < plan.tasks.size(); ++i) key_of[digests[i]] = plan.tasks[i].key;
   if (mpi_size <= 1 && o.checkpoint_seconds >= 0) {
     checkpoints =
-        std::make_unique<CheckpointStore>(store.dir() / "checkpoints", o.checkpoint_seconds);
-    ctx.set_checkpoints([&cs = *checkpoints](const std::string& key) { return cs.for_task(key); });
+        std::make_unique<CheckpointStore>(cache.dir() / "checkpoints", o.checkpoint_seconds);
+    ctx.set_checkpoints([&cs = *checkpoints, &plan, &digests](const std::string& key) {
+      return cs.for_task(digests[size_t(plan.index.at(key))]);
+    });
   }
+  // A checkpoint of a task already committed (a crash between its commit and the checkpoint's
+  // removal) is never needed again.
+  if (checkpoints)
+    for (size_t i = 0; i < plan.tasks.size(); ++i)
+      if (mine[i] && !ps.pending[i]) checkpoints->remove(digests[i]);
 
   fp32_roof_gflops_per_core();  // measured now, on cores the tasks do not use yet
   if (runs_bf16(p)) bf16_roof_gflops_per_core();
@@ -383,26 +493,35 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
       break;
     }
   const int to_run = ps.total - ps.reused;
-  if (!o.quiet)
+  if (!o.quiet) {
     std::fprintf(stderr, "sirl run: profile %s, %d tasks (%d already done), %d %s → %s\n",
                  p.name.c_str(), ps.total, ps.reused, threads,
                  mpi_size > 1 ? "MPI workers" : "threads", o.out.c_str());
+    if (!ps.other_class.empty())
+      std::fprintf(stderr,
+                   "sirl run: %zu reused tasks were computed on another CPU class "
+                   "(--any-cpu-class; /tables/timings' cpu_class says which), e.g. %s\n",
+                   ps.other_class.size(), ps.other_class.front().c_str());
+  }
   Progress progress(to_run, ps.flops, o.quiet);
   if (checkpoints) {
-    const std::vector<std::string> k = checkpoints->keys();
-    progress.set_resumed({k.begin(), k.end()});
+    std::set<std::string> resumed;
+    for (const std::string& d : checkpoints->keys())
+      if (auto it = key_of.find(d); it != key_of.end()) resumed.insert(it->second);
+    progress.set_resumed(resumed);
   }
+  Execution exec{p, plan, digests, ps.pending, ctx, cache, sources, checkpoints.get(), o, progress};
   const std::exception_ptr failure =
-      execute(plan, ps.pending, ctx, store, checkpoints.get(), threads,
-              // Threads: the most cores one task takes; MPI: each worker rank's cores.
-              mpi_size > 1             ? std::max(1, o.max_task_threads)
-              : o.max_task_threads > 0 ? o.max_task_threads
-                                       : threads,
-              mpi_size, progress, o.quiet);
+      exec.run(threads,
+               // Threads: the most cores one task takes; MPI: each worker rank's cores.
+               mpi_size > 1             ? std::max(1, o.max_task_threads)
+               : o.max_task_threads > 0 ? o.max_task_threads
+                                        : threads,
+               mpi_size);
   progress.finish();
 
   // Assemble whatever is finished (a partial file plots with gaps; a rerun completes it).
-  const std::vector<TaskRecord> records = finished_records(p, plan, mine, std::move(prior), store);
+  const std::vector<TaskRecord> records = finished_records(p, plan, mine, prior, cache, sources);
   RunInfo info;
   info.profile_name = p.name;
   info.profile_text = p.text;
@@ -434,16 +553,16 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
     write_results_file(o.out, info, datasets, records, result_tables(records, info.roofs()));
   } catch (const std::exception&) {
     // A task's failure (a full disk while saving it) is the cause to report; the results file
-    // then failed for the same reason. Every committed task stays in the staging folder.
+    // then failed for the same reason. Every committed task stays in the cache.
     if (!failure) throw;
   }
   if (failure) std::rethrow_exception(failure);
-  crash_point();                // the results file and its checksum are in place
-  fs::remove_all(store.dir());  // everything is in the results file now
+  crash_point();  // the results file and its checksum are in place
   RunSummary s;
   s.tasks = ps.total;
   s.reused = ps.reused;
-  s.ran = to_run;
+  s.elsewhere = exec.elsewhere;
+  s.ran = to_run - s.elsewhere;
   s.seconds = info.wall_seconds;
   return s;
 }

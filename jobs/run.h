@@ -1,5 +1,6 @@
 // `sirl run`: plan → resume check → parallel execution with per-task commits → results file.
 #pragma once
+#include <filesystem>
 #include <map>
 #include <string>
 
@@ -18,34 +19,51 @@ struct RunOptions {
   // `threads`, 1 = one core per task. Under MPI: the cores every
   // worker rank's tasks use (0 = 1). Results do not depend on it.
   int max_task_threads = 0;
-  bool force = false;                    // accept an existing file from another profile/engine
+  // The task cache (jobs/task_cache.h): finished tasks by content, shared by any runs given the
+  // same folder; "" = OUT.tasks beside the output.
+  std::string cache;
+  // Reuse results computed on another CPU class (other bits) when this class has none.
+  bool any_cpu_class = false;
+  // Compute every task again (reusing nothing of the cache or of OUT), and accept an OUT written
+  // for another shard.
+  bool force = false;
   int shard_index = 0, shard_count = 1;  // run only shard i of n (Slurm job arrays)
   bool quiet = false;
   // Long trainings save their state this often (seconds, at an epoch's end) under
-  // <out>.tasks/checkpoints/, and a rerun continues them; 0: every epoch; negative: never.
+  // <cache>/checkpoints/, and a rerun continues them; 0: every epoch; negative: never.
   double checkpoint_seconds = 300;
   std::string engine_version, git_commit;  // recorded in the file
 };
 
 struct RunSummary {
   int tasks = 0, reused = 0, ran = 0;
+  int elsewhere = 0;  // computed by another run sharing the cache while this one waited
   double seconds = 0;
   bool worker = false;  // an MPI worker rank (rank 0 reports for the run)
 };
 
 RunSummary run_profile(const Profile& p, const RunOptions& o);
 
-// The resume policy for an existing results file, as one decision: its records are reused when it
-// was written by this profile text, this engine and this part of the grid (shard "" = the whole
-// run) and a checksum verified it. Otherwise, without --force, the run is refused (`refusal`
-// says why, one line); with --force, or for an unverified file, every task is computed again.
+// The folder of the task cache a run uses: --cache, or OUT.tasks beside the output.
+std::filesystem::path cache_dir(const RunOptions& o);
+
+// The policy for an existing results file at --out: its records are candidates for reuse (each
+// still needs its task digest and CPU class to match, jobs/run.cpp) when a checksum verified it
+// and it holds the same part of the grid (shard "" = the whole run); a file of another part is
+// refused (`refusal` says why, one line) unless --force, which reuses nothing.
 struct ResumeDecision {
   bool reuse = false;
   std::string refusal;  // non-empty: refuse the run with this text
 };
-ResumeDecision resume_decision(const RunInfo& existing, const std::string& profile_text,
-                               const std::string& engine_version, const std::string& shard,
-                               bool force);
+ResumeDecision resume_decision(const RunInfo& existing, const std::string& shard, bool force);
+
+// What a task cache folder already holds of a plan (read only: nothing created or removed).
+struct CacheHoldings {
+  int tasks = 0;        // results of this CPU class
+  int other_class = 0;  // results only another class computed (reusable with --any-cpu-class)
+  double flops = 0, other_flops = 0;  // their planned FLOPs
+};
+CacheHoldings cache_holdings(const Plan& plan, const Profile& p, const std::filesystem::path& dir);
 
 // Which of the plan's tasks belong to shard i of n: tasks are grouped by the representation
 // they evaluate (a rep with its FPE/TPA cells stays together), groups are dealt by a hash of the

@@ -12,6 +12,7 @@
 #include "engine/tpa.h"
 #include "jobs/expected_epochs.h"
 #include "jobs/task_outputs.h"
+#include "jobs/task_settings.h"
 #include "kernels/vae.h"
 #include "results/external_embeddings.h"
 
@@ -219,6 +220,18 @@ bool reads_vae(const Variant& v) {
   return v.vae || v.method == Method::vae;
 }
 
+// The hyper-parameters a representation's training reads: φ's shape and the precision, its
+// method's schedule, and the VAE's when it starts from (or is) the VAE's encoder.
+std::string rep_hyper(const Variant& v, const Hyper& h) {
+  std::string s = hyper_lines(h, {"phi.", "precision"});
+  if (v.method == Method::sirl)
+    s += hyper_lines(h, {"sirl."});
+  else if (uses_queries(v.method))
+    s += hyper_lines(h, {"pref."});
+  if (reads_vae(v)) s += hyper_lines(h, {"vae."});
+  return s;
+}
+
 void rep_cost(Task& t, const Profile& p) {
   const EnvSizes z = env_sizes(t, p);
   t.flops = 0;
@@ -281,7 +294,7 @@ void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
   const Representation rep =
       train_representation(d, *bundle, c, task_seed(t.env, t.seed, "phi"), vae.get());
   put_representation(rep, r);
-  r.text["hyper"] = describe(h);
+  r.text["hyper"] = rep_hyper(t.variant, h);  // what this φ was trained with
   // FLOPs spent in this task: the VAE method's φ is the VAE task's encoder, trained there.
   r.num["flops"] =
       (t.variant.method == Method::vae ? 0.0 : rep.train_flops) + record_embedding(rep, d, r);
@@ -454,6 +467,38 @@ std::string tpa_cell_key(const Task& t) {
   return cell_prefix(t) + "tpa/M" + std::to_string(t.M) + (t.frozen ? "/frozen" : "/unfrozen");
 }
 
+// ---- settings: what each kind reads of the profile (jobs/task_settings.h) ----
+
+std::string vae_settings(const Task& t, const Profile& p) {
+  return describe_data(p, t.env) + hyper_lines(p.hyper.at(t.env), {"phi.", "vae.", "precision"});
+}
+
+std::string rep_settings(const Task& t, const Profile& p) {
+  if (t.variant.method == Method::external)
+    return describe_data(p, t.env) + describe_external(external_method(p, t.variant.external));
+  // Every φ is handed its seed's query bundle (methods that ask nothing ignore it).
+  return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
+         rep_hyper(t.variant, p.hyper.at(t.env));
+}
+
+// The probe's split comes from the main teacher's bundle; a robustness row also states its own
+// teacher's answer error.
+std::string fpe_settings(const Task& t, const Profile& p) {
+  return describe_data(p, t.env) + describe_queries(p.queries) +
+         (t.teacher.empty() ? "" : describe_queries(queries_for(p, t.teacher)));
+}
+
+std::string tpa_settings(const Task& t, const Profile& p) {
+  return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
+         hyper_lines(p.hyper.at(t.env), {"phi.", "tpa.", "precision"});
+}
+
+std::string active_settings(const Task& t, const Profile& p) {
+  return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
+         describe_active(p.active.at(t.env)) +
+         hyper_lines(p.hyper.at(t.env), {"phi.", "sirl.", "precision"});
+}
+
 using C = H5Table::Column;
 
 // The columns a robustness row adds: who taught, on which axis at which level, and how far its
@@ -493,6 +538,7 @@ TaskKindSpec vae_kind() {
       .description = "a VAE over Ξ per (env, seed): pre-training and the VAE baseline",
       .key = [](const Task& t) { return vae_key(t.env, t.seed); },
       .inputs = [](const Task&, const Profile&) { return std::vector<Task>{}; },
+      .settings = vae_settings,
       .cost = vae_cost,
       .rate = [](const Task&) { return "vae"; },
       .shard_group = by_representation,
@@ -516,6 +562,7 @@ TaskKindSpec rep_kind() {
             if (reads_active(t.variant)) in.push_back(active_input(t));
             return in;
           },
+      .settings = rep_settings,
       .cost = rep_cost,
       .rate =
           [](const Task& t) { return t.variant.method == Method::sirl ? "rep_sirl" : "rep_pref"; },
@@ -534,6 +581,7 @@ TaskKindSpec fpe_kind() {
       .description = "FPE of one φ: a linear probe's held-out error",
       .key = [](const Task& t) { return cell_prefix(t) + "fpe"; },
       .inputs = [](const Task& t, const Profile&) { return std::vector<Task>{rep_input(t)}; },
+      .settings = fpe_settings,
       .cost = fpe_cost,
       .rate = [](const Task&) { return "fpe"; },
       .shard_group = by_representation,
@@ -562,6 +610,7 @@ TaskKindSpec tpa_kind() {
       .description = "TPA of one φ at M pairs, frozen or unfrozen: 20 reward heads",
       .key = tpa_cell_key,
       .inputs = [](const Task& t, const Profile&) { return std::vector<Task>{rep_input(t)}; },
+      .settings = tpa_settings,
       .cost = tpa_cost,
       .rate = [](const Task& t) { return t.frozen ? "tpa_frozen" : "tpa_unfrozen"; },
       .shard_group = by_representation,
@@ -627,6 +676,7 @@ TaskKindSpec active_kind() {
       .key =
           [](const Task& t) { return active_key(t.env, t.seed, t.variant.selection, t.teacher); },
       .inputs = [](const Task&, const Profile&) { return std::vector<Task>{}; },
+      .settings = active_settings,
       .cost = active_cost,
       .rate = [](const Task&) { return "rep_sirl"; },
       .shard_group = by_representation,

@@ -7,6 +7,7 @@
 #include "datasets/environments.h"
 #include "engine/tpa.h"
 #include "jobs/task_outputs.h"
+#include "jobs/task_settings.h"
 
 namespace sirl {
 
@@ -221,6 +222,11 @@ void describe_participant(const Task& t, TaskRecord& r) {
   r.text["participant"] = t.participant;
 }
 
+// Every study task reads [study] and the run's top-level precision.
+std::string study_settings(const Task&, const Profile& p) {
+  return describe_study(p.study) + "precision = " + p.precision + "\n";
+}
+
 }  // namespace
 
 TaskKindSpec study_rep_kind() {
@@ -231,6 +237,7 @@ TaskKindSpec study_rep_kind() {
           "user study: SIRL on the pooled answers or Random, per training seed, with its FPE",
       .key = [](const Task& t) { return study_rep_key(t.seed, t.variant.method); },
       .inputs = [](const Task&, const Profile&) { return std::vector<Task>{}; },
+      .settings = study_settings,
       .cost = study_rep_cost,
       .rate = sirl_rate,
       .shard_group = the_study,
@@ -248,6 +255,7 @@ TaskKindSpec study_heldout_kind() {
       .description = "user study: SIRL without one participant's answers",
       .key = [](const Task& t) { return heldout_key(t.participant); },
       .inputs = [](const Task&, const Profile&) { return std::vector<Task>{}; },
+      .settings = study_settings,
       .cost = study_heldout_cost,
       .rate = sirl_rate,
       .shard_group = the_study,
@@ -270,6 +278,7 @@ TaskKindSpec study_tpa_kind() {
             in.push_back(study_heldout_task(p, t.participant));
             return in;
           },
+      .settings = study_settings,
       .cost = study_tpa_cost,
       .rate = unfrozen_tpa_rate,
       .shard_group = the_study,
@@ -287,6 +296,7 @@ TaskKindSpec study_simulated_kind() {
       .description = "user study: TPA on simulated perfect preferences",
       .key = [](const Task&) { return std::string(kSimulatedKey); },
       .inputs = [](const Task&, const Profile& p) { return seed0_representations(p); },
+      .settings = study_settings,
       .cost = study_simulated_cost,
       .rate = unfrozen_tpa_rate,
       .shard_group = the_study,

@@ -14,7 +14,7 @@ const std::vector<TaskKindSpec>& task_kinds() {
         study_rep_kind(),  study_heldout_kind(), study_tpa_kind(), study_simulated_kind(),
         robust_fpe_kind(), robust_tpa_kind(),    active_kind()};
     for (size_t i = 0; i < k.size(); ++i)
-      if (int(k[i].kind) != int(i) || !k[i].key || !k[i].inputs || !k[i].cost || !k[i].rate ||
+      if (int(k[i].kind) != int(i) || !k[i].key || !k[i].inputs || !k[i].settings || !k[i].cost || !k[i].rate ||
           !k[i].shard_group || !k[i].describe || !k[i].run)
         throw std::logic_error(std::string("task kind ") + k[i].name +
                                ": out of TaskKind order or a function missing");

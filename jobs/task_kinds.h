@@ -22,6 +22,11 @@ struct TaskKindSpec {
   std::string (*key)(const Task& t);
   // The tasks whose outputs it reads, fields set (add_task adds them first and keys them).
   std::vector<Task> (*inputs)(const Task& t, const Profile& p);
+  // What it reads of the profile besides its inputs' outputs, as canonical text
+  // (jobs/task_settings.h): with its key and its inputs' digests, its content digest
+  // (jobs/task_digest.h). Everything its record depends on must be here: a setting left out lets
+  // a run reuse a result computed under another value.
+  std::string (*settings)(const Task& t, const Profile& p);
   // Sets t.flops and t.bytes (estimates for `sirl plan` and the scheduler's memory bound).
   void (*cost)(Task& t, const Profile& p);
   // Which measured single-thread rate `sirl plan` times the task with (jobs/estimate.cpp).

@@ -240,6 +240,9 @@ H5Table timings_table(const std::vector<TaskRecord>& records, const Roofs& roofs
   // The task's cell, from its record ("" and -1 where a kind has no such field).
   auto &env = t.add("env", C::String), &seed = t.add("seed", C::Int),
        &teacher = t.add("teacher", C::String), &variant = t.add("variant", C::String);
+  // Which CPU class computed it (a reused result may come from another class) and its content
+  // digest (jobs/task_digest.h); "" in files of engines before 0.10.0.
+  auto &cls = t.add("cpu_class", C::String), &digest = t.add("task_digest", C::String);
   CellFieldColumns cell(t);
   auto text_or = [](const TaskRecord& r, const char* k) {
     auto it = r.text.find(k);
@@ -250,6 +253,8 @@ H5Table timings_table(const std::vector<TaskRecord>& records, const Roofs& roofs
     seed.ints.push_back(int64_t(num_or(r, "seed", -1)));
     teacher.strings.push_back(text_or(r, "teacher"));
     variant.strings.push_back(r.kind == "vae" ? "vae" : text_or(r, "variant"));
+    cls.strings.push_back(text_or(r, "cpu_class"));
+    digest.strings.push_back(text_or(r, "task_digest"));
     cell.push(r);
     kind.strings.push_back(r.kind);
     key.strings.push_back(r.key);
@@ -550,7 +555,16 @@ void export_csv(const ResultTables& t, const std::string& dir) {
           std::snprintf(num, sizeof num, "%.17g", c.doubles[r]);
           line += num;
         } else {
-          line += c.strings[r];  // keys and names never contain commas or quotes
+          // RFC 4180: a field with a comma, quote or line break (a CPU class) is quoted, its
+          // quotes doubled.
+          const std::string& v = c.strings[r];
+          if (v.find_first_of(",\"\r\n") == std::string::npos) {
+            line += v;
+          } else {
+            line += '"';
+            for (char ch : v) line += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+            line += '"';
+          }
         }
       }
       put(line + "\n");

@@ -1,6 +1,10 @@
 #include "results/task_store.h"
 
+#include <signal.h>
+#include <unistd.h>
+
 #include <atomic>
+#include <cerrno>
 #include <cstdlib>
 
 #include <cstdio>
@@ -82,10 +86,11 @@ void write_frame(const fs::path& p, const std::string& key) {
   }
 }
 
-// The record committed in `p` for `key`, verified before HDF5 opens the file (framed commits)
-// and against the record checksum after. A corrupted file is refused naming the task (and
-// removed when `remove_if_corrupt`, so that a rerun computes the task again).
-TaskRecord read_commit(const fs::path& p, const std::string& key, bool remove_if_corrupt) {
+// The record committed in `p` under `id` for task `key`, verified before HDF5 opens the file
+// (framed commits) and against the record checksum after. A corrupted file is refused naming the
+// task (and removed when `remove_if_corrupt`, so that a rerun computes the task again).
+TaskRecord read_commit(const fs::path& p, const std::string& id, const std::string& key,
+                       bool remove_if_corrupt) {
   auto corrupted = [&](const std::string& why) {
     std::error_code ec;
     if (remove_if_corrupt) fs::remove(p, ec);
@@ -100,7 +105,7 @@ TaskRecord read_commit(const fs::path& p, const std::string& key, bool remove_if
     throw corrupted("no commit header");
   }
   if (frame.framed) {
-    if (frame.key != key) throw H5Error(p.string() + ": holds task " + frame.key + ", not " + key);
+    if (frame.key != id) throw H5Error(p.string() + ": holds " + frame.key + ", not " + id);
     if (frame_checksum(p, frame.checksum.size()) != frame.checksum)
       throw corrupted("checksum mismatch");
   }
@@ -116,6 +121,45 @@ TaskRecord read_commit(const fs::path& p, const std::string& key, bool remove_if
   return r;
 }
 
+std::string this_host() {
+  char buf[256] = {};
+  gethostname(buf, sizeof buf - 1);
+  return buf;
+}
+
+// A commit's temporary file names its writer, "<final>.<host>.<pid>.tmp", so that a process
+// opening a shared store removes only what a dead process of this host left behind, never the
+// half-written commit of a live one.
+std::string tmp_suffix() {
+  static const std::string s = [] {
+    std::string t = ".";
+    t.append(this_host()).append(".").append(std::to_string(::getpid())).append(".tmp");
+    return t;
+  }();
+  return s;
+}
+
+bool abandoned_tmp(const std::string& name) {
+  const std::string stem = name.substr(0, name.size() - 4);  // without ".tmp"
+  const size_t dot_pid = stem.rfind('.');
+  if (dot_pid == std::string::npos) return true;
+  const std::string pid = stem.substr(dot_pid + 1), rest = stem.substr(0, dot_pid);
+  const size_t dot_host = rest.rfind('.');
+  if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos ||
+      dot_host == std::string::npos || !rest.substr(0, dot_host).ends_with(".h5"))
+    return true;  // an engine before 0.10.0's "<final>.tmp": no live writer uses that name
+  if (rest.substr(dot_host + 1) != this_host()) return false;  // another host's: not ours to judge
+  return ::kill(pid_t(std::stol(pid)), 0) != 0 && errno == ESRCH;
+}
+
+// The id a commit file is filed under (its frame's, or an engine 0.2.0 file's task key).
+std::string commit_id(const fs::path& p) {
+  const Frame frame = read_frame(p);  // reads no HDF5 (and is fast)
+  if (frame.framed) return frame.key;
+  H5File f = H5File::open_read(p.string());
+  return f.attr_string("/r", "task_key");
+}
+
 }  // namespace
 
 TaskStore::TaskStore(fs::path dir) : dir_(std::move(dir)) {
@@ -125,40 +169,60 @@ TaskStore::TaskStore(fs::path dir) : dir_(std::move(dir)) {
   for (const auto& e : fs::directory_iterator(dir_)) {
     const auto name = e.path().filename().string();
     if (name.ends_with(".tmp")) {
-      fs::remove(e.path(), ec);
+      if (abandoned_tmp(name)) fs::remove(e.path(), ec);
       continue;
     }
     if (!name.ends_with(".h5")) continue;
     try {
-      const Frame frame = read_frame(e.path());  // indexing reads no HDF5 (and is fast)
-      if (frame.framed) {
-        index_[frame.key] = e.path();
-      } else {
-        H5File f = H5File::open_read(e.path().string());
-        index_[f.attr_string("/r", "task_key")] = e.path();
-      }
+      index_[commit_id(e.path())] = e.path();
     } catch (const H5Error&) {
       fs::remove(e.path(), ec);  // cannot happen with rename commits; never trust a bad file
     }
   }
 }
 
-fs::path TaskStore::file_for(const fs::path& dir, const std::string& key) {
+std::vector<std::string> TaskStore::ids_in(const fs::path& dir) {
+  std::vector<std::string> ids;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return ids;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    if (!e.path().filename().string().ends_with(".h5")) continue;
+    try {
+      ids.push_back(commit_id(e.path()));
+    } catch (const H5Error&) {
+      // a damaged file holds nothing to count; the next run that opens the store removes it
+    }
+  }
+  return ids;
+}
+
+fs::path TaskStore::file_for(const fs::path& dir, const std::string& id) {
   char name[32];
   std::snprintf(name, sizeof name, "%016llx.h5",
-                static_cast<unsigned long long>(seed_from_key(key, 0)));
+                static_cast<unsigned long long>(seed_from_key(id, 0)));
   return dir / name;
 }
 
-TaskRecord TaskStore::load_from(const fs::path& dir, const std::string& key) {
-  const fs::path p = file_for(dir, key);
+TaskRecord TaskStore::load_from(const fs::path& dir, const std::string& id,
+                                const std::string& key) {
+  const fs::path p = file_for(dir, id);
   if (!fs::exists(p)) throw H5Error(dir.string() + ": no committed task " + key);
-  return read_commit(p, key, false);  // another process's file: never removed from here
+  return read_commit(p, id, key, false);  // another process's file: never removed from here
 }
 
-bool TaskStore::has(const std::string& key) const {
+bool TaskStore::has(const std::string& id) const {
   std::lock_guard lock(mu_);
-  return index_.count(key) > 0;
+  if (index_.count(id)) return true;
+  const fs::path p = file_for(dir_, id);
+  std::error_code ec;
+  if (!fs::exists(p, ec)) return false;
+  try {
+    if (commit_id(p) != id) return false;  // another id's file under the same 64-bit name
+  } catch (const H5Error&) {
+    return false;
+  }
+  index_[id] = p;
+  return true;
 }
 
 std::vector<std::string> TaskStore::keys() const {
@@ -168,9 +232,9 @@ std::vector<std::string> TaskStore::keys() const {
   return k;
 }
 
-void TaskStore::commit(const TaskRecord& r) {
-  const fs::path final = file_for(dir_, r.key);
-  const fs::path tmp = final.string() + ".tmp";
+void TaskStore::commit(const TaskRecord& r, const std::string& id) {
+  const fs::path final = file_for(dir_, id);
+  const fs::path tmp = final.string() + tmp_suffix();
   try {
     {
       H5File f = H5File::create(tmp.string(), kFrameBytes);
@@ -178,7 +242,7 @@ void TaskStore::commit(const TaskRecord& r) {
       f.set_attr("/r", "record_checksum", record_checksum(r));
       f.flush();  // a full disk shows here, not in a destructor
     }             // closed: every byte handed to the OS
-    write_frame(tmp, r.key);
+    write_frame(tmp, id);
   } catch (const std::exception& e) {
     std::error_code ec;
     fs::remove(tmp, ec);
@@ -194,14 +258,14 @@ void TaskStore::commit(const TaskRecord& r) {
   fsync_path(dir_.string());
   {
     std::lock_guard lock(mu_);
-    index_[r.key] = final;
+    index_[id] = final;
   }
   crash_point_after_commit();
 }
 
-void TaskStore::remove(const std::string& key) {
+void TaskStore::remove(const std::string& id) {
   std::lock_guard lock(mu_);
-  const auto it = index_.find(key);
+  const auto it = index_.find(id);
   if (it == index_.end()) return;
   std::error_code ec;
   fs::remove(it->second, ec);
@@ -237,15 +301,49 @@ void crash_point_after_commit() {
   if (k > 0 && ++commits == k) std::_Exit(137);
 }
 
-TaskRecord TaskStore::load(const std::string& key) const {
+TaskRecord TaskStore::load(const std::string& id, const std::string& key) const {
   fs::path p;
   {
     std::lock_guard lock(mu_);
-    auto it = index_.find(key);
+    auto it = index_.find(id);
     if (it == index_.end()) throw H5Error(dir_.string() + ": no committed task " + key);
     p = it->second;
   }
-  return read_commit(p, key, true);
+  return read_commit(p, id, key, true);
+}
+
+std::string TaskStore::verify(const std::string& id, const std::string& key) const {
+  fs::path p;
+  {
+    std::lock_guard lock(mu_);
+    auto it = index_.find(id);
+    if (it == index_.end()) return "task " + key + ": not in " + dir_.string();
+    p = it->second;
+  }
+  std::string why;
+  try {
+    const Frame frame = read_frame(p);
+    if (frame.framed && frame.key != id)
+      why = "it holds " + frame.key;
+    else if (frame.framed && frame_checksum(p, frame.checksum.size()) != frame.checksum)
+      why = "checksum mismatch";
+  } catch (const H5Error& e) {
+    why = e.what();
+  }
+  if (why.empty()) return "";
+  std::error_code ec;
+  fs::remove(p, ec);
+  std::lock_guard lock(mu_);
+  index_.erase(id);
+  return "task " + key + ": its committed file " + p.string() + " is corrupted (" + why + ")";
+}
+
+uint64_t TaskStore::bytes(const std::string& id) const {
+  std::lock_guard lock(mu_);
+  auto it = index_.find(id);
+  std::error_code ec;
+  const uint64_t n = it == index_.end() ? 0 : fs::file_size(it->second, ec);
+  return ec ? 0 : n;
 }
 
 std::string record_checksum(const TaskRecord& r) {

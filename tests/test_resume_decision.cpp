@@ -1,5 +1,6 @@
-// The resume policy of `sirl run` for an existing results file, decided without running anything:
-// which files are refused (and why), which are reused, and what --force changes.
+// The policy of `sirl run` for an existing results file at --out, decided without running
+// anything: which files are refused (and why), which are read for reusable records, and what
+// --force changes. (Which records are reused is decided per task by its digest: jobs/run.cpp.)
 #include <gtest/gtest.h>
 
 #include <string>
@@ -9,56 +10,43 @@
 namespace sirl {
 namespace {
 
-RunInfo written(const std::string& text, const std::string& engine, const std::string& shard) {
+RunInfo written(const std::string& shard) {
   RunInfo i;
   i.profile_name = "smoke";
-  i.profile_text = text;
-  i.engine_version = engine;
   i.shard = shard;
   i.tasks_done = 42;
   return i;
 }
 
-TEST(ResumeDecision, TheSameRunIsReused) {
-  const ResumeDecision d = resume_decision(written("P", "0.8.0", ""), "P", "0.8.0", "", false);
+TEST(ResumeDecision, TheSamePartOfTheGridIsRead) {
+  const ResumeDecision d = resume_decision(written(""), "", false);
   EXPECT_TRUE(d.reuse);
   EXPECT_EQ(d.refusal, "");
-}
-
-TEST(ResumeDecision, AnotherProfileIsRefusedNamingIt) {
-  const ResumeDecision d = resume_decision(written("P", "0.8.0", ""), "Q", "0.8.0", "", false);
-  EXPECT_FALSE(d.reuse);
-  EXPECT_EQ(d.refusal, "under a different profile ('smoke')");
-}
-
-TEST(ResumeDecision, AnotherEngineIsRefusedNamingBoth) {
-  const ResumeDecision d = resume_decision(written("P", "0.7.0", ""), "P", "0.8.0", "", false);
-  EXPECT_FALSE(d.reuse);
-  EXPECT_EQ(d.refusal, "by engine 0.7.0 (this is 0.8.0)");
+  EXPECT_TRUE(resume_decision(written("1/2"), "1/2", false).reuse);
 }
 
 TEST(ResumeDecision, AnotherPartOfTheGridIsRefused) {
-  const ResumeDecision d = resume_decision(written("P", "0.8.0", "0/2"), "P", "0.8.0", "", false);
+  const ResumeDecision d = resume_decision(written("0/2"), "", false);
   EXPECT_FALSE(d.reuse);
   EXPECT_EQ(d.refusal, "with shard 0/2 (42 tasks), and this run is the whole run");
-  EXPECT_EQ(resume_decision(written("P", "0.8.0", ""), "P", "0.8.0", "1/2", false).refusal,
+  EXPECT_EQ(resume_decision(written(""), "1/2", false).refusal,
             "with the whole run (42 tasks), and this run is shard 1/2");
+  EXPECT_EQ(resume_decision(written("0/2"), "1/2", false).refusal,
+            "with shard 0/2 (42 tasks), and this run is shard 1/2");
 }
 
-TEST(ResumeDecision, ForceNeverRefusesAndNeverReusesAnotherRun) {
-  for (const RunInfo& other :
-       {written("Q", "0.8.0", ""), written("P", "0.7.0", ""), written("P", "0.8.0", "0/2")}) {
-    const ResumeDecision d = resume_decision(other, "P", "0.8.0", "", true);
+TEST(ResumeDecision, ForceNeverRefusesAndNeverReuses) {
+  for (const RunInfo& other : {written(""), written("0/2")}) {
+    const ResumeDecision d = resume_decision(other, "", true);
     EXPECT_EQ(d.refusal, "");
     EXPECT_FALSE(d.reuse);
   }
-  EXPECT_TRUE(resume_decision(written("P", "0.8.0", ""), "P", "0.8.0", "", true).reuse);
 }
 
 TEST(ResumeDecision, AnUnverifiedFileIsNeverReused) {
-  RunInfo i = written("P", "0.8.0", "");
+  RunInfo i = written("");
   i.verified = false;
-  const ResumeDecision d = resume_decision(i, "P", "0.8.0", "", false);
+  const ResumeDecision d = resume_decision(i, "", false);
   EXPECT_EQ(d.refusal, "");
   EXPECT_FALSE(d.reuse);
 }

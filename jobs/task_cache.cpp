@@ -1,0 +1,167 @@
+#include "jobs/task_cache.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+
+#include "results/durable.h"
+#include "results/h5.h"
+
+namespace sirl {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+int open_lock_file(const fs::path& p) {
+  // O_NOFOLLOW: a planted link must not make a run lock (or gc delete) its target.
+  const int fd = ::open(p.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+  if (fd < 0)
+    throw std::runtime_error(p.string() + ": cannot open the lock file: " + std::strerror(errno));
+  return fd;
+}
+
+// Whether another process holds an flock on `p` (false when the file is absent).
+bool held_elsewhere(const fs::path& p) {
+  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+  if (fd < 0) return false;
+  const bool held = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+  ::close(fd);
+  return held;
+}
+
+bool is_digest(const std::string& s) {
+  return s.size() == 32 && s.find_first_not_of("0123456789abcdef") == std::string::npos;
+}
+
+std::string host_name() {
+  char buf[256] = {};
+  gethostname(buf, sizeof buf - 1);
+  return buf;
+}
+
+}  // namespace
+
+TaskCache::TaskCache(fs::path dir) : store_(std::move(dir)) {
+  std::error_code ec;
+  for (const char* sub : {"locks", "runs"}) {
+    refuse_symlink((store_.dir() / sub).string());
+    fs::create_directories(store_.dir() / sub, ec);
+    if (ec) throw H5Error((store_.dir() / sub).string() + ": cannot create: " + ec.message());
+  }
+}
+
+TaskCache::~TaskCache() {
+  if (needs_fd_ >= 0) {
+    std::error_code ec;
+    fs::remove(needs_path_, ec);
+    ::close(needs_fd_);
+  }
+}
+
+std::string TaskCache::id(const std::string& digest, const std::string& cpu_class) {
+  return digest + "-" + bytes_digest(cpu_class.data(), cpu_class.size()).substr(0, 8);
+}
+
+std::string TaskCache::find(const std::string& digest, const std::string& cpu_class,
+                            bool any_class) const {
+  const std::string mine = id(digest, cpu_class);
+  if (store_.has(mine)) return mine;
+  if (!any_class) return "";
+  for (const std::string& k : store_.keys())
+    if (k.starts_with(digest + "-")) return k;
+  return "";
+}
+
+void TaskCache::register_needs(const std::vector<std::string>& digests) {
+  needs_path_ = store_.dir() / "runs" / (host_name() + "." + std::to_string(::getpid()));
+  needs_fd_ = open_lock_file(needs_path_);
+  if (::flock(needs_fd_, LOCK_EX | LOCK_NB) != 0)
+    throw std::runtime_error(needs_path_.string() + ": cannot lock: " + std::strerror(errno));
+  std::string text;
+  for (const auto& d : digests) text += d + "\n";
+  if (::ftruncate(needs_fd_, 0) != 0 ||
+      ::pwrite(needs_fd_, text.data(), text.size(), 0) != ssize_t(text.size()))
+    throw std::runtime_error(needs_path_.string() + ": cannot write: " + std::strerror(errno));
+}
+
+TaskCache::Claim::~Claim() {
+  if (fd_ >= 0) ::close(fd_);  // closing releases the flock
+}
+
+TaskCache::Claim TaskCache::claim(const std::string& digest,
+                                  const std::function<void()>& waiting) const {
+  const int fd = open_lock_file(store_.dir() / "locks" / (digest + ".lock"));
+  if (::flock(fd, LOCK_EX | LOCK_NB) == 0) return Claim(fd);
+  if (errno != EWOULDBLOCK) {
+    const int err = errno;
+    ::close(fd);
+    throw std::runtime_error("cannot lock task " + digest + ": " + std::strerror(err));
+  }
+  if (waiting) waiting();
+  while (::flock(fd, LOCK_EX) != 0)
+    if (errno != EINTR) {
+      const int err = errno;
+      ::close(fd);
+      throw std::runtime_error("cannot lock task " + digest + ": " + std::strerror(err));
+    }
+  return Claim(fd);
+}
+
+GcSummary collect_garbage(const fs::path& dir, const std::set<std::string>& keep, bool dry_run) {
+  if (!fs::is_directory(dir)) throw std::runtime_error(dir.string() + ": no such cache folder");
+  std::set<std::string> needed = keep;
+  std::set<std::string> held;  // needed by a running process
+  std::error_code ec;
+  if (fs::is_directory(dir / "runs"))
+    for (const auto& e : fs::directory_iterator(dir / "runs")) {
+      if (e.is_symlink()) continue;
+      if (!held_elsewhere(e.path())) {  // its process ended without removing it
+        if (!dry_run) fs::remove(e.path(), ec);
+        continue;
+      }
+      std::ifstream in(e.path());
+      for (std::string line; std::getline(in, line);)
+        if (is_digest(line)) held.insert(line);
+    }
+  auto computing = [&](const std::string& digest) {
+    return held_elsewhere(dir / "locks" / (digest + ".lock"));
+  };
+  GcSummary s;
+  auto sweep = [&](const fs::path& folder) {
+    for (const std::string& id : TaskStore::ids_in(folder)) {
+      const std::string digest = id.substr(0, id.find('-'));
+      const fs::path file = TaskStore::file_for(folder, id);
+      const uint64_t bytes = fs::file_size(file, ec);
+      if (is_digest(digest) && (needed.count(digest) || held.count(digest) || computing(digest))) {
+        ++s.kept;
+        s.kept_bytes += ec ? 0 : bytes;
+        if (!needed.count(digest)) ++s.held;
+        continue;
+      }
+      ++s.removed;
+      s.removed_bytes += ec ? 0 : bytes;
+      if (!dry_run) fs::remove(file, ec);
+    }
+  };
+  sweep(dir);
+  sweep(dir / "checkpoints");
+  if (!dry_run && fs::is_directory(dir / "locks"))
+    for (const auto& e : fs::directory_iterator(dir / "locks")) {
+      const std::string name = e.path().filename().string();
+      const std::string digest = name.substr(0, name.find('.'));
+      if (e.is_symlink() || needed.count(digest) || held.count(digest)) continue;
+      const int fd = ::open(e.path().c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+      if (fd < 0) continue;
+      if (::flock(fd, LOCK_EX | LOCK_NB) == 0) fs::remove(e.path(), ec);
+      ::close(fd);
+    }
+  return s;
+}
+
+}  // namespace sirl

@@ -1,0 +1,263 @@
+#!/usr/bin/python3
+"""Incremental runs through the task cache (ctest; Debian's python3):
+
+- one more seed: exactly the new seed's tasks are computed (counted from the cache's new files);
+- a comment added and the profile's tables reordered: nothing is computed;
+- "sirl.epochs" changed for GridRobot: exactly GridRobot's SIRL-trained representations and every
+  task that reads them, directly or not, are computed (the set from `sirl plan --tasks`' inputs
+  and the records' methods, not from the engine's digests);
+- each resulting file equals a fresh run's (fresh cache) in every table but timings, every
+  dataset and record field under /runs (timing excepted) and /datasets;
+- two runs of different profiles sharing one fresh cache at once: no task computed twice, both
+  files equal fresh runs', the cache's every file sound;
+- a corrupted file in the cache is named, never read, and its task computed again;
+- `sirl plan --cache` counts what the cache holds; `sirl gc` keeps what a profile needs and
+  removes the rest.
+"""
+import glob
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+import h5py
+import numpy as np
+
+SIRL = os.environ["SIRL"]
+SRC = os.environ["SIRL_SOURCE_DIR"]
+SMOKE = os.path.join(SRC, "configs", "smoke.toml")
+TIMING = {"seconds", "threads"}  # record fields that describe the run, not the result
+
+
+def fail(msg):
+    print("incremental_runs: FAIL:", msg)
+    sys.exit(1)
+
+
+def run(*args, expect=0):
+    p = subprocess.run([SIRL, *args], capture_output=True, text=True)
+    if p.returncode != expect:
+        fail(f"sirl {' '.join(args)} exited {p.returncode}, not {expect}:\n{p.stderr[-3000:]}")
+    return p
+
+
+def computed(p):
+    """(reused, computed, by another run) from `sirl run`'s summary line (p: a finished process
+    or its standard output)."""
+    text = p if isinstance(p, str) else p.stdout
+    line = [ln for ln in text.splitlines() if ln.startswith("sirl run:")][-1]
+    inner = line[line.index("(") + 1:line.index(")")]
+    nums = [int(w) for w in inner.replace(",", " ").split() if w.isdigit()]
+    return nums[0], nums[1], (nums[2] if len(nums) > 2 else 0)
+
+
+def cache_keys(cache):
+    """{file name: task key} of the committed results in a cache (their /r attributes)."""
+    out = {}
+    for path in glob.glob(os.path.join(cache, "*.h5")):
+        with h5py.File(path, "r") as f:
+            out[os.path.basename(path)] = f["r"].attrs["task_key"]
+    return out
+
+
+def plan_inputs(*args):
+    """{task key: [keys of the tasks it reads]} from `sirl plan --tasks`."""
+    deps = {}
+    for line in run("plan", *args, "--tasks").stdout.splitlines():
+        words = line.split(" ")
+        deps[words[0]] = words[4:]
+    return deps
+
+
+def same(a, b):
+    a, b = np.asarray(a), np.asarray(b)
+    if a.dtype.kind == "f":
+        return a.shape == b.shape and np.array_equal(a, b, equal_nan=True)
+    return a.shape == b.shape and np.array_equal(a, b)
+
+
+def compare_files(got, want):
+    """Every table but timings, every dataset and record field under /runs and /datasets."""
+    with h5py.File(got, "r") as g, h5py.File(want, "r") as w:
+        for name in w["tables"]:
+            if name == "timings":
+                continue
+            wt, gt = w["tables"][name][()], g["tables"][name][()]
+            if wt.dtype != gt.dtype or wt.shape != gt.shape:
+                fail(f"{got}: /tables/{name} has another shape or columns than a fresh run's")
+            for col in wt.dtype.names:
+                if not same(gt[col], wt[col]):
+                    fail(f"{got}: /tables/{name} column {col} differs from a fresh run's")
+        for root in ("runs", "datasets"):
+            names = []
+            w[root].visit(names.append)
+            got_names = []
+            g[root].visit(got_names.append)
+            if sorted(names) != sorted(got_names):
+                fail(f"{got}: /{root} holds other objects than a fresh run's")
+            for n in names:
+                wo, go = w[root][n], g[root][n]
+                if isinstance(wo, h5py.Dataset) and not same(go[()], wo[()]):
+                    fail(f"{got}: /{root}/{n} differs from a fresh run's")
+                for a in wo.attrs:
+                    if a in TIMING:
+                        continue
+                    if a not in go.attrs or not same(go.attrs[a], wo.attrs[a]):
+                        fail(f"{got}: /{root}/{n}@{a} differs from a fresh run's")
+
+
+def fresh(tmp, name, *args):
+    out = os.path.join(tmp, name + "-fresh.h5")
+    run("run", *args, "--out", out, "--cache", os.path.join(tmp, name + "-fresh-cache"))
+    return out
+
+
+def reordered_profile(tmp):
+    """smoke.toml with comments added and its tables in reverse order (same settings)."""
+    lines = open(SMOKE).read().splitlines()
+    first = next(i for i, ln in enumerate(lines) if ln.startswith("["))
+    blocks, cur = [], []
+    for ln in lines[first:]:
+        if ln.startswith("[") and cur:
+            blocks.append(cur)
+            cur = []
+        cur.append(ln)
+    blocks.append(cur)
+    text = "# a comment that changes nothing\n" + "\n".join(lines[:first]) + "\n"
+    for b in reversed(blocks):
+        text += "\n# another comment\n" + "\n".join(b) + "\n"
+    path = os.path.join(tmp, "smoke-reordered.toml")
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def main():
+    tmp = tempfile.mkdtemp(prefix="sirl-incremental-")
+    try:
+        cache = os.path.join(tmp, "cache")
+        base = os.path.join(tmp, "base.h5")
+        p = run("run", SMOKE, "--out", base, "--cache", cache)
+        n_tasks = len(plan_inputs(SMOKE))
+        if computed(p) != (0, n_tasks, 0):
+            fail(f"a first run computed {computed(p)}, not all {n_tasks} tasks")
+        with h5py.File(base, "r") as f:
+            records = {}
+            for n, o in f["runs"].items():
+                o.visititems(lambda k, v: records.__setitem__(v.attrs["task_key"], dict(v.attrs))
+                             if "task_key" in v.attrs else None)
+            cls = f.attrs["cpu_class"]
+            tim = f["tables"]["timings"]
+            if not all(c.decode() == cls for c in tim["cpu_class"][()]):
+                fail("timings' cpu_class is not the run's class for every task")
+            if any(len(d) != 32 for d in tim["task_digest"][()]):
+                fail("timings' task_digest is not 32 hex digits for every task")
+
+        # 1. One more seed: exactly its tasks.
+        before = cache_keys(cache)
+        seeds = ["--set", "seeds=[0,1,2]"]
+        p = run("run", SMOKE, *seeds, "--out", os.path.join(tmp, "seeds.h5"), "--cache", cache)
+        new = {k for f, k in cache_keys(cache).items() if f not in before}
+        deps3 = plan_inputs(SMOKE, *seeds)
+        added = set(deps3) - set(plan_inputs(SMOKE))
+        if new != added or computed(p)[1] != len(added):
+            fail(f"one more seed computed {computed(p)} ({len(new)} new files), "
+                 f"not the {len(added)} tasks the seed adds")
+        compare_files(os.path.join(tmp, "seeds.h5"), fresh(tmp, "seeds", SMOKE, *seeds))
+        print(f"incremental_runs: one more seed: {len(added)} of {len(deps3)} tasks computed")
+
+        # 2. A comment and reordered tables: nothing.
+        p = run("run", reordered_profile(tmp), "--out", os.path.join(tmp, "reordered.h5"),
+                "--cache", cache)
+        if computed(p) != (n_tasks, 0, 0):
+            fail(f"a reordered, commented profile computed {computed(p)}")
+        compare_files(os.path.join(tmp, "reordered.h5"), base)
+
+        # 3. sirl.epochs for GridRobot: its SIRL-trained φ and everything downstream.
+        epochs = ["--set", 'hyper.grid."sirl.epochs"=31']
+        deps = plan_inputs(SMOKE, *epochs)
+        changed = {k for k, r in records.items()
+                   if r.get("env") == "grid" and r.get("task_kind") in ("rep", "active")
+                   and r.get("method") == "sirl"}
+        if not changed:
+            fail("smoke has no GridRobot SIRL representation to change")
+        grew = True
+        while grew:  # every reader of a changed task, however indirect
+            more = {k for k, ins in deps.items() if changed.intersection(ins)} - changed
+            changed |= more
+            grew = bool(more)
+        before = cache_keys(cache)
+        p = run("run", SMOKE, *epochs, "--out", os.path.join(tmp, "epochs.h5"), "--cache", cache)
+        new = {k for f, k in cache_keys(cache).items() if f not in before}
+        if new != changed or computed(p)[1] != len(changed):
+            fail(f"sirl.epochs for grid computed {computed(p)}: "
+                 f"{sorted(new ^ changed)[:5]} differ from the expected {len(changed)} tasks")
+        compare_files(os.path.join(tmp, "epochs.h5"), fresh(tmp, "epochs", SMOKE, *epochs))
+        print(f"incremental_runs: grid sirl.epochs: {len(changed)} of {len(deps)} tasks computed")
+
+        # 4. Two profiles at once on one fresh cache.
+        shared = os.path.join(tmp, "shared")
+        outs = [os.path.join(tmp, "one.h5"), os.path.join(tmp, "two.h5")]
+        procs = [subprocess.Popen([SIRL, "run", SMOKE, *extra, "--out", o, "--cache", shared,
+                                   "--threads", "1"],
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                 for o, extra in zip(outs, ([], seeds))]
+        results = [pr.communicate() for pr in procs]
+        for pr, (out, err) in zip(procs, results):
+            if pr.returncode != 0:
+                fail(f"a concurrent run exited {pr.returncode}:\n{err[-2000:]}")
+        counts = [computed(out) for out, _ in results]
+        union = set(plan_inputs(SMOKE)) | set(deps3)
+        files = cache_keys(shared)
+        if len(files) != len(union) or sorted(files.values()) != sorted(union):
+            fail(f"the shared cache holds {len(files)} results for {len(union)} distinct tasks")
+        if sum(c[1] for c in counts) != len(union):
+            fail(f"two runs at once computed {[c[1] for c in counts]}: a task twice or none")
+        compare_files(outs[0], base)
+        compare_files(outs[1], os.path.join(tmp, "seeds-fresh.h5"))
+        p = run("run", SMOKE, *seeds, "--out", os.path.join(tmp, "again.h5"), "--cache", shared)
+        if computed(p)[1] != 0:
+            fail("after two concurrent runs a third found damaged or missing results")
+        print(f"incremental_runs: two runs at once: {[c[1] for c in counts]} computed, "
+              f"{[c[2] for c in counts]} waited for, {len(union)} distinct tasks")
+
+        # 5. A corrupted result: named, removed, computed again.
+        victim_file, victim_key = sorted(cache_keys(cache).items())[7]
+        with open(os.path.join(cache, victim_file), "r+b") as f:
+            f.seek(-100, os.SEEK_END)
+            b = f.read(1)
+            f.seek(-100, os.SEEK_END)
+            f.write(bytes([b[0] ^ 0xFF]))
+        out = os.path.join(tmp, "healed.h5")
+        p = run("run", SMOKE, "--out", out, "--cache", cache)
+        if victim_key not in p.stderr or "corrupted" not in p.stderr:
+            fail(f"a corrupted result of {victim_key} was not named:\n{p.stderr[-2000:]}")
+        if victim_key in plan_inputs(SMOKE) and computed(p)[1] != 1:
+            fail(f"after corrupting {victim_key} the run computed {computed(p)}, not 1 task")
+        compare_files(out, base)
+
+        # 6. plan --cache and gc.
+        text = run("plan", SMOKE, *seeds, "--cache", cache).stdout
+        if f"cache {cache}: {len(deps3)} of {len(deps3)} tasks" not in text:
+            fail(f"sirl plan --cache did not count the cached tasks:\n{text[-800:]}")
+        run("gc", cache, expect=2)  # neither profiles nor --all
+        p = run("gc", cache, SMOKE, "--dry-run")
+        kept_before = len(cache_keys(cache))
+        run("gc", cache, SMOKE)
+        left = set(cache_keys(cache).values())
+        if left != set(plan_inputs(SMOKE)):
+            fail(f"gc kept {len(left)} results, not smoke's {n_tasks} (had {kept_before})")
+        p = run("run", SMOKE, "--out", os.path.join(tmp, "after-gc.h5"), "--cache", cache)
+        if computed(p)[1] != 0:
+            fail("gc removed a result smoke needs")
+        run("gc", cache, "--all")
+        if cache_keys(cache):
+            fail("gc --all left results behind")
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    print("incremental_runs: OK")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,255 @@
+// The task cache and task digests: ids by digest and class, reuse across classes only when asked,
+// one computer per task (a second claim waits), gc keeping what profiles and live runs need,
+// abandoned temporary files swept but a live writer's kept; and which profile edits change which
+// tasks' digests.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+#include <thread>
+
+#include "jobs/plan.h"
+#include "jobs/profile.h"
+#include "jobs/task_cache.h"
+#include "jobs/task_digest.h"
+#include "results/h5.h"
+#include "tests/scratch_dir.h"
+#include "tests/small_profile.h"
+
+namespace sirl {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kDigestA(32, 'a'), kDigestB(32, 'b'), kDigestC(32, 'c');
+
+TaskRecord cache_record(const std::string& key) {
+  TaskRecord r;
+  r.key = key;
+  r.kind = "fpe";
+  r.num["fpe"] = 0.25;
+  return r;
+}
+
+TEST(TaskCache, FilesByDigestAndClassAndReusesAnotherClassOnlyWhenAsked) {
+  const test::ScratchDir scratch;
+  TaskCache cache(scratch.path() / "c");
+  const std::string id = TaskCache::id(kDigestA, "zen5");
+  EXPECT_EQ(id.size(), 32u + 1 + 8);
+  EXPECT_TRUE(id.starts_with(kDigestA + "-"));
+  EXPECT_NE(id, TaskCache::id(kDigestA, "zen4"));
+  cache.store().commit(cache_record("grid/s0/sirl/N100/fpe"), id);
+  EXPECT_EQ(cache.find(kDigestA, "zen5", false), id);
+  EXPECT_EQ(cache.find(kDigestA, "zen4", false), "");
+  EXPECT_EQ(cache.find(kDigestA, "zen4", true), id);
+  EXPECT_EQ(cache.find(kDigestB, "zen5", true), "");
+  EXPECT_EQ(cache.store().load(id, "grid/s0/sirl/N100/fpe"), cache_record("grid/s0/sirl/N100/fpe"));
+  EXPECT_THROW(cache.store().load(id, "grid/s0/sirl/N200/fpe"), H5Error);
+}
+
+TEST(TaskCache, SeesACommitOfAnotherProcessAfterItOpened) {
+  const test::ScratchDir scratch;
+  TaskCache mine(scratch.path() / "c");
+  TaskStore other(scratch.path() / "c");  // another process's view of the folder
+  const std::string id = TaskCache::id(kDigestA, "zen5");
+  EXPECT_EQ(mine.find(kDigestA, "zen5", false), "");
+  other.commit(cache_record("k"), id);
+  EXPECT_EQ(mine.find(kDigestA, "zen5", false), id);
+  EXPECT_EQ(mine.store().load(id, "k"), cache_record("k"));
+}
+
+TEST(TaskCache, ASecondClaimOnATaskWaitsForTheFirst) {
+  const test::ScratchDir scratch;
+  TaskCache cache(scratch.path() / "c");
+  std::atomic<bool> released{false}, waited{false}, second_has_it{false};
+  std::thread second;
+  {
+    const TaskCache::Claim first = cache.claim(kDigestA);
+    second = std::thread([&] {
+      const TaskCache::Claim c = cache.claim(kDigestA, [&] { waited = true; });
+      second_has_it = true;
+      EXPECT_TRUE(released.load()) << "the second claim was granted while the first held it";
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    EXPECT_FALSE(second_has_it.load());
+    released = true;
+  }
+  second.join();
+  EXPECT_TRUE(waited.load());
+  EXPECT_TRUE(second_has_it.load());
+  const TaskCache::Claim other = cache.claim(kDigestB);  // another task: not held by anyone
+}
+
+TEST(TaskCache, GcKeepsWhatProfilesAndLiveRunsNeedAndRemovesTheRest) {
+  const test::ScratchDir scratch;
+  const fs::path dir = scratch.path() / "c";
+  TaskCache cache(dir);
+  for (const std::string& d : {kDigestA, kDigestB, kDigestC})
+    cache.store().commit(cache_record("key-" + d.substr(0, 1)), TaskCache::id(d, "zen5"));
+  cache.store().commit(cache_record("legacy/key"));  // an old engine's file, by key
+  // A live run (held runs/ file) needs B; C is being computed (its lock is held).
+  TaskCache live(dir);
+  live.register_needs({kDigestB});
+  const TaskCache::Claim computing = live.claim(kDigestC);
+
+  GcSummary dry = collect_garbage(dir, {kDigestA}, true);
+  EXPECT_EQ(dry.removed, 1);
+  EXPECT_EQ(dry.kept, 3);
+  EXPECT_EQ(dry.held, 2);
+  EXPECT_EQ(TaskStore::ids_in(dir).size(), 4u) << "--dry-run removed something";
+
+  const GcSummary s = collect_garbage(dir, {kDigestA}, false);
+  EXPECT_EQ(s.removed, 1);
+  EXPECT_GT(s.removed_bytes, 0u);
+  const std::vector<std::string> left = TaskStore::ids_in(dir);
+  EXPECT_EQ(std::set<std::string>(left.begin(), left.end()),
+            (std::set<std::string>{TaskCache::id(kDigestA, "zen5"), TaskCache::id(kDigestB, "zen5"),
+                                   TaskCache::id(kDigestC, "zen5")}));
+}
+
+TEST(TaskCache, GcOfNothingNeededEmptiesTheCacheOnceTheRunHasEnded) {
+  const test::ScratchDir scratch;
+  const fs::path dir = scratch.path() / "c";
+  {
+    TaskCache cache(dir);
+    cache.register_needs({kDigestA});
+    cache.store().commit(cache_record("k"), TaskCache::id(kDigestA, "zen5"));
+    EXPECT_EQ(collect_garbage(dir, {}, false).removed, 0) << "removed what a live run needs";
+  }
+  const GcSummary s = collect_garbage(dir, {}, false);
+  EXPECT_EQ(s.removed, 1);
+  EXPECT_TRUE(TaskStore::ids_in(dir).empty());
+  EXPECT_TRUE(fs::is_empty(dir / "runs")) << "an ended run's needs file stays";
+}
+
+TEST(TaskCache, OpeningSweepsAbandonedTemporaryFilesButNotALiveWritersOnes) {
+  const test::ScratchDir scratch;
+  const fs::path dir = scratch.path() / "c";
+  fs::create_directories(dir);
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  const std::string live = "0123456789abcdef.h5." + std::string(host) + "." +
+                           std::to_string(::getpid()) + ".tmp",
+                    dead = "0123456789abcdee.h5." + std::string(host) + ".999999999.tmp",
+                    elsewhere = "0123456789abcded.h5.another-host.1.tmp",
+                    legacy = "0123456789abcdec.h5.tmp";
+  for (const auto& n : {live, dead, elsewhere, legacy}) std::ofstream(dir / n) << "partial";
+  TaskStore store(dir);
+  EXPECT_TRUE(fs::exists(dir / live));
+  EXPECT_FALSE(fs::exists(dir / dead));
+  EXPECT_TRUE(fs::exists(dir / elsewhere));
+  EXPECT_FALSE(fs::exists(dir / legacy));
+}
+
+TEST(TaskCache, VerifyNamesAndRemovesADamagedResult) {
+  const test::ScratchDir scratch;
+  TaskCache cache(scratch.path() / "c");
+  const std::string id = TaskCache::id(kDigestA, "zen5");
+  TaskRecord r = cache_record("grid/s0/sirl/N100/fpe");
+  r.arrays["w"] = TaskRecord::Array::of(std::vector<float>(1000, 1.0f));
+  cache.store().commit(r, id);
+  EXPECT_EQ(cache.store().verify(id, r.key), "");
+  const fs::path file = TaskStore::file_for(cache.dir(), id);
+  {
+    std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(-200, std::ios::end);
+    f.put('\x5a');
+  }
+  const std::string why = cache.store().verify(id, r.key);
+  EXPECT_NE(why.find("grid/s0/sirl/N100/fpe"), std::string::npos) << why;
+  EXPECT_NE(why.find("corrupted"), std::string::npos) << why;
+  EXPECT_FALSE(fs::exists(file));
+  EXPECT_EQ(cache.find(kDigestA, "zen5", true), "");
+}
+
+// ---- digests ----
+
+std::map<std::string, std::string> plan_digests_by_key(const Profile& p) {
+  const Plan plan = make_plan(p);
+  const std::vector<std::string> d = task_digests(plan, p);
+  std::map<std::string, std::string> out;
+  for (size_t i = 0; i < plan.tasks.size(); ++i) out[plan.tasks[i].key] = d[i];
+  return out;
+}
+
+// The keys whose digest differs between two profiles (tasks in both).
+std::set<std::string> digest_changes(const std::string& a, const std::string& b) {
+  const auto da = plan_digests_by_key(parse_profile(a)), db = plan_digests_by_key(parse_profile(b));
+  std::set<std::string> out;
+  for (const auto& [k, d] : da)
+    if (auto it = db.find(k); it != db.end() && it->second != d) out.insert(k);
+  return out;
+}
+
+std::string small_profile_with(const std::string& line) {
+  std::string text = test::kSmallProfile;
+  const size_t at = text.find("[hyper.grid]\n") + std::string("[hyper.grid]\n").size();
+  return text.insert(at, line + "\n");
+}
+
+TEST(TaskDigest, IsDeterministicAndDistinctPerTask) {
+  const auto a = plan_digests_by_key(parse_profile(test::kSmallProfile));
+  EXPECT_EQ(a, plan_digests_by_key(parse_profile(test::kSmallProfile)));
+  std::set<std::string> distinct;
+  for (const auto& [k, d] : a) {
+    EXPECT_EQ(d.size(), 32u);
+    distinct.insert(d);
+  }
+  EXPECT_EQ(distinct.size(), a.size());
+}
+
+TEST(TaskDigest, ATpaSettingChangesTpaCellsOnly) {
+  const std::set<std::string> c =
+      digest_changes(test::kSmallProfile, small_profile_with("\"tpa.lr\" = 0.002"));
+  ASSERT_FALSE(c.empty());
+  for (const auto& k : c) EXPECT_TRUE(k.find("/tpa/") != std::string::npos) << k;
+}
+
+TEST(TaskDigest, APreferenceSettingChangesPreferenceMethodsAndTheirCellsOnly) {
+  const std::set<std::string> c =
+      digest_changes(test::kSmallProfile, small_profile_with("\"pref.epochs\" = 9"));
+  ASSERT_FALSE(c.empty());
+  for (const auto& k : c) EXPECT_TRUE(k.find("/multipref10/") != std::string::npos) << k;
+}
+
+TEST(TaskDigest, TheVaesSettingsChangeTheVaeAndWhatReadsIt) {
+  const std::set<std::string> c =
+      digest_changes(test::kSmallProfile, small_profile_with("\"vae.epochs\" = 9"));
+  EXPECT_TRUE(c.count("grid/s0/vae"));
+  EXPECT_TRUE(c.count("grid/s0/sirl+vae/N100/rep"));
+  EXPECT_TRUE(c.count("grid/s0/sirl+vae/N100/fpe"));
+  EXPECT_FALSE(c.count("grid/s0/sirl/N100/rep"));
+  EXPECT_FALSE(c.count("grid/s0/random/fpe"));
+}
+
+TEST(TaskDigest, TheQueryBudgetChangesWhatLearnsFromAnswers) {
+  std::string text = test::kSmallProfile;
+  text.replace(text.find("similarity = 300"), 16, "similarity = 301");
+  const std::set<std::string> c = digest_changes(test::kSmallProfile, text);
+  EXPECT_TRUE(c.count("grid/s0/sirl/N100/rep"));
+  EXPECT_FALSE(c.count("grid/s0/vae")) << "the VAE learns from no answer";
+}
+
+TEST(TaskDigest, JoiningTheAblationChangesACellsRecordSoItsDigest) {
+  std::string text = test::kSmallProfile;
+  text.replace(text.find("M = [80]"), 8, "M = [10]");
+  const std::set<std::string> c = digest_changes(test::kSmallProfile, text);
+  EXPECT_TRUE(c.count("grid/s0/sirl/N300/tpa/M10/frozen")) << "in_ablation changed";
+  EXPECT_FALSE(c.count("grid/s0/sirl/N300/rep"));
+}
+
+TEST(TaskDigest, AddingASeedChangesNoExistingTask) {
+  std::string text = test::kSmallProfile;
+  text.replace(text.find("seeds = [0, 1, 2]"), 17, "seeds = [0, 1, 2, 3]");
+  EXPECT_TRUE(digest_changes(test::kSmallProfile, text).empty());
+  EXPECT_GT(plan_digests_by_key(parse_profile(text)).size(),
+            plan_digests_by_key(parse_profile(test::kSmallProfile)).size());
+}
+
+}  // namespace
+}  // namespace sirl
