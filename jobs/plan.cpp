@@ -37,8 +37,10 @@ namespace {
 
 // A TPA cell of [tpa] (Fig. 5) or of [ablation] (Fig. 7); a cell both grids share is one task.
 void add_tpa_cell(Plan& plan, const Profile& p, const std::string& env, int64_t seed,
-                  const Variant& v, int64_t N, int64_t M, bool frozen, bool ablation) {
+                  const std::string& point, const Variant& v, int64_t N, int64_t M, bool frozen,
+                  bool ablation) {
   Task t = experiment_cell(TaskKind::tpa, env, seed, v, N);
+  t.hyper = point;
   t.M = M;
   t.frozen = frozen;
   Task& added = plan.tasks[size_t(add_task(plan, p, std::move(t)))];
@@ -47,28 +49,34 @@ void add_tpa_cell(Plan& plan, const Profile& p, const std::string& env, int64_t 
 
 // [robustness]: every noisy teacher's cells, and the main teacher's cells of the same sizes
 // (each axis's reference point; a cell the main grid has already is that task).
-void add_robustness_cells(Plan& plan, const Profile& p, const std::string& env, int64_t seed) {
+void add_robustness_cells(Plan& plan, const Profile& p, const std::string& env, int64_t seed,
+                          const std::string& point) {
   const RobustnessGrid& g = p.robustness;
   if (g.teachers.empty()) return;
+  auto at_point = [&](Task t) {
+    t.hyper = point;
+    return t;
+  };
   TpaGrid frozen_rule;
   frozen_rule.frozen = g.frozen;
   for (const Variant& v : g.methods)
     for (int64_t N : g.N) {
       if (uses_queries(v.method))
-        add_task(plan, p, experiment_cell(TaskKind::fpe, env, seed, v, N));
+        add_task(plan, p, at_point(experiment_cell(TaskKind::fpe, env, seed, v, N)));
       for (int64_t M : g.M)
         for (bool fr : frozen_settings(frozen_rule, v)) {
-          Task t = experiment_cell(TaskKind::tpa, env, seed, v, N);
+          Task t = at_point(experiment_cell(TaskKind::tpa, env, seed, v, N));
           t.M = M;
           t.frozen = fr;
           add_task(plan, p, std::move(t));
         }
       for (const TeacherPoint& tp : g.teachers) {
         if (uses_queries(v.method))
-          add_task(plan, p, experiment_cell(TaskKind::robust_fpe, env, seed, v, N, tp.tag));
+          add_task(plan, p,
+                   at_point(experiment_cell(TaskKind::robust_fpe, env, seed, v, N, tp.tag)));
         for (int64_t M : g.M)
           for (bool fr : frozen_settings(frozen_rule, v)) {
-            Task t = experiment_cell(TaskKind::robust_tpa, env, seed, v, N, tp.tag);
+            Task t = at_point(experiment_cell(TaskKind::robust_tpa, env, seed, v, N, tp.tag));
             t.M = M;
             t.frozen = fr;
             add_task(plan, p, std::move(t));
@@ -83,26 +91,33 @@ Plan make_plan(const Profile& p) {
   Plan plan;
   for (const auto& env : p.envs) {
     const EnvAxes& axes = p.axes.at(env);
-    for (int64_t seed : axes.seeds) {
-      for (const auto& v : p.fpe_methods)
-        for (int64_t N : axes.fpe_N)
-          if (runs_in(p, v, env))
-            add_task(plan, p, experiment_cell(TaskKind::fpe, env, seed, v, N));
-      for (const auto& v : p.tpa.methods)
-        for (int64_t N : runs_in(p, v, env) ? axes.tpa_N : std::vector<int64_t>{})
-          for (int64_t M : axes.tpa_M)
-            for (bool fr : frozen_settings(p.tpa, v))
-              add_tpa_cell(plan, p, env, seed, v, N, M, fr, false);
-      for (Method m : p.ablation_methods)
-        for (bool with_vae : {false, true}) {
-          if (with_vae && !accepts_vae_pretrain(m)) continue;
-          const Variant v{m, with_vae};
-          for (int64_t N : axes.ablation_N)
-            for (int64_t M : axes.ablation_M)
-              for (bool fr : {true, false}) add_tpa_cell(plan, p, env, seed, v, N, M, fr, true);
-        }
-      add_robustness_cells(plan, p, env, seed);
-    }
+    // Every hyper-parameter point ("" = the base) runs the environment's whole grid; add_task
+    // folds a task the point does not change into the base point's.
+    for (const std::string& point : hyper_point_tags(p, env))
+      for (int64_t seed : axes.seeds) {
+        for (const auto& v : p.fpe_methods)
+          for (int64_t N : axes.fpe_N)
+            if (runs_in(p, v, env)) {
+              Task t = experiment_cell(TaskKind::fpe, env, seed, v, N);
+              t.hyper = point;
+              add_task(plan, p, std::move(t));
+            }
+        for (const auto& v : p.tpa.methods)
+          for (int64_t N : runs_in(p, v, env) ? axes.tpa_N : std::vector<int64_t>{})
+            for (int64_t M : axes.tpa_M)
+              for (bool fr : frozen_settings(p.tpa, v))
+                add_tpa_cell(plan, p, env, seed, point, v, N, M, fr, false);
+        for (Method m : p.ablation_methods)
+          for (bool with_vae : {false, true}) {
+            if (with_vae && !accepts_vae_pretrain(m)) continue;
+            const Variant v{m, with_vae};
+            for (int64_t N : axes.ablation_N)
+              for (int64_t M : axes.ablation_M)
+                for (bool fr : {true, false})
+                  add_tpa_cell(plan, p, env, seed, point, v, N, M, fr, true);
+          }
+        add_robustness_cells(plan, p, env, seed, point);
+      }
   }
   add_study_tasks(plan, p);
   return plan;

@@ -42,8 +42,16 @@ struct Task {
   // The teacher who answered the queries: "" = the profile's main teacher, else a noisy
   // teacher's tag ("beta=1"; Profile::robustness). Only for cells that learn from answers.
   std::string teacher;
+  // The hyper-parameter point it runs at: "" = the environment's base point, else a tag of
+  // Profile::hyper_points ("sirl.epochs=300"). add_task keeps it only on a task whose settings
+  // or inputs the point changes (a φ is shared by every point of a "tpa.lr" axis), and its key
+  // then carries it after the seed: "grid/s0/sirl.epochs=300/sirl/N100/rep".
+  std::string hyper;
   std::vector<int> deps;  // indices into Plan::tasks (set by add_task)
-  double flops = 0;       // estimated floating-point operations executed (add_task)
+  // The key of the input of each kind it reads (set by add_task): a runner finds its φ, VAE or
+  // active queries here, whichever point they were planned at.
+  std::map<TaskKind, std::string> input_keys;
+  double flops = 0;  // estimated floating-point operations executed (add_task)
   // Every epoch of every schedule: more than `flops` where the engine ends training early by
   // rule (SIRL's exact skip, converged reward heads; jobs/expected_epochs.h).
   double protocol_flops = 0;

@@ -579,12 +579,50 @@ void parse_study(Reader& r, const toml::table& root, Profile& p) {
   }
 }
 
-// The paper's hyper-parameters per environment, then [hyper.all] and [hyper.<env>] overrides.
+// Whether a [hyper] value is an axis: a list of values for a key that takes one (a list of
+// lists for a width list).
+bool is_hyper_axis(const toml::node& v, const std::string& key) {
+  const auto* a = v.as_array();
+  if (!a) return false;
+  HyperType want{};
+  try {
+    want = hyper_type(key);
+  } catch (const std::invalid_argument&) {
+    return false;  // hyper_text names the unknown key
+  }
+  return want != HyperType::integer_list || (!a->empty() && (*a)[0].is_array());
+}
+
+// An axis's values as the texts set_hyper parses; refuses an empty list and a repeated value.
+std::vector<std::string> hyper_axis_values(const Reader& r, const toml::node& v,
+                                           const std::string& key) {
+  std::vector<std::string> out;
+  for (auto&& e : *v.as_array()) {
+    std::string text = hyper_text(r, e, key);  // fails with file:line itself
+    if (std::find(out.begin(), out.end(), text) != out.end())
+      r.fail(&e, key + ": the value " + text + " is listed twice");
+    out.push_back(std::move(text));
+  }
+  if (out.empty()) r.fail(&v, key + ": an axis needs at least one value");
+  return out;
+}
+
+struct HyperAxis {
+  std::string key;
+  std::vector<std::string> values;
+  const toml::node* node;
+};
+
+// The paper's hyper-parameters per environment, then [hyper.all] and [hyper.<env>] overrides. A
+// key given a list of values is an axis: the environment's cells run at every combination of its
+// axes' values, the first value of each being the base point (p.hyper, tasks without a point).
 void parse_hyper(Reader& r, const toml::table& root, Profile& p) {
   for (const auto& env : p.envs) {
     p.hyper[env] = paper_hyper(env);
     p.hyper[env].precision = p.precision;
   }
+  // Per env: [hyper.all]'s axes then [hyper.<env>]'s, each table's by key name (toml++ order).
+  std::map<std::string, std::vector<HyperAxis>> axes;
   if (const auto* hy = r.table(root, "hyper", false)) {
     std::set<std::string> allowed{"all"};
     for (const auto& e : p.envs) allowed.insert(e);
@@ -598,6 +636,12 @@ void parse_hyper(Reader& r, const toml::table& root, Profile& p) {
         const std::string key(k.str());
         for (auto& [env, h] : p.hyper) {
           if (scope != "all" && env != scope) continue;
+          auto& env_axes = axes[env];
+          std::erase_if(env_axes, [&](const HyperAxis& a) { return a.key == key; });
+          if (is_hyper_axis(v, key)) {
+            env_axes.push_back({key, hyper_axis_values(r, v, key), &v});
+            continue;
+          }
           const std::string text = hyper_text(r, v, key);  // fails with file:line itself
           try {
             set_hyper(h, key, text);
@@ -607,7 +651,45 @@ void parse_hyper(Reader& r, const toml::table& root, Profile& p) {
         }
       }
     }
-    for (auto& [env, h] : p.hyper) {
+    // Every combination of an environment's axes, the first values' being the base.
+    for (auto& [env, env_axes] : axes) {
+      if (env_axes.empty()) continue;
+      std::vector<std::vector<std::pair<std::string, std::string>>> points{{}};
+      for (const HyperAxis& a : env_axes) {
+        std::vector<std::vector<std::pair<std::string, std::string>>> next;
+        for (const auto& pt : points)
+          for (const std::string& value : a.values) {
+            next.push_back(pt);
+            next.back().push_back({a.key, value});
+          }
+        points = std::move(next);
+      }
+      if (points.size() > 256)
+        r.fail(env_axes.back().node, "[hyper." + env + "]: " + std::to_string(points.size()) +
+                                         " combinations of hyper-parameter values (at most 256)");
+      const Hyper base = p.hyper[env];
+      for (size_t i = 0; i < points.size(); ++i) {
+        HyperPoint hp{"", base};
+        for (const auto& [key, value] : points[i]) {
+          hp.tag += (hp.tag.empty() ? "" : ";") + key + "=" + value;
+          try {
+            set_hyper(hp.hyper, key, value);
+          } catch (const std::invalid_argument& e) {
+            const auto it = std::find_if(env_axes.begin(), env_axes.end(),
+                                         [&](const HyperAxis& a) { return a.key == key; });
+            r.fail(it->node, e.what());
+          }
+        }
+        if (i == 0) p.hyper[env] = hp.hyper;
+        p.hyper_points[env].push_back(std::move(hp));
+      }
+    }
+    std::vector<std::pair<std::string, Hyper*>> all;  // every point's values
+    for (auto& [env, h] : p.hyper) all.push_back({env, &h});
+    for (auto& [env, pts] : p.hyper_points)
+      for (auto& pt : pts) all.push_back({env, &pt.hyper});
+    for (auto& [env, hp] : all) {
+      const Hyper& h = *hp;
       try {
         validate(h);
       } catch (const std::invalid_argument& e) {
@@ -745,10 +827,38 @@ const QueryBundleConfig& queries_for(const Profile& p, const std::string& teache
   throw std::invalid_argument("profile " + p.name + " has no teacher '" + teacher + "'");
 }
 
+std::vector<std::string> hyper_point_tags(const Profile& p, const std::string& env) {
+  std::vector<std::string> tags{""};
+  if (auto it = p.hyper_points.find(env); it != p.hyper_points.end())
+    for (size_t i = 1; i < it->second.size(); ++i) tags.push_back(it->second[i].tag);
+  return tags;
+}
+
+std::string hyper_points_text(const Profile& p) {
+  std::string s;
+  for (const auto& [env, pts] : p.hyper_points) {
+    s += env;
+    for (const HyperPoint& hp : pts) s += "\t" + hp.tag;
+    s += "\n";
+  }
+  return s;
+}
+
+const Hyper& hyper_at(const Profile& p, const std::string& env, const std::string& tag) {
+  if (tag.empty()) return p.hyper.at(env);
+  if (auto it = p.hyper_points.find(env); it != p.hyper_points.end())
+    for (const HyperPoint& hp : it->second)
+      if (hp.tag == tag) return hp.hyper;
+  throw std::invalid_argument("no hyper-parameter point '" + tag + "' in environment " + env);
+}
+
 bool runs_bf16(const Profile& p) {
   if (p.precision == "bf16") return true;
   for (const auto& [env, h] : p.hyper)
     if (bf16_products(h)) return true;
+  for (const auto& [env, pts] : p.hyper_points)
+    for (const HyperPoint& hp : pts)
+      if (bf16_products(hp.hyper)) return true;
   return false;
 }
 

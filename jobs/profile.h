@@ -103,6 +103,16 @@ struct ExternalMethod {
   std::vector<std::string> envs;  // the environments it has embeddings for (default: all)
 };
 
+// One combination of an environment's hyper-parameter axes ([hyper.<env>] keys given as lists:
+// "sirl.epochs" = [100, 300]): its tag ("sirl.epochs=300", axes joined by ";", in the order the
+// profile gives them) and its values. The first combination (each axis's first value) is the
+// base point: Profile::hyper holds it and its tasks carry no point (the keys and digests a
+// profile without the axes gives them).
+struct HyperPoint {
+  std::string tag;
+  Hyper hyper;
+};
+
 struct Profile {
   std::string path, text;  // where it came from, and its exact text (recorded in results)
   std::string name, description;
@@ -116,6 +126,8 @@ struct Profile {
   std::vector<Method> ablation_methods;
   std::vector<int64_t> ablation_N, ablation_M;
   std::map<std::string, Hyper> hyper;  // per env: the paper's values with this profile's overrides
+  // Per env with hyper-parameter axes: every combination, the base point first (absent: none).
+  std::map<std::string, std::vector<HyperPoint>> hyper_points;
   // Top-level `precision` ("fp32" or "bf16"): every network of the run, the study's included;
   // [hyper.<env>] precision may still set one environment apart.
   std::string precision = "fp32";
@@ -127,6 +139,15 @@ struct Profile {
   std::map<std::string, ActivePlan> active;  // per env (every env has one)
   std::vector<ExternalMethod> external;
 };
+
+// The hyper-parameter points a planner expands environment `env`'s cells over: "" (the base
+// point) first, then the tags of the other combinations of its axes.
+std::vector<std::string> hyper_point_tags(const Profile& p, const std::string& env);
+// RunInfo::hyper_points for the profile: "<env>\t<base tag>\t<tag>…" per environment with axes.
+std::string hyper_points_text(const Profile& p);
+// The values of point `tag` of environment `env` ("" = the base point, Profile::hyper). Throws
+// std::invalid_argument for an unknown tag.
+const Hyper& hyper_at(const Profile& p, const std::string& env, const std::string& tag);
 
 // Whether variant v has cells in environment env: every method has, but an external method only
 // in the environments its [external.<name>] lists.

@@ -73,6 +73,7 @@ size_t write_plan_records(const std::string& out, const Profile& p, RunInfo info
     if (auto it = all.find(t.key); it != all.end()) records.push_back(it->second);
   info.tasks_total = int64_t(plan.tasks.size());
   info.tasks_done = int64_t(records.size());
+  info.hyper_points = hyper_points_text(p);
   info.complete = records.size() == plan.tasks.size();
   RunContext ctx(p, [](const std::string& k) -> TaskRecord {
     throw std::logic_error("writing gathered records reads no task (" + k + ")");
@@ -531,6 +532,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   info.cpu_class = cpu_class();
   info.libraries = library_versions_text();
   info.kernel_paths = kernel_paths();
+  info.hyper_points = hyper_points_text(p);
   // bf16 products run natively or emulated: different bits, so a different class.
   if (runs_bf16(p)) info.cpu_class += std::string(", bf16 ") + bf16_backend();
   info.roof_fp32_gflops = fp32_roof_gflops_per_core();

@@ -72,7 +72,7 @@ struct EnvSizes {
 };
 EnvSizes env_sizes(const Task& t, const Profile& p) {
   const EnvSpec& e = env_spec(t.env);
-  const Hyper& h = p.hyper.at(t.env);
+  const Hyper& h = hyper_at(p, t.env, t.hyper);
   const int in = e.input_dim(p.data);
   return {h, in, e.trajectories(p.data), phi_shape(in, h)};
 }
@@ -124,6 +124,7 @@ Task vae_input(const Task& t) {
   v.kind = TaskKind::vae;
   v.env = t.env;
   v.seed = t.seed;
+  v.hyper = t.hyper;
   return v;
 }
 std::string active_key(const std::string& env, int64_t seed, Selection rule,
@@ -137,6 +138,7 @@ Task active_input(const Task& t) {
   a.env = t.env;
   a.seed = t.seed;
   a.teacher = t.teacher;
+  a.hyper = t.hyper;
   a.variant = Variant{Method::sirl, false, t.variant.selection};
   return a;
 }
@@ -145,7 +147,9 @@ bool reads_active(const Variant& v) {
 }
 
 Task rep_input(const Task& t) {
-  return experiment_cell(TaskKind::rep, t.env, t.seed, t.variant, t.N, t.teacher);
+  Task r = experiment_cell(TaskKind::rep, t.env, t.seed, t.variant, t.N, t.teacher);
+  r.hyper = t.hyper;
+  return r;
 }
 std::string input_rep_key(const Task& t) {
   return rep_key(t.env, t.seed, t.variant, t.N, t.teacher);
@@ -206,7 +210,7 @@ void vae_cost(Task& t, const Profile& p) {
 
 void run_vae(const Task& t, RunContext& ctx, TaskRecord& r) {
   const auto checkpoint = ctx.checkpointer(t.key);
-  const VaeModel v = train_vae(ctx.dataset(t.env), ctx.profile().hyper.at(t.env),
+  const VaeModel v = train_vae(ctx.dataset(t.env), hyper_at(ctx.profile(), t.env, t.hyper),
                                task_seed(t.env, t.seed, "vae"), t.threads, checkpoint.get());
   put_vae(v, r);
   r.num["flops"] = v.train_flops;
@@ -277,17 +281,17 @@ void run_external_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
 
 void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
   if (t.variant.method == Method::external) return run_external_rep(t, ctx, r);
-  const Hyper& h = ctx.profile().hyper.at(t.env);
+  const Hyper& h = hyper_at(ctx.profile(), t.env, t.hyper);
   const Dataset& d = ctx.dataset(t.env);
   std::shared_ptr<const VaeModel> vae;
-  if (reads_vae(t.variant)) vae = ctx.vae(vae_key(t.env, t.seed));
+  if (reads_vae(t.variant)) vae = ctx.vae(t.input_keys.at(TaskKind::vae));
   const auto checkpoint = ctx.checkpointer(t.key);
   MethodConfig c{t.variant.method, t.N, t.variant.vae, h, t.threads, checkpoint.get()};
   const QueryBundle* bundle = &ctx.bundle(t.env, t.seed, t.teacher);
   QueryBundle chosen;  // an active variant: the same bundle with the triplets it chose
   if (reads_active(t.variant)) {
     chosen = *bundle;
-    chosen.similarity = *ctx.triplets(active_key(t.env, t.seed, t.variant.selection, t.teacher));
+    chosen.similarity = *ctx.triplets(t.input_keys.at(TaskKind::active));
     bundle = &chosen;
   }
   // SIRL's φ starts from the same initialisation whichever way its triplets were chosen.
@@ -325,7 +329,7 @@ void fpe_cost(Task& t, const Profile& p) {
 // FPE's labelled trajectories are the true features whoever the teacher (its split is drawn
 // from a stream no teacher touches, so every teacher's φ is probed on the same rows).
 void run_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const auto rep = ctx.representation(input_rep_key(t));
+  const auto rep = ctx.representation(t.input_keys.at(TaskKind::rep));
   const FpeSplit& split = ctx.bundle(t.env, t.seed).fpe;
   const FpeResult f = evaluate_fpe(*rep, ctx.dataset(t.env), split);
   r.num["fpe"] = f.fpe;
@@ -374,11 +378,12 @@ void record_heads_convergence(const TpaResult& res, TaskRecord& r) {
 
 void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   const auto checkpoint = ctx.checkpointer(t.key);
-  const TpaResult res = evaluate_tpa(
-      *ctx.representation(input_rep_key(t)), ctx.dataset(t.env),
-      ctx.bundle(t.env, t.seed, t.teacher).tpa,
-      TpaConfig{t.M, t.frozen, ctx.profile().hyper.at(t.env), t.threads, checkpoint.get()},
-      task_seed(t.env, t.seed, "tpa"));
+  const TpaResult res =
+      evaluate_tpa(*ctx.representation(t.input_keys.at(TaskKind::rep)), ctx.dataset(t.env),
+                   ctx.bundle(t.env, t.seed, t.teacher).tpa,
+                   TpaConfig{t.M, t.frozen, hyper_at(ctx.profile(), t.env, t.hyper), t.threads,
+                             checkpoint.get()},
+                   task_seed(t.env, t.seed, "tpa"));
   r.num["tpa"] = res.mean;
   r.num["tpa_std"] = res.stddev;
   r.num["flops"] = res.train_flops;
@@ -397,7 +402,8 @@ void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   r.arrays["head_epochs"] =
       TaskRecord::Array::of(std::vector<float>(res.head_epochs.begin(), res.head_epochs.end()));
   r.text["stop"] =  // the rule this cell's heads ran under
-      tpa_stop_rule(ctx.profile().hyper.at(t.env), t.frozen).converged ? "converged" : "fixed";
+      tpa_stop_rule(hyper_at(ctx.profile(), t.env, t.hyper), t.frozen).converged ? "converged"
+                                                                                 : "fixed";
   record_heads_convergence(res, r);
   if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
 }
@@ -418,7 +424,7 @@ ActiveConfig active_config(const Task& t, const Profile& p) {
   c.batch = a.batch;
   c.round_epochs = a.round_epochs;
   c.mu = a.mu;
-  c.hyper = p.hyper.at(t.env);
+  c.hyper = hyper_at(p, t.env, t.hyper);
   return c;
 }
 
@@ -470,7 +476,8 @@ std::string tpa_cell_key(const Task& t) {
 // ---- settings: what each kind reads of the profile (jobs/task_settings.h) ----
 
 std::string vae_settings(const Task& t, const Profile& p) {
-  return describe_data(p, t.env) + hyper_lines(p.hyper.at(t.env), {"phi.", "vae.", "precision"});
+  return describe_data(p, t.env) +
+         hyper_lines(hyper_at(p, t.env, t.hyper), {"phi.", "vae.", "precision"});
 }
 
 std::string rep_settings(const Task& t, const Profile& p) {
@@ -478,7 +485,7 @@ std::string rep_settings(const Task& t, const Profile& p) {
     return describe_data(p, t.env) + describe_external(external_method(p, t.variant.external));
   // Every φ is handed its seed's query bundle (methods that ask nothing ignore it).
   return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
-         rep_hyper(t.variant, p.hyper.at(t.env));
+         rep_hyper(t.variant, hyper_at(p, t.env, t.hyper));
 }
 
 // The probe's split comes from the main teacher's bundle; a robustness row also states its own
@@ -490,13 +497,13 @@ std::string fpe_settings(const Task& t, const Profile& p) {
 
 std::string tpa_settings(const Task& t, const Profile& p) {
   return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
-         hyper_lines(p.hyper.at(t.env), {"phi.", "tpa.", "precision"});
+         hyper_lines(hyper_at(p, t.env, t.hyper), {"phi.", "tpa.", "precision"});
 }
 
 std::string active_settings(const Task& t, const Profile& p) {
   return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
          describe_active(p.active.at(t.env)) +
-         hyper_lines(p.hyper.at(t.env), {"phi.", "sirl.", "precision"});
+         hyper_lines(hyper_at(p, t.env, t.hyper), {"phi.", "sirl.", "precision"});
 }
 
 using C = H5Table::Column;
@@ -599,7 +606,8 @@ TaskKindSpec fpe_kind() {
                  {"fpe", C::Double, "fpe"},
                  {"train_mse", C::Double, "train_mse"},
                  {"selection", C::String, "selection"},
-                 {"teacher", C::String, "teacher"}}},
+                 {"teacher", C::String, "teacher"},
+                 {"hyper_point", C::String, "hyper_point", true}}},
   };
 }
 
@@ -634,7 +642,8 @@ TaskKindSpec tpa_kind() {
                  {"in_ablation", C::Int, "in_ablation"},
                  {"selection", C::String, "selection"},
                  {"teacher", C::String, "teacher"},
-                 {"best_mode", C::Int, "best_mode"}}},
+                 {"best_mode", C::Int, "best_mode"},
+                 {"hyper_point", C::String, "hyper_point", true}}},
   };
 }
 

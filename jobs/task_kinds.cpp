@@ -14,8 +14,8 @@ const std::vector<TaskKindSpec>& task_kinds() {
         study_rep_kind(),  study_heldout_kind(), study_tpa_kind(), study_simulated_kind(),
         robust_fpe_kind(), robust_tpa_kind(),    active_kind()};
     for (size_t i = 0; i < k.size(); ++i)
-      if (int(k[i].kind) != int(i) || !k[i].key || !k[i].inputs || !k[i].settings || !k[i].cost || !k[i].rate ||
-          !k[i].shard_group || !k[i].describe || !k[i].run)
+      if (int(k[i].kind) != int(i) || !k[i].key || !k[i].inputs || !k[i].settings || !k[i].cost ||
+          !k[i].rate || !k[i].shard_group || !k[i].describe || !k[i].run)
         throw std::logic_error(std::string("task kind ") + k[i].name +
                                ": out of TaskKind order or a function missing");
     return k;
@@ -34,14 +34,33 @@ const char* kind_name(TaskKind k) {
 void describe_env_and_seed(const Task& t, TaskRecord& r) {
   r.text["env"] = t.env;
   r.num["seed"] = double(t.seed);
+  if (!t.hyper.empty()) r.text["hyper_point"] = t.hyper;  // base-point records stay as they were
 }
 
 int add_task(Plan& plan, const Profile& p, Task t) {
   const TaskKindSpec& kind = task_kind(t.kind);
-  t.key = kind.key(t);
-  if (auto it = plan.index.find(t.key); it != plan.index.end()) return it->second;
   t.deps.clear();
-  for (Task& in : kind.inputs(t, p)) t.deps.push_back(add_task(plan, p, std::move(in)));
+  t.input_keys.clear();
+  bool input_at_point = false;
+  for (Task& in : kind.inputs(t, p)) {
+    const int d = add_task(plan, p, std::move(in));
+    const Task& dep = plan.tasks[size_t(d)];
+    t.deps.push_back(d);
+    t.input_keys[dep.kind] = dep.key;
+    input_at_point = input_at_point || !dep.hyper.empty();
+  }
+  // A hyper-parameter point it does not read (and no input of it read) is the base task.
+  if (!t.hyper.empty() && !input_at_point) {
+    Task base = t;
+    base.hyper.clear();
+    if (kind.settings(t, p) == kind.settings(base, p)) t.hyper.clear();
+  }
+  t.key = kind.key(t);
+  if (!t.hyper.empty()) {  // after "<env>/s<seed>/"
+    const size_t at = t.key.find('/', t.key.find('/') + 1);
+    t.key.insert(at + 1, t.hyper + "/");
+  }
+  if (auto it = plan.index.find(t.key); it != plan.index.end()) return it->second;
   kind.cost(t, p);
   if (t.protocol_flops < t.flops) t.protocol_flops = t.flops;  // no early end expected
   const int i = int(plan.tasks.size());

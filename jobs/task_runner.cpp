@@ -133,7 +133,7 @@ bool runs_bf16_products(const Task& t, const Profile& p) {
   const bool study = t.kind == TaskKind::study_rep || t.kind == TaskKind::study_heldout ||
                      t.kind == TaskKind::study_tpa || t.kind == TaskKind::study_simulated;
   const bool probe = t.kind == TaskKind::fpe || t.kind == TaskKind::robust_fpe;
-  return !probe && (study ? p.precision : precision_of(p, t.env)) == "bf16";
+  return !probe && (study ? p.precision : hyper_at(p, t.env, t.hyper).precision) == "bf16";
 }
 
 std::string task_cpu_class(const Task& t, const Profile& p) {

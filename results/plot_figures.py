@@ -30,6 +30,7 @@ sys.path.insert(1, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import claims as claims_stats  # noqa: E402
 import sirl_bench  # noqa: E402
 import plot_beyond  # noqa: E402
+import plot_hyper  # noqa: E402
 
 # One colour and one label per method variant, shared by every figure.
 STYLE = {
@@ -85,9 +86,15 @@ TABLES = ("fpe", "tpa", "timings", "training", "vae_latents", "robust_fpe", "rob
 
 
 def load(path):
-    """The file through sirl_bench (typed tables; N and M are <NA> where a cell has none)."""
+    """The file through sirl_bench (typed tables; N and M are <NA> where a cell has none). The
+    cell tables hold the base point of any hyper-parameter axis only (the paper's figures and
+    claims); every point's rows are in t["all_points"]."""
     res = sirl_bench.open(path)
     t = {k: res.tables[k] if k in res.tables else pd.DataFrame() for k in TABLES}
+    t["all_points"] = {k: t[k] for k in ("fpe", "tpa")}
+    for k in ("fpe", "tpa", "training", "robust_fpe", "robust_tpa"):
+        if "hyper_point" in t[k]:
+            t[k] = t[k][t[k].hyper_point == ""]
     return res, t
 
 
@@ -740,6 +747,7 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
     L += plot_beyond.robustness_lines(fpe, tpa, t["robust_fpe"], t["robust_tpa"],
                                       beyond.get("robustness", []))
     L += external_lines(fpe, tpa, envs)
+    L += beyond.get("hyper", [])
     L += ["", "## Learning curves and convergence", ""]
     if os.path.exists(os.path.join(out, "fig_learning_curves.png")):
         L += ["![Learning curves](fig_learning_curves.png)", ""]
@@ -878,6 +886,9 @@ def main():
     beyond = {"active": plot_beyond.plot_active(t["fpe"], t["tpa"], a.out, notes, DRAWN),
               "robustness": plot_beyond.plot_robustness(t["fpe"], t["tpa"], t["robust_fpe"],
                                                         t["robust_tpa"], a.out, notes, DRAWN)}
+    beyond["hyper"] = plot_hyper.plot_hyper(t["all_points"]["fpe"], t["all_points"]["tpa"],
+                                            res.hyper_points, STYLE, ORDER, mean_ci, save, a.out,
+                                            notes, DRAWN)
     report(res, t, envs, a.out, notes, fig3_key, beyond)
     with open(os.path.join(a.out, "figures.json"), "w") as fh:
         json.dump(DRAWN, fh, indent=1)

@@ -46,7 +46,14 @@ H5Table cell_table(const std::vector<TaskRecord>& records, const CellTableSpec& 
     if (r.kind != spec.kind) continue;
     for (size_t k = 0; k < spec.columns.size(); ++k) {
       const TableColumn& c = spec.columns[k];
-      if (c.type == C::String) {
+      if (c.optional && !r.text.count(c.key) && !r.num.count(c.key)) {
+        if (c.type == C::String)
+          t.columns[k].strings.push_back("");
+        else if (c.type == C::Int)
+          t.columns[k].ints.push_back(0);
+        else
+          t.columns[k].doubles.push_back(0);
+      } else if (c.type == C::String) {
         t.columns[k].strings.push_back(need_text(r, c.key));
       } else if (c.type == C::Int) {
         t.columns[k].ints.push_back(int64_t(need_num(r, c.key)));
@@ -86,14 +93,16 @@ std::pair<int64_t, double> final_loss_of(const TaskRecord& r) {
 // a TPA cell is in the paper's best mode (Fig. 5: SIRL frozen, every other method unfrozen; 0 for
 // a training that is not a TPA cell).
 struct CellFieldColumns {
-  H5Table::Column *method, *vae, *selection, *best_mode;
+  H5Table::Column *method, *vae, *selection, *best_mode, *hyper_point;
   explicit CellFieldColumns(H5Table& t)
       : method(&t.add("method", C::String)),
         vae(&t.add("vae", C::Int)),
         selection(&t.add("selection", C::String)),
-        best_mode(&t.add("best_mode", C::Int)) {}
+        best_mode(&t.add("best_mode", C::Int)),
+        hyper_point(&t.add("hyper_point", C::String)) {}
   void push(const TaskRecord& r) {
-    auto m = r.text.find("method"), s = r.text.find("selection");
+    auto m = r.text.find("method"), s = r.text.find("selection"), h = r.text.find("hyper_point");
+    hyper_point->strings.push_back(h != r.text.end() ? h->second : "");  // "" = the base point
     // A VAE record trains the VAE baseline's encoder: its method is "vae".
     method->strings.push_back(m != r.text.end() ? m->second : r.kind == "vae" ? "vae" : "");
     vae->ints.push_back(int64_t(num_or(r, "vae", 0)));
@@ -347,6 +356,7 @@ void write_results_file(const std::string& path, const RunInfo& info,
       f.set_attr("/", "profile_name", info.profile_name);
       f.set_attr("/", "profile_text", info.profile_text);
       f.set_attr("/", "engine_version", info.engine_version);
+      if (!info.hyper_points.empty()) f.set_attr("/", "hyper_points", info.hyper_points);
       f.set_attr("/", "git_commit", info.git_commit);
       f.set_attr("/", "host", info.host);
       f.set_attr("/", "cpu_class", info.cpu_class);
@@ -488,6 +498,7 @@ RunInfo read_run_info(const std::string& path) {
   if (f.has_attr("/", "cpu_class")) i.cpu_class = f.attr_string("/", "cpu_class");
   if (f.has_attr("/", "libraries")) i.libraries = f.attr_string("/", "libraries");
   if (f.has_attr("/", "kernel_paths")) i.kernel_paths = f.attr_string("/", "kernel_paths");
+  if (f.has_attr("/", "hyper_points")) i.hyper_points = f.attr_string("/", "hyper_points");
   if (f.has_attr("/", "roof_fp32_gflops_per_core"))
     i.roof_fp32_gflops = f.attr_double("/", "roof_fp32_gflops_per_core");
   if (f.has_attr("/", "roof_bf16_gflops_per_core"))

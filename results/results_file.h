@@ -52,6 +52,10 @@ struct RunInfo {
   std::string libraries;  // compiler and library versions ("" in files before engine 0.8.0)
   std::string kernel_paths;  // the instruction sets and backends that ran (kernels/cpu_class.h;
                              // "" in files before engine 0.9.0)
+  // The hyper-parameter points of environments with axes ([hyper.<env>] lists), one line per
+  // environment: "<env>\t<base tag>\t<tag>…"; a table row's hyper_point "" is the base tag. ""
+  // when the profile has no axis.
+  std::string hyper_points;
   std::string started, finished;  // ISO 8601 UTC
   std::string shard;              // "i/n" for a shard file, "" for a whole run
   int64_t threads = 0, tasks_total = 0, tasks_done = 0;
@@ -68,6 +72,7 @@ struct TableColumn {
   const char* name;
   H5Table::Column::Type type;
   const char* key;
+  bool optional = false;  // a record without the field gives "" (or 0) instead of an error
 };
 struct CellTableSpec {
   std::string name;  // the table: /tables/<name>, <name>.csv

@@ -3,7 +3,8 @@
 command, found from its --help, refuses "010", "0x10", "+3", " 3", "nan" (and integers also
 "inf", "1e3", "30.0"; reals "inf" unless their help says inf means something) with exit code 2
 and one line naming the option and the value; profile hyper-parameters refuse a value of the
-wrong TOML type (30.0, "30" or [30] for an integer key; "0.5", nan or inf for a real one).
+wrong TOML type (30.0 or "30" for an integer key, also as a value of an axis: [30, 30.5];
+"0.5", nan or inf for a real one), and a list of them is an axis ([30, 60]).
 """
 import os
 import re
@@ -69,12 +70,13 @@ def main():
             failures.append(f"sirl {' '.join(path)} --beta inf refused: {err.strip()[:200]}")
 
     # Profile hyper-parameters: the TOML type must be the key's.
-    cases = {"sirl.epochs": (["30.0", '"30"', "[30]", "true"], "30"),
-             "tpa.stop_min_epochs": (["100.5", "[100]"], "100"),
-             "sirl.lr": (['"0.5"', "nan", "inf", "[1]"], "0.5"),
-             "vae.standardize": (["1", '"true"'], "false"),
-             "phi.hidden": (['"64,64"', "[64.0]"], "[64, 64]"),
-             "tpa.stop": (["1"], '"converged"')}
+    # (A list of values is an axis, each value checked as the key's: "[30, 60]" is good.)
+    cases = {"sirl.epochs": (["30.0", '"30"', "[30, 30.5]", "true", "[[30]]"], "[30, 60]"),
+             "tpa.stop_min_epochs": (["100.5", '[100, "200"]'], "100"),
+             "sirl.lr": (['"0.5"', "nan", "inf", "[1, nan]"], "0.5"),
+             "vae.standardize": (["1", '"true"', "[true, 1]"], "false"),
+             "phi.hidden": (['"64,64"', "[64.0]", "[[64], [64.5]]"], "[64, 64]"),
+             "tpa.stop": (["1", '["fixed", 1]'], '"converged"')}
     with tempfile.TemporaryDirectory() as tmp:
         prof = os.path.join(tmp, "p.toml")
         for key, (bad, good) in cases.items():

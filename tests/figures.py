@@ -135,11 +135,8 @@ with tempfile.TemporaryDirectory() as tmp:
     # JacoRobot runs its ablation at another M than the top-level [ablation]: Fig. 7 must draw
     # the cells the file holds (16 + 4 bars: four methods × 4 configurations, VAE and Random × 2).
     over = os.path.join(tmp, "override.toml")
-    with open(SMOKE) as f:
-        text = f.read()
-    assert "trajectories = 500\n" in text
     with open(over, "w") as f:
-        f.write(text.replace("trajectories = 500\n", "trajectories = 500\nablation_M = [80]\n"))
+        f.write(f'extends = "{SMOKE}"\n[jaco]\nablation_M = [80]\n')
     ov = os.path.join(tmp, "override.h5")
     sh(SIRL, "run", over, "--out", ov, "--quiet")
     sh("/usr/bin/python3", PLOT, ov, "--out", os.path.join(tmp, "ov"))

@@ -15,6 +15,7 @@
   removes the rest.
 """
 import glob
+import json
 import os
 import shutil
 import subprocess
@@ -195,6 +196,61 @@ def main():
                  f"{sorted(new ^ changed)[:5]} differ from the expected {len(changed)} tasks")
         compare_files(os.path.join(tmp, "epochs.h5"), fresh(tmp, "epochs", SMOKE, *epochs))
         print(f"incremental_runs: grid sirl.epochs: {len(changed)} of {len(deps)} tasks computed")
+
+        # 3b. Both values as a hyper-parameter axis: the base point is the plain run's (cached);
+        # the other point's tasks (keys of their own) are computed once, with the bits the
+        # changed run gave the same cells.
+        axis = ["--set", 'hyper.grid."sirl.epochs"=[30,31]']
+        out = os.path.join(tmp, "axis.h5")
+        p = run("run", SMOKE, *axis, "--out", out, "--cache", cache)
+        if computed(p) != (n_tasks, len(changed), 0):
+            fail(f"an axis of sirl.epochs 30 (cached) and 31 computed {computed(p)}, not the "
+                 f"{len(changed)} tasks of the new point")
+        if computed(run("run", SMOKE, *axis, "--out", out, "--cache", cache))[1] != 0:
+            fail("a finished axis run recomputed tasks")
+        point = "sirl.epochs=31"
+        with h5py.File(out, "r") as f, h5py.File(base, "r") as b, \
+                h5py.File(os.path.join(tmp, "epochs.h5"), "r") as e:
+            if f.attrs["hyper_points"] != "grid\tsirl.epochs=30\tsirl.epochs=31\n":
+                fail(f"/@hyper_points is {f.attrs['hyper_points']!r}")
+            for name in ("fpe", "tpa"):
+                t = f["tables"][name][()]
+                at_base = t[t["hyper_point"] == b""]
+                if not all(same(at_base[c], b["tables"][name][()][c]) for c in b["tables"][name].dtype.names):
+                    fail(f"/tables/{name}: the base point's rows are not the plain run's")
+                own = t[t["hyper_point"] == point.encode()]
+                want = e["tables"][name][()]
+                keyed = {tuple(r[c] for c in ("env", "variant", "N", "seed") + (("M", "frozen") if name == "tpa" else ())): r
+                         for r in want}
+                if len(own) == 0:
+                    fail(f"/tables/{name} has no row at {point}")
+                for r in own:
+                    k = tuple(r[c] for c in ("env", "variant", "N", "seed") + (("M", "frozen") if name == "tpa" else ()))
+                    if k not in keyed or not same(r[name], keyed[k][name]):
+                        fail(f"/tables/{name} {k} at {point} is not the sirl.epochs=31 run's")
+        # The figures: the paper's from the base point only (as the plain run's), and the axis's
+        # own figure with the changed run's values at the point.
+        figs = {}
+        for name, path in (("axis", out), ("base", base), ("epochs", os.path.join(tmp, "epochs.h5"))):
+            d = os.path.join(tmp, "figs-" + name)
+            p = subprocess.run(["/usr/bin/python3", os.path.join(SRC, "results", "plot_figures.py"),
+                                path, "--out", d], capture_output=True, text=True)
+            if p.returncode != 0:
+                fail(f"plot_figures {name}: {p.stderr[-1500:]}")
+            figs[name] = json.load(open(os.path.join(d, "figures.json")))
+        for fig in ("fig4", "fig5"):
+            if figs["axis"][fig] != figs["base"][fig]:
+                fail(f"{fig} of the axis run is not the base point's")
+        drawn = figs["axis"].get("hyper", {}).get("grid", {}).get("fpe", {}).get("sirl", {})
+        n_max = max(figs["epochs"]["fig4"]["grid"]["sirl"], key=int)
+        if set(drawn) != {"sirl.epochs=30", point} or \
+                abs(drawn[point] - figs["epochs"]["fig4"]["grid"]["sirl"][n_max]) > 1e-12 or \
+                abs(drawn["sirl.epochs=30"] - figs["base"]["fig4"]["grid"]["sirl"][n_max]) > 1e-12:
+            fail(f"the axis figure drew {drawn}")
+        if "## Hyper-parameter axes" not in open(os.path.join(tmp, "figs-axis", "report.md")).read():
+            fail("the report has no section on the hyper-parameter axes")
+        print(f"incremental_runs: an axis of both values: {len(changed)} computed, {point} rows "
+              "equal the changed run's; figures from the base point, the axis figure from both")
 
         # 4. Two profiles at once on one fresh cache.
         shared = os.path.join(tmp, "shared")

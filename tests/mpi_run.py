@@ -82,11 +82,8 @@ with tempfile.TemporaryDirectory() as tmp:
     # A task that fails on a worker: rank 0 stops dispatching, releases the workers (mpirun
     # returns instead of hanging), names the failing task, and writes what finished.
     bad = os.path.join(tmp, "diverge.toml")
-    with open(SMOKE) as f:
-        text = f.read()
-    text = text.replace('[hyper.grid]', '[hyper.grid]\n"sirl.lr" = 1e30', 1)
     with open(bad, "w") as f:
-        f.write(text)
+        f.write(f'extends = "{SMOKE}"\n[hyper.grid]\n"sirl.lr" = 1e30\n')
     failed = os.path.join(tmp, "failed.h5")
     t0 = time.time()
     q = subprocess.run(["mpirun", "--oversubscribe", "-np", "3", SIRL, "run", bad, "--out", failed],

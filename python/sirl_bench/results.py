@@ -173,6 +173,18 @@ class Results:
         return out
 
     @property
+    def hyper_points(self) -> dict:
+        """{env: [base tag, other tags…]} for environments with hyper-parameter axes
+        ([hyper.<env>] keys given as lists; {} when none). A table row's hyper_point is one of
+        the tags, or "" for the base point (the first tag): the cells a profile without the axes
+        has, and the only ones the paper's figures and claims use."""
+        out = {}
+        for line in self.provenance.get("hyper_points", "").splitlines():
+            env, *tags = line.split("\t")
+            out[env] = tags
+        return out
+
+    @property
     def libraries(self) -> dict:
         """The compiler and library versions the run's bits depend on, {name: version} (from
         /@libraries, "compiler GCC 12.2.0; eigen 3.4.0; ..."); {} for files before engine 0.8.0.

@@ -1,0 +1,81 @@
+"""Hyper-parameter axes ([hyper.<env>] keys given as lists): one figure per environment with
+axes, each method's FPE (at the largest N) and TPA (its best mode, the largest N and M) at every
+point of the axes, mean ± 95 % CI over seeds, and the report's lines for them.
+
+A cell the point does not change (a Random φ under a "sirl.epochs" axis) is the base point's
+cell, stored once with hyper_point "": it is drawn at every point."""
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+
+CELL = ["variant", "N", "M", "frozen", "seed", "teacher"]
+
+
+def at_point(d, point, base):
+    """The rows of table d (one environment) at `point`: its own, and the base point's for cells
+    it shares."""
+    if point == base:
+        return d[d.hyper_point == ""]
+    own = d[d.hyper_point == point]
+    cols = [c for c in CELL if c in d.columns]
+    shared = d[d.hyper_point == ""]
+    keys = set(map(tuple, own[cols].astype(str).values))
+    return pd.concat([own, shared[[tuple(r) not in keys for r in shared[cols].astype(str).values]]])
+
+
+def metric_rows(fpe, tpa, env):
+    """(label, table, value column) of the two metrics drawn for an environment."""
+    out = []
+    f = fpe[fpe.env == env] if not fpe.empty else fpe
+    if not f.empty:
+        nmax = f.N.max()
+        out.append((f"FPE at N = {int(nmax)} (N-free methods: theirs)",
+                    f[(f.N == nmax) | f.N.isna()], "fpe"))
+    t = tpa[(tpa.env == env) & tpa.in_main & tpa.best_mode] if not tpa.empty else tpa
+    if not t.empty:
+        nmax, mmax = t.N.max(), t.M.max()
+        out.append((f"TPA at N = {int(nmax)}, M = {int(mmax)}, best mode",
+                    t[((t.N == nmax) | t.N.isna()) & (t.M == mmax)], "tpa"))
+    return out
+
+
+def plot_hyper(fpe, tpa, points, style, order, mean_ci, save, out, notes, drawn):
+    """Draws fig_hyper_<env>.png for every environment with axes; returns the report's lines."""
+    lines = []
+    for env, tags in points.items():
+        rows = metric_rows(fpe, tpa, env)
+        if not rows:
+            notes.append(f"hyper-parameter axes of {env}: no FPE or TPA cells to draw")
+            continue
+        fig, axes = plt.subplots(1, len(rows), figsize=(5.5 * len(rows), 3.8), squeeze=False,
+                                 constrained_layout=True)
+        xs = np.arange(len(tags))
+        for ax, (label, d, col) in zip(axes[0], rows):
+            for v in order:
+                if not (d.variant == v).any():
+                    continue
+                colour, name = style[v]
+                ms, cis = [], []
+                for tag in tags:
+                    m, ci = mean_ci(at_point(d[d.variant == v], tag, tags[0])[col])
+                    ms.append(m)
+                    cis.append(ci if np.isfinite(ci) else 0)
+                    drawn.setdefault("hyper", {}).setdefault(env, {}).setdefault(col, {}) \
+                        .setdefault(v, {})[tag] = float(m)
+                ax.errorbar(xs, ms, yerr=cis, color=colour, marker="o", capsize=3, label=name)
+            ax.set_xticks(xs)
+            ax.set_xticklabels(tags, rotation=20, ha="right", fontsize=8)
+            ax.set_title(label, fontsize=10)
+            ax.grid(alpha=0.3)
+        axes[0][0].legend(fontsize=7)
+        fig.suptitle(f"{env}: every point of its hyper-parameter axes (mean ± 95 % CI over "
+                     "seeds; the first point is the figures' and claims')", fontsize=10)
+        name = f"fig_hyper_{env}"
+        save(fig, out, name)
+        lines += [f"![{env}: hyper-parameter axes]({name}.png)", ""]
+    if lines:
+        lines = ["", "## Hyper-parameter axes", "",
+                 "The profile lists values for some hyper-parameters; every figure and claim above "
+                 "uses each axis's first value, these show every point. A method the axis does "
+                 "not change keeps one value.", ""] + lines
+    return lines
