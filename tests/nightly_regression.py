@@ -25,7 +25,18 @@ with tempfile.TemporaryDirectory() as tmp:
     base_json = os.path.join(a, "nightly-base.json")
     night = json.load(open(base_json))
     assert night["micro"] and night["pipeline"]["smoke"]["digests"], night
-    print("ok: a quick night writes", base_json)
+    assert all(len(v["repetitions"]) == 3 for v in night["micro"].values()), night["micro"]
+    seeds = night["pipeline"]["smoke"]["metric_seeds"].values()
+    assert seeds and all(len(s) >= 1 for s in seeds) and any(len(s) >= 2 for s in seeds), seeds
+    print("ok: a quick night writes", base_json, "with every repetition and each seed's value")
+    # It is filed in the history store and checked there: a first night is compared with nothing.
+    findings = json.load(open(os.path.join(a, "findings-base.json")))
+    assert findings["findings"] and all(f["verdict"] == "not compared" for f in findings["findings"]), \
+        findings
+    assert os.path.exists(os.path.join(a, "history.sqlite"))
+    assert os.path.exists(os.path.join(a, "dashboard", "index.html"))
+    assert "no earlier night of this machine class" in p.stdout, p.stdout
+    print("ok: the night is filed in the history store; a first night is compared with nothing")
 
     # A night within noise passes: the same results, every benchmark 5 % slower (below the 10 %
     # floor). Deterministic: it compares JSON files, it does not time anything twice.
