@@ -18,7 +18,7 @@ export OMP_TOOL_LIBRARIES="$archer"
 export TSAN_OPTIONS="ignore_noninstrumented_modules=1 halt_on_error=0 log_path=$reports/tsan suppressions=$PWD/tests/tsan.supp"
 export SIRL_TEST_PROFILE="$PWD/tests/data/micro.toml"
 export SIRL_CRASH_WALK_STRIDE=5  # every fifth crash point (the release suite walks them all)
-threaded='^(Scheduler\.|TaskThreads\.|ReadyQueue\.|.*ThreadCount$|.*TwoThreads$|Mlp\.ThreadedGemmIsBitIdentical$'
+threaded='^(Scheduler\.|TaskThreads\.|TaskCache\.|ReadyQueue\.|.*ThreadCount$|.*TwoThreads$|Mlp\.ThreadedGemmIsBitIdentical$'
 threaded+='|StudyRequests\.|study_server$|crash_walk$|mpi_run$)'
 status=0
 ctest --preset tsan -j 2 -R "$threaded" || status=$?
