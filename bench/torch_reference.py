@@ -1,17 +1,53 @@
 #!/usr/bin/python3
 """The PyTorch code people would otherwise write, timed on the same work as bench_kernels.cpp.
 
-Prints one JSON object: {case: {"ms": median step time, "gflops": ..., "steps_per_s": ...}}.
+Prints one JSON object: {case: {"ms": median step time, "gflops": ..., "steps_per_s": ...,
+"cpu_percent": CPU time over wall time, "matmul_gflops": a plain product of its largest layer,
+"suspect": ...}, "baseline": what it ran on}.
 FLOPs are counted as in the C++ benchmark: 2·in·out per layer per sample forward, ×3 with backward.
+
+It runs at its own best: every thread pool PyTorch can start (OpenMP, OpenBLAS, MKL, BLIS, its
+intra- and inter-op pools) is pinned to --threads before torch is imported, and a --threads 1 case
+that used more than 105 % of a core is refused (exit 2), not reported. --config picks one way a
+PyTorch user may run it (default: the environment as it is; no-coretype: without
+OPENBLAS_CORETYPE; flush-denormal: torch.set_flush_denormal(True); no-mkldnn: oneDNN off);
+--best-of-configs runs each in its own process and keeps each case's fastest, naming its config.
+A case whose step runs below 20 % of the rate of a plain matrix product of its largest layer is
+marked suspect (its ratio against ours is not a fair one).
 Usage: /usr/bin/python3 bench/torch_reference.py [--repeats 5] [--threads 1] [--runs] [--cases a,b]
+                                                 [--config NAME | --best-of-configs]
 """
 import argparse
 import json
+import os
+import resource
 import statistics
+import subprocess
 import sys
 import time
 
-import torch
+CONFIGS = ("default", "no-coretype", "flush-denormal", "no-mkldnn")
+POOLS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
+SUSPECT_SHARE = 0.2
+
+
+def _option(name, default):
+    for i, a in enumerate(sys.argv):
+        if a == name and i + 1 < len(sys.argv):
+            return sys.argv[i + 1]
+        if a.startswith(name + "="):
+            return a.split("=", 1)[1]
+    return default
+
+
+# Before torch loads its BLAS: a pool sized later is too late (OpenBLAS's pthread build starts its
+# own threads at load, whatever torch.set_num_threads says).
+for _v in POOLS:
+    os.environ[_v] = _option("--threads", "1")
+if _option("--config", "default") == "no-coretype":
+    os.environ.pop("OPENBLAS_CORETYPE", None)
+
+import torch  # noqa: E402
 
 
 def mlp(widths, linear=()):
@@ -216,6 +252,67 @@ def tpa_cell_case(phi_widths, hidden, epochs, T, M=100, R=20, B=64, l2=10.0, fro
     return run, flops(widths, 2 * M * epochs) * R
 
 
+def cpu_seconds():
+    u = resource.getrusage(resource.RUSAGE_SELF)
+    return u.ru_utime + u.ru_stime
+
+
+# The largest layer of each case, as (rows of one product, inputs, outputs): the sanity floor's
+# plain matrix product.
+LARGEST = {"sirl_step_grid": (192, 128, 128), "sirl_step_jaco": (192, 2037, 1024),
+           "tpa_heads_grid": (128, 128, 128), "tpa_heads_grid_batched": (128, 128, 128),
+           "tpa_heads_jaco": (128, 1024, 1024), "tpa_heads_jaco_batched": (128, 1024, 1024),
+           "tpa_unfrozen_jaco": (128, 2037, 1024), "tpa_unfrozen_jaco_batched": (128, 2037, 1024),
+           "sirl_run_grid": (192, 128, 128), "sirl_run_jaco": (192, 2037, 1024),
+           "tpa_cell_grid": (128, 128, 128), "tpa_cell_jaco": (128, 1024, 1024),
+           "tpa_small_cell_jaco_frozen": (20, 1024, 1024),
+           "tpa_small_cell_jaco_unfrozen": (20, 2037, 1024),
+           "tpa_quick_cell_jaco_frozen": (128, 1024, 1024),
+           "tpa_quick_cell_jaco_unfrozen": (128, 2037, 1024)}
+
+
+def matmul_gflops(rows, n_in, n_out, min_time=0.2):
+    a, b = torch.randn(rows, n_in), torch.randn(n_in, n_out)
+    with torch.no_grad():
+        s = time_case(lambda: torch.mm(a, b), min_time, 3)
+    return 2 * rows * n_in * n_out / s * 1e-9
+
+
+def baseline_config(config, threads):
+    """What the baseline ran on, for the benchmark output."""
+    show = torch.__config__.show()
+    pick = [ln.strip() for ln in show.splitlines() if "CPU capability" in ln]
+    blas = [w for w in show.replace(",", " ").split() if w.startswith(("BLAS_INFO=", "LAPACK_INFO="))]
+    try:  # the BLAS Debian's alternatives resolved to (torch says only "generic")
+        with open("/proc/self/maps") as f:
+            libs = sorted({ln.split()[-1] for ln in f if "blas" in ln.lower() and "/" in ln})
+    except OSError:
+        libs = []
+    return {"torch": torch.__version__, "config": config, "threads": threads, "blas_libraries": libs,
+            "intra_op_threads": torch.get_num_threads(),
+            "inter_op_threads": torch.get_num_interop_threads(),
+            "cpu_capability": pick[0] if pick else "?", "blas": " ".join(blas),
+            "mkldnn": bool(torch.backends.mkldnn.enabled),
+            "env": {k: os.environ.get(k, "") for k in POOLS + ("OPENBLAS_CORETYPE", "OPENBLAS_L2_SIZE")}}
+
+
+def best_of_configs(argv):
+    """Runs this script once per configuration and keeps each case's fastest."""
+    best, configs = {}, {}
+    for c in CONFIGS:
+        p = subprocess.run([sys.executable, os.path.abspath(__file__), *argv, "--config", c],
+                           capture_output=True, text=True)
+        if p.returncode != 0:
+            sys.exit(f"torch_reference: --config {c} failed: {p.stderr.strip()[-500:]}")
+        out = json.loads(p.stdout)
+        configs[c] = out.pop("baseline")
+        for name, v in out.items():
+            if isinstance(v, dict) and (name not in best or v["ms"] < best[name]["ms"]):
+                best[name] = dict(v, config=c)
+    best["baseline"] = {"best_of": configs}
+    return best
+
+
 def time_case(step, min_time=1.0, repeats=5):
     for _ in range(3):
         step()
@@ -247,8 +344,24 @@ def main():
     ap.add_argument("--min-time", type=float, default=2.0, help="seconds per case")
     ap.add_argument("--runs", action="store_true", help="also time whole training runs and TPA cells")
     ap.add_argument("--cases", help="comma-separated case names: time only these (runs included)")
+    ap.add_argument("--config", choices=CONFIGS, default="default",
+                    help="how the baseline runs (read before torch is imported)")
+    ap.add_argument("--best-of-configs", action="store_true",
+                    help="run every --config, keep each case's fastest")
     args = ap.parse_args()
+    if args.best_of_configs:
+        argv = [a for a in sys.argv[1:] if a != "--best-of-configs"]
+        print(json.dumps(best_of_configs(argv)))
+        return
     torch.set_num_threads(args.threads)
+    try:
+        torch.set_num_interop_threads(1)
+    except RuntimeError:
+        pass  # already started: it was 1 unless the environment said otherwise
+    if args.config == "flush-denormal":
+        torch.set_flush_denormal(True)
+    if args.config == "no-mkldnn":
+        torch.backends.mkldnn.enabled = False
     torch.manual_seed(0)
     cases = {
         "sirl_step_grid": sirl_step_case([19, 128, 128, 6]),
@@ -285,10 +398,22 @@ def main():
         if unknown:
             sys.exit(f"torch_reference: no case {', '.join(unknown)}; cases: {', '.join(cases)}")
         cases = {c: cases[c] for c in wanted}
-    out = {"torch": torch.__version__, "threads": args.threads}
+    out = {"torch": torch.__version__, "threads": args.threads,
+           "baseline": baseline_config(args.config, args.threads)}
+    refused = []
     for name, (step, fl) in cases.items():
+        c0, w0 = cpu_seconds(), time.perf_counter()
         s = time_run(step, args.repeats) if name in runs else time_case(step, args.min_time, args.repeats)
-        out[name] = {"ms": s * 1e3, "gflops": fl / s * 1e-9, "steps_per_s": 1 / s}
+        cpu = 100 * (cpu_seconds() - c0) / (time.perf_counter() - w0)
+        mm = matmul_gflops(*LARGEST[name]) if name in LARGEST else 0.0
+        g = fl / s * 1e-9
+        out[name] = {"ms": s * 1e3, "gflops": g, "steps_per_s": 1 / s, "cpu_percent": cpu,
+                     "matmul_gflops": mm, "suspect": bool(mm and g < SUSPECT_SHARE * mm)}
+        if args.threads == 1 and cpu > 105:
+            refused.append(f"{name} ({cpu:.0f} % CPU)")
+    if refused:
+        sys.exit("torch_reference: with --threads 1 these cases used more than one core, a thread "
+                 "pool was not pinned: " + ", ".join(refused))
     print(json.dumps(out))
 
 
