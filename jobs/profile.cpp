@@ -670,10 +670,11 @@ void parse_hyper(Reader& r, const toml::table& root, Profile& p) {
       const Hyper base = p.hyper[env];
       for (size_t i = 0; i < points.size(); ++i) {
         HyperPoint hp{"", base};
-        for (const auto& [key, value] : points[i]) {
-          hp.tag += (hp.tag.empty() ? "" : ";") + key + "=" + value;
+        for (const auto& kv : points[i]) {
+          const std::string& key = kv.first;  // (a structured binding cannot be captured in C++20)
+          hp.tag += (hp.tag.empty() ? "" : ";") + key + "=" + kv.second;
           try {
-            set_hyper(hp.hyper, key, value);
+            set_hyper(hp.hyper, key, kv.second);
           } catch (const std::invalid_argument& e) {
             const auto it = std::find_if(env_axes.begin(), env_axes.end(),
                                          [&](const HyperAxis& a) { return a.key == key; });
