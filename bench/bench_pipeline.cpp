@@ -92,8 +92,7 @@ BENCHMARK(BM_TpaCell)
 
 // The smallest cells of a quick run: 20 heads, M = 10 pairs each (one step an epoch), JacoRobot,
 // 15 epochs as quick's profile has them; frozen (heads only) and unfrozen (each head fine-tunes
-// its own copy of φ). Few FLOPs a byte: a quick run spent 25–30 GFLOP/s on them while the 20
-// heads stepped together, ~40 since they train one after another.
+// its own copy of φ). Few FLOPs a byte: the cells that run at the lowest rate of a quick run.
 void BM_TpaSmallCell(benchmark::State& state) {
   time_tpa_cell(state, true, 15, 10, state.range(0) == 1);
 }

@@ -1,9 +1,8 @@
 // How the process gets its large buffers back from the allocator. A JacoRobot TPA cell allocates
 // its 20 heads' weights and Adam moments afresh (254 MB frozen, 1 GB unfrozen) and frees them when
 // it ends. glibc serves blocks that large with mmap and returns them with munmap, so every cell
-// pays to fault its pages in again: on the 2-vCPU Xeon of 2026-12-03, 14 % of a frozen cell's
-// time was the kernel's page faults (`perf`), and the cell ran in 627 ms instead of 706 with
-// freed memory kept for reuse (`BM_TpaCell/jaco:1`, medians of 3).
+// pays to fault its pages in again, a measurable share of a frozen cell's time (`BM_TpaCell/jaco`;
+// the measurement: docs/kernels.md, "The measurements behind the kernels' choices").
 #pragma once
 
 namespace sirl {

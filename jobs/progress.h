@@ -14,7 +14,7 @@ class Progress {
   Progress(int total, double total_flops, bool quiet = false);
   // Tasks that continue a training checkpoint: part of their work was done before this process
   // started, so they count toward the share done but not toward the rate the ETA divides by
-  // (a 190-TFLOP cell finishing 2 minutes after a restart once read as 1372 GFLOP/s).
+  // (else a large cell finishing soon after a restart reads as an absurd rate).
   void set_resumed(std::set<std::string> keys);
   // One task finished (thread-safe).
   void task_done(const std::string& key, double task_flops, double seconds);

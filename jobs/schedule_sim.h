@@ -27,7 +27,7 @@ struct ClusterModel {
   // machine does; the scheduler sizes critical chains with its own kAssumedSerialFraction.
   double serial_fraction = kAssumedSerialFraction;
   double commit_seconds = 0.002;  // per task: in the worker (threads), on rank 0 (MPI)
-  // Outside the schedule (measured on the 2-core Zen 5 with smoke's 336 tasks): reading every
+  // Outside the schedule (measured with smoke's 336 tasks): reading every
   // committed record back and writing the results file at the end, per task; and what
   // `mpirun` adds to a run (MPI_Init, the workers' hello, MPI_Finalize).
   double finish_seconds_per_task = 0.0025;

@@ -16,14 +16,14 @@ namespace sirl {
 
 // Threads pay off for a task with enough work (FLOPs) in big enough steps: a task whose working
 // set is small (GridRobot's φ, 0.7 MiB) runs steps of tens of µs, which a second thread does not
-// speed up (bench: 0.25–0.49 ms per step on 2 threads against 0.25–0.28 on 1), while the
-// JacoRobot φ (1.5× on 2 threads) and 20 batched TPA heads (1.7×) gain.
+// speed up, while the JacoRobot φ and 20 batched TPA heads gain (docs/kernels.md, "The
+// measurements behind the kernels' choices").
 inline constexpr double kThreadedTaskFlops = 5e9;
 inline constexpr double kThreadedTaskBytes = 4.0 * 1024 * 1024;
 
 // The speed-up the scheduler assumes for a task on k cores when it sizes a critical chain:
 // Amdahl's k / (1 + s (k − 1)) with s = 0.25, about what the JacoRobot φ and the 20 batched
-// heads measured on 2 cores (1.5–1.7×).
+// heads gain on 2 cores.
 inline constexpr double kAssumedSerialFraction = 0.25;
 double task_speedup(int k, double serial_fraction);
 

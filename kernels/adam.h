@@ -56,8 +56,8 @@ AdamStepScalars adam_begin_step(const AdamConfig& cfg, AdamState& state);
 // One departure from PyTorch: a moment that falls below the smallest normal float (1.18e-38) is
 // stored as 0. A zero gradient (SIRL's loss is exactly 0 from epoch ~107 on JacoRobot) decays m
 // into that range within ~830 steps (0.9^k), and on Intel cores every arithmetic on a subnormal
-// float takes a microcode assist: the Grid SIRL step ran 2.2x slower with its moments subnormal
-// (a Sapphire Rapids-class Xeon, 0.39 against 0.18 ms). m/denom with m subnormal and denom ≥ ε =
+// float takes a microcode assist (the Grid SIRL step ran about twice as slow with its moments
+// subnormal: docs/kernels.md). m/denom with m subnormal and denom ≥ ε =
 // 1e-8 moves p by < 1.2e-33, below half an ulp of any |p| > 1e-26, so the parameters keep PyTorch's
 // bits. Updating a vector in pieces gives the same bits as one call over the whole (each element is
 // independent): the fused backward pass (mlp_backward_adam) updates each slice of weights as soon

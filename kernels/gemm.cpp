@@ -149,10 +149,10 @@ thread_local AlignedVector<float> t_scratch;  // nt's transposed operand (and re
 // oneDNN's matmul primitive on one slice (kernels/onednn_matmul.h: row-major; 'T' reads that
 // operand transposed), on the calling thread only, as every slice is. Whether a product goes
 // there depends on its shape only. Two dimensions ≥ 512 and none below 32: with fewer rows (a TPA
-// cell of M = 10 trains on 20), oneDNN packs a whole weight slice for little work (one
-// measurement on a noisy VM: 20 rows through the Jaco unfrozen cell, 564 ms a step with oneDNN
-// against 472 without). The primitive, not dnnl_sgemm: on Zen 5 the 192 × 2037 → 1024 forward
-// product ran at 130 GFLOP/s in 256-wide sgemm slices (bench/bench_gemm_candidates).
+// cell of M = 10 trains on 20), oneDNN packs a whole weight slice for little work. The matmul
+// primitive, not dnnl_sgemm, whose slices of the JacoRobot forward product ran slower
+// (bench/bench_gemm_candidates; the figures: docs/kernels.md, "The measurements behind the
+// kernels' choices").
 bool dnnl_big(int M, int N, int K) {
 #ifdef SIRL_HAVE_DNNL
   return (M >= 512) + (N >= 512) + (K >= 512) >= 2 && std::min({M, N, K}) >= 32;
@@ -275,9 +275,8 @@ void matmul_nn_cols(T* Cs, int ldc, const T* A, const T* B, int M, int N, int K,
 // ---- products oneDNN serves, by blocks of C's rows ----
 //
 // oneDNN's matmul runs a dense operand set on its brgemm kernels and hands strided ones (a
-// 256-column slice of C) to its sgemm, which on Zen 5 read JacoRobot's transposed first-layer
-// weights (K = 2037) at half speed: 2.4 ms per 256-column slice of the forward product against
-// 4.2 ms for all 1024 columns at once (192 rows, one thread). So the forward and weight-gradient
+// 256-column slice of C) to its sgemm, which can read JacoRobot's transposed first-layer weights
+// (K = 2037) at half speed (docs/kernels.md). So the forward and weight-gradient
 // products compute such a product in blocks of C's rows, each one call over all N columns, dense:
 // one block up to 128 rows, two (multiples of 16, so two threads can share it) up to 512, blocks of
 // 256 above. The blocks depend on the shape only, so the bits do too.
@@ -291,8 +290,8 @@ int gemm_row_block(int M, int N, int K) {
 // moments: blocks of ~64 Ki weights. A layer of 4 Ki to 256 Ki weights (GridRobot's 128 × 128)
 // fits; on one thread it goes by blocks of kRowBlock rows, the blocks libxsmm's calls cut the
 // whole product into (xsmm_colmajor), so Adam runs over whole rows instead of 64-wide pieces of
-// them (20 Grid heads 2.51–2.53 → 2.42–2.47 ms, the Grid unfrozen TPA step 3.02–3.28 → 2.92 ms);
-// with more threads, by column slices, which two threads share. Below 4 Ki, column slices.
+// them (faster for the Grid heads and the unfrozen Grid TPA step: docs/kernels.md); with more
+// threads, by column slices, which two threads share. Below 4 Ki, column slices.
 constexpr size_t kBigLayer = size_t(1) << 18, kMidLayer = size_t(1) << 12;
 
 int gemm_weight_row_block(int M, int N, int K, int threads) {
@@ -443,7 +442,7 @@ void nn_k_block_slice(float* Cs, int ldc, const float* A, const float* B, int M,
 }  // namespace
 
 // ∂L/∂input stays in column slices: oneDNN's sgemm reads these operands untransposed at full
-// speed (192 × 1024 × 1024: 0.57 ms per 256-column slice), and its dense path was no faster
+// speed (docs/kernels.md), and its dense path was no faster
 // in A/B runs of the JacoRobot SIRL step and TPA cells. A big layer libxsmm serves sums each
 // slice over the fused pass's blocks of the inner dimension, one after the other (as
 // matmul_nn_k_block does): the same bits on any thread count and in either pass by construction.

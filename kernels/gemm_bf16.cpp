@@ -14,8 +14,7 @@ namespace sirl {
 namespace {
 
 // Below this in any dimension oneDNN's bf16 matmul lost to the fp32 kernels on the engine's
-// shapes (bench/bench_gemm_candidates, Zen 5: 192 × 128 → 6 dw 64 against 220 GFLOP/s; 128 × 128
-// → 128 about 330 against 230; the 1024-wide JacoRobot layers 330-425 against 200-220).
+// shapes (bench/bench_gemm_candidates; the figures: docs/kernels.md).
 constexpr int kBf16NativeMin = 32;
 
 bool forced_off() {

@@ -11,8 +11,8 @@ namespace sirl {
 // vfmadd231ps on zmm: 16 chains × 16 lanes × 2 FLOP per round (needs AVX-512F).
 float fma_loop_avx512(int64_t iters, float seed);
 // vfmadd231ps on ymm: 12 chains × 8 lanes × 2 FLOP per round (needs AVX2 + FMA). AVX2 has 16 ymm
-// registers: 16 accumulators and the two operands would spill (a Zen 3 measured 53 GFLOP/s a
-// core that way, where oneDNN's sgemm reached 80); 12 chains still cover latency × pipes.
+// registers: 16 accumulators and the two operands would spill (and fall well short of oneDNN's
+// sgemm: docs/kernels.md); 12 chains still cover latency × pipes.
 float fma_loop_avx2(int64_t iters, float seed);
 double fma_loop_flops(bool avx512, int64_t iters);
 
