@@ -186,142 +186,188 @@ void check_config(const Dataset& d, const ActiveConfig& c) {
                                 ") is too many for a Ξ of " + std::to_string(d.count));
 }
 
+// One selection's state: the ensemble, the two random streams, the queries answered and every
+// triple ever asked. run() is the paper's loop of rounds; a checkpoint saves and restores all of
+// it between rounds.
+class ActiveSelection {
+ public:
+  ActiveSelection(const Dataset& d, const Teacher& teacher, const ActiveConfig& cfg, uint64_t seed)
+      : d_(d),
+        teacher_(teacher),
+        cfg_(cfg),
+        shape_(phi_shape(d.input_dim, cfg.hyper)),
+        ens_(make_ensemble(shape_, cfg, seed)),
+        pool_rng_(seed_from_key("active/pool", seed)),
+        answer_rng_(seed_from_key("active/answers", seed)) {}
+
+  ActiveQueries run() {
+    // A rerun continues from the last round saved.
+    if (TrainingSnapshot s; cfg_.checkpointer && cfg_.checkpointer->load(s)) restore(s);
+    while (out_.queries.count < cfg_.budget) {
+      const int64_t before = out_.queries.count;
+      const int64_t want = std::min(cfg_.batch, cfg_.budget - out_.queries.count);
+      const std::vector<Triple> pool = draw_pool(out_.rounds == 0 ? want : cfg_.pool);
+      if (out_.rounds == 0) {  // nothing learned yet: a uniform first batch
+        for (const Triple& q : pool) ask(q);
+        check_answered(before);
+        out_.batch_score.push_back(0.f);
+        out_.pool_score.push_back(0.f);
+      } else {
+        // Train the members on everything answered so far, then score the pool.
+        train_members();
+        const std::vector<double> score =
+            score_pool(d_, pool, ens_.trainer, cfg_, out_.train_flops);
+        const double picked = ask_best(pool, score, want);
+        double pool_mean = 0;
+        for (double v : score) pool_mean += v / double(score.size());
+        check_answered(before);
+        out_.batch_score.push_back(float(picked));
+        out_.pool_score.push_back(float(pool_mean));
+      }
+      ++out_.rounds;
+      if (cfg_.checkpointer && out_.queries.count < cfg_.budget && cfg_.checkpointer->due()) save();
+    }
+    return out_;
+  }
+
+ private:
+  // Asks the teacher; false: it skipped the query (which stays asked).
+  bool ask(const Triple& q) {
+    asked_.insert(sorted(q.data()));
+    const auto a = answer_similarity(teacher_, d_.feature(q[0]), d_.feature(q[1]), d_.feature(q[2]),
+                                     d_.feature_count(), answer_rng_);
+    if (!a) {
+      ++out_.queries.skipped;
+      return false;
+    }
+    out_.queries.idx.insert(out_.queries.idx.end(),
+                            {q[size_t(a->p1)], q[size_t(a->p2)], q[size_t(a->neg)]});
+    ++out_.queries.count;
+    return true;
+  }
+
+  // A teacher who withholds every answer of a round would make the loop spin forever.
+  void check_answered(int64_t before) const {
+    if (out_.queries.count == before)
+      throw std::runtime_error("active selection: the teacher skipped every query of round " +
+                               std::to_string(out_.rounds) + "; lower its skip threshold");
+  }
+
+  // `size` triples never asked, none twice.
+  std::vector<Triple> draw_pool(int64_t size) {
+    std::vector<Triple> pool;
+    std::set<Triple> in_pool;
+    for (int64_t i = 0; i < size; ++i) {
+      pool.push_back(draw_new(d_, pool_rng_, asked_, in_pool));
+      in_pool.insert(sorted(pool.back().data()));
+    }
+    return pool;
+  }
+
+  // One round's epochs of every member on the n queries answered so far (each its own order).
+  void train_members() {
+    const int64_t n = out_.queries.count;
+    const int B = cfg_.hyper.sirl.batch;
+    run_epochs_batched(
+        n, cfg_.round_epochs, B, ens_.order,
+        [&](const std::vector<const int32_t*>& order, int b) -> const std::vector<float>& {
+          batch_.resize(size_t(cfg_.members) * b * 3);
+          for (int k = 0; k < cfg_.members; ++k)
+            for (int i = 0; i < b; ++i)
+              std::copy_n(out_.queries.idx.begin() + 3 * order[size_t(k)][i], 3,
+                          batch_.begin() + (size_t(k) * b + i) * 3);
+          triplet_train_step_batched(ens_.trainer, d_.inputs.data(), batch_.data(), b,
+                                     float(cfg_.hyper.triplet_margin), cfg_.threads);
+          out_.train_flops += 3 * cfg_.members * shape_.forward_flops(3 * b);
+          return ens_.trainer.losses;
+        });
+    for (float v : ens_.trainer.params)
+      if (!std::isfinite(v))
+        throw std::runtime_error("active selection: an ensemble member diverged");
+  }
+
+  // Asks up to `want` of the pool, best score first, no trajectory twice in one batch while the
+  // pool allows it. Returns the mean score of the answered ones (0 if none).
+  double ask_best(const std::vector<Triple>& pool, const std::vector<double>& score, int64_t want) {
+    std::vector<size_t> rank(pool.size());
+    std::iota(rank.begin(), rank.end(), 0);
+    std::stable_sort(rank.begin(), rank.end(),
+                     [&](size_t a, size_t b) { return score[a] > score[b]; });
+    std::set<int32_t> used;
+    std::vector<bool> taken(pool.size(), false);
+    double picked = 0;
+    int64_t got = 0;
+    for (int pass = 0; pass < 2 && got < want; ++pass)
+      for (size_t r : rank) {
+        if (got >= want) break;
+        if (taken[r]) continue;
+        const Triple& q = pool[r];
+        if (pass == 0 && (used.count(q[0]) || used.count(q[1]) || used.count(q[2]))) continue;
+        taken[r] = true;
+        used.insert(q.begin(), q.end());
+        if (ask(q)) {
+          ++got;
+          picked += score[r];
+        }
+      }
+    return got ? picked / double(got) : 0.0;
+  }
+
+  void restore(const TrainingSnapshot& s) {
+    out_.rounds = s.epoch;
+    const auto& w = s.words.at("active/queries");
+    out_.queries.idx.assign(w.begin(), w.end());
+    out_.queries.count = int64_t(out_.queries.idx.size() / 3);
+    out_.queries.skipped = int64_t(s.number("active/skipped"));
+    const auto& aw = s.words.at("active/asked");
+    for (size_t i = 0; i + 2 < aw.size(); i += 3)
+      asked_.insert({int32_t(aw[i]), int32_t(aw[i + 1]), int32_t(aw[i + 2])});
+    out_.batch_score = s.get("active/batch_score", size_t(out_.rounds));
+    out_.pool_score = s.get("active/pool_score", size_t(out_.rounds));
+    out_.train_flops = s.number("active/flops");
+    get_adam(s, "active/members", ens_.trainer.params, ens_.trainer.adam);
+    s.get_rng("active/pool_rng", pool_rng_);
+    s.get_rng("active/answer_rng", answer_rng_);
+    for (int k = 0; k < cfg_.members; ++k)
+      s.get_rng("active/order/" + std::to_string(k), ens_.order[size_t(k)]);
+  }
+
+  void save() {
+    TrainingSnapshot s;
+    s.epoch = out_.rounds;
+    s.words["active/queries"].assign(out_.queries.idx.begin(), out_.queries.idx.end());
+    auto& aw = s.words["active/asked"];
+    for (const Triple& t : asked_) aw.insert(aw.end(), t.begin(), t.end());
+    s.numbers["active/skipped"] = double(out_.queries.skipped);
+    s.numbers["active/flops"] = out_.train_flops;
+    s.floats["active/batch_score"] = out_.batch_score;
+    s.floats["active/pool_score"] = out_.pool_score;
+    put_adam(s, "active/members", ens_.trainer.params, ens_.trainer.adam);
+    s.put_rng("active/pool_rng", pool_rng_);
+    s.put_rng("active/answer_rng", answer_rng_);
+    for (int k = 0; k < cfg_.members; ++k)
+      s.put_rng("active/order/" + std::to_string(k), ens_.order[size_t(k)]);
+    cfg_.checkpointer->save(s);
+  }
+
+  const Dataset& d_;
+  const Teacher& teacher_;
+  const ActiveConfig& cfg_;
+  const MlpShape shape_;
+  Ensemble ens_;
+  Rng pool_rng_, answer_rng_;
+  ActiveQueries out_;
+  std::set<Triple> asked_;
+  std::vector<int32_t> batch_;  // the members' batches of one step, member by member
+};
+
 }  // namespace
 
 ActiveQueries select_active_queries(const Dataset& d, const Teacher& teacher,
                                     const ActiveConfig& cfg, uint64_t seed) {
   check_config(d, cfg);
   validate(teacher, d.feature_count());
-  const MlpShape shape = phi_shape(d.input_dim, cfg.hyper);
-  Ensemble ens = make_ensemble(shape, cfg, seed);
-  Rng pool_rng(seed_from_key("active/pool", seed)),
-      answer_rng(seed_from_key("active/answers", seed));
-  ActiveQueries out;
-  std::set<Triple> asked;
-  auto ask = [&](const Triple& q) {  // false: the teacher skipped it (it stays asked)
-    asked.insert(sorted(q.data()));
-    const auto a = answer_similarity(teacher, d.feature(q[0]), d.feature(q[1]), d.feature(q[2]),
-                                     d.feature_count(), answer_rng);
-    if (!a) {
-      ++out.queries.skipped;
-      return false;
-    }
-    out.queries.idx.insert(out.queries.idx.end(),
-                           {q[size_t(a->p1)], q[size_t(a->p2)], q[size_t(a->neg)]});
-    ++out.queries.count;
-    return true;
-  };
-
-  // A rerun continues from the last round saved.
-  if (TrainingSnapshot s; cfg.checkpointer && cfg.checkpointer->load(s)) {
-    out.rounds = s.epoch;
-    const auto& w = s.words.at("active/queries");
-    out.queries.idx.assign(w.begin(), w.end());
-    out.queries.count = int64_t(out.queries.idx.size() / 3);
-    out.queries.skipped = int64_t(s.number("active/skipped"));
-    const auto& aw = s.words.at("active/asked");
-    for (size_t i = 0; i + 2 < aw.size(); i += 3)
-      asked.insert({int32_t(aw[i]), int32_t(aw[i + 1]), int32_t(aw[i + 2])});
-    out.batch_score = s.get("active/batch_score", size_t(out.rounds));
-    out.pool_score = s.get("active/pool_score", size_t(out.rounds));
-    out.train_flops = s.number("active/flops");
-    get_adam(s, "active/members", ens.trainer.params, ens.trainer.adam);
-    s.get_rng("active/pool_rng", pool_rng);
-    s.get_rng("active/answer_rng", answer_rng);
-    for (int k = 0; k < cfg.members; ++k)
-      s.get_rng("active/order/" + std::to_string(k), ens.order[size_t(k)]);
-  }
-
-  std::vector<int32_t> batch;
-  // A teacher who withholds every answer of a round would make the loop spin forever.
-  auto check_answered = [&](int64_t before) {
-    if (out.queries.count == before)
-      throw std::runtime_error("active selection: the teacher skipped every query of round " +
-                               std::to_string(out.rounds) + "; lower its skip threshold");
-  };
-  while (out.queries.count < cfg.budget) {
-    const int64_t before = out.queries.count;
-    const int64_t want = std::min(cfg.batch, cfg.budget - out.queries.count);
-    std::vector<Triple> pool;
-    std::set<Triple> in_pool;
-    for (int64_t i = 0; i < (out.rounds == 0 ? want : cfg.pool); ++i) {
-      pool.push_back(draw_new(d, pool_rng, asked, in_pool));
-      in_pool.insert(sorted(pool.back().data()));
-    }
-    if (out.rounds == 0) {  // nothing learned yet: a uniform first batch
-      for (const Triple& q : pool) ask(q);
-      check_answered(before);
-      out.batch_score.push_back(0.f);
-      out.pool_score.push_back(0.f);
-    } else {
-      // Train the members on everything answered so far, then score the pool.
-      const int64_t n = out.queries.count;
-      const int B = cfg.hyper.sirl.batch;
-      run_epochs_batched(
-          n, cfg.round_epochs, B, ens.order,
-          [&](const std::vector<const int32_t*>& order, int b) -> const std::vector<float>& {
-            batch.resize(size_t(cfg.members) * b * 3);
-            for (int k = 0; k < cfg.members; ++k)
-              for (int i = 0; i < b; ++i)
-                std::copy_n(out.queries.idx.begin() + 3 * order[size_t(k)][i], 3,
-                            batch.begin() + (size_t(k) * b + i) * 3);
-            triplet_train_step_batched(ens.trainer, d.inputs.data(), batch.data(), b,
-                                       float(cfg.hyper.triplet_margin), cfg.threads);
-            out.train_flops += 3 * cfg.members * shape.forward_flops(3 * b);
-            return ens.trainer.losses;
-          });
-      for (float v : ens.trainer.params)
-        if (!std::isfinite(v))
-          throw std::runtime_error("active selection: an ensemble member diverged");
-      const std::vector<double> score = score_pool(d, pool, ens.trainer, cfg, out.train_flops);
-      std::vector<size_t> rank(pool.size());
-      std::iota(rank.begin(), rank.end(), 0);
-      std::stable_sort(rank.begin(), rank.end(),
-                       [&](size_t a, size_t b) { return score[a] > score[b]; });
-      // Best first; no trajectory twice in one batch while the pool allows it.
-      std::set<int32_t> used;
-      std::vector<bool> taken(pool.size(), false);
-      double picked = 0;
-      int64_t got = 0;
-      for (int pass = 0; pass < 2 && got < want; ++pass)
-        for (size_t r : rank) {
-          if (got >= want) break;
-          if (taken[r]) continue;
-          const Triple& q = pool[r];
-          if (pass == 0 && (used.count(q[0]) || used.count(q[1]) || used.count(q[2]))) continue;
-          taken[r] = true;
-          used.insert(q.begin(), q.end());
-          if (ask(q)) {
-            ++got;
-            picked += score[r];
-          }
-        }
-      double pool_mean = 0;
-      for (double v : score) pool_mean += v / double(score.size());
-      check_answered(before);
-      out.batch_score.push_back(float(got ? picked / double(got) : 0.0));
-      out.pool_score.push_back(float(pool_mean));
-    }
-    ++out.rounds;
-    if (cfg.checkpointer && out.queries.count < cfg.budget && cfg.checkpointer->due()) {
-      TrainingSnapshot s;
-      s.epoch = out.rounds;
-      s.words["active/queries"].assign(out.queries.idx.begin(), out.queries.idx.end());
-      auto& aw = s.words["active/asked"];
-      for (const Triple& t : asked) aw.insert(aw.end(), t.begin(), t.end());
-      s.numbers["active/skipped"] = double(out.queries.skipped);
-      s.numbers["active/flops"] = out.train_flops;
-      s.floats["active/batch_score"] = out.batch_score;
-      s.floats["active/pool_score"] = out.pool_score;
-      put_adam(s, "active/members", ens.trainer.params, ens.trainer.adam);
-      s.put_rng("active/pool_rng", pool_rng);
-      s.put_rng("active/answer_rng", answer_rng);
-      for (int k = 0; k < cfg.members; ++k)
-        s.put_rng("active/order/" + std::to_string(k), ens.order[size_t(k)]);
-      cfg.checkpointer->save(s);
-    }
-  }
-  return out;
+  return ActiveSelection(d, teacher, cfg, seed).run();
 }
 
 }  // namespace sirl

@@ -101,6 +101,40 @@ std::vector<float> initial_heads(const Representation& rep, const TpaConfig& cfg
   return init;
 }
 
+// Each head's held-out and training accuracy, how far its copy of φ moved (unfrozen), and the
+// cell's mean and standard deviation over heads. params: [R, P] (φ's weights first, unfrozen).
+void score_heads(const MlpShape& net, const std::vector<float>& params, const Representation& rep,
+                 const CellRows& rows, const std::vector<TpaSet>& sets, const TpaConfig& cfg,
+                 TpaResult& res) {
+  const int R = int(sets.size());
+  const size_t P = net.param_count(), P_phi = cfg.frozen ? 0 : rep.params.size();
+  MlpTape<float> tape;
+  std::vector<float> xb;
+  res.accuracy.resize(R);
+  res.train_accuracy.resize(R);
+  res.phi_drift.assign(R, 0.f);
+  auto accuracy_on = [&](const float* p, const std::vector<int32_t>& pairs, const float* labels) {
+    const int n = int(pairs.size() / 2), w = net.in();
+    xb.resize(size_t(2) * n * w);
+    gather_by_role(rows.X.data(), w, pairs.data(), n, 2, xb.data());
+    mlp_forward(net, p, xb.data(), 2 * n, tape, cfg.threads);
+    return preference_accuracy(tape.output(), labels, n);
+  };
+  for (int r = 0; r < R; ++r) {
+    const float* p = params.data() + size_t(r) * P;
+    res.accuracy[r] = accuracy_on(p, rows.test[r], sets[r].pairs.label.data() + sets[r].train);
+    res.train_accuracy[r] = accuracy_on(p, rows.train[r], sets[r].pairs.label.data());
+    for (size_t i = 0; i < P_phi; ++i)
+      res.phi_drift[r] = std::max(res.phi_drift[r], std::abs(p[i] - rep.params[i]));
+  }
+  double sum = 0;
+  for (double a : res.accuracy) sum += a;
+  res.mean = sum / R;
+  double ss = 0;
+  for (double a : res.accuracy) ss += (a - res.mean) * (a - res.mean);
+  res.stddev = R > 1 ? std::sqrt(ss / (R - 1)) : 0.0;
+}
+
 }  // namespace
 
 TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::vector<TpaSet>& sets,
@@ -115,7 +149,6 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   const CellRows rows = compact_rows(rep, d, sets, cfg);
   const Hyper& h = cfg.hyper;
   const MlpShape net = tpa_network(rep.shape, h, cfg.frozen);
-  const size_t P = net.param_count(), P_phi = cfg.frozen ? 0 : rep.params.size();
   BatchedTrainer t(net, R, h.tpa.adam, initial_heads(rep, cfg, size_t(R), net, seed));
 
   std::vector<Rng> order_rng;
@@ -171,32 +204,7 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   }
   require_finite(t.params, "TPA head weights");
 
-  // Held-out and training accuracy of each head.
-  MlpTape<float> tape;
-  std::vector<float> xb;
-  res.accuracy.resize(R);
-  res.train_accuracy.resize(R);
-  res.phi_drift.assign(R, 0.f);
-  auto accuracy_on = [&](const float* p, const std::vector<int32_t>& pairs, const float* labels) {
-    const int n = int(pairs.size() / 2), w = net.in();
-    xb.resize(size_t(2) * n * w);
-    gather_by_role(rows.X.data(), w, pairs.data(), n, 2, xb.data());
-    mlp_forward(net, p, xb.data(), 2 * n, tape, cfg.threads);
-    return preference_accuracy(tape.output(), labels, n);
-  };
-  for (int r = 0; r < R; ++r) {
-    const float* p = t.params.data() + size_t(r) * P;
-    res.accuracy[r] = accuracy_on(p, rows.test[r], sets[r].pairs.label.data() + sets[r].train);
-    res.train_accuracy[r] = accuracy_on(p, rows.train[r], sets[r].pairs.label.data());
-    for (size_t i = 0; i < P_phi; ++i)
-      res.phi_drift[r] = std::max(res.phi_drift[r], std::abs(p[i] - rep.params[i]));
-  }
-  double sum = 0;
-  for (double a : res.accuracy) sum += a;
-  res.mean = sum / R;
-  double ss = 0;
-  for (double a : res.accuracy) ss += (a - res.mean) * (a - res.mean);
-  res.stddev = R > 1 ? std::sqrt(ss / (R - 1)) : 0.0;
+  score_heads(net, t.params, rep, rows, sets, cfg, res);
   return res;
 }
 

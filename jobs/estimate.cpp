@@ -34,93 +34,95 @@ double seconds_of(const std::function<void()>& f) {
 
 }  // namespace
 
-PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
-  PlanEstimate e;
-  // The grid's environments and the user study's (its tasks run on its own Ξ).
-  std::vector<std::string> envs = p.envs;
-  if (p.study.enabled && std::find(envs.begin(), envs.end(), p.study.cohort.env) == envs.end())
-    envs.push_back(p.study.cohort.env);
-  for (const auto& env : envs) {
-    EnvConfig small = p.data;
-    constexpr int64_t kSmall = 300;  // enough to time the training code and Ξ's generation rate
-    small.jaco.trajectories = kSmall;
-    small.jaco.threads = 1;  // as a run builds Ξ: inside one task
-    const EnvSpec& spec = env_spec(env);
-    Dataset d;
-    const double made = seconds_of([&] { d = spec.make(small); });
-    // A sampled Ξ costs per trajectory (each one sampled, solved and featurised on its own).
-    const double gen =
-        spec.sampled ? made * double(p.data.jaco.trajectories) / double(kSmall) : made;
-    {
-      QueryBundleConfig full = p.queries;
-      full.fpe_trajectories = std::min<int64_t>(full.fpe_trajectories, d.count);
-      const double bundle = seconds_of([&] { make_query_bundle(d, full, 1); });
-      const auto axes = p.axes.find(env);
-      const double seeds = axes != p.axes.end() ? double(axes->second.seeds.size()) : 1.0;
-      e.dataset_seconds[env] = gen;
-      e.bundle_seconds[env] = bundle;
-      e.setup_seconds += gen + seeds * bundle;
+namespace {
+
+// Times the making of env's Ξ (from a small one when it is sampled trajectory by trajectory) and
+// of one seed's query bundle into e; returns the small Ξ the rates are calibrated on.
+Dataset time_setup(const std::string& env, const Profile& p, PlanEstimate& e) {
+  EnvConfig small = p.data;
+  constexpr int64_t kSmall = 300;  // enough to time the training code and Ξ's generation rate
+  small.jaco.trajectories = kSmall;
+  small.jaco.threads = 1;  // as a run builds Ξ: inside one task
+  const EnvSpec& spec = env_spec(env);
+  Dataset d;
+  const double made = seconds_of([&] { d = spec.make(small); });
+  // A sampled Ξ costs per trajectory (each one sampled, solved and featurised on its own).
+  const double gen = spec.sampled ? made * double(p.data.jaco.trajectories) / double(kSmall) : made;
+  QueryBundleConfig full = p.queries;
+  full.fpe_trajectories = std::min<int64_t>(full.fpe_trajectories, d.count);
+  const double bundle = seconds_of([&] { make_query_bundle(d, full, 1); });
+  const auto axes = p.axes.find(env);
+  const double seeds = axes != p.axes.end() ? double(axes->second.seeds.size()) : 1.0;
+  e.dataset_seconds[env] = gen;
+  e.bundle_seconds[env] = bundle;
+  e.setup_seconds += gen + seeds * bundle;
+  return d;
+}
+
+// The single-thread rate (e.gflops_per_s) and fixed cost per call (e.call_seconds) of each of
+// env's task kinds, from short runs of the real training code on d.
+void calibrate_rates(const std::string& env, const Dataset& d, const Profile& p, PlanEstimate& e) {
+  QueryBundleConfig qc = p.queries;
+  qc.similarity = qc.preference = 200;
+  qc.fpe_trajectories = std::min<int64_t>(qc.fpe_trajectories, d.count);
+  const QueryBundle b = make_query_bundle(d, qc, 1);
+  Hyper h = p.hyper.count(env) ? p.hyper.at(env) : study_config(p).hyper;
+  const bool big = env_spec(env).sampled;  // JacoRobot: a few steps suffice for GEMM-bound networks
+  // Each kind is timed at two lengths (k and 3k epochs) and its rate is the difference's: what a
+  // call costs once (allocation, the GEMM's JIT, embedding Ξ) would otherwise count as slow
+  // training, while the run's trainings are tens to thousands of epochs long.
+  auto lengths = [&](Hyper x, int scale) {
+    x.sirl.epochs = (big ? 1 : 10) * scale;
+    x.pref.epochs = (big ? 1 : 5) * scale;
+    x.vae.epochs = scale;
+    x.tpa.epochs = (big ? 1 : 5) * scale;
+    return x;
+  };
+  // Each length is timed several times and its fastest time kept: a calibration of a few
+  // milliseconds per call (GridRobot) otherwise reads one interruption as a rate off by 2x.
+  // At least 3 pairs (2 when a pair takes over a second), more while the kind has cost < 0.5 s.
+  auto rate = [&](const std::string& kind, const std::function<double(const Hyper&)>& f) {
+    double f1 = 0, f3 = 0, s1 = 1e300, s3 = 1e300, spent = 0;
+    for (int pair = 0; pair < 9; ++pair) {
+      const double a = seconds_of([&] { return f(lengths(h, 1)); }, &f1);
+      const double b = seconds_of([&] { return f(lengths(h, 3)); }, &f3);
+      s1 = std::min(s1, a);
+      s3 = std::min(s3, b);
+      spent += a + b;
+      if (pair + 1 >= (a + b > 1.0 ? 2 : 3) && spent > 0.5) break;
     }
-    QueryBundleConfig qc = p.queries;
-    qc.similarity = qc.preference = 200;
-    qc.fpe_trajectories = std::min<int64_t>(qc.fpe_trajectories, d.count);
-    const QueryBundle b = make_query_bundle(d, qc, 1);
-    Hyper h = p.hyper.count(env) ? p.hyper.at(env) : study_config(p).hyper;
-    const bool big = spec.sampled;  // JacoRobot: a few steps suffice for GEMM-bound networks
-    // Each kind is timed at two lengths (k and 3k epochs) and its rate is the difference's:
-    // what a call costs once (allocation, the GEMM's JIT, embedding Ξ) would otherwise count as
-    // slow training, while the run's trainings are tens to thousands of epochs long.
-    auto lengths = [&](Hyper x, int scale) {
-      x.sirl.epochs = (big ? 1 : 10) * scale;
-      x.pref.epochs = (big ? 1 : 5) * scale;
-      x.vae.epochs = scale;
-      x.tpa.epochs = (big ? 1 : 5) * scale;
-      return x;
-    };
-    // Each length is timed several times and its fastest time kept: a calibration of a few
-    // milliseconds per call (GridRobot) otherwise reads one interruption as a rate off by 2x.
-    // At least 3 pairs (2 when a pair takes over a second), more while the kind has cost < 0.5 s.
-    auto rate = [&](const std::string& kind, const std::function<double(const Hyper&)>& f) {
-      double f1 = 0, f3 = 0, s1 = 1e300, s3 = 1e300, spent = 0;
-      for (int pair = 0; pair < 9; ++pair) {
-        const double a = seconds_of([&] { return f(lengths(h, 1)); }, &f1);
-        const double b = seconds_of([&] { return f(lengths(h, 3)); }, &f3);
-        s1 = std::min(s1, a);
-        s3 = std::min(s3, b);
-        spent += a + b;
-        if (pair + 1 >= (a + b > 1.0 ? 2 : 3) && spent > 0.5) break;
-      }
-      const double r = s3 > s1 && f3 > f1 ? (f3 - f1) / (s3 - s1) : (s3 > 0 ? f3 / s3 : 1e9);
-      e.gflops_per_s[env + "/" + kind] = r * 1e-9;
-      e.call_seconds[env + "/" + kind] = std::max(0.0, s1 - f1 / r);
-    };
-    Representation phi = train_representation(
-        d, b, MethodConfig{Method::sirl, 200, false, lengths(h, 1)}, 1);  // for the TPA cells
-    rate("rep_sirl", [&](const Hyper& x) {
-      return train_representation(d, b, MethodConfig{Method::sirl, 200, false, x}, 1).train_flops;
-    });
-    rate("rep_pref", [&](const Hyper& x) {
-      return train_representation(d, b, MethodConfig{Method::multipref10, 200, false, x}, 1)
-          .train_flops;
-    });
-    rate("vae", [&](const Hyper& x) { return train_vae(d, x, 1).train_flops; });
-    {  // FPE: φ over the probe's rows, once (no epochs); its fixed part is in the rate
-      const auto t0 = std::chrono::steady_clock::now();
-      evaluate_fpe(phi, d, b.fpe);
-      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      const double f = phi.shape.forward_flops(int(b.fpe.train.size() + b.fpe.test.size()));
-      e.gflops_per_s[env + "/fpe"] = s > 0 ? f / s * 1e-9 : 1;
-      e.call_seconds[env + "/fpe"] = 0;
-    }
-    const int64_t M = std::min<int64_t>(100, b.tpa[0].train);
-    rate("tpa_frozen", [&](const Hyper& x) {
-      return evaluate_tpa(phi, d, b.tpa, TpaConfig{M, true, x}, 1).train_flops;
-    });
-    rate("tpa_unfrozen", [&](const Hyper& x) {
-      return evaluate_tpa(phi, d, b.tpa, TpaConfig{M, false, x}, 1).train_flops;
-    });
-    e.peak_bytes += 4.0 * double(d.inputs.size() + d.features.size() * 2);
+    const double r = s3 > s1 && f3 > f1 ? (f3 - f1) / (s3 - s1) : (s3 > 0 ? f3 / s3 : 1e9);
+    e.gflops_per_s[env + "/" + kind] = r * 1e-9;
+    e.call_seconds[env + "/" + kind] = std::max(0.0, s1 - f1 / r);
+  };
+  Representation phi = train_representation(
+      d, b, MethodConfig{Method::sirl, 200, false, lengths(h, 1)}, 1);  // for the TPA cells
+  rate("rep_sirl", [&](const Hyper& x) {
+    return train_representation(d, b, MethodConfig{Method::sirl, 200, false, x}, 1).train_flops;
+  });
+  rate("rep_pref", [&](const Hyper& x) {
+    return train_representation(d, b, MethodConfig{Method::multipref10, 200, false, x}, 1)
+        .train_flops;
+  });
+  rate("vae", [&](const Hyper& x) { return train_vae(d, x, 1).train_flops; });
+  {  // FPE: φ over the probe's rows, once (no epochs); its fixed part is in the rate
+    const double s = seconds_of([&] { evaluate_fpe(phi, d, b.fpe); });
+    const double f = phi.shape.forward_flops(int(b.fpe.train.size() + b.fpe.test.size()));
+    e.gflops_per_s[env + "/fpe"] = s > 0 ? f / s * 1e-9 : 1;
+    e.call_seconds[env + "/fpe"] = 0;
   }
+  const int64_t M = std::min<int64_t>(100, b.tpa[0].train);
+  rate("tpa_frozen", [&](const Hyper& x) {
+    return evaluate_tpa(phi, d, b.tpa, TpaConfig{M, true, x}, 1).train_flops;
+  });
+  rate("tpa_unfrozen", [&](const Hyper& x) {
+    return evaluate_tpa(phi, d, b.tpa, TpaConfig{M, false, x}, 1).train_flops;
+  });
+}
+
+// Each task's time on one core from its kind's rate, the one-thread total, the scheduler's
+// makespan on `threads` cores, and the peak memory of the largest tasks running at once.
+void time_tasks(const Plan& plan, int threads, PlanEstimate& e) {
   std::vector<double>& secs = e.task_seconds;
   secs.assign(plan.tasks.size(), 0);
   std::vector<double> sizes;
@@ -142,6 +144,22 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
   e.seconds = simulate_schedule(plan, secs, std::vector<char>(plan.tasks.size(), 1), m).makespan;
   std::sort(sizes.rbegin(), sizes.rend());
   for (int k = 0; k < threads && k < int(sizes.size()); ++k) e.peak_bytes += sizes[k];
+}
+
+}  // namespace
+
+PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
+  PlanEstimate e;
+  // The grid's environments and the user study's (its tasks run on its own Ξ).
+  std::vector<std::string> envs = p.envs;
+  if (p.study.enabled && std::find(envs.begin(), envs.end(), p.study.cohort.env) == envs.end())
+    envs.push_back(p.study.cohort.env);
+  for (const auto& env : envs) {
+    const Dataset d = time_setup(env, p, e);
+    calibrate_rates(env, d, p, e);
+    e.peak_bytes += 4.0 * double(d.inputs.size() + d.features.size() * 2);
+  }
+  time_tasks(plan, threads, e);
   return e;
 }
 

@@ -100,116 +100,151 @@ void mpi_abort(int code) {
   std::exit(code);
 }
 
-std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending,
-                              int threads_per_worker,
-                              const std::function<void(int, const TaskRecord&)>& on_result) {
-  int size = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  const int width = std::max(1, threads_per_worker);
-  std::vector<int> ran(size, 0);  // results received per rank
-  ReadyQueue queue(plan, pending);
-  std::deque<int> idle;
-  std::vector<int> running(size, -1);
-  // Each worker's node (by processor name), how many cores its process may use, and the idle
-  // workers of its node it borrowed for its current task.
-  std::map<std::string, int> node_ids;
-  std::vector<int> node(size, -1), usable(size, 1), node_workers;
-  std::vector<std::vector<int>> gang(size);
-  int busy = 0, reported = 0;
-  std::string error;           // the first failure, which stops dispatching
-  std::exception_ptr failure;  // rank 0's own, rethrown as it was
+namespace {
+
+// Rank 0's side of a run: what it knows of each worker (its node, its usable cores, its task and
+// the workers it borrowed), the ready queue, and the first failure.
+class Dispatcher {
+ public:
+  Dispatcher(const Plan& plan, const std::vector<char>& pending, int threads_per_worker,
+             const std::function<void(int, const TaskRecord&)>& on_result)
+      : plan_(plan), on_result_(on_result), queue_(plan, pending) {
+    MPI_Comm_size(MPI_COMM_WORLD, &size_);
+    width_ = std::max(1, threads_per_worker);
+    ran_.assign(size_t(size_), 0);
+    running_.assign(size_t(size_), -1);
+    node_.assign(size_t(size_), -1);
+    usable_.assign(size_t(size_), 1);
+    gang_.resize(size_t(size_));
+  }
+
+  std::vector<int> run() {
+    while (true) {
+      hand_out();
+      if (busy_ == 0 && (queue_.remaining() == 0 || !error_.empty())) break;
+      const MPI_Status st = wait_for_message(MPI_ANY_SOURCE);
+      const std::string msg = recv_bytes(st);
+      if (st.MPI_TAG == kReady)
+        on_ready(st.MPI_SOURCE, msg);
+      else if (st.MPI_TAG == kResult || st.MPI_TAG == kError)
+        on_done(st.MPI_SOURCE, st.MPI_TAG == kError, msg);
+    }
+    // Every worker's first message is received, even when there was nothing to run.
+    while (reported_ < size_ - 1) {
+      recv_bytes(wait_for_message(MPI_ANY_SOURCE));
+      ++reported_;
+    }
+    mpi_release_workers();
+    if (failure_) std::rethrow_exception(failure_);
+    if (!error_.empty()) throw std::runtime_error(error_);
+    return ran_;
+  }
+
+ private:
   // Hands the ready tasks to idle workers. The first task waits for every worker's report: a
   // task borrows only workers it knows of.
-  auto hand_out = [&] {
-    while (error.empty() && reported == size - 1 && !idle.empty() && !queue.empty()) {
-      const int w = idle.front();
-      idle.pop_front();
-      const int i = queue.pop();
+  void hand_out() {
+    while (error_.empty() && reported_ == size_ - 1 && !idle_.empty() && !queue_.empty()) {
+      const int w = idle_.front();
+      idle_.pop_front();
+      const int i = queue_.pop();
       // As the thread scheduler, counting in workers: a big task alone or on a critical chain
       // takes idle workers of its node too, as far as its process may run threads on their
       // cores (a rank bound to its own core lends nothing). The simulator does the same.
       std::vector<int> same;
-      for (int x : idle)
-        if (node[x] == node[w]) same.push_back(x);
+      for (int x : idle_)
+        if (node_[x] == node_[w]) same.push_back(x);
       const int k = task_threads(
-          plan.tasks[size_t(i)],
-          {1 + int(same.size()), size - 1,
-           std::min(node_workers[size_t(node[w])], std::max(1, usable[w] / width)), queue.size(),
-           queue.rank(i), queue.remaining_flops(), queue.longest_chain()});
+          plan_.tasks[size_t(i)],
+          {1 + int(same.size()), size_ - 1,
+           std::min(node_workers_[size_t(node_[w])], std::max(1, usable_[w] / width_)),
+           queue_.size(), queue_.rank(i), queue_.remaining_flops(), queue_.longest_chain()});
       same.resize(size_t(k - 1));
       for (int x : same) {
-        idle.erase(std::find(idle.begin(), idle.end(), x));
+        idle_.erase(std::find(idle_.begin(), idle_.end(), x));
         MPI_Send(nullptr, 0, MPI_BYTE, x, kHold, MPI_COMM_WORLD);
       }
-      gang[w] = same;
-      const int msg[2] = {i, k * width};
+      gang_[w] = same;
+      const int msg[2] = {i, k * width_};
       MPI_Send(msg, 2, MPI_INT, w, kTask, MPI_COMM_WORLD);
-      running[w] = i;
-      ++busy;
+      running_[w] = i;
+      ++busy_;
     }
-  };
-  while (true) {
+  }
+
+  // A worker's first message: "node name\tusable cores".
+  void on_ready(int w, const std::string& msg) {
+    const size_t tab = msg.find('\t');
+    const auto [it, added] = node_ids_.emplace(msg.substr(0, tab), int(node_ids_.size()));
+    if (added) node_workers_.push_back(0);
+    node_[w] = it->second;
+    ++node_workers_[size_t(node_[w])];
+    usable_[w] = tab == std::string::npos ? 1 : std::max(1, std::atoi(msg.c_str() + tab + 1));
+    idle_.push_back(w);
+    ++reported_;
+  }
+
+  // Worker w finished its task: a result (a serialized record) or an error (its message).
+  void on_done(int w, bool failed, const std::string& msg) {
+    const int i = running_[w];
+    running_[w] = -1;
+    --busy_;
+    idle_.push_back(w);
+    for (int x : gang_[w]) {
+      MPI_Send(nullptr, 0, MPI_BYTE, x, kRelease, MPI_COMM_WORLD);
+      idle_.push_back(x);
+    }
+    gang_[w].clear();
+    if (failed) {
+      if (error_.empty()) error_ = "rank " + std::to_string(w) + ": " + msg;
+      return;
+    }
+    // The worker takes its next task before rank 0 commits this result: it need not wait for
+    // the write. Only tasks ready before this result go out; its dependents become ready once it
+    // is committed (they read it from the staging folder).
     hand_out();
-    if (busy == 0 && (queue.remaining() == 0 || !error.empty())) break;
-    const MPI_Status st = wait_for_message(MPI_ANY_SOURCE);
-    const std::string msg = recv_bytes(st);
-    const int w = st.MPI_SOURCE;
-    if (st.MPI_TAG == kReady) {
-      const size_t tab = msg.find('\t');
-      const auto [it, added] = node_ids.emplace(msg.substr(0, tab), int(node_ids.size()));
-      if (added) node_workers.push_back(0);
-      node[w] = it->second;
-      ++node_workers[size_t(node[w])];
-      usable[w] = tab == std::string::npos ? 1 : std::max(1, std::atoi(msg.c_str() + tab + 1));
-      idle.push_back(w);
-      ++reported;
-    } else if (st.MPI_TAG == kResult || st.MPI_TAG == kError) {
-      const int i = running[w];
-      running[w] = -1;
-      --busy;
-      idle.push_back(w);
-      for (int x : gang[w]) {
-        MPI_Send(nullptr, 0, MPI_BYTE, x, kRelease, MPI_COMM_WORLD);
-        idle.push_back(x);
-      }
-      gang[w].clear();
-      if (st.MPI_TAG == kError) {
-        if (error.empty()) error = "rank " + std::to_string(w) + ": " + msg;
-        continue;
-      }
-      // The worker takes its next task before rank 0 commits this result: it need not wait
-      // for the write. Only tasks ready before this result go out; its dependents become ready
-      // once it is committed (they read it from the staging folder).
-      hand_out();
-      // A result rank 0 cannot take (a commit failing for want of space, a malformed record)
-      // ends the run like a failed task: no new task starts, and the running ones are received
-      // before the workers are released. Leaving now would leave them blocked in MPI_Send of
-      // their results, and mpirun waiting on them.
-      try {
-        const TaskRecord rec = deserialize(msg);
-        if (rec.key != plan.tasks[i].key)
-          throw std::runtime_error("rank " + std::to_string(w) + " returned " + rec.key +
-                                   " for task " + plan.tasks[i].key);
-        on_result(i, rec);
-        queue.finish(i);
-        ++ran[w];
-      } catch (const std::exception& e) {
-        if (error.empty()) {  // the first failure is the one reported
-          failure = std::current_exception();
-          error = e.what();
-        }
+    // A result rank 0 cannot take (a commit failing for want of space, a malformed record) ends
+    // the run like a failed task: no new task starts, and the running ones are received before
+    // the workers are released. Leaving now would leave them blocked in MPI_Send of their
+    // results, and mpirun waiting on them.
+    try {
+      const TaskRecord rec = deserialize(msg);
+      if (rec.key != plan_.tasks[i].key)
+        throw std::runtime_error("rank " + std::to_string(w) + " returned " + rec.key +
+                                 " for task " + plan_.tasks[i].key);
+      on_result_(i, rec);
+      queue_.finish(i);
+      ++ran_[w];
+    } catch (const std::exception& e) {
+      if (error_.empty()) {  // the first failure is the one reported
+        failure_ = std::current_exception();
+        error_ = e.what();
       }
     }
   }
-  // Every worker's first message is received, even when there was nothing to run.
-  while (reported < size - 1) {
-    recv_bytes(wait_for_message(MPI_ANY_SOURCE));
-    ++reported;
-  }
-  mpi_release_workers();
-  if (failure) std::rethrow_exception(failure);
-  if (!error.empty()) throw std::runtime_error(error);
-  return ran;
+
+  const Plan& plan_;
+  const std::function<void(int, const TaskRecord&)>& on_result_;
+  ReadyQueue queue_;
+  int size_ = 1, width_ = 1, busy_ = 0, reported_ = 0;
+  std::vector<int> ran_;      // results received per rank
+  std::vector<int> running_;  // each worker's task (-1: none)
+  std::deque<int> idle_;
+  // Each worker's node (by processor name), how many cores its process may use, and the idle
+  // workers of its node it borrowed for its current task.
+  std::map<std::string, int> node_ids_;
+  std::vector<int> node_, usable_, node_workers_;
+  std::vector<std::vector<int>> gang_;
+  std::string error_;           // the first failure, which stops dispatching
+  std::exception_ptr failure_;  // rank 0's own, rethrown as it was
+};
+
+}  // namespace
+
+std::vector<int> mpi_dispatch(const Plan& plan, const std::vector<char>& pending,
+                              int threads_per_worker,
+                              const std::function<void(int, const TaskRecord&)>& on_result) {
+  return Dispatcher(plan, pending, threads_per_worker, on_result).run();
 }
 
 void mpi_work(const Plan& plan, RunContext& ctx) {

@@ -613,6 +613,105 @@ struct HyperAxis {
   const toml::node* node;
 };
 
+using HyperAxes = std::map<std::string, std::vector<HyperAxis>>;  // per environment
+
+// [hyper.all] then [hyper.<env>], each table's keys in toml++ order: a single value sets the
+// environment's base point, a list makes (or replaces) an axis.
+HyperAxes read_hyper_tables(Reader& r, const toml::table& hy, Profile& p) {
+  HyperAxes axes;
+  std::set<std::string> allowed{"all"};
+  for (const auto& e : p.envs) allowed.insert(e);
+  r.only_keys(hy, "[hyper] (one sub-table per environment, or 'all')", allowed);
+  std::vector<std::string> scopes{"all"};
+  scopes.insert(scopes.end(), p.envs.begin(), p.envs.end());
+  for (const std::string& scope : scopes) {
+    const auto* t = r.table(hy, scope.c_str(), false);
+    if (!t) continue;
+    for (auto&& [k, v] : *t) {
+      const std::string key(k.str());
+      for (auto& [env, h] : p.hyper) {
+        if (scope != "all" && env != scope) continue;
+        auto& env_axes = axes[env];
+        std::erase_if(env_axes, [&](const HyperAxis& a) { return a.key == key; });
+        if (is_hyper_axis(v, key)) {
+          env_axes.push_back({key, hyper_axis_values(r, v, key), &v});
+          continue;
+        }
+        const std::string text = hyper_text(r, v, key);  // fails with file:line itself
+        try {
+          set_hyper(h, key, text);
+        } catch (const std::invalid_argument& e) {
+          r.fail(&v, e.what());
+        }
+      }
+    }
+  }
+  return axes;
+}
+
+// Every combination of an environment's axes (p.hyper_points), the first values' being the base
+// point (p.hyper).
+void expand_hyper_points(Reader& r, const HyperAxes& axes, Profile& p) {
+  for (const auto& [env, env_axes] : axes) {
+    if (env_axes.empty()) continue;
+    std::vector<std::vector<std::pair<std::string, std::string>>> points{{}};
+    for (const HyperAxis& a : env_axes) {
+      std::vector<std::vector<std::pair<std::string, std::string>>> next;
+      for (const auto& pt : points)
+        for (const std::string& value : a.values) {
+          next.push_back(pt);
+          next.back().push_back({a.key, value});
+        }
+      points = std::move(next);
+    }
+    if (points.size() > 256)
+      r.fail(env_axes.back().node, "[hyper." + env + "]: " + std::to_string(points.size()) +
+                                       " combinations of hyper-parameter values (at most 256)");
+    const Hyper base = p.hyper[env];
+    for (size_t i = 0; i < points.size(); ++i) {
+      HyperPoint hp{"", base};
+      for (const auto& kv : points[i]) {
+        const std::string& key = kv.first;  // (a structured binding cannot be captured in C++20)
+        hp.tag += (hp.tag.empty() ? "" : ";") + key + "=" + kv.second;
+        try {
+          set_hyper(hp.hyper, key, kv.second);
+        } catch (const std::invalid_argument& e) {
+          const auto it = std::find_if(env_axes.begin(), env_axes.end(),
+                                       [&](const HyperAxis& a) { return a.key == key; });
+          r.fail(it->node, e.what());
+        }
+      }
+      if (i == 0) p.hyper[env] = hp.hyper;
+      p.hyper_points[env].push_back(std::move(hp));
+    }
+  }
+}
+
+// Every point's values valid, and every φ small enough to train in this machine's memory: one φ
+// in training holds weights, gradient and two Adam moments (16 bytes per weight); refused before
+// anything allocates it.
+void check_hyper_points(Reader& r, const toml::table& hy, Profile& p) {
+  std::vector<std::pair<std::string, Hyper*>> all;  // every point's values
+  for (auto& [env, h] : p.hyper) all.push_back({env, &h});
+  for (auto& [env, pts] : p.hyper_points)
+    for (auto& pt : pts) all.push_back({env, &pt.hyper});
+  for (auto& [env, hp] : all) {
+    const Hyper& h = *hp;
+    try {
+      validate(h);
+    } catch (const std::invalid_argument& e) {
+      r.fail(&hy, std::string("[hyper.") + env + "]: " + e.what());
+    }
+    const double bytes = 16.0 * double(phi_shape(env_spec(env).input_dim(p.data), h).param_count());
+    const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+    if (bytes > ram)
+      r.fail(&hy, "[hyper." + env + "]: φ of widths " + describe_widths(h) + " needs " +
+                      std::to_string(int64_t(bytes / (1 << 30))) +
+                      " GiB to train, this machine has " +
+                      std::to_string(int64_t(ram / (1 << 30))) + " GiB");
+  }
+}
+
 // The paper's hyper-parameters per environment, then [hyper.all] and [hyper.<env>] overrides. A
 // key given a list of values is an axis: the environment's cells run at every combination of its
 // axes' values, the first value of each being the base point (p.hyper, tasks without a point).
@@ -621,93 +720,11 @@ void parse_hyper(Reader& r, const toml::table& root, Profile& p) {
     p.hyper[env] = paper_hyper(env);
     p.hyper[env].precision = p.precision;
   }
-  // Per env: [hyper.all]'s axes then [hyper.<env>]'s, each table's by key name (toml++ order).
-  std::map<std::string, std::vector<HyperAxis>> axes;
-  if (const auto* hy = r.table(root, "hyper", false)) {
-    std::set<std::string> allowed{"all"};
-    for (const auto& e : p.envs) allowed.insert(e);
-    r.only_keys(*hy, "[hyper] (one sub-table per environment, or 'all')", allowed);
-    std::vector<std::string> scopes{"all"};
-    scopes.insert(scopes.end(), p.envs.begin(), p.envs.end());
-    for (const std::string& scope : scopes) {
-      const auto* t = r.table(*hy, scope.c_str(), false);
-      if (!t) continue;
-      for (auto&& [k, v] : *t) {
-        const std::string key(k.str());
-        for (auto& [env, h] : p.hyper) {
-          if (scope != "all" && env != scope) continue;
-          auto& env_axes = axes[env];
-          std::erase_if(env_axes, [&](const HyperAxis& a) { return a.key == key; });
-          if (is_hyper_axis(v, key)) {
-            env_axes.push_back({key, hyper_axis_values(r, v, key), &v});
-            continue;
-          }
-          const std::string text = hyper_text(r, v, key);  // fails with file:line itself
-          try {
-            set_hyper(h, key, text);
-          } catch (const std::invalid_argument& e) {
-            r.fail(&v, e.what());
-          }
-        }
-      }
-    }
-    // Every combination of an environment's axes, the first values' being the base.
-    for (auto& [env, env_axes] : axes) {
-      if (env_axes.empty()) continue;
-      std::vector<std::vector<std::pair<std::string, std::string>>> points{{}};
-      for (const HyperAxis& a : env_axes) {
-        std::vector<std::vector<std::pair<std::string, std::string>>> next;
-        for (const auto& pt : points)
-          for (const std::string& value : a.values) {
-            next.push_back(pt);
-            next.back().push_back({a.key, value});
-          }
-        points = std::move(next);
-      }
-      if (points.size() > 256)
-        r.fail(env_axes.back().node, "[hyper." + env + "]: " + std::to_string(points.size()) +
-                                         " combinations of hyper-parameter values (at most 256)");
-      const Hyper base = p.hyper[env];
-      for (size_t i = 0; i < points.size(); ++i) {
-        HyperPoint hp{"", base};
-        for (const auto& kv : points[i]) {
-          const std::string& key = kv.first;  // (a structured binding cannot be captured in C++20)
-          hp.tag += (hp.tag.empty() ? "" : ";") + key + "=" + kv.second;
-          try {
-            set_hyper(hp.hyper, key, kv.second);
-          } catch (const std::invalid_argument& e) {
-            const auto it = std::find_if(env_axes.begin(), env_axes.end(),
-                                         [&](const HyperAxis& a) { return a.key == key; });
-            r.fail(it->node, e.what());
-          }
-        }
-        if (i == 0) p.hyper[env] = hp.hyper;
-        p.hyper_points[env].push_back(std::move(hp));
-      }
-    }
-    std::vector<std::pair<std::string, Hyper*>> all;  // every point's values
-    for (auto& [env, h] : p.hyper) all.push_back({env, &h});
-    for (auto& [env, pts] : p.hyper_points)
-      for (auto& pt : pts) all.push_back({env, &pt.hyper});
-    for (auto& [env, hp] : all) {
-      const Hyper& h = *hp;
-      try {
-        validate(h);
-      } catch (const std::invalid_argument& e) {
-        r.fail(hy, std::string("[hyper.") + env + "]: " + e.what());
-      }
-      // One φ in training holds weights, gradient and two Adam moments (16 bytes per weight);
-      // refuse a network that could not fit before anything allocates it.
-      const double bytes =
-          16.0 * double(phi_shape(env_spec(env).input_dim(p.data), h).param_count());
-      const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
-      if (bytes > ram)
-        r.fail(hy, "[hyper." + env + "]: φ of widths " + describe_widths(h) + " needs " +
-                       std::to_string(int64_t(bytes / (1 << 30))) +
-                       " GiB to train, this machine has " +
-                       std::to_string(int64_t(ram / (1 << 30))) + " GiB");
-    }
-  }
+  const auto* hy = r.table(root, "hyper", false);
+  if (!hy) return;
+  const HyperAxes axes = read_hyper_tables(r, *hy, p);
+  expand_hyper_points(r, axes, p);
+  check_hyper_points(r, *hy, p);
 }
 
 // Cross-checks: budgets must cover the grid.

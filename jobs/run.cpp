@@ -425,6 +425,99 @@ std::vector<TaskRecord> finished_records(const Profile& p, const Plan& plan,
   return records;
 }
 
+// The worker threads (MPI: worker ranks) a run uses. More threads than cores would not run more
+// tasks at once (oneTBB has no more workers), only claim so in the progress line and the file's
+// metadata: say so and use the cores.
+int run_threads(const RunOptions& o, int mpi_size) {
+  if (mpi_size > 1) return mpi_size - 1;
+  const int cores = usable_cores();
+  const int threads = o.threads > 0 ? o.threads : cores;
+  if (threads <= cores) return threads;
+  std::fprintf(stderr,
+               "sirl run: --threads %d is more than the %d core(s) this process may use; "
+               "running %d threads (results do not depend on it)\n",
+               threads, cores, cores);
+  return cores;
+}
+
+// The checkpoint store in the cache, handed to ctx's trainings by task digest. A checkpoint of a
+// task already committed (a crash between its commit and the checkpoint's removal) is never
+// needed again: removed.
+std::unique_ptr<CheckpointStore> open_checkpoints(const TaskCache& cache, const RunOptions& o,
+                                                  const Plan& plan,
+                                                  const std::vector<std::string>& digests,
+                                                  const std::vector<char>& mine,
+                                                  const std::vector<char>& pending,
+                                                  RunContext& ctx) {
+  auto checkpoints =
+      std::make_unique<CheckpointStore>(cache.dir() / "checkpoints", o.checkpoint_seconds);
+  ctx.set_checkpoints([&cs = *checkpoints, &plan, &digests](const std::string& key) {
+    return cs.for_task(digests[size_t(plan.index.at(key))]);
+  });
+  for (size_t i = 0; i < plan.tasks.size(); ++i)
+    if (mine[i] && !pending[i]) checkpoints->remove(digests[i]);
+  return checkpoints;
+}
+
+// The keys of the plan's tasks that continue a checkpoint (their work so far is not this
+// process's: Progress keeps them out of its rate).
+std::set<std::string> resumed_keys(const CheckpointStore& checkpoints, const Plan& plan,
+                                   const std::vector<std::string>& digests) {
+  std::map<std::string, std::string> key_of;  // digest → key, for this plan's tasks
+  for (size_t i = 0; i < plan.tasks.size(); ++i) key_of[digests[i]] = plan.tasks[i].key;
+  std::set<std::string> resumed;
+  for (const std::string& d : checkpoints.keys())
+    if (auto it = key_of.find(d); it != key_of.end()) resumed.insert(it->second);
+  return resumed;
+}
+
+// Measures the roofs the results file records (kernels/roofline.h keeps them per process):
+// before the tasks, on cores they do not use yet; the memory roof only when a task streams.
+void measure_roofs(const Profile& p, const Plan& plan, const std::vector<char>& pending) {
+  fp32_roof_gflops_per_core();
+  if (runs_bf16(p)) bf16_roof_gflops_per_core();
+  for (size_t i = 0; i < plan.tasks.size(); ++i)
+    if (pending[i] && plan.tasks[i].stream_bytes > 0) {
+      stream_gbs_per_core();
+      break;
+    }
+}
+
+void announce_run(const Profile& p, const RunOptions& o, const PendingSet& ps, int threads,
+                  int mpi_size) {
+  std::fprintf(stderr, "sirl run: profile %s, %d tasks (%d already done), %d %s → %s\n",
+               p.name.c_str(), ps.total, ps.reused, threads,
+               mpi_size > 1 ? "MPI workers" : "threads", o.out.c_str());
+  if (!ps.other_class.empty())
+    std::fprintf(stderr,
+                 "sirl run: %zu reused tasks were computed on another CPU class "
+                 "(--any-cpu-class; /tables/timings' cpu_class says which), e.g. %s\n",
+                 ps.other_class.size(), ps.other_class.front().c_str());
+}
+
+// What the results file says about the run besides its tasks and times: the profile, the engine
+// and the machine (CPU class, libraries, kernel paths, the roofs measured before the tasks).
+RunInfo run_info(const Profile& p, const RunOptions& o, const std::vector<TaskRecord>& records) {
+  RunInfo info;
+  info.profile_name = p.name;
+  info.profile_text = p.text;
+  info.engine_version = o.engine_version;
+  info.git_commit = o.git_commit;
+  info.host = hostname();
+  info.cpu_class = cpu_class();
+  info.libraries = library_versions_text();
+  info.kernel_paths = kernel_paths();
+  info.hyper_points = hyper_points_text(p);
+  // bf16 products run natively or emulated: different bits, so a different class.
+  if (runs_bf16(p)) info.cpu_class += std::string(", bf16 ") + bf16_backend();
+  info.roof_fp32_gflops = fp32_roof_gflops_per_core();
+  if (runs_bf16(p)) info.roof_bf16_gflops = bf16_roof_gflops_per_core();
+  if (std::any_of(records.begin(), records.end(),
+                  [](const TaskRecord& r) { return r.num.count("stream_bytes") > 0; }))
+    info.stream_gbs = stream_gbs_per_core();  // measured before the tasks when any streams
+  return info;
+}
+
 RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   // One writer per output, taken before reading anything of it.
   const FileLock lock(o.out, "sirl run", "wait for it to finish, or choose another --out");
@@ -435,17 +528,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   const Plan plan = make_plan(p);
   const std::vector<std::string> digests = task_digests(plan, p);
   const std::vector<char> mine = shard_tasks(plan, o.shard_index, o.shard_count);
-  // More threads than cores would not run more tasks at once (oneTBB has no more workers),
-  // only claim so in the progress line and the file's metadata: say so and use the cores.
-  const int cores = usable_cores();
-  int threads = mpi_size > 1 ? mpi_size - 1 : o.threads > 0 ? o.threads : cores;
-  if (mpi_size <= 1 && threads > cores) {
-    std::fprintf(stderr,
-                 "sirl run: --threads %d is more than the %d core(s) this process may use; "
-                 "running %d threads (results do not depend on it)\n",
-                 threads, cores, cores);
-    threads = cores;
-  }
+  const int threads = run_threads(o, mpi_size);
   const std::string shard =
       o.shard_count > 1 ? std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count) : "";
 
@@ -471,46 +554,14 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   // Training checkpoints, by task digest (not under MPI: its workers may not share this
   // directory).
   std::unique_ptr<CheckpointStore> checkpoints;
-  std::map<std::string, std::string> key_of;  // digest → key, for this plan's tasks
-  for (size_t i = 0; i < plan.tasks.size(); ++i) key_of[digests[i]] = plan.tasks[i].key;
-  if (mpi_size <= 1 && o.checkpoint_seconds >= 0) {
-    checkpoints =
-        std::make_unique<CheckpointStore>(cache.dir() / "checkpoints", o.checkpoint_seconds);
-    ctx.set_checkpoints([&cs = *checkpoints, &plan, &digests](const std::string& key) {
-      return cs.for_task(digests[size_t(plan.index.at(key))]);
-    });
-  }
-  // A checkpoint of a task already committed (a crash between its commit and the checkpoint's
-  // removal) is never needed again.
-  if (checkpoints)
-    for (size_t i = 0; i < plan.tasks.size(); ++i)
-      if (mine[i] && !ps.pending[i]) checkpoints->remove(digests[i]);
+  if (mpi_size <= 1 && o.checkpoint_seconds >= 0)
+    checkpoints = open_checkpoints(cache, o, plan, digests, mine, ps.pending, ctx);
 
-  fp32_roof_gflops_per_core();  // measured now, on cores the tasks do not use yet
-  if (runs_bf16(p)) bf16_roof_gflops_per_core();
-  for (size_t i = 0; i < plan.tasks.size(); ++i)
-    if (ps.pending[i] && plan.tasks[i].stream_bytes > 0) {
-      stream_gbs_per_core();  // likewise, when a task will need its memory roof
-      break;
-    }
+  measure_roofs(p, plan, ps.pending);  // now, on cores the tasks do not use yet
   const int to_run = ps.total - ps.reused;
-  if (!o.quiet) {
-    std::fprintf(stderr, "sirl run: profile %s, %d tasks (%d already done), %d %s → %s\n",
-                 p.name.c_str(), ps.total, ps.reused, threads,
-                 mpi_size > 1 ? "MPI workers" : "threads", o.out.c_str());
-    if (!ps.other_class.empty())
-      std::fprintf(stderr,
-                   "sirl run: %zu reused tasks were computed on another CPU class "
-                   "(--any-cpu-class; /tables/timings' cpu_class says which), e.g. %s\n",
-                   ps.other_class.size(), ps.other_class.front().c_str());
-  }
+  if (!o.quiet) announce_run(p, o, ps, threads, mpi_size);
   Progress progress(to_run, ps.flops, o.quiet);
-  if (checkpoints) {
-    std::set<std::string> resumed;
-    for (const std::string& d : checkpoints->keys())
-      if (auto it = key_of.find(d); it != key_of.end()) resumed.insert(it->second);
-    progress.set_resumed(resumed);
-  }
+  if (checkpoints) progress.set_resumed(resumed_keys(*checkpoints, plan, digests));
   Execution exec{p, plan, digests, ps.pending, ctx, cache, sources, checkpoints.get(), o, progress};
   const std::exception_ptr failure =
       exec.run(threads,
@@ -523,23 +574,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
 
   // Assemble whatever is finished (a partial file plots with gaps; a rerun completes it).
   const std::vector<TaskRecord> records = finished_records(p, plan, mine, prior, cache, sources);
-  RunInfo info;
-  info.profile_name = p.name;
-  info.profile_text = p.text;
-  info.engine_version = o.engine_version;
-  info.git_commit = o.git_commit;
-  info.host = hostname();
-  info.cpu_class = cpu_class();
-  info.libraries = library_versions_text();
-  info.kernel_paths = kernel_paths();
-  info.hyper_points = hyper_points_text(p);
-  // bf16 products run natively or emulated: different bits, so a different class.
-  if (runs_bf16(p)) info.cpu_class += std::string(", bf16 ") + bf16_backend();
-  info.roof_fp32_gflops = fp32_roof_gflops_per_core();
-  if (runs_bf16(p)) info.roof_bf16_gflops = bf16_roof_gflops_per_core();
-  if (std::any_of(records.begin(), records.end(),
-                  [](const TaskRecord& r) { return r.num.count("stream_bytes") > 0; }))
-    info.stream_gbs = stream_gbs_per_core();  // measured before the tasks when any streams
+  RunInfo info = run_info(p, o, records);
   info.started = started;
   info.finished = now_iso();
   info.shard = shard;
