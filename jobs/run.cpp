@@ -518,6 +518,23 @@ RunInfo run_info(const Profile& p, const RunOptions& o, const std::vector<TaskRe
   return info;
 }
 
+// Files this shard's tasks under the run's needs in the cache: sirl gc keeps them while it lives.
+void register_needs(TaskCache& cache, const std::vector<std::string>& digests,
+                    const std::vector<char>& mine) {
+  std::vector<std::string> needed;
+  for (size_t i = 0; i < digests.size(); ++i)
+    if (mine[i]) needed.push_back(digests[i]);
+  cache.register_needs(needed);
+}
+
+// Each environment's Ξ and its first seed's queries, as the results file keeps them.
+std::vector<RunDataset> run_datasets(const Profile& p, RunContext& ctx) {
+  std::vector<RunDataset> datasets;
+  for (const auto& env : p.envs)
+    datasets.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
+  return datasets;
+}
+
 RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   // One writer per output, taken before reading anything of it.
   const FileLock lock(o.out, "sirl run", "wait for it to finish, or choose another --out");
@@ -535,12 +552,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   // Earlier results: the task cache, and the records of the results file being replaced.
   const std::map<std::string, TaskRecord> prior = load_prior(p, o, shard, plan, digests);
   TaskCache cache(cache_dir(o));
-  {
-    std::vector<std::string> needed;
-    for (size_t i = 0; i < plan.tasks.size(); ++i)
-      if (mine[i]) needed.push_back(digests[i]);
-    cache.register_needs(needed);  // sirl gc keeps them while this run lives
-  }
+  register_needs(cache, digests, mine);
   Sources sources(plan.tasks.size());
   const PendingSet ps = find_pending(p, plan, mine, digests, prior, cache, sources, o);
   RunContext ctx(p, [&](const std::string& key) -> TaskRecord {
@@ -583,11 +595,9 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   info.tasks_done = int64_t(records.size());
   info.complete = info.tasks_done == ps.total;
   info.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::vector<RunDataset> datasets;
-  for (const auto& env : p.envs)
-    datasets.push_back({&ctx.dataset(env), &ctx.bundle(env, p.axes.at(env).seeds.front())});
   try {
-    write_results_file(o.out, info, datasets, records, result_tables(records, info.roofs()));
+    write_results_file(o.out, info, run_datasets(p, ctx), records,
+                       result_tables(records, info.roofs()));
   } catch (const std::exception&) {
     // A task's failure (a full disk while saving it) is the cause to report; the results file
     // then failed for the same reason. Every committed task stays in the cache.

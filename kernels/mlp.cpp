@@ -176,105 +176,122 @@ void mlp_backward(const MlpShape& s, const T* params, MlpTape<T>& tape,
   }
 }
 
+namespace {
+
+// Layer l's ReLU mask on g [batch, no] (output > 0 ⇔ pre-activation > 0) and, in the same pass,
+// db [no] = Σ_rows g, rows in order (the same values and order as mask_relu then mlp_backward's
+// sum); then the biases' Adam update.
+void mask_relu_and_step_bias(const MlpShape& s, int l, const MlpTape<float>& tape, float* g,
+                             const AdamStepScalars& step, float* params, float* m, float* v) {
+  const int batch = tape.batch, no = s.widths[l + 1];
+  const size_t b_off = s.bias_offset(l);
+  thread_local AlignedVector<float> db;
+  db.assign(no, 0.f);
+  const float* y = s.relu_after(l) ? tape.act[l].data() : nullptr;
+  for (int r = 0; r < batch; ++r) {
+    float* gr = g + size_t(r) * no;
+    if (y) {
+      const float* yr = y + size_t(r) * no;
+      for (int j = 0; j < no; ++j) {
+        gr[j] = yr[j] <= 0.f ? 0.f : gr[j];
+        db[j] += gr[j];
+      }
+    } else {
+      for (int j = 0; j < no; ++j) db[j] += gr[j];
+    }
+  }
+  adam_apply(step, params + b_off, db.data(), m + b_off, v + b_off, no);
+}
+
+// Layer l's weights: ∂L/∂input into d_in [batch, ni] (if not null) from the weights before their
+// update, and each part of W's gradient (a column slice or a block of rows) followed at once by
+// that part's Adam update. g: [batch, no] ∂L/∂(pre-activation), masked.
+void step_layer_weights(const MlpShape& s, int l, MlpTape<float>& tape, float* g, float* d_in,
+                        const AdamStepScalars& step, float* params, float* m, float* v,
+                        int threads) {
+  const int batch = tape.batch, ni = s.widths[l], no = s.widths[l + 1];
+  const float* in = l == 0 ? tape.input : tape.act[l - 1].data();  // [batch, ni]
+  const size_t w_off = s.weight_offset(l);
+  float* W = params + w_off;  // [no, ni]
+  // The products' operands; with bf16_products, bf16 copies: g's rounded now, the input's and
+  // W's from the forward pass (taken before any slice updates W, as ∂L/∂input needs the old
+  // weights).
+  const bool h = s.bf16_products;
+  const uint16_t* gh = h ? bf16_copy(g, size_t(batch) * no, bf16_scratch()) : nullptr;
+  const uint16_t* inh = h ? tape_copy(tape.in16, l).data() : nullptr;
+  const uint16_t* Wh = h ? tape_copy(tape.w16, l).data() : nullptr;
+  const int width = gemm_column_slice(ni), slices = (ni + width - 1) / width;
+  const auto slice = [&](int p) {
+    const int j0 = p * width, nj = std::min(width, ni - j0);
+    // d_in[:, j0..] [batch, nj] = g [batch, no] · W[:, j0..] [no, nj], with W before its update
+    if (d_in && h) matmul_bf16_nn_cols(d_in + j0, ni, gh, Wh, batch, ni, no, false, j0, nj);
+    if (d_in && !h) matmul_nn_cols(d_in + j0, ni, g, W, batch, ni, no, false, j0, nj);
+    // dW[:, j0..] [no, nj] = gᵀ [no, batch] · in[:, j0..] [batch, nj], written over a scratch
+    // (not added to a zeroed one: the same values but for the sign of a zero sum, which Adam's
+    // m = β1·m + (1−β1)·g and v = β2·v + (1−β2)·g² cannot tell from m = v = +0 on)
+    thread_local AlignedVector<float> dw;
+    dw.resize(size_t(no) * nj);
+    if (h)
+      matmul_bf16_tn_cols(dw.data(), nj, gh, inh, no, ni, batch, false, j0, nj);
+    else
+      matmul_tn_cols(dw.data(), nj, g, in, no, ni, batch, false, j0, nj);
+    // W[:, j0..] (row stride ni) with its scratch gradient [no, nj]
+    adam_apply_rows(step, W + j0, ni, dw.data(), nj, m + w_off + j0, v + w_off + j0, no, nj);
+  };
+  // fp32 products oneDNN serves, big layers libxsmm serves, and on one thread mid-sized ones go
+  // by blocks of W's rows (gemm.h, gemm_weight_row_block), and so do bf16 products of those
+  // shapes (gemm_bf16.h, gemm_bf16_weight_row_block): ∂L/∂input first, whole, from the old W,
+  // then each block: its gradient and its Adam update.
+  const int row_block = h ? gemm_bf16_weight_row_block(no, ni, batch, threads)
+                          : gemm_weight_row_block(no, ni, batch, threads);
+  // On one thread, for a big layer libxsmm serves, ∂L/∂input too goes block by block (its
+  // inner dimension is W's rows), each block of W read once, before its update (gemm.h:
+  // matmul_nn sums over the same blocks). With more threads the blocks run at once, and
+  // ∂L/∂input comes first.
+  const bool d_in_by_blocks =
+      !h && row_block && d_in && threads <= 1 && gemm_nn_by_k_blocks(batch, ni, no);
+  const auto rows = [&](int p) {
+    const int i0 = p * row_block, mi = std::min(row_block, no - i0);
+    // d_in [batch, ni] (+)= g[:, i0..] [batch, mi] · W[i0.., :] [mi, ni], W before its update
+    if (d_in_by_blocks) matmul_nn_k_block(d_in, g, W, batch, ni, no, p > 0, i0, mi);
+    thread_local AlignedVector<float> dw;
+    dw.resize(size_t(mi) * ni);  // written over, as the slices' scratch above
+    if (h)
+      matmul_bf16_tn_rows(dw.data(), gh, inh, no, ni, batch, false, i0, mi);
+    else
+      matmul_tn_rows(dw.data(), g, in, no, ni, batch, false, i0, mi);
+    const size_t at = w_off + size_t(i0) * ni;
+    adam_apply(step, params + at, dw.data(), m + at, v + at, size_t(mi) * ni);
+  };
+  const int blocks = row_block ? (no + row_block - 1) / row_block : 0;
+  // (No OpenMP region at all on one thread: even a serialised one costs microseconds, and a
+  // TPA step of 20 small heads runs 60 of these loops.)
+  if (row_block && d_in && !d_in_by_blocks) {
+    if (h)
+      matmul_bf16_nn(d_in, gh, Wh, batch, ni, no, false, threads);
+    else
+      matmul_nn(d_in, g, W, batch, ni, no, false, threads);
+  }
+  const int parts = row_block ? blocks : slices;
+  const auto part = [&](int p) { row_block ? rows(p) : slice(p); };
+  if (threads > 1 && parts > 1) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int p = 0; p < parts; ++p) part(p);
+  } else {
+    for (int p = 0; p < parts; ++p) part(p);
+  }
+}
+
+}  // namespace
+
 void mlp_backward_adam(const MlpShape& s, float* params, MlpTape<float>& tape, const float* dout,
                        const AdamStepScalars& step, float* m, float* v, int threads, float* dx) {
-  const int L = s.layers(), batch = tape.batch;
   begin_backward<float>(s, tape, dout);
-  for (int l = L - 1; l >= 0; --l) {
-    const int ni = s.widths[l], no = s.widths[l + 1];
+  for (int l = s.layers() - 1; l >= 0; --l) {
     float* g = tape.grad.data();  // [batch, no] ∂L/∂(pre-activation)
-    const float* in = l == 0 ? tape.input : tape.act[l - 1].data();  // [batch, ni]
-    const size_t w_off = s.weight_offset(l), b_off = s.bias_offset(l);
-    float* W = params + w_off;  // [no, ni]
-    {
-      // In one pass over g: the ReLU mask (output > 0 ⇔ pre-activation > 0) and db [no] = Σ_rows
-      // g, rows in order (the same values and order as mask_relu then mlp_backward's sum). Then
-      // the biases' update.
-      thread_local AlignedVector<float> db;
-      db.assign(no, 0.f);
-      const float* y = s.relu_after(l) ? tape.act[l].data() : nullptr;
-      for (int r = 0; r < batch; ++r) {
-        float* gr = g + size_t(r) * no;
-        if (y) {
-          const float* yr = y + size_t(r) * no;
-          for (int j = 0; j < no; ++j) {
-            gr[j] = yr[j] <= 0.f ? 0.f : gr[j];
-            db[j] += gr[j];
-          }
-        } else {
-          for (int j = 0; j < no; ++j) db[j] += gr[j];
-        }
-      }
-      adam_apply(step, params + b_off, db.data(), m + b_off, v + b_off, no);
-    }
+    mask_relu_and_step_bias(s, l, tape, g, step, params, m, v);
     float* d_in = l > 0 ? tape.grad_next.data() : dx;  // [batch, ni]
-    // The products' operands; with bf16_products, bf16 copies: g's rounded now, the input's and
-    // W's from the forward pass (taken before any slice updates W, as ∂L/∂input needs the old
-    // weights).
-    const bool h = s.bf16_products;
-    const uint16_t* gh = h ? bf16_copy(g, size_t(batch) * no, bf16_scratch()) : nullptr;
-    const uint16_t* inh = h ? tape_copy(tape.in16, l).data() : nullptr;
-    const uint16_t* Wh = h ? tape_copy(tape.w16, l).data() : nullptr;
-    const int width = gemm_column_slice(ni), slices = (ni + width - 1) / width;
-    const auto slice = [&](int p) {
-      const int j0 = p * width, nj = std::min(width, ni - j0);
-      // d_in[:, j0..] [batch, nj] = g [batch, no] · W[:, j0..] [no, nj], with W before its update
-      if (d_in && h) matmul_bf16_nn_cols(d_in + j0, ni, gh, Wh, batch, ni, no, false, j0, nj);
-      if (d_in && !h) matmul_nn_cols(d_in + j0, ni, g, W, batch, ni, no, false, j0, nj);
-      // dW[:, j0..] [no, nj] = gᵀ [no, batch] · in[:, j0..] [batch, nj], written over a scratch
-      // (not added to a zeroed one: the same values but for the sign of a zero sum, which Adam's
-      // m = β1·m + (1−β1)·g and v = β2·v + (1−β2)·g² cannot tell from m = v = +0 on)
-      thread_local AlignedVector<float> dw;
-      dw.resize(size_t(no) * nj);
-      if (h)
-        matmul_bf16_tn_cols(dw.data(), nj, gh, inh, no, ni, batch, false, j0, nj);
-      else
-        matmul_tn_cols(dw.data(), nj, g, in, no, ni, batch, false, j0, nj);
-      // W[:, j0..] (row stride ni) with its scratch gradient [no, nj]
-      adam_apply_rows(step, W + j0, ni, dw.data(), nj, m + w_off + j0, v + w_off + j0, no, nj);
-    };
-    // fp32 products oneDNN serves, big layers libxsmm serves, and on one thread mid-sized ones go
-    // by blocks of W's rows (gemm.h, gemm_weight_row_block), and so do bf16 products of those
-    // shapes (gemm_bf16.h, gemm_bf16_weight_row_block): ∂L/∂input first, whole, from the old W,
-    // then each block: its gradient and its Adam update.
-    const int row_block = h ? gemm_bf16_weight_row_block(no, ni, batch, threads)
-                            : gemm_weight_row_block(no, ni, batch, threads);
-    // On one thread, for a big layer libxsmm serves, ∂L/∂input too goes block by block (its
-    // inner dimension is W's rows), each block of W read once, before its update (gemm.h:
-    // matmul_nn sums over the same blocks). With more threads the blocks run at once, and
-    // ∂L/∂input comes first.
-    const bool d_in_by_blocks =
-        !h && row_block && d_in && threads <= 1 && gemm_nn_by_k_blocks(batch, ni, no);
-    const auto rows = [&](int p) {
-      const int i0 = p * row_block, mi = std::min(row_block, no - i0);
-      // d_in [batch, ni] (+)= g[:, i0..] [batch, mi] · W[i0.., :] [mi, ni], W before its update
-      if (d_in_by_blocks) matmul_nn_k_block(d_in, g, W, batch, ni, no, p > 0, i0, mi);
-      thread_local AlignedVector<float> dw;
-      dw.resize(size_t(mi) * ni);  // written over, as the slices' scratch above
-      if (h)
-        matmul_bf16_tn_rows(dw.data(), gh, inh, no, ni, batch, false, i0, mi);
-      else
-        matmul_tn_rows(dw.data(), g, in, no, ni, batch, false, i0, mi);
-      const size_t at = w_off + size_t(i0) * ni;
-      adam_apply(step, params + at, dw.data(), m + at, v + at, size_t(mi) * ni);
-    };
-    const int blocks = row_block ? (no + row_block - 1) / row_block : 0;
-    // (No OpenMP region at all on one thread: even a serialised one costs microseconds, and a
-    // TPA step of 20 small heads runs 60 of these loops.)
-    if (row_block && d_in && !d_in_by_blocks) {
-      if (h)
-        matmul_bf16_nn(d_in, gh, Wh, batch, ni, no, false, threads);
-      else
-        matmul_nn(d_in, g, W, batch, ni, no, false, threads);
-    }
-    const int parts = row_block ? blocks : slices;
-    const auto part = [&](int p) { row_block ? rows(p) : slice(p); };
-    if (threads > 1 && parts > 1) {
-#pragma omp parallel for num_threads(threads) schedule(static)
-      for (int p = 0; p < parts; ++p) part(p);
-    } else {
-      for (int p = 0; p < parts; ++p) part(p);
-    }
+    step_layer_weights(s, l, tape, g, d_in, step, params, m, v, threads);
     if (l > 0) std::swap(tape.grad, tape.grad_next);
   }
 }
