@@ -286,7 +286,7 @@ void register_plan(CLI::App& app, Runner& run) {
     const Plan plan = make_plan(p);
     if (list_tasks) {
       for (const Task& t : plan.tasks) {
-        std::printf("%s %s %.6g %.6g", t.key.c_str(), kind_name(t.kind), t.flops * 1e-9,
+        std::printf("%s %s %.6g %.6g", t.key.c_str(), t.kind.name(), t.flops * 1e-9,
                     t.bytes / (1024.0 * 1024.0));
         for (int d : t.deps) std::printf(" %s", plan.tasks[size_t(d)].key.c_str());
         std::printf("\n");
@@ -303,10 +303,10 @@ void register_plan(CLI::App& app, Runner& run) {
     std::printf("   seeds: %zu   N (FPE): %zu values   N (TPA): %zu   M: %zu\n", p.seeds.size(),
                 p.fpe_N.size(), p.tpa.N.size(), p.tpa.M.size());
     std::printf("\n%-16s %8s %14s  %s\n", "kind", "tasks", "GFLOP", "what it computes");
-    for (const TaskKindSpec& ks : task_kinds()) {
-      if (plan.count(ks.kind) == 0) continue;
-      std::printf("%-16s %8d %14.1f  %s\n", ks.name, plan.count(ks.kind),
-                  plan.flops(ks.kind) * 1e-9, ks.description);
+    for (const TaskKindSpec* ks : task_kinds()) {
+      if (plan.count(*ks) == 0) continue;
+      std::printf("%-16s %8d %14.1f  %s\n", ks->name, plan.count(*ks), plan.flops(*ks) * 1e-9,
+                  ks->description);
     }
     double total = 0, protocol = 0;
     for (const auto& t : plan.tasks) total += t.flops, protocol += t.protocol_flops;

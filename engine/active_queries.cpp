@@ -278,7 +278,7 @@ class ActiveSelection {
                           batch_.begin() + (size_t(k) * b + i) * 3);
           triplet_train_step_batched(ens_.trainer, d_.inputs.data(), batch_.data(), b,
                                      float(cfg_.hyper.triplet_margin), cfg_.threads);
-          out_.train_flops += 3 * cfg_.members * shape_.forward_flops(3 * b);
+          out_.train_flops += cfg_.members * shape_.train_flops(3 * b);
           return ens_.trainer.losses;
         });
     for (float v : ens_.trainer.params)

@@ -60,7 +60,7 @@ void train_sirl(const Dataset& d, const QueryBundle& bundle, const MethodConfig&
   bool epoch_start = true, moments_zero = false, idle = false;
   double epoch_flops = 0;  // every epoch has the same batches
   for (int64_t i0 = 0; i0 < q.count; i0 += s.batch)
-    epoch_flops += 3 * t.shape.forward_flops(3 * int(std::min<int64_t>(s.batch, q.count - i0)));
+    epoch_flops += t.shape.train_flops(3 * int(std::min<int64_t>(s.batch, q.count - i0)));
   int skipped = 0;
   rep.loss_curve = run_epochs(
       q.count, s.epochs, s.batch, order_rng,
@@ -73,7 +73,7 @@ void train_sirl(const Dataset& d, const QueryBundle& bundle, const MethodConfig&
         batch.resize(size_t(3) * b);
         for (int i = 0; i < b; ++i)
           std::copy_n(q.idx.begin() + 3 * rows[i], 3, batch.begin() + 3 * i);
-        rep.train_flops += 3 * t.shape.forward_flops(3 * b);
+        rep.train_flops += t.shape.train_flops(3 * b);
         const float loss =
             triplet_train_step(t, d.inputs.data(), batch.data(), b, margin, cfg.threads);
         if (idle) idle = triplet_max_hinge(t.tape.output(), b, t.shape.out(), margin) <= inside;
@@ -134,7 +134,7 @@ void train_preference(const Dataset& d, const QueryBundle& bundle, const MethodC
           label[i] = q.label[j];
           human[i] = q.human[j];
         }
-        rep.train_flops += 3 * t.shape.forward_flops(2 * b);
+        rep.train_flops += t.shape.train_flops(2 * b);
         return multihead_preference_train_step(t, K, d.inputs.data(), pairs.data(), label.data(),
                                                human.data(), b, float(cfg.hyper.pref_l2),
                                                cfg.threads);

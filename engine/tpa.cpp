@@ -163,7 +163,7 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   // head's share: epoch_flops / R).
   double epoch_flops = 0;
   for (int64_t i0 = 0; i0 < M; i0 += h.tpa.batch)
-    epoch_flops += 3 * R * net.forward_flops(2 * int(std::min<int64_t>(h.tpa.batch, M - i0)));
+    epoch_flops += R * net.train_flops(2 * int(std::min<int64_t>(h.tpa.batch, M - i0)));
   const int64_t batches = (M + h.tpa.batch - 1) / h.tpa.batch;
   const ResumableState resume =
       adam_resumable(cfg.checkpointer, "tpa", t.params, t.adam, res.train_flops);

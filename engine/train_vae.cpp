@@ -103,7 +103,7 @@ VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads,
         const float loss = vae_loss_and_adam_step(
             m.shape, m.params.data(), x.data(), b, eps.data(), float(h.vae_kl_weight), m.elbo, step,
             adam.m.data(), adam.v.data(), ws, &parts, threads);
-        m.train_flops += 3 * (m.shape.encoder.forward_flops(b) + m.shape.decoder.forward_flops(b));
+        m.train_flops += m.shape.encoder.train_flops(b) + m.shape.decoder.train_flops(b);
         rec_sum += parts.reconstruction * b;
         kl_sum += parts.kl * b;
         if ((rows_seen += b) % T == 0) {  // the epoch's last batch

@@ -128,7 +128,7 @@ void time_tasks(const Plan& plan, int threads, PlanEstimate& e) {
   std::vector<double> sizes;
   for (size_t i = 0; i < plan.tasks.size(); ++i) {
     const Task& t = plan.tasks[i];
-    const std::string kind = task_kind(t.kind).rate(t);
+    const std::string kind = t.kind.spec().rate(t);
     double r = 1e9, once = 0;
     if (auto it = e.gflops_per_s.find(t.env + "/" + kind); it != e.gflops_per_s.end())
       r = std::max(it->second, 1e-3) * 1e9;

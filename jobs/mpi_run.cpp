@@ -17,6 +17,7 @@
 
 #include "jobs/ready_queue.h"
 #include "jobs/scheduler.h"
+#include "jobs/task_kinds.h"
 
 namespace sirl {
 

@@ -9,37 +9,13 @@
 
 namespace sirl {
 
-int Plan::count(TaskKind k) const {
-  int n = 0;
-  for (const auto& t : tasks) n += t.kind == k;
-  return n;
-}
-double Plan::flops(TaskKind k) const {
-  double f = 0;
-  for (const auto& t : tasks)
-    if (t.kind == k) f += t.flops;
-  return f;
-}
-
-double Plan::protocol_flops(TaskKind k) const {
-  double f = 0;
-  for (const auto& t : tasks)
-    if (t.kind == k) f += t.protocol_flops;
-  return f;
-}
-
-// Forward+backward ≈ 3× the forward multiply-adds (docs/ARCHITECTURE.md §6).
-double train_flops(const MlpShape& s, int64_t rows_per_epoch, int epochs) {
-  return 3.0 * s.forward_flops(1) * double(rows_per_epoch) * epochs;
-}
-
 namespace {
 
 // A TPA cell of [tpa] (Fig. 5) or of [ablation] (Fig. 7); a cell both grids share is one task.
 void add_tpa_cell(Plan& plan, const Profile& p, const std::string& env, int64_t seed,
                   const std::string& point, const Variant& v, int64_t N, int64_t M, bool frozen,
                   bool ablation) {
-  Task t = experiment_cell(TaskKind::tpa, env, seed, v, N);
+  Task t = experiment_cell(tpa_kind(), env, seed, v, N);
   t.hyper = point;
   t.M = M;
   t.frozen = frozen;
@@ -62,21 +38,20 @@ void add_robustness_cells(Plan& plan, const Profile& p, const std::string& env, 
   for (const Variant& v : g.methods)
     for (int64_t N : g.N) {
       if (uses_queries(v.method))
-        add_task(plan, p, at_point(experiment_cell(TaskKind::fpe, env, seed, v, N)));
+        add_task(plan, p, at_point(experiment_cell(fpe_kind(), env, seed, v, N)));
       for (int64_t M : g.M)
         for (bool fr : frozen_settings(frozen_rule, v)) {
-          Task t = at_point(experiment_cell(TaskKind::tpa, env, seed, v, N));
+          Task t = at_point(experiment_cell(tpa_kind(), env, seed, v, N));
           t.M = M;
           t.frozen = fr;
           add_task(plan, p, std::move(t));
         }
       for (const TeacherPoint& tp : g.teachers) {
         if (uses_queries(v.method))
-          add_task(plan, p,
-                   at_point(experiment_cell(TaskKind::robust_fpe, env, seed, v, N, tp.tag)));
+          add_task(plan, p, at_point(experiment_cell(robust_fpe_kind(), env, seed, v, N, tp.tag)));
         for (int64_t M : g.M)
           for (bool fr : frozen_settings(frozen_rule, v)) {
-            Task t = at_point(experiment_cell(TaskKind::robust_tpa, env, seed, v, N, tp.tag));
+            Task t = at_point(experiment_cell(robust_tpa_kind(), env, seed, v, N, tp.tag));
             t.M = M;
             t.frozen = fr;
             add_task(plan, p, std::move(t));
@@ -98,7 +73,7 @@ Plan make_plan(const Profile& p) {
         for (const auto& v : p.fpe_methods)
           for (int64_t N : axes.fpe_N)
             if (runs_in(p, v, env)) {
-              Task t = experiment_cell(TaskKind::fpe, env, seed, v, N);
+              Task t = experiment_cell(fpe_kind(), env, seed, v, N);
               t.hyper = point;
               add_task(plan, p, std::move(t));
             }

@@ -1,8 +1,20 @@
 #include "jobs/ready_queue.h"
 
-#include "jobs/scheduler.h"
+#include <algorithm>
 
 namespace sirl {
+
+std::vector<double> upward_rank(const Plan& plan) {
+  const int n = int(plan.tasks.size());
+  std::vector<double> rank(n, 0);
+  // Dependencies always precede their dependents in the plan, so one reverse sweep suffices.
+  std::vector<double> best_child(n, 0);
+  for (int i = n - 1; i >= 0; --i) {
+    rank[i] = plan.tasks[i].flops + best_child[i];
+    for (int d : plan.tasks[i].deps) best_child[d] = std::max(best_child[d], rank[i]);
+  }
+  return rank;
+}
 
 ReadyQueue::ReadyQueue(const Plan& plan, const std::vector<char>& pending)
     : rank_(upward_rank(plan)),

@@ -10,6 +10,10 @@
 
 namespace sirl {
 
+// Each task's upward rank: its FLOPs plus the costliest chain of tasks that wait on it (the
+// order ready tasks start in; `sirl plan` and tests read it too).
+std::vector<double> upward_rank(const Plan& plan);
+
 class ReadyQueue {
  public:
   // pending[i]: task i still has to run; a dependency that is not pending counts as done.

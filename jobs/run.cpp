@@ -60,7 +60,7 @@ std::string hostname() {
 // study's networks, regenerable and 3.1 M floats on JacoRobot, never).
 bool keeps_weights(const Profile& p, const Task& t) {
   auto it = p.axes.find(t.env);
-  return task_kind(t.kind).stores_weights && it != p.axes.end() && it->second.store_weights;
+  return t.kind.spec().stores_weights && it != p.axes.end() && it->second.store_weights;
 }
 
 }  // namespace
@@ -109,7 +109,7 @@ std::vector<char> shard_tasks(const Plan& plan, int index, int count) {
   std::vector<char> in(n, count == 1);
   if (count == 1) return in;
   for (int i = 0; i < n; ++i) {
-    const std::string g = task_kind(plan.tasks[i].kind).shard_group(plan.tasks[i]);
+    const std::string g = plan.tasks[i].kind.spec().shard_group(plan.tasks[i]);
     if (!g.empty()) in[i] = seed_from_key(g) % uint64_t(count) == uint64_t(index);
   }
   // Pull in dependencies (the VAEs), last task first so chains close.

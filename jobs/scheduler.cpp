@@ -13,18 +13,6 @@
 
 namespace sirl {
 
-std::vector<double> upward_rank(const Plan& plan) {
-  const int n = int(plan.tasks.size());
-  std::vector<double> rank(n, 0);
-  // Dependencies always precede their dependents in the plan, so one reverse sweep suffices.
-  std::vector<double> best_child(n, 0);
-  for (int i = n - 1; i >= 0; --i) {
-    rank[i] = plan.tasks[i].flops + best_child[i];
-    for (int d : plan.tasks[i].deps) best_child[d] = std::max(best_child[d], rank[i]);
-  }
-  return rank;
-}
-
 double task_speedup(int k, double serial_fraction) {
   return k <= 1 ? 1.0 : double(k) / (1.0 + serial_fraction * double(k - 1));
 }

@@ -61,9 +61,6 @@ void run_dag(const Plan& plan, const std::vector<char>& pending, int threads,
 // counts them): run_dag never gets more working threads than this, whatever it is asked for.
 int usable_cores();
 
-// The priority used above, exposed for `sirl plan` and tests.
-std::vector<double> upward_rank(const Plan& plan);
-
 // oneTBB's version at run time, for provenance.
 std::string tbb_version();
 }  // namespace sirl

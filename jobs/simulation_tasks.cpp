@@ -54,7 +54,7 @@ Task experiment_cell(TaskKind kind, const std::string& env, int64_t seed, const 
   t.seed = seed;
   t.variant = v;
   t.N = uses_queries(v.method) ? N : 0;
-  const bool heads_learn = kind == TaskKind::tpa || kind == TaskKind::robust_tpa;
+  const bool heads_learn = kind == tpa_kind() || kind == robust_tpa_kind();
   t.teacher = heads_learn ? teacher : rep_teacher(v, teacher);
   return t;
 }
@@ -121,7 +121,7 @@ double record_embedding(const Representation& rep, const Dataset& d, TaskRecord&
 
 Task vae_input(const Task& t) {
   Task v;
-  v.kind = TaskKind::vae;
+  v.kind = vae_kind();
   v.env = t.env;
   v.seed = t.seed;
   v.hyper = t.hyper;
@@ -134,7 +134,7 @@ std::string active_key(const std::string& env, int64_t seed, Selection rule,
 }
 Task active_input(const Task& t) {
   Task a;
-  a.kind = TaskKind::active;
+  a.kind = active_kind();
   a.env = t.env;
   a.seed = t.seed;
   a.teacher = t.teacher;
@@ -147,7 +147,7 @@ bool reads_active(const Variant& v) {
 }
 
 Task rep_input(const Task& t) {
-  Task r = experiment_cell(TaskKind::rep, t.env, t.seed, t.variant, t.N, t.teacher);
+  Task r = experiment_cell(rep_kind(), t.env, t.seed, t.variant, t.N, t.teacher);
   r.hyper = t.hyper;
   return r;
 }
@@ -158,7 +158,7 @@ std::string input_rep_key(const Task& t) {
 // Every task of the experiment shards with its φ; a VAE or an active query set goes to every
 // shard that needs it.
 std::string by_representation(const Task& t) {
-  return t.kind == TaskKind::vae || t.kind == TaskKind::active ? "" : input_rep_key(t);
+  return t.kind == vae_kind() || t.kind == active_kind() ? "" : input_rep_key(t);
 }
 
 // What a record says about its task: env and seed, and for φ and its cells the method and sizes.
@@ -199,8 +199,8 @@ void vae_cost(Task& t, const Profile& p) {
   const EnvSizes z = env_sizes(t, p);
   const VaeShape vs = make_vae_shape(z.input_dim, z.h.phi_hidden, z.h.embedding_dim);
   // training, then one pass over Ξ measuring the posterior (train_vae)
-  t.flops = train_flops(vs.encoder, z.trajectories, z.h.vae.epochs) +
-            train_flops(vs.decoder, z.trajectories, z.h.vae.epochs) +
+  t.flops = vs.encoder.train_flops(z.trajectories, z.h.vae.epochs) +
+            vs.decoder.train_flops(z.trajectories, z.h.vae.epochs) +
             vs.encoder.forward_flops(int(z.trajectories)) +
             vs.decoder.forward_flops(int(z.trajectories));
   t.bytes = working_set(vs.encoder, z.h.vae.batch) + working_set(vs.decoder, z.h.vae.batch);
@@ -245,7 +245,7 @@ void rep_cost(Task& t, const Profile& p) {
     return;
   }
   if (t.variant.method == Method::sirl) {
-    t.protocol_flops = train_flops(z.phi, 3 * t.N, z.h.sirl.epochs);
+    t.protocol_flops = z.phi.train_flops(3 * t.N, z.h.sirl.epochs);
     // Trainings end at their fixed point (the exact skip): what they are expected to run.
     t.flops = t.protocol_flops;
     if (const double e = expected_sirl_epochs(t.env, t.N, t.variant.vae, z.h); e < z.h.sirl.epochs)
@@ -253,7 +253,7 @@ void rep_cost(Task& t, const Profile& p) {
     t.bytes = working_set(z.phi, 3 * z.h.sirl.batch);
     t.stream_bytes = stream_bytes(z.phi, 3 * t.N, 3 * z.h.sirl.batch, z.h.sirl.epochs);
   } else if (uses_queries(t.variant.method)) {
-    t.flops = train_flops(z.phi, 2 * t.N, z.h.pref.epochs);
+    t.flops = z.phi.train_flops(2 * t.N, z.h.pref.epochs);
     t.bytes = working_set(z.phi, 2 * z.h.pref.batch);
     t.stream_bytes = stream_bytes(z.phi, 2 * t.N, 2 * z.h.pref.batch, z.h.pref.epochs);
     t.protocol_flops = t.flops;
@@ -284,14 +284,14 @@ void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
   const Hyper& h = hyper_at(ctx.profile(), t.env, t.hyper);
   const Dataset& d = ctx.dataset(t.env);
   std::shared_ptr<const VaeModel> vae;
-  if (reads_vae(t.variant)) vae = ctx.vae(t.input_keys.at(TaskKind::vae));
+  if (reads_vae(t.variant)) vae = ctx.vae(t.input(vae_kind()));
   const auto checkpoint = ctx.checkpointer(t.key);
   MethodConfig c{t.variant.method, t.N, t.variant.vae, h, t.threads, checkpoint.get()};
   const QueryBundle* bundle = &ctx.bundle(t.env, t.seed, t.teacher);
   QueryBundle chosen;  // an active variant: the same bundle with the triplets it chose
   if (reads_active(t.variant)) {
     chosen = *bundle;
-    chosen.similarity = *ctx.triplets(t.input_keys.at(TaskKind::active));
+    chosen.similarity = *ctx.triplets(t.input(active_kind()));
     bundle = &chosen;
   }
   // SIRL's φ starts from the same initialisation whichever way its triplets were chosen.
@@ -329,7 +329,7 @@ void fpe_cost(Task& t, const Profile& p) {
 // FPE's labelled trajectories are the true features whoever the teacher (its split is drawn
 // from a stream no teacher touches, so every teacher's φ is probed on the same rows).
 void run_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const auto rep = ctx.representation(t.input_keys.at(TaskKind::rep));
+  const auto rep = ctx.representation(t.input(rep_kind()));
   const FpeSplit& split = ctx.bundle(t.env, t.seed).fpe;
   const FpeResult f = evaluate_fpe(*rep, ctx.dataset(t.env), split);
   r.num["fpe"] = f.fpe;
@@ -347,7 +347,7 @@ void run_robust_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
 void tpa_cost(Task& t, const Profile& p) {
   const EnvSizes z = env_sizes(t, p);
   const MlpShape net = tpa_network(z.phi, z.h, t.frozen);
-  t.protocol_flops = kTestRewards * train_flops(net, 2 * t.M, z.h.tpa.epochs);
+  t.protocol_flops = kTestRewards * net.train_flops(2 * t.M, z.h.tpa.epochs);
   // Under tpa.stop = "converged" the heads stop early: what they are expected to run.
   t.flops = t.protocol_flops;
   if (const double e = expected_head_epochs(t.env, t.frozen, t.M, z.h); e < z.h.tpa.epochs)
@@ -379,7 +379,7 @@ void record_heads_convergence(const TpaResult& res, TaskRecord& r) {
 void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   const auto checkpoint = ctx.checkpointer(t.key);
   const TpaResult res =
-      evaluate_tpa(*ctx.representation(t.input_keys.at(TaskKind::rep)), ctx.dataset(t.env),
+      evaluate_tpa(*ctx.representation(t.input(rep_kind())), ctx.dataset(t.env),
                    ctx.bundle(t.env, t.seed, t.teacher).tpa,
                    TpaConfig{t.M, t.frozen, hyper_at(ctx.profile(), t.env, t.hyper), t.threads,
                              checkpoint.get()},
@@ -436,7 +436,7 @@ void active_cost(Task& t, const Profile& p) {
   t.flops = 0;
   const int64_t rounds = (c.budget + c.batch - 1) / c.batch;
   for (int64_t r = 1; r < rounds; ++r) {
-    t.flops += c.members * train_flops(z.phi, 3 * std::min(c.budget, r * c.batch), c.round_epochs);
+    t.flops += c.members * z.phi.train_flops(3 * std::min(c.budget, r * c.batch), c.round_epochs);
     t.flops += c.members * z.phi.forward_flops(int(std::min<int64_t>(3 * c.pool, z.trajectories)));
   }
   t.bytes = c.members * working_set(z.phi, 3 * z.h.sirl.batch);
@@ -538,9 +538,8 @@ bool complete_cell_fields(TaskRecord& r) {
   return true;
 }
 
-TaskKindSpec vae_kind() {
-  return {
-      .kind = TaskKind::vae,
+const TaskKindSpec& vae_kind() {
+  static const TaskKindSpec kind{
       .name = "vae",
       .description = "a VAE over Ξ per (env, seed): pre-training and the VAE baseline",
       .key = [](const Task& t) { return vae_key(t.env, t.seed); },
@@ -549,16 +548,17 @@ TaskKindSpec vae_kind() {
       .cost = vae_cost,
       .rate = [](const Task&) { return "vae"; },
       .shard_group = by_representation,
+      .bf16_products = env_precision_is_bf16,
       .stores_weights = true,
       .describe = describe_env_and_seed,
       .run = run_vae,
       .table = {},
   };
+  return kind;
 }
 
-TaskKindSpec rep_kind() {
-  return {
-      .kind = TaskKind::rep,
+const TaskKindSpec& rep_kind() {
+  static const TaskKindSpec kind{
       .name = "rep",
       .description = "a representation φ per (env, seed, method, N), its embedding of Ξ",
       .key = [](const Task& t) { return input_rep_key(t); },
@@ -574,16 +574,19 @@ TaskKindSpec rep_kind() {
       .rate =
           [](const Task& t) { return t.variant.method == Method::sirl ? "rep_sirl" : "rep_pref"; },
       .shard_group = by_representation,
+      .bf16_products = env_precision_is_bf16,
       .stores_weights = true,
       .describe = describe_variant,
       .run = run_rep,
       .table = {},
+      .lacks_fields = lacks_cell_fields,
+      .complete_fields = complete_cell_fields,
   };
+  return kind;
 }
 
-TaskKindSpec fpe_kind() {
-  return {
-      .kind = TaskKind::fpe,
+const TaskKindSpec& fpe_kind() {
+  static const TaskKindSpec kind{
       .name = "fpe",
       .description = "FPE of one φ: a linear probe's held-out error",
       .key = [](const Task& t) { return cell_prefix(t) + "fpe"; },
@@ -592,6 +595,7 @@ TaskKindSpec fpe_kind() {
       .cost = fpe_cost,
       .rate = [](const Task&) { return "fpe"; },
       .shard_group = by_representation,
+      .bf16_products = never_bf16,
       .stores_weights = true,
       .describe = describe_variant,
       .run = run_fpe,
@@ -608,12 +612,14 @@ TaskKindSpec fpe_kind() {
                  {"selection", C::String, "selection"},
                  {"teacher", C::String, "teacher"},
                  {"hyper_point", C::String, "hyper_point", true}}},
+      .lacks_fields = lacks_cell_fields,
+      .complete_fields = complete_cell_fields,
   };
+  return kind;
 }
 
-TaskKindSpec tpa_kind() {
-  return {
-      .kind = TaskKind::tpa,
+const TaskKindSpec& tpa_kind() {
+  static const TaskKindSpec kind{
       .name = "tpa",
       .description = "TPA of one φ at M pairs, frozen or unfrozen: 20 reward heads",
       .key = tpa_cell_key,
@@ -622,6 +628,7 @@ TaskKindSpec tpa_kind() {
       .cost = tpa_cost,
       .rate = [](const Task& t) { return t.frozen ? "tpa_frozen" : "tpa_unfrozen"; },
       .shard_group = by_representation,
+      .bf16_products = env_precision_is_bf16,
       .stores_weights = true,
       .describe = describe_tpa,
       .run = run_tpa,
@@ -644,42 +651,48 @@ TaskKindSpec tpa_kind() {
                  {"teacher", C::String, "teacher"},
                  {"best_mode", C::Int, "best_mode"},
                  {"hyper_point", C::String, "hyper_point", true}}},
+      .lacks_fields = lacks_cell_fields,
+      .complete_fields = complete_cell_fields,
   };
+  return kind;
 }
 
 // The robustness cells: FPE and TPA cells of a noisy teacher, in tables of their own so the
 // main grid's tables (and their digests) do not change when a profile adds noise axes.
-TaskKindSpec robust_fpe_kind() {
-  TaskKindSpec k = fpe_kind();
-  k.kind = TaskKind::robust_fpe;
-  k.name = "robust_fpe";
-  k.description = "FPE of one φ trained on a noisy teacher's answers ([robustness])";
-  k.run = run_robust_fpe;
-  k.table.kind = "robust_fpe";
-  k.table.name = "robust_fpe";
-  drop_columns(k.table, {"teacher"});  // kTeacherColumns bring it, next to the method
-  k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
-                         kTeacherColumns.end());
-  return k;
+const TaskKindSpec& robust_fpe_kind() {
+  static const TaskKindSpec kind = [] {
+    TaskKindSpec k = fpe_kind();
+    k.name = "robust_fpe";
+    k.description = "FPE of one φ trained on a noisy teacher's answers ([robustness])";
+    k.run = run_robust_fpe;
+    k.table.kind = "robust_fpe";
+    k.table.name = "robust_fpe";
+    drop_columns(k.table, {"teacher"});  // kTeacherColumns bring it, next to the method
+    k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
+                           kTeacherColumns.end());
+    return k;
+  }();
+  return kind;
 }
 
-TaskKindSpec robust_tpa_kind() {
-  TaskKindSpec k = tpa_kind();
-  k.kind = TaskKind::robust_tpa;
-  k.name = "robust_tpa";
-  k.description = "TPA of one φ, heads trained on a noisy teacher's labels ([robustness])";
-  k.run = run_robust_tpa;
-  k.table.kind = "robust_tpa";
-  k.table.name = "robust_tpa";
-  drop_columns(k.table, {"in_main", "in_ablation", "teacher"});  // in_main, in_ablation: no grid
-  k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
-                         kTeacherColumns.end());
-  return k;
+const TaskKindSpec& robust_tpa_kind() {
+  static const TaskKindSpec kind = [] {
+    TaskKindSpec k = tpa_kind();
+    k.name = "robust_tpa";
+    k.description = "TPA of one φ, heads trained on a noisy teacher's labels ([robustness])";
+    k.run = run_robust_tpa;
+    k.table.kind = "robust_tpa";
+    k.table.name = "robust_tpa";
+    drop_columns(k.table, {"in_main", "in_ablation", "teacher"});  // in_main, in_ablation: no grid
+    k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
+                           kTeacherColumns.end());
+    return k;
+  }();
+  return kind;
 }
 
-TaskKindSpec active_kind() {
-  return {
-      .kind = TaskKind::active,
+const TaskKindSpec& active_kind() {
+  static const TaskKindSpec kind{
       .name = "active",
       .description = "the triplets an active SIRL variant asks, chosen round by round",
       .key =
@@ -689,11 +702,21 @@ TaskKindSpec active_kind() {
       .cost = active_cost,
       .rate = [](const Task&) { return "rep_sirl"; },
       .shard_group = by_representation,
+      .bf16_products = env_precision_is_bf16,
       .stores_weights = true,
       .describe = describe_active,
       .run = run_active,
       .table = {},
   };
+  return kind;
 }
+
+namespace {
+[[maybe_unused]] const TaskKindRegistration registered[]{
+    TaskKindRegistration(vae_kind()),        TaskKindRegistration(rep_kind()),
+    TaskKindRegistration(fpe_kind()),        TaskKindRegistration(tpa_kind()),
+    TaskKindRegistration(robust_fpe_kind()), TaskKindRegistration(robust_tpa_kind()),
+    TaskKindRegistration(active_kind())};
+}  // namespace
 
 }  // namespace sirl

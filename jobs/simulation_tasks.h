@@ -7,7 +7,8 @@
 //   <env>/s<seed>/<teacher>/<variant>[/N<N>]/{rep,fpe,tpa/...}      <teacher> = "beta=1", …
 // (a method that learns from no answers — VAE, Random — has one φ for every teacher, but its
 // TPA heads learn from the teacher's labels).
-// Each function returns a kind's whole declaration (jobs/task_kinds.h).
+// Each function returns a kind's whole declaration (jobs/task_kinds.h), registered with the
+// engine by this file.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -16,15 +17,15 @@
 
 namespace sirl {
 
-TaskKindSpec vae_kind();
-TaskKindSpec rep_kind();
-TaskKindSpec fpe_kind();
-TaskKindSpec tpa_kind();
-TaskKindSpec robust_fpe_kind();
-TaskKindSpec robust_tpa_kind();
+const TaskKindSpec& vae_kind();
+const TaskKindSpec& rep_kind();
+const TaskKindSpec& fpe_kind();
+const TaskKindSpec& tpa_kind();
+const TaskKindSpec& robust_fpe_kind();
+const TaskKindSpec& robust_tpa_kind();
 // <env>/s<seed>[/<teacher>]/active/<rule>: the triplets an active variant of SIRL learns from
 // (engine/active_queries.h), [queries] similarity of them, in the order asked.
-TaskKindSpec active_kind();
+const TaskKindSpec& active_kind();
 
 // The keys other code looks tasks up by (the VAE and φ a cell reads).
 std::string vae_key(const std::string& env, int64_t seed);

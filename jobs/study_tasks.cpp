@@ -32,13 +32,13 @@ Task study_task(TaskKind kind, const Profile& p) {
   return t;
 }
 Task study_rep_task(const Profile& p, int64_t k, Method m) {
-  Task t = study_task(TaskKind::study_rep, p);
+  Task t = study_task(study_rep_kind(), p);
   t.seed = k;
   t.variant = Variant{m, false};
   return t;
 }
 Task study_heldout_task(const Profile& p, const std::string& id) {
-  Task t = study_task(TaskKind::study_heldout, p);
+  Task t = study_task(study_heldout_kind(), p);
   t.participant = id;
   return t;
 }
@@ -65,7 +65,7 @@ StudySizes study_sizes(const Profile& p, const StudyAnalysisConfig& c) {
 
 // One frozen-or-unfrozen TPA cell over `heads` heads of M pairs.
 double tpa_flops(const MlpShape& net, int64_t heads, int64_t M, int epochs) {
-  return double(heads) * train_flops(net, 2 * M, epochs);
+  return double(heads) * net.train_flops(2 * M, epochs);
 }
 
 }  // namespace
@@ -91,11 +91,11 @@ void add_study_tasks(Plan& plan, const Profile& p) {
   for (int u = 0; u < p.study.cohort.users; ++u) {
     const std::string id = simulated_participant_id(u);
     add_task(plan, p, study_heldout_task(p, id));
-    Task t = study_task(TaskKind::study_tpa, p);
+    Task t = study_task(study_tpa_kind(), p);
     t.participant = id;
     add_task(plan, p, std::move(t));
   }
-  add_task(plan, p, study_task(TaskKind::study_simulated, p));
+  add_task(plan, p, study_task(study_simulated_kind(), p));
 }
 
 namespace {
@@ -111,7 +111,7 @@ void study_rep_cost(Task& t, const Profile& p) {
   const double embed =
       z.phi.forward_flops(int(std::min<int64_t>(c.fpe_trajectories, z.trajectories)));
   t.flops =
-      (t.variant.method == Method::sirl ? train_flops(z.phi, 3 * z.triplets, c.hyper.sirl.epochs)
+      (t.variant.method == Method::sirl ? z.phi.train_flops(3 * z.triplets, c.hyper.sirl.epochs)
                                         : 0) +
       embed;
 }
@@ -119,7 +119,7 @@ void study_rep_cost(Task& t, const Profile& p) {
 void study_heldout_cost(Task& t, const Profile& p) {
   const StudyAnalysisConfig c = study_config(p);
   const StudySizes z = study_sizes(p, c);
-  t.flops = train_flops(z.phi, 3 * (z.triplets - p.study.cohort.similarity), c.hyper.sirl.epochs);
+  t.flops = z.phi.train_flops(3 * (z.triplets - p.study.cohort.similarity), c.hyper.sirl.epochs);
 }
 
 // Three cells per participant (the other mode's Random is evaluated beside the chosen one), and
@@ -222,6 +222,11 @@ void describe_participant(const Task& t, TaskRecord& r) {
   r.text["participant"] = t.participant;
 }
 
+// The study's tasks multiply in the run's top-level precision.
+bool top_precision_is_bf16(const Task&, const Profile& p) {
+  return p.precision == "bf16";
+}
+
 // Every study task reads [study] and the run's top-level precision.
 std::string study_settings(const Task&, const Profile& p) {
   return describe_study(p.study) + "precision = " + p.precision + "\n";
@@ -229,9 +234,8 @@ std::string study_settings(const Task&, const Profile& p) {
 
 }  // namespace
 
-TaskKindSpec study_rep_kind() {
-  return {
-      .kind = TaskKind::study_rep,
+const TaskKindSpec& study_rep_kind() {
+  static const TaskKindSpec kind{
       .name = "study_rep",
       .description =
           "user study: SIRL on the pooled answers or Random, per training seed, with its FPE",
@@ -241,16 +245,17 @@ TaskKindSpec study_rep_kind() {
       .cost = study_rep_cost,
       .rate = sirl_rate,
       .shard_group = the_study,
+      .bf16_products = top_precision_is_bf16,
       .stores_weights = false,
       .describe = describe_env_and_seed,
       .run = run_study_rep,
       .table = {},
   };
+  return kind;
 }
 
-TaskKindSpec study_heldout_kind() {
-  return {
-      .kind = TaskKind::study_heldout,
+const TaskKindSpec& study_heldout_kind() {
+  static const TaskKindSpec kind{
       .name = "study_heldout",
       .description = "user study: SIRL without one participant's answers",
       .key = [](const Task& t) { return heldout_key(t.participant); },
@@ -259,16 +264,17 @@ TaskKindSpec study_heldout_kind() {
       .cost = study_heldout_cost,
       .rate = sirl_rate,
       .shard_group = the_study,
+      .bf16_products = top_precision_is_bf16,
       .stores_weights = false,
       .describe = describe_participant,
       .run = run_study_heldout,
       .table = {},
   };
+  return kind;
 }
 
-TaskKindSpec study_tpa_kind() {
-  return {
-      .kind = TaskKind::study_tpa,
+const TaskKindSpec& study_tpa_kind() {
+  static const TaskKindSpec kind{
       .name = "study_tpa",
       .description = "user study: one participant's Real and Held-out TPA (cross-validated)",
       .key = [](const Task& t) { return tpa_key(t.participant); },
@@ -282,16 +288,17 @@ TaskKindSpec study_tpa_kind() {
       .cost = study_tpa_cost,
       .rate = unfrozen_tpa_rate,
       .shard_group = the_study,
+      .bf16_products = top_precision_is_bf16,
       .stores_weights = false,
       .describe = describe_participant,
       .run = run_study_tpa,
       .table = {},
   };
+  return kind;
 }
 
-TaskKindSpec study_simulated_kind() {
-  return {
-      .kind = TaskKind::study_simulated,
+const TaskKindSpec& study_simulated_kind() {
+  static const TaskKindSpec kind{
       .name = "study_simulated",
       .description = "user study: TPA on simulated perfect preferences",
       .key = [](const Task&) { return std::string(kSimulatedKey); },
@@ -300,12 +307,20 @@ TaskKindSpec study_simulated_kind() {
       .cost = study_simulated_cost,
       .rate = unfrozen_tpa_rate,
       .shard_group = the_study,
+      .bf16_products = top_precision_is_bf16,
       .stores_weights = false,
       .describe = describe_env_and_seed,
       .run = run_study_simulated,
       .table = {},
   };
+  return kind;
 }
+
+namespace {
+[[maybe_unused]] const TaskKindRegistration registered[]{
+    TaskKindRegistration(study_rep_kind()), TaskKindRegistration(study_heldout_kind()),
+    TaskKindRegistration(study_tpa_kind()), TaskKindRegistration(study_simulated_kind())};
+}  // namespace
 
 StudyAnalysis assemble_study(const Profile& p, const std::vector<TaskRecord>& records) {
   std::map<std::string, const TaskRecord*> by_key;

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "engine/study_analysis.h"
-#include "jobs/plan.h"
 #include "jobs/profile.h"
+#include "jobs/task.h"
 #include "jobs/task_kinds.h"
 #include "results/task_record.h"
 
@@ -25,10 +25,10 @@ StudyAnalysisConfig study_config(const Profile& p);
 void add_study_tasks(Plan& plan, const Profile& p);
 
 // The four kinds' declarations (jobs/task_kinds.h).
-TaskKindSpec study_rep_kind();
-TaskKindSpec study_heldout_kind();
-TaskKindSpec study_tpa_kind();
-TaskKindSpec study_simulated_kind();
+const TaskKindSpec& study_rep_kind();
+const TaskKindSpec& study_heldout_kind();
+const TaskKindSpec& study_tpa_kind();
+const TaskKindSpec& study_simulated_kind();
 
 // The analysis from the study tasks' records. Throws std::runtime_error naming a missing task.
 StudyAnalysis assemble_study(const Profile& p, const std::vector<TaskRecord>& records);

@@ -11,7 +11,7 @@ namespace sirl {
 std::string task_digest_text(const Task& t, const Profile& p,
                              const std::vector<std::string>& input_digests,
                              const std::vector<std::string>& input_keys) {
-  const TaskKindSpec& kind = task_kind(t.kind);
+  const TaskKindSpec& kind = t.kind.spec();
   std::string s = "sirl task\nnumerics " + std::to_string(kNumericsVersion) + "\nkind " +
                   kind.name + "\nkey " + t.key + "\n";
   // The record's own fields, as its describe writes them (a cell joining the ablation grid

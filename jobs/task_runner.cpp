@@ -4,7 +4,6 @@
 #include <stdexcept>
 
 #include "datasets/environments.h"
-#include "jobs/task_kinds.h"
 #include "jobs/task_outputs.h"
 #include "kernels/cpu_class.h"
 #include "kernels/gemm_bf16.h"
@@ -125,44 +124,6 @@ std::shared_ptr<const VaeModel> RunContext::vae(const std::string& key) {
   auto v = std::make_shared<const VaeModel>(get_vae(load_(key)));
   keep(key, v);
   return v;
-}
-
-bool runs_bf16_products(const Task& t, const Profile& p) {
-  // FPE (robust_fpe too) fits a linear probe on a stored embedding: fp32 whatever the
-  // precision. The study's tasks run in the top-level precision (jobs/study_tasks.cpp).
-  const bool study = t.kind == TaskKind::study_rep || t.kind == TaskKind::study_heldout ||
-                     t.kind == TaskKind::study_tpa || t.kind == TaskKind::study_simulated;
-  const bool probe = t.kind == TaskKind::fpe || t.kind == TaskKind::robust_fpe;
-  return !probe && (study ? p.precision : hyper_at(p, t.env, t.hyper).precision) == "bf16";
-}
-
-std::string task_cpu_class(const Task& t, const Profile& p) {
-  // bf16 products run natively or emulated: different bits, so a different class.
-  return cpu_class() + (runs_bf16_products(t, p) ? std::string(", bf16 ") + bf16_backend() : "");
-}
-
-TaskRecord run_task(const Task& t, RunContext& ctx) {
-  const auto start = std::chrono::steady_clock::now();
-  TaskRecord r;
-  r.key = t.key;
-  const TaskKindSpec& kind = task_kind(t.kind);
-  r.kind = kind.name;
-  kind.describe(t, r);
-  try {
-    kind.run(t, ctx, r);
-  } catch (const std::exception& e) {
-    throw std::runtime_error("task " + t.key + ": " + e.what());
-  }
-  r.num["seconds"] =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  r.num["threads"] = t.threads;  // like seconds, a fact of this run's scheduling, not a result
-  // Whether its networks' products ran in bf16 (/tables/timings holds it to the bf16 roof).
-  if (runs_bf16_products(t, ctx.profile())) r.num["bf16_products"] = 1;
-  r.text["cpu_class"] = task_cpu_class(t, ctx.profile());  // what computed these bits
-  // What it streams from main memory (the cost model's estimate, deterministic): with the
-  // bandwidth the run measures, its memory roof in /tables/timings.
-  if (t.stream_bytes > 0) r.num["stream_bytes"] = t.stream_bytes;
-  return r;
 }
 
 }  // namespace sirl

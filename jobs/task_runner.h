@@ -15,8 +15,8 @@
 #include "engine/checkpoint.h"
 #include "engine/representation.h"
 #include "engine/train_vae.h"
-#include "jobs/plan.h"
 #include "jobs/profile.h"
+#include "jobs/task.h"
 #include "results/task_record.h"
 
 namespace sirl {
@@ -65,18 +65,6 @@ class RunContext {
   std::map<std::string, std::unique_ptr<std::once_flag>> once_;
   std::once_flag& once(const std::string& key);
 };
-
-// Computes the task, returning its record (timing included). Throws std::runtime_error naming
-// the task on any failure (divergence, bad inputs).
-TaskRecord run_task(const Task& t, RunContext& ctx);
-
-// Whether the task's networks multiply in bf16 (its environment's precision, or the top-level
-// one for the study's tasks; never FPE's linear probe).
-bool runs_bf16_products(const Task& t, const Profile& p);
-// The CPU class whose bits the task's result has (kernels/cpu_class.h; with the bf16 backend
-// when its products run in bf16): recorded as its record's "cpu_class", and the class the task
-// cache files it under.
-std::string task_cpu_class(const Task& t, const Profile& p);
 
 // The seed every task of (env, seed) derives its streams from: all methods of one seed start
 // from the same φ initialisation and the same TPA heads (common random numbers).

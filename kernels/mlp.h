@@ -37,6 +37,12 @@ struct MlpShape {
   }
   // 2·in·out multiply-adds per layer per sample (biases and ReLU not counted).
   double forward_flops(int batch) const;
+  // Training: forward + backward ≈ 3× the forward pass (the backward pass runs two products per
+  // layer). The engine's counters and the planner's estimates both count with these.
+  double train_flops(int batch) const { return 3 * forward_flops(batch); }  // one step
+  double train_flops(int64_t rows_per_epoch, int epochs) const {
+    return 3.0 * forward_flops(1) * double(rows_per_epoch) * epochs;
+  }
 };
 
 // Throws std::invalid_argument on fewer than two widths or a width < 1.

@@ -7,6 +7,7 @@
 #include "jobs/estimate.h"
 #include "jobs/plan.h"
 #include "jobs/profile.h"
+#include "jobs/simulation_tasks.h"
 #include "tests/small_profile.h"
 
 namespace sirl {
@@ -20,9 +21,9 @@ TEST(Estimate, AddsEachTasksFlopsOverItsKindsRate) {
   const PlanEstimate e = estimate_plan(plan, p, 2);
   double total = 0;
   for (const auto& t : plan.tasks) {
-    std::string kind = kind_name(t.kind);
-    if (t.kind == TaskKind::rep) kind = t.variant.method == Method::sirl ? "rep_sirl" : "rep_pref";
-    if (t.kind == TaskKind::tpa) kind = t.frozen ? "tpa_frozen" : "tpa_unfrozen";
+    std::string kind = t.kind.name();
+    if (t.kind == rep_kind()) kind = t.variant.method == Method::sirl ? "rep_sirl" : "rep_pref";
+    if (t.kind == tpa_kind()) kind = t.frozen ? "tpa_frozen" : "tpa_unfrozen";
     const auto it = e.gflops_per_s.find(t.env + "/" + kind);
     const double rate = it == e.gflops_per_s.end() ? 1e9 : std::max(it->second, 1e-3) * 1e9;
     const auto once = e.call_seconds.find(t.env + "/" + kind);

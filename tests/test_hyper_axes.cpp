@@ -11,6 +11,7 @@
 
 #include "jobs/plan.h"
 #include "jobs/profile.h"
+#include "jobs/simulation_tasks.h"
 #include "jobs/task_digest.h"
 #include "tests/profile_error.h"
 #include "tests/small_profile.h"
@@ -103,7 +104,7 @@ TEST(HyperAxes, OnlyTheTasksAPointChangesGetAPointAndTheBaseKeepsItsKeysAndDiges
   // A cell at the point reads the base point's φ.
   const Task& cell =
       pa.tasks[size_t(pa.index.at("grid/s0/tpa.epochs=40/sirl/N100/tpa/M10/frozen"))];
-  EXPECT_EQ(cell.input_keys.at(TaskKind::rep), "grid/s0/sirl/N100/rep");
+  EXPECT_EQ(cell.input(rep_kind()), "grid/s0/sirl/N100/rep");
   EXPECT_EQ(cell.hyper, "tpa.epochs=40");
 }
 
@@ -117,7 +118,7 @@ TEST(HyperAxes, APointOfAnInputCarriesToItsReaders) {
   EXPECT_FALSE(has("grid/s0/vae.epochs=4/sirl/N100/rep"));     // no VAE in it
   EXPECT_FALSE(has("grid/s0/vae.epochs=4/random/fpe"));
   const Task& rep = plan.tasks[size_t(plan.index.at("grid/s0/vae.epochs=4/sirl+vae/N100/rep"))];
-  EXPECT_EQ(rep.input_keys.at(TaskKind::vae), "grid/s0/vae.epochs=4/vae");
+  EXPECT_EQ(rep.input(vae_kind()), "grid/s0/vae.epochs=4/vae");
 }
 
 }  // namespace

@@ -180,8 +180,8 @@ TEST(NoisyTeacher, TeacherListsBecomeAxisPointsBesideThePerfectMainTeacher) {
   const Plan plan = make_plan(p);
   // Per seed and teacher: FPE of SIRL and MultiPref-10 (Random's φ learns from no answers);
   // TPA of all three (SIRL frozen, the others unfrozen: "best").
-  EXPECT_EQ(plan.count(TaskKind::robust_fpe), 2 * 3 * 2);
-  EXPECT_EQ(plan.count(TaskKind::robust_tpa), 2 * 3 * 3);
+  EXPECT_EQ(plan.count(robust_fpe_kind()), 2 * 3 * 2);
+  EXPECT_EQ(plan.count(robust_tpa_kind()), 2 * 3 * 3);
   ASSERT_TRUE(plan.index.count("grid/s1/beta=0/sirl/N200/rep"));
   ASSERT_TRUE(plan.index.count("grid/s1/beta=0/sirl/N200/tpa/M40/frozen"));
   ASSERT_TRUE(plan.index.count("grid/s1/beta=0/random/tpa/M40/unfrozen"));
@@ -262,7 +262,7 @@ TEST(ActiveVariants, ParseNameAndPlanTheirQueryTasks) {
   EXPECT_EQ(p.active.at("jaco").round_epochs, 5);
 
   const Plan plan = make_plan(p);
-  EXPECT_EQ(plan.count(TaskKind::active), 2 * 2);  // per env: one query set per rule
+  EXPECT_EQ(plan.count(active_kind()), 2 * 2);  // per env: one query set per rule
   // Both N of an active variant read the one query set (nested, like the uniform set).
   for (const char* rep : {"grid/s0/sirl@vote/N100/rep", "grid/s0/sirl@vote/N300/rep"}) {
     const Task& t = plan.tasks[size_t(plan.index.at(rep))];

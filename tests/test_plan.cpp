@@ -8,6 +8,7 @@
 #include "jobs/plan.h"
 #include "jobs/profile.h"
 #include "jobs/run.h"
+#include "jobs/simulation_tasks.h"
 #include "tests/small_profile.h"
 
 namespace sirl {
@@ -18,23 +19,23 @@ TEST(Plan, TaskCountsMatchTheGrid) {
   const Plan plan = make_plan(p);
   const int S = 3;
   // VAE: one per seed (sirl+vae and vae need it).
-  EXPECT_EQ(plan.count(TaskKind::vae), S);
+  EXPECT_EQ(plan.count(vae_kind()), S);
   // FPE: sirl, sirl+vae × 3 N; vae and random once each (no N).
-  EXPECT_EQ(plan.count(TaskKind::fpe), S * (2 * 3 + 2));
+  EXPECT_EQ(plan.count(fpe_kind()), S * (2 * 3 + 2));
   // TPA main: sirl (frozen) and multipref10 (unfrozen) × 2 N × 2 M; random (unfrozen) × 2 M.
   // Ablation: sirl, sirl+vae × 2 frozen × 1 M; random × 2 frozen. Cells shared with the main
   // grid (sirl N300 M80 frozen; random M80 unfrozen) are counted once.
   const int main_cells = 2 * 2 * 2 + 2;
   const int ablation_new = 2 * 2 + 2 - 2;
-  EXPECT_EQ(plan.count(TaskKind::tpa), S * (main_cells + ablation_new));
+  EXPECT_EQ(plan.count(tpa_kind()), S * (main_cells + ablation_new));
   // Representations: sirl N100/200/300, sirl+vae N100/200/300, vae, random, multipref10 N100/300.
-  EXPECT_EQ(plan.count(TaskKind::rep), S * (3 + 3 + 1 + 1 + 2));
+  EXPECT_EQ(plan.count(rep_kind()), S * (3 + 3 + 1 + 1 + 2));
   // Every dependency precedes its dependent, and every FPE/TPA task depends on one rep.
   for (size_t i = 0; i < plan.tasks.size(); ++i) {
     for (int d : plan.tasks[i].deps) EXPECT_LT(size_t(d), i);
-    if (plan.tasks[i].kind == TaskKind::fpe || plan.tasks[i].kind == TaskKind::tpa) {
+    if (plan.tasks[i].kind == fpe_kind() || plan.tasks[i].kind == tpa_kind()) {
       ASSERT_EQ(plan.tasks[i].deps.size(), 1u);
-      EXPECT_EQ(plan.tasks[plan.tasks[i].deps[0]].kind, TaskKind::rep);
+      EXPECT_EQ(plan.tasks[plan.tasks[i].deps[0]].kind, rep_kind());
     }
   }
   std::set<std::string> keys;
@@ -47,7 +48,7 @@ TEST(Plan, FrozenBestIsSirlFrozenAndTheOthersUnfrozen) {
   const Plan plan = make_plan(parse_profile(test::kSmallProfile, "t.toml"));
   int sirl = 0, others = 0;
   for (const auto& t : plan.tasks) {
-    if (t.kind != TaskKind::tpa || !t.in_main) continue;
+    if (t.kind != tpa_kind() || !t.in_main) continue;
     if (t.variant.method == Method::sirl) {
       EXPECT_TRUE(t.frozen) << t.key;
       ++sirl;
@@ -72,12 +73,12 @@ TEST(Plan, ShardsPartitionTheWorkAndKeepDependencies) {
     const auto in = shard_tasks(plan, s, 3);
     for (size_t i = 0; i < in.size(); ++i) {
       if (!in[i]) continue;
-      if (plan.tasks[i].kind != TaskKind::vae) ++owners[i];
+      if (plan.tasks[i].kind != vae_kind()) ++owners[i];
       for (int d : plan.tasks[i].deps) EXPECT_TRUE(in[d]) << plan.tasks[i].key;
     }
   }
   for (size_t i = 0; i < plan.tasks.size(); ++i) {
-    if (plan.tasks[i].kind != TaskKind::vae) {
+    if (plan.tasks[i].kind != vae_kind()) {
       EXPECT_EQ(owners[i], 1) << plan.tasks[i].key;
     }
   }
@@ -123,7 +124,7 @@ frozen = [true, false]
                                   "stream.toml");
   int grid = 0, jaco10 = 0, jaco100 = 0;
   for (const Task& t : make_plan(p).tasks) {
-    if (t.kind != TaskKind::tpa) continue;
+    if (t.kind != tpa_kind()) continue;
     if (t.env == "grid") {
       EXPECT_EQ(t.stream_bytes, 0.0) << t.key;
       grid += !t.frozen;

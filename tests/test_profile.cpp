@@ -9,6 +9,7 @@
 #include "engine/tpa.h"
 #include "jobs/plan.h"
 #include "jobs/profile.h"
+#include "jobs/simulation_tasks.h"
 #include "jobs/study_tasks.h"
 #include "tests/profile_error.h"
 #include "tests/small_profile.h"
@@ -123,7 +124,7 @@ TEST(Profile, APartOfTheGridIsAProfileOfItsOwn) {
   const std::string base = "name = \"x\"\nenvs = [\"grid\", \"grid2\"]\nseeds = [0]\n";
   auto kinds = [](const Plan& plan) {
     std::map<std::string, int> n;
-    for (const auto& t : plan.tasks) ++n[kind_name(t.kind)];
+    for (const auto& t : plan.tasks) ++n[t.kind.name()];
     return n;
   };
   auto fpe_only =
@@ -141,7 +142,7 @@ TEST(Profile, APartOfTheGridIsAProfileOfItsOwn) {
   EXPECT_EQ(ab_kinds["tpa"], 2 * 4);  // frozen/unfrozen × with/without VAE, per environment
   EXPECT_EQ(ab_kinds["vae"], 2);
   for (const auto& t : ab.tasks)
-    if (t.kind == TaskKind::tpa) {
+    if (t.kind == tpa_kind()) {
       EXPECT_TRUE(t.in_ablation && !t.in_main) << t.key;
     }
 }

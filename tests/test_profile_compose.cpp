@@ -10,6 +10,7 @@
 
 #include "jobs/plan.h"
 #include "jobs/profile.h"
+#include "jobs/simulation_tasks.h"
 #include "tests/small_profile.h"
 
 namespace sirl {
@@ -138,18 +139,18 @@ TEST(ProfileExternal, TakesFrozenCellsOnlyAndOnlyInItsEnvironments) {
   for (const auto& t : make_plan(p).tasks) {
     if (t.variant.method != Method::external) continue;
     EXPECT_EQ(t.env, "grid") << t.key;
-    if (t.kind == TaskKind::tpa) {
+    if (t.kind == tpa_kind()) {
       EXPECT_TRUE(t.frozen) << t.key;
       frozen += t.frozen;
     }
-    fpe += t.kind == TaskKind::fpe;
+    fpe += t.kind == fpe_kind();
   }
   EXPECT_EQ(frozen, 3 * 2 * 2);  // seeds × N × M
   EXPECT_EQ(fpe, 3 * 3);         // seeds × N
   // A built-in method of that grid still gets both modes.
   int sirl_unfrozen = 0;
   for (const auto& t : make_plan(p).tasks)
-    sirl_unfrozen += t.kind == TaskKind::tpa && t.variant.method == Method::sirl && !t.frozen;
+    sirl_unfrozen += t.kind == tpa_kind() && t.variant.method == Method::sirl && !t.frozen;
   EXPECT_GT(sirl_unfrozen, 0);
   // Names and keys refused with the line that set them.
   auto error = [&](const std::string& extra) {

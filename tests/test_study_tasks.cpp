@@ -44,14 +44,14 @@ TEST(StudyTasks, ThePlanHasOneTaskPerPieceWithItsDependencies) {
   const Profile p = parse_profile(kStudyProfile, "study.toml");
   const Plan plan = make_plan(p);
   // 2 seeds × (SIRL, Random), per user a Held-out φ and a TPA task, one simulated-TPA task.
-  EXPECT_EQ(plan.count(TaskKind::study_rep), 4);
-  EXPECT_EQ(plan.count(TaskKind::study_heldout), 3);
-  EXPECT_EQ(plan.count(TaskKind::study_tpa), 3);
-  EXPECT_EQ(plan.count(TaskKind::study_simulated), 1);
+  EXPECT_EQ(plan.count(study_rep_kind()), 4);
+  EXPECT_EQ(plan.count(study_heldout_kind()), 3);
+  EXPECT_EQ(plan.count(study_tpa_kind()), 3);
+  EXPECT_EQ(plan.count(study_simulated_kind()), 1);
   EXPECT_EQ(int(plan.tasks.size()), 11);  // no grid cells: the profile has only [study]
   for (const auto& t : plan.tasks) {
     EXPECT_GT(t.flops, 0) << t.key;
-    if (t.kind == TaskKind::study_tpa) {
+    if (t.kind == study_tpa_kind()) {
       ASSERT_EQ(t.deps.size(), 3u);
       EXPECT_EQ(plan.tasks[t.deps[0]].key, "study/s0/sirl/rep");
       EXPECT_EQ(plan.tasks[t.deps[1]].key, "study/s0/random/rep");
