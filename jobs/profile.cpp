@@ -6,7 +6,6 @@
 #include "datasets/study.h"
 
 #include <toml++/toml.h>
-#include <unistd.h>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -333,12 +332,6 @@ bool env_is_study(const std::string& name) {
 }  // namespace
 
 namespace {
-
-std::string describe_widths(const Hyper& h) {
-  std::string s;
-  for (int w : h.phi_hidden) s += (s.empty() ? "" : ",") + std::to_string(w);
-  return "[" + s + "]";
-}
 
 // [queries] and [teacher]: the budgets and the simulated human.
 void parse_queries(Reader& r, const toml::table& root, Profile& p) {
@@ -687,9 +680,8 @@ void expand_hyper_points(Reader& r, const HyperAxes& axes, Profile& p) {
   }
 }
 
-// Every point's values valid, and every φ small enough to train in this machine's memory: one φ
-// in training holds weights, gradient and two Adam moments (16 bytes per weight); refused before
-// anything allocates it.
+// Every point's values valid. (Whether its networks fit this machine's memory is the run's
+// question, not the profile's: `sirl run` checks each task's working set before it starts.)
 void check_hyper_points(Reader& r, const toml::table& hy, Profile& p) {
   std::vector<std::pair<std::string, Hyper*>> all;  // every point's values
   for (auto& [env, h] : p.hyper) all.push_back({env, &h});
@@ -702,13 +694,6 @@ void check_hyper_points(Reader& r, const toml::table& hy, Profile& p) {
     } catch (const std::invalid_argument& e) {
       r.fail(&hy, std::string("[hyper.") + env + "]: " + e.what());
     }
-    const double bytes = 16.0 * double(phi_shape(env_spec(env).input_dim(p.data), h).param_count());
-    const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
-    if (bytes > ram)
-      r.fail(&hy, "[hyper." + env + "]: φ of widths " + describe_widths(h) + " needs " +
-                      std::to_string(int64_t(bytes / (1 << 30))) +
-                      " GiB to train, this machine has " +
-                      std::to_string(int64_t(ram / (1 << 30))) + " GiB");
   }
 }
 

@@ -425,6 +425,20 @@ std::vector<TaskRecord> finished_records(const Profile& p, const Plan& plan,
   return records;
 }
 
+// A task whose working set (its cost model's estimate: weights, gradient, Adam's moments, a
+// batch's activations) exceeds this machine's memory would fail deep inside its training, or
+// take the machine down with it: refused before anything runs, naming the task.
+void refuse_tasks_beyond_memory(const Plan& plan, const std::vector<char>& mine) {
+  const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+  for (size_t i = 0; i < plan.tasks.size(); ++i)
+    if (mine[i] && plan.tasks[i].bytes > ram)
+      throw std::runtime_error(
+          "task " + plan.tasks[i].key + " needs " +
+          std::to_string(int64_t(plan.tasks[i].bytes / (1 << 30))) +
+          " GiB to train, this machine has " + std::to_string(int64_t(ram / (1 << 30))) +
+          " GiB (`sirl plan PROFILE --tasks` lists every task's working set in MiB)");
+}
+
 // The worker threads (MPI: worker ranks) a run uses. More threads than cores would not run more
 // tasks at once (oneTBB has no more workers), only claim so in the progress line and the file's
 // metadata: say so and use the cores.
@@ -545,6 +559,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   const Plan plan = make_plan(p);
   const std::vector<std::string> digests = task_digests(plan, p);
   const std::vector<char> mine = shard_tasks(plan, o.shard_index, o.shard_count);
+  refuse_tasks_beyond_memory(plan, mine);
   const int threads = run_threads(o, mpi_size);
   const std::string shard =
       o.shard_count > 1 ? std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count) : "";

@@ -1,7 +1,9 @@
 // Profiles: parsing, validation with file:line errors, partial grids, the shipped profiles.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -9,9 +11,11 @@
 #include "engine/tpa.h"
 #include "jobs/plan.h"
 #include "jobs/profile.h"
+#include "jobs/run.h"
 #include "jobs/simulation_tasks.h"
 #include "jobs/study_tasks.h"
 #include "tests/profile_error.h"
+#include "tests/scratch_dir.h"
 #include "tests/small_profile.h"
 
 namespace sirl {
@@ -85,14 +89,39 @@ TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
   m = test::profile_error_of(base +
                              "[fpe]\nmethods = [\"sirl\", \"random\", \"sirl\"]\nN = [100]\n");
   EXPECT_NE(m.find("'sirl' is listed twice"), std::string::npos) << m;
-  // A network that cannot fit is refused with its size, before anything allocates it.
-  m = test::profile_error_of(base + grid +
-                             "[hyper.grid]\n\"phi.hidden\" = [100000000, 100000000]\n");
-  EXPECT_NE(m.find("GiB to train, this machine has"), std::string::npos) << m;
+  // A network too big for this machine is still a valid profile (a profile means the same on
+  // every machine; `sirl run` refuses it: Profile.ARunRefusesATaskBeyondThisMachinesMemory).
+  EXPECT_EQ(test::profile_error_of(base + grid +
+                                   "[hyper.grid]\n\"phi.hidden\" = [100000000, 100000000]\n"),
+            "no error");
   // A float in an integer list: one file:line prefix, not two.
   m = test::profile_error_of(base + grid + "[hyper.grid]\n\"phi.hidden\" = [1e8, 1e8]\n");
   EXPECT_EQ(m.find("bad.toml", 1), std::string::npos) << m;
   EXPECT_NE(m.find("must be an array of integers"), std::string::npos) << m;
+}
+
+// A φ of 10^8 × 10^8 weights needs ~1.5 million GiB to train: the run names the task and both
+// sizes before it allocates anything or writes a file.
+TEST(Profile, ARunRefusesATaskBeyondThisMachinesMemory) {
+  const Profile p = parse_profile(
+      "name = \"huge\"\nenvs = [\"grid\"]\nseeds = [0]\n[fpe]\nmethods = [\"sirl\"]\nN = [100]\n"
+      "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n"
+      "[hyper.grid]\n\"phi.hidden\" = [100000000, 100000000]\n",
+      "huge.toml");
+  const test::ScratchDir scratch;
+  RunOptions o;
+  o.out = (scratch.path() / "huge.h5").string();
+  o.quiet = true;
+  try {
+    run_profile(p, o);
+    FAIL() << "the run started";
+  } catch (const std::runtime_error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("task grid/s0/sirl/N100/rep needs "), std::string::npos) << m;
+    EXPECT_NE(m.find(" GiB to train, this machine has "), std::string::npos) << m;
+  }
+  EXPECT_FALSE(std::filesystem::exists(o.out));
+  EXPECT_FALSE(std::filesystem::exists(o.out + ".tasks"));
 }
 
 // precision: fp32 by default; "bf16" at the top reaches every environment's networks and the
