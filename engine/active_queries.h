@@ -31,14 +31,19 @@ enum class Selection { uniform, vote, infogain };
 const char* selection_name(Selection s);
 Selection parse_selection(const std::string& name);
 
-struct ActiveConfig {
-  Selection rule = Selection::vote;
-  int64_t budget = 1000;  // triplets asked in all (the largest N of the cells that read them)
+// How the ensemble asks, round by round: a profile's [active] table (defaults measured in
+// docs/active.md).
+struct ActiveRounds {
   int members = 5;        // K, the ensemble
-  int64_t pool = 8000;    // candidate triplets drawn per round (docs/active.md)
+  int64_t pool = 8000;    // candidate triplets drawn per round
   int64_t batch = 100;    // triplets asked per round
   int round_epochs = 50;  // epochs each member trains per round (warm start)
   double mu = 0.05;       // crowd-kernel μ, in units of the member's median pair distance
+};
+
+struct ActiveConfig : ActiveRounds {
+  Selection rule = Selection::vote;
+  int64_t budget = 1000;  // triplets asked in all (the largest N of the cells that read them)
   Hyper hyper;            // φ's shape and the SIRL schedule's batch, Adam and margin
   int threads = 1;
   Checkpointer* checkpointer = nullptr;  // saves after a round when due; a rerun continues

@@ -33,14 +33,12 @@ void add_robustness_cells(Plan& plan, const Profile& p, const std::string& env, 
     t.hyper = point;
     return t;
   };
-  TpaGrid frozen_rule;
-  frozen_rule.frozen = g.frozen;
   for (const Variant& v : g.methods)
     for (int64_t N : g.N) {
       if (uses_queries(v.method))
         add_task(plan, p, at_point(experiment_cell(fpe_kind(), env, seed, v, N)));
       for (int64_t M : g.M)
-        for (bool fr : frozen_settings(frozen_rule, v)) {
+        for (bool fr : frozen_settings(g, v)) {
           Task t = at_point(experiment_cell(tpa_kind(), env, seed, v, N));
           t.M = M;
           t.frozen = fr;
@@ -50,7 +48,7 @@ void add_robustness_cells(Plan& plan, const Profile& p, const std::string& env, 
         if (uses_queries(v.method))
           add_task(plan, p, at_point(experiment_cell(robust_fpe_kind(), env, seed, v, N, tp.tag)));
         for (int64_t M : g.M)
-          for (bool fr : frozen_settings(frozen_rule, v)) {
+          for (bool fr : frozen_settings(g, v)) {
             Task t = at_point(experiment_cell(robust_tpa_kind(), env, seed, v, N, tp.tag));
             t.M = M;
             t.frozen = fr;

@@ -397,11 +397,11 @@ void parse_queries(Reader& r, const toml::table& root, Profile& p) {
 
 // [active] and [active.<env>]: the active variants' selection settings.
 void parse_active(Reader& r, const toml::table& root, Profile& p) {
-  for (const auto& env : p.envs) p.active[env] = ActivePlan{};
+  for (const auto& env : p.envs) p.active[env] = ActiveRounds{};
   const auto* at = r.table(root, "active", false);
   if (!at) return;
   const std::set<std::string> keys{"members", "pool", "batch", "round_epochs", "mu"};
-  auto read = [&](const toml::table& t, const std::string& name, ActivePlan& a) {
+  auto read = [&](const toml::table& t, const std::string& name, ActiveRounds& a) {
     a.members = int(r.integer(t, "members", a.members, 2, 64));
     a.pool = r.integer(t, "pool", a.pool, 1, 10'000'000);
     a.batch = r.integer(t, "batch", a.batch, 1, 10'000'000);
@@ -414,7 +414,7 @@ void parse_active(Reader& r, const toml::table& root, Profile& p) {
   std::set<std::string> allowed = keys;
   for (const auto& env : p.envs) allowed.insert(env);
   r.only_keys(*at, "[active]", allowed);
-  ActivePlan all;
+  ActiveRounds all;
   read(*at, "[active]", all);
   for (const auto& env : p.envs) {
     p.active[env] = all;
@@ -441,12 +441,7 @@ void parse_robustness(Reader& r, const toml::table& root, Profile& p) {
            "[robustness] needs noisy teachers: give a list for beta, mistake or attend in "
            "[teacher] (e.g. beta = [10, 1, 0])");
   r.only_keys(*rb, "[robustness]", {"methods", "N", "M", "frozen"});
-  TpaGrid g;
-  parse_tpa(r, *rb, g, "[robustness]");
-  p.robustness.methods = g.methods;
-  p.robustness.N = g.N;
-  p.robustness.M = g.M;
-  p.robustness.frozen = g.frozen;
+  parse_tpa(r, *rb, p.robustness, "[robustness]");  // its cells, as a [tpa] table's
 }
 
 // [fpe], [tpa], [ablation]: which cells run.

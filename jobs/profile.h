@@ -76,20 +76,8 @@ struct TeacherPoint {
 // [robustness]: the cells every noisy teacher runs, beside the main grid's (Fig. "robustness"):
 // FPE of each query-trained method at each N, TPA of every method at each N × M. The main
 // teacher's cells of the same sizes are the axes' reference points (added to the main grid).
-struct RobustnessGrid {
+struct RobustnessGrid : TpaGrid {  // its cells' methods, N, M and frozen rule, as in [tpa]
   std::vector<TeacherPoint> teachers;
-  std::vector<Variant> methods;
-  std::vector<int64_t> N, M;
-  std::vector<bool> frozen;  // empty = "best" (SIRL frozen, the rest unfrozen), as in [tpa]
-};
-
-// [active]: how the active variants choose their triplets (ActiveConfig's members, pool, batch,
-// round_epochs and mu), per environment ([active.<env>] overrides [active]).
-struct ActivePlan {
-  int members = 5;
-  int64_t pool = 8000, batch = 100;  // defaults measured in docs/active.md
-  int round_epochs = 50;
-  double mu = 0.05;
 };
 
 // [external.<name>]: a representation trained outside the engine, handed in as its embedding of
@@ -136,7 +124,9 @@ struct Profile {
   std::map<std::string, EnvAxes> axes;
   StudyPlan study;
   RobustnessGrid robustness;
-  std::map<std::string, ActivePlan> active;  // per env (every env has one)
+  // [active]: how the active variants choose their triplets, per environment ([active.<env>]
+  // overrides [active]; every env has one).
+  std::map<std::string, ActiveRounds> active;
   std::vector<ExternalMethod> external;
 };
 

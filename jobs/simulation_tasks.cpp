@@ -415,15 +415,10 @@ void run_robust_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
 // ---- active ----
 
 ActiveConfig active_config(const Task& t, const Profile& p) {
-  const ActivePlan& a = p.active.at(t.env);
   ActiveConfig c;
+  static_cast<ActiveRounds&>(c) = p.active.at(t.env);
   c.rule = t.variant.selection;
   c.budget = queries_for(p, t.teacher).similarity;  // as many as the uniform set holds
-  c.members = a.members;
-  c.pool = a.pool;
-  c.batch = a.batch;
-  c.round_epochs = a.round_epochs;
-  c.mu = a.mu;
   c.hyper = hyper_at(p, t.env, t.hyper);
   return c;
 }

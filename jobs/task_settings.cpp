@@ -13,7 +13,7 @@ static_assert(sizeof(QueryBundleConfig) == 96, "describe the new field in descri
 static_assert(sizeof(Teacher) == 56, "describe the new Teacher field in describe_queries");
 static_assert(sizeof(CohortConfig) == 88, "describe the new CohortConfig field in describe_study");
 static_assert(sizeof(StudyPlan) == 120, "describe the new StudyPlan field in describe_study");
-static_assert(sizeof(ActivePlan) == 40, "describe the new ActivePlan field in describe_active");
+static_assert(sizeof(ActiveRounds) == 40, "describe the new ActiveRounds field in describe_active");
 static_assert(sizeof(ExternalMethod) == 152, "describe the new field in describe_external");
 
 namespace {
@@ -75,7 +75,7 @@ std::string describe_queries(const QueryBundleConfig& q) {
          " skip=" + num(q.teacher.skip) + " equal=" + num(q.teacher.equal) + " mask=" + mask + "\n";
 }
 
-std::string describe_active(const ActivePlan& a) {
+std::string describe_active(const ActiveRounds& a) {
   return "active members=" + num(a.members) + " pool=" + num(double(a.pool)) +
          " batch=" + num(double(a.batch)) + " round_epochs=" + num(a.round_epochs) +
          " mu=" + num(a.mu) + "\n";

@@ -24,7 +24,7 @@ std::string describe_data(const Profile& p, const std::string& env);
 // The query budgets and the teacher who answers them.
 std::string describe_queries(const QueryBundleConfig& q);
 // [active.<env>].
-std::string describe_active(const ActivePlan& a);
+std::string describe_active(const ActiveRounds& a);
 // [study]: the simulated cohort and its pipeline's settings.
 std::string describe_study(const StudyPlan& s);
 // [external.<name>]: where its embeddings are and their digest.
