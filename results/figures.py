@@ -1,0 +1,385 @@
+"""The paper's figures (Fig. 3, 4, 5, 7 and the learning curves) from a results file's tables:
+one colour and label per method, what each figure drew recorded in DRAWN (figures.json)."""
+import math
+import os
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from scipy import stats  # noqa: E402
+
+from run_tables import ENV, env_title, main_tpa  # noqa: E402
+
+# One colour and one label per method variant, shared by every figure.
+STYLE = {
+    "sirl": ("#d62728", "SIRL"),
+    "sirl+vae": ("#ff9896", "SIRL+VAE"),
+    "vae": ("#2ca02c", "VAE"),
+    "multipref10": ("#1f77b4", "MultiPref-10"),
+    "multipref50": ("#17becf", "MultiPref-50"),
+    "singlepref": ("#9467bd", "SinglePref"),
+    "random": ("#7f7f7f", "Random"),
+}
+
+
+ORDER = list(STYLE)
+
+
+# Methods evaluated from outside the engine (`sirl evaluate`: method "external", the variant is
+# the name the user gave), drawn after the built-in ones in these colours.
+EXTERNAL_COLOURS = ["#8c564b", "#e377c2", "#bcbd22", "#000000", "#ff7f0e", "#aec7e8"]
+
+
+def add_external_styles(t):
+    """Gives every external method of the file a colour and its own name as label."""
+    names = []
+    for k in ("fpe", "tpa"):
+        d = t.get(k)
+        if d is not None and not d.empty and "method" in d:
+            names += [v for v in d[d.method == "external"].variant.unique() if v not in names]
+    for i, v in enumerate(sorted(names)):
+        if v not in STYLE:
+            STYLE[v] = (EXTERNAL_COLOURS[i % len(EXTERNAL_COLOURS)], v)
+            ORDER.append(v)
+    return sorted(names)
+
+
+# What each figure drew, written to figures.json beside them (tests and users check it).
+DRAWN = {}
+
+
+def mean_ci(values):
+    """Mean and the half-width of its 95 % t confidence interval (nan for one value)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if len(v) == 0:
+        return np.nan, np.nan
+    if len(v) == 1:
+        return v[0], np.nan
+    return v.mean(), stats.t.ppf(0.975, len(v) - 1) * v.std(ddof=1) / math.sqrt(len(v))
+
+
+def save(fig, out, name):
+    for ext in ("png", "pdf"):
+        fig.savefig(os.path.join(out, f"{name}.{ext}"), dpi=150, bbox_inches="tight")
+    plt.close(fig)
+
+
+def fpe_dots(ax, d, env, Ns):
+    """Fig. 4's panel for an environment run at one N: each method's mean FPE as a dot with its
+    95 % CI, methods along the x-axis (an N axis with one point would read as a curve)."""
+    variants = [v for v in ORDER if (d.variant == v).any()]
+    for i, v in enumerate(variants):
+        colour, label = STYLE[v]
+        m, ci = mean_ci(d[d.variant == v].fpe)
+        DRAWN.setdefault("fig4", {}).setdefault(env, {})[v] = {
+            str(Ns[0]) if Ns and d[d.variant == v].N.notna().all() else "0": float(m)}
+        ax.errorbar([i], [m], yerr=[ci if np.isfinite(ci) else 0], fmt="o", color=colour,
+                    capsize=3, ms=6, label=label)
+    ax.set_xticks(range(len(variants)))
+    ax.set_xticklabels([STYLE[v][1] for v in variants], rotation=35, ha="right", fontsize=8)
+    ax.set_xlim(-0.6, len(variants) - 0.4)
+    ax.set_title(f"{env_title(env)}" + (f", N = {Ns[0]}" if Ns else ""))
+    ax.set_ylim(bottom=0)
+    ax.set_ylabel("FPE (test MSE, normalised features)")
+    ax.grid(alpha=0.3, axis="y")
+
+
+def plot_fig4(fpe, envs, out, notes):
+    envs = [e for e in envs if not fpe.empty and (fpe.env == e).any()]
+    if not envs:
+        notes.append("Fig. 4: no FPE cells in this file")
+        return
+    fig, axes = plt.subplots(1, len(envs), figsize=(5.2 * len(envs), 3.8), squeeze=False,
+                             constrained_layout=True)
+    for ax, env in zip(axes[0], envs):
+        d = fpe[fpe.env == env]
+        Ns = sorted(int(n) for n in d.N.dropna().unique())
+        if len(Ns) <= 1:  # one N (the simplified GridRobot): a dot per method, not a curve
+            fpe_dots(ax, d, env, Ns)
+            continue
+        for v in ORDER:
+            dv = d[d.variant == v]
+            if dv.empty:
+                continue
+            colour, label = STYLE[v]
+            if dv.N.isna().all():  # VAE and Random use no queries: one value per seed
+                m, ci = mean_ci(dv.fpe)
+                DRAWN.setdefault("fig4", {}).setdefault(env, {})[v] = {"0": float(m)}
+                ax.axhline(m, color=colour, ls="--", lw=1.5, label=label)
+                if np.isfinite(ci) and Ns:
+                    ax.axhspan(m - ci, m + ci, color=colour, alpha=0.12)
+                continue
+            xs, ms, cis = [], [], []
+            for n in Ns:
+                m, ci = mean_ci(dv[dv.N == n].fpe)
+                xs.append(n)
+                ms.append(m)  # nan for a missing cell: matplotlib leaves a gap
+                cis.append(ci)
+            ms, cis = np.array(ms), np.array(cis)
+            DRAWN.setdefault("fig4", {}).setdefault(env, {})[v] = {
+                str(x): float(m) for x, m in zip(xs, ms) if np.isfinite(m)}
+            if np.isnan(ms).any():
+                notes.append(f"Fig. 4 {env_title(env)}: {label} missing at N = "
+                             f"{[x for x, m in zip(xs, ms) if np.isnan(m)]} (drawn as gaps)")
+            ax.plot(xs, ms, "o-", color=colour, label=label, ms=4)
+            ok = np.isfinite(cis)
+            ax.fill_between(np.array(xs)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour, alpha=0.15)
+        ax.set_title(env_title(env))
+        ax.set_ylim(bottom=0)  # an MSE: CI bands of few seeds may dip below 0
+        ax.set_xlabel("representation queries N")
+        ax.set_ylabel("FPE (test MSE, normalised features)")
+        ax.grid(alpha=0.3)
+    axes[0][-1].legend(fontsize=8, loc="upper right")
+    fig.suptitle("Fig. 4: feature prediction error (mean ± 95 % CI over seeds)", fontsize=11)
+    save(fig, out, "fig4_fpe")
+
+
+def plot_fig5(tpa, envs, out, notes):
+    t = main_tpa(tpa)
+    envs = [e for e in envs if (t.env == e).any()] if not t.empty else []
+    if not envs:
+        notes.append("Fig. 5: no TPA cells of the main grid in this file")
+        return
+    Ns = sorted(int(n) for n in t.N.dropna().unique())
+    if not Ns:
+        Ns = [0]
+    fig, axes = plt.subplots(len(envs), len(Ns), figsize=(4.2 * len(Ns), 3.4 * len(envs)),
+                             squeeze=False, sharey=True, constrained_layout=True)
+    for r, env in enumerate(envs):
+        for c, n in enumerate(Ns):
+            ax = axes[r][c]
+            d = t[(t.env == env) & ((t.N == n) | t.N.isna())]
+            Ms = sorted(int(m) for m in d.M.dropna().unique())
+            for v in ORDER:
+                dv = d[d.variant == v]
+                if dv.empty:
+                    continue
+                colour, label = STYLE[v]
+                stats_ = [mean_ci(dv[dv.M == m].tpa) for m in Ms]
+                ms = np.array([s[0] for s in stats_])
+                cis = np.array([s[1] for s in stats_])
+                DRAWN.setdefault("fig5", {}).setdefault(env, {}).setdefault(str(n), {})[v] = {
+                    str(m): float(x) for m, x in zip(Ms, ms) if np.isfinite(x)}
+                if np.isnan(ms).any():
+                    notes.append(f"Fig. 5 {env_title(env)} N={n}: {label} missing at M = "
+                                 f"{[m for m, x in zip(Ms, ms) if np.isnan(x)]} (gaps)")
+                ax.plot(Ms, ms, "o-", color=colour, label=label, ms=4)
+                ok = np.isfinite(cis)
+                ax.fill_between(np.array(Ms)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour,
+                                alpha=0.15)
+            ax.set_title(f"{env_title(env)}, N = {n}")
+            ax.set_ylim(0.35, 1.0)
+            ax.set_xlabel("preference queries per test reward M")
+            if c == 0:
+                ax.set_ylabel("TPA (held-out accuracy)")
+            ax.grid(alpha=0.3)
+    axes[0][-1].legend(fontsize=8, loc="lower right")
+    frozen = "SIRL" + (" and external methods" if (t.method == "external").any() else "")
+    fig.suptitle(f"Fig. 5: test preference accuracy ({frozen} frozen, others unfrozen; "
+                 "mean ± 95 % CI)",
+                 fontsize=11)
+    save(fig, out, "fig5_tpa")
+
+
+def plot_fig7(tpa, envs, out, notes):
+    """Fig. 7 from the cells the file marks as the ablation's (in_ablation), per environment."""
+    ab = tpa[tpa["in_ablation"]] if not tpa.empty and "in_ablation" in tpa else tpa.iloc[0:0]
+    envs = [e for e in envs if (ab.env == e).any()]
+    if not envs:
+        notes.append("Fig. 7: no ablation cells in this file")
+        return
+    fig, axes = plt.subplots(1, len(envs), figsize=(7 * len(envs), 3.8), squeeze=False,
+                             constrained_layout=True)
+    bases = [b for b in ["sirl", "vae", "multipref10", "multipref50", "singlepref", "random"]
+             if b in set(ab.method)]
+    configs = [(1, 0, "frozen"), (0, 0, "unfrozen"), (1, 1, "frozen + VAE"), (0, 1, "unfrozen + VAE")]
+    hatches = ["", "//", "..", "xx"]
+    for ax, env in zip(axes[0], envs):
+        d = ab[ab.env == env]
+        Nab = sorted(int(n) for n in d.N.dropna().unique())
+        Mab = sorted(int(m) for m in d.M.dropna().unique())
+        width = 0.2
+        for k, (fr, vae, name) in enumerate(configs):
+            ms, cis = [], []
+            for b in bases:
+                cell = d[(d.method == b) & (d.frozen == fr) & (d.vae == vae)]
+                # mean over the ablation's (N, M) cells per seed, then over seeds
+                per_seed = cell.groupby("seed").tpa.mean()
+                m, ci = mean_ci(per_seed)
+                ms.append(m)
+                cis.append(ci)
+            x = np.arange(len(bases)) + (k - 1.5) * width
+            colours = [STYLE[b][0] for b in bases]
+            ax.bar(x, np.nan_to_num(ms, nan=0.0) * np.isfinite(ms), width, yerr=np.nan_to_num(cis),
+                   color=colours, edgecolor="black", hatch=hatches[k], alpha=0.85, label=name)
+            for xi, m, b in zip(x, ms, bases):
+                if np.isnan(m):
+                    applicable = vae == 0 or b not in ("vae", "random")
+                    ax.text(xi, 0.41, "n/a" if not applicable else "missing", rotation=90,
+                            ha="center", va="bottom", fontsize=7)
+                    if applicable:
+                        notes.append(f"Fig. 7 {env_title(env)}: no {name} cell for "
+                                     f"{STYLE[b][1]}")
+        DRAWN.setdefault("fig7", {})[env] = {
+            "N": Nab, "M": Mab,
+            "bars": int(sum(np.isfinite(p.get_height()) and p.get_height() > 0 for p in ax.patches)),
+            "missing": sum(1 for t in ax.texts if t.get_text() == "missing")}
+        ax.set_xticks(np.arange(len(bases)))
+        ax.set_xticklabels([STYLE[b][1] for b in bases], fontsize=8)
+        ax.set_ylim(0.4, 1.0)
+        ax.set_ylabel("TPA (mean over the cells)")
+        ax.set_title(f"{env_title(env)}, N = {Nab}, M = {Mab}")
+        ax.grid(alpha=0.3, axis="y")
+        handles = [matplotlib.patches.Patch(facecolor="white", edgecolor="black", hatch=h, label=c[2])
+                   for h, c in zip(hatches, configs)]
+        ax.legend(handles=handles, fontsize=8, loc="upper right")
+    fig.suptitle("Fig. 7: ablation — frozen/unfrozen φ × VAE pre-training (n/a: VAE "
+                 "pre-training does not apply)", fontsize=11)
+    save(fig, out, "fig7_ablation")
+
+
+def rep_keys(res, env, variant):
+    """Keys of the main teacher's representations of (env, variant) that stored an embedding,
+    largest N first, then lowest seed."""
+    r = res.records
+    if r.empty or "variant" not in r:
+        return []
+    r = r[(r.kind == "rep") & (r.env == env) & (r.variant == variant) & (r.teacher == "")]
+    r = r[r.arrays.str.split(",").map(lambda a: "embedding" in a)]
+    return list(r.sort_values(["N", "seed"], ascending=[False, True]).key)
+
+
+def plot_fig3(res, out, notes):
+    """The paper's Fig. 3: on the simplified GridRobot (laptop + angle), trajectories most and
+    least similar to a query under a SIRL φ, from the φ's stored embedding of Ξ."""
+    # The environment Fig. 3 is drawn on: the highest fig3_rank with a SIRL φ in the file.
+    ranked = sorted((e for e in ENV if ENV[e]["fig3_rank"] > 0), key=lambda e: -ENV[e]["fig3_rank"])
+    env, keys = None, []
+    for e in ranked:
+        keys = rep_keys(res, e, "sirl")
+        if keys:
+            env = e
+            break
+    if env and env != ranked[0]:
+        notes.append(f"Fig. 3: no {env_title(ranked[0])} SIRL φ in this file; drawn on {env_title(env)}")
+    if not keys:
+        notes.append("Fig. 3: no SIRL representation of a Fig. 3 environment in this file")
+        return None
+    key = keys[0]
+    E = res.embedding(key)
+    g = res.datasets[env]
+    X = g["inputs"]
+    F = g["features"]  # normalised φ*; columns as the dataset names them
+    fnames = list(g["attrs"].get("features.feature_names", []))
+    lap = fnames.index("laptop_distance") if "laptop_distance" in fnames else 0
+    ang = fnames.index("abs_angle") if "abs_angle" in fnames else 1
+    # The paper's two queries: far from the laptop holding the cup on its side; close to the
+    # laptop holding the cup at an angle (|angle| = 30 or 60 degrees).
+    q_far = int(np.argmax(F[:, lap] + F[:, ang]))
+    tilted = np.where(np.isin(np.round(np.abs(X[:, 18]) * 90), [30, 60]))[0]
+    q_near = int(tilted[np.argmin(F[tilted, lap])]) if len(tilted) else int(np.argmin(F[:, lap]))
+    objects = g["objects"]
+    onames = list(g["attrs"]["objects.names"])
+    size, scale = 5, 4
+
+    def draw(ax, idx, title, colour):
+        ax.set_xlim(-0.5, size - 0.5)
+        ax.set_ylim(-0.5, size - 0.5)
+        ax.set_aspect("equal")
+        ax.set_xticks(range(size))
+        ax.set_yticks(range(size))
+        ax.grid(alpha=0.3)
+        for (ox, oy), n in zip(objects, onames):
+            marker, c = ("s", "black") if n.startswith("obstacle") else ("D", "tab:orange")
+            ax.scatter([ox], [oy], marker=marker, s=260, c=c, zorder=3)
+        for i in idx:
+            pts = X[i, :18].reshape(9, 2) * scale
+            ax.plot(pts[:, 0], pts[:, 1], "-o", color=colour, ms=3, lw=2, alpha=0.8)
+            ax.annotate(f"{X[i, 18] * 90:+.0f}°", pts[-1], fontsize=7, color=colour)
+        ax.set_title(title, fontsize=9)
+
+    fig, axes = plt.subplots(2, 3, figsize=(10, 7))
+    for row, q in enumerate([q_far, q_near]):
+        dist = ((E - E[q]) ** 2).sum(1)
+        dist[q] = np.inf
+        nearest = np.argsort(dist)[:3]
+        dist[q] = -np.inf
+        farthest = np.argsort(dist)[-3:][::-1]
+        draw(axes[row][0], [q], f"query ξ{q}", "black")
+        draw(axes[row][1], nearest, "most similar under φ", "tab:green")
+        draw(axes[row][2], farthest, "least similar under φ", "tab:red")
+    DRAWN["fig3"] = {"env": env, "representation": key, "queries": [q_far, q_near]}
+    marks = "◆ laptop" + (", ■ obstacles" if any(n.startswith("obstacle") for n in onames) else "")
+    fig.suptitle(f"Fig. 3: {env_title(env)} under a SIRL φ ({key}); {marks}, "
+                 "end angle in degrees", fontsize=10)
+    save(fig, out, "fig3_grid_similar")
+    return key
+
+
+def head_mean_curves(res, rows):
+    """{key: 1-D loss curve} of the given training rows; a TPA cell's heads are averaged at each
+    epoch over the heads still training (a head stopped by tpa.stop has no rows after its stop),
+    and the curve ends where the last head stopped."""
+    recs = res.records[res.records.key.isin(set(rows.key))]
+    c = res.curves_of(recs)
+    if c.empty:
+        return {}
+    m = c.groupby(["key", "epoch"], sort=True).loss.mean()
+    return {k: m.loc[k].to_numpy() for k in m.index.get_level_values(0).unique()}
+
+
+def plot_learning_curves(res, t, envs, out, notes):
+    """Per environment: the VAE, each method's φ at its largest N, and the TPA heads of the main
+    grid's largest (N, M): median over seeds with the min–max band."""
+    tr = t["training"]
+    if tr.empty:
+        notes.append("learning curves: no training in this file")
+        return False
+    envs = [e for e in envs if (tr.env == e).any()]
+    panels = [("vae", "VAE (loss per epoch)"), ("rep", "φ training (largest N)"),
+              ("tpa", "TPA heads (largest N, M; mean over heads)")]
+    fig, axes = plt.subplots(len(envs), 3, figsize=(15, 3.3 * len(envs)), squeeze=False,
+                             constrained_layout=True)
+    for r, env in enumerate(envs):
+        for c, (kind, title) in enumerate(panels):
+            ax = axes[r][c]
+            d = tr[(tr.env == env) & (tr.kind == kind)]
+            if kind == "tpa":
+                d = d[(d.N == d.N.max()) & (d.M == d.M.max())] if not d.empty else d
+            for v in ["vae"] if kind == "vae" else ORDER:
+                dv = d[d.variant == v]
+                if kind == "rep" and not dv.empty:
+                    dv = dv[dv.N == dv.N.max()]
+                if dv.empty:
+                    continue
+                cs = list(head_mean_curves(res, dv).values())
+                if not cs:
+                    continue
+                n = max(len(x) for x in cs)  # curves of stopped heads end early: NaN-padded
+                A = np.full((len(cs), n), np.nan)
+                for i, x in enumerate(cs):
+                    A[i, :len(x)] = x
+                ep = np.arange(1, n + 1)
+                colour, label = STYLE.get(v, ("#2ca02c", "VAE"))
+                if kind == "tpa":
+                    label += " (frozen)" if dv.frozen.all() else ""
+                ax.plot(ep, np.nanmedian(A, 0), "o-" if n < 10 else "-", ms=3, color=colour,
+                        label=f"{label} ({len(cs)})")
+                ax.fill_between(ep, np.nanmin(A, 0), np.nanmax(A, 0), color=colour, alpha=0.15)
+            ax.set_title(f"{env_title(env)}: {title}", fontsize=9)
+            ax.set_xlabel("epoch")
+            ax.set_ylabel("training loss")
+            ax.grid(alpha=0.3)
+            if ax.lines:
+                ax.set_yscale("log" if kind == "vae" else "linear")
+                ax.legend(fontsize=7)
+            else:
+                ax.text(0.5, 0.5, "not run", ha="center", va="center", transform=ax.transAxes)
+                ax.set_xticks([])
+                ax.set_yticks([])
+    fig.suptitle("Learning curves: median over seeds (band: min–max); (n) = trainings", fontsize=11)
+    save(fig, out, "fig_learning_curves")
+    return True

@@ -1,0 +1,167 @@
+"""The paper's claims decided from a results file's tables (claims.py's paired tests, Holm,
+power), and their lines in the report: the summary table and the details."""
+import math
+
+import claims as claims_stats
+from figures import STYLE
+from run_tables import ENV, env_title, main_tpa
+
+ALPHA = claims_stats.ALPHA
+
+
+def fmt(x, spec=".4f"):
+    return "—" if x is None or (isinstance(x, float) and not math.isfinite(x)) else format(x, spec)
+
+
+def comparison_text(c):
+    name = c["name"]
+    label = ("vs " + STYLE[name][1]) if name in STYLE else name
+    return (f"{label}: Δ = {fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, {fmt(c['hi'], '+.4f')}], "
+            f"d_z = {fmt(c['dz'], '+.2f')}, p = {fmt(c['p'], '.3g')}"
+            f"{' (every seed differs by the same amount: exact sign test)' if c.get('test') == 'sign' else ''}"
+            f", Holm p = {fmt(c.get('p_holm'), '.3g')} "
+            f"(n = {c['n']})")
+
+
+def claim(claims, env, name, comparisons, better, main=False, trainings=None):
+    """Decides one hypothesis (claims.decide) and keeps it for the summary and the details;
+    `trainings`: the /tables/training rows its numbers rest on (for the converged count)."""
+    v, deciding = claims_stats.decide(comparisons, better)
+    h = {"env": env, "claim": name, "better": better, "comparisons": comparisons, "verdict": v,
+         "deciding": deciding, "main": main}
+    if trainings is not None and not trainings.empty:
+        h["converged"] = (int(trainings.converged.sum()), len(trainings))
+    if comparisons:
+        h["power"] = claims_stats.power(comparisons, better)
+        h["seeds80"] = claims_stats.seeds_for_power(comparisons, better)
+    claims.append(h)
+
+
+def rested_on(tr, env, N, variants, tpa_cells):
+    """The trainings behind a main claim at N: the compared methods' φ at N and the VAE, and for
+    a TPA claim their TPA cells of the main grid (SIRL frozen, the others unfrozen)."""
+    if tr is None or tr.empty:
+        return None
+    t = tr[(tr.env == env) & (tr.teacher == "")] if "teacher" in tr else tr[tr.env == env]
+    use = ((t.kind == "rep") & (t.N == N) & t.variant.isin(variants)) | (t.kind == "vae")
+    if tpa_cells:
+        use |= ((t.kind == "tpa") & ((t.N == N) | t.N.isna()) & t.variant.isin(variants)
+                & t.best_mode).fillna(False)
+    return t[use]
+
+
+def hypotheses(fpe, tpa, envs, training=None):
+    """Every claim the report checks, per environment, decided."""
+    H = []
+    baselines = ["vae", "multipref10", "multipref50", "singlepref", "random"]
+    compared = ["sirl"] + baselines
+    for env in envs:
+        d = fpe[fpe.env == env]
+        if not d.empty:
+            nmax = d.N.max()
+
+            def fpe_at(v):
+                x = d[(d.variant == v) & ((d.N == nmax) | d.N.isna())]
+                return x.set_index("seed").fpe
+
+            claim(H, env, f"H1 — SIRL's FPE is lower than every baseline's at N = {nmax}",
+                  [claims_stats.paired(v, fpe_at("sirl"), fpe_at(v)) for v in baselines
+                   if (d.variant == v).any()], "<", main=True,
+                  trainings=rested_on(training, env, nmax, compared, False))
+        m = main_tpa(tpa[tpa.env == env])
+        if not m.empty:
+            nmax = m.N.max()
+
+            def tpa_at(v):
+                x = m[(m.variant == v) & ((m.N == nmax) | m.N.isna())]
+                return x.groupby("seed").tpa.mean()
+
+            claim(H, env, f"H2 — SIRL's TPA (frozen, mean over M) is higher than every baseline's "
+                          f"(unfrozen) at N = {nmax}",
+                  [claims_stats.paired(v, tpa_at("sirl"), tpa_at(v)) for v in baselines
+                   if (m.variant == v).any()], ">", main=True,
+                  trainings=rested_on(training, env, nmax, compared, True))
+            claim(H, env, "Secondary — Random beats preference pre-training (TPA)",
+                  [claims_stats.paired(v, tpa_at("random"), tpa_at(v))
+                   for v in ["multipref10", "multipref50", "singlepref"] if (m.variant == v).any()],
+                  ">")
+        ab = tpa[(tpa.env == env) & (tpa.vae == 0)]
+        for meth, text in [("sirl", "SIRL is better frozen"),
+                           ("multipref10", "MultiPref-10 is better unfrozen"),
+                           ("multipref50", "MultiPref-50 is better unfrozen"),
+                           ("singlepref", "SinglePref is better unfrozen")]:
+            x = ab[ab.method == meth]
+            if x.frozen.nunique() < 2:
+                continue
+            keys = ["N", "M"]
+            cells = x.groupby(keys).frozen.nunique()
+            cells = cells[cells == 2].index
+            x = x.set_index(keys).loc[cells].reset_index()
+            fr = x[x.frozen == 1].groupby("seed").tpa.mean()
+            un = x[x.frozen == 0].groupby("seed").tpa.mean()
+            claim(H, env, f"Secondary — {text} (ablation cells, mean over N, M)",
+                  [claims_stats.paired("frozen − unfrozen", fr, un)], ">" if meth == "sirl" else "<")
+        if ENV.get(env, {}).get("vae_weak_claim"):
+            x = fpe[(fpe.env == env)]
+            if not x.empty and (x.variant == "vae").any():  # a profile may run no VAE FPE
+                nmax = x.N.max()
+                v = x[(x.variant == "vae")].set_index("seed").fpe
+                s = x[(x.variant == "sirl") & (x.N == nmax)].set_index("seed").fpe
+                claim(H, env, f"Secondary — VAE is weak on {env_title(env)} (FPE above SIRL's)",
+                      [claims_stats.paired("vae", v, s)], ">")
+    return H
+
+
+def summary_lines(H):
+    """The report's first table: one row per claim × environment."""
+    L = ["| claim | environment | verdict | deciding comparison: Δ [95 % CI] | Holm p | seeds | "
+         "power | seeds for 80 % | trainings converged |", "|---|---|---|---|---:|---:|---:|---:|---:|"]
+    for h in H:
+        c = h["deciding"]
+        if c is None:
+            L.append(f"| {h['claim']} | {env_title(h['env'])} | not evaluated (no data) | — | — | — | — | — | — |")
+            continue
+        conv = h.get("converged")
+        conv_text = (f"{conv[0]} of {conv[1]}" + (" ⚠" if conv[0] < conv[1] else "")) if conv else "—"
+        label = ("vs " + STYLE[c["name"]][1]) if c["name"] in STYLE else c["name"]
+        s80 = h.get("seeds80")
+        pw = h.get("power", math.nan)
+        claim_text = f"**{h['claim']}**" if h["main"] else h["claim"]
+        L.append(f"| {claim_text} | {env_title(h['env'])} | **{h['verdict']}** | {label}: "
+                 f"{fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, {fmt(c['hi'], '+.4f')}] | "
+                 f"{fmt(c.get('p_holm'), '.3g')} | {c['n']} | {fmt(100 * pw, '.0f') + ' %' if pw == pw else '—'} | "
+                 f"{s80 if s80 else f'> {claims_stats.MAX_SEEDS}' if pw == pw else '—'} | "
+                 f"{conv_text} |")
+    L += ["", f"Verdicts: *held* = every comparison goes the claimed way with Holm-adjusted p < "
+          f"{ALPHA} (paired t-tests over seeds, Holm's correction within each claim); *not held* = "
+          f"at least one goes the other way with adjusted p < {ALPHA}; *inconclusive* otherwise. "
+          f"The deciding comparison is the one the verdict rests on (for *held* the weakest). "
+          f"*Power* = the chance that a run with this many seeds decides (held or not held) if the "
+          f"true effects were the observed ones (simulated noncentral t, Holm applied); *seeds for "
+          f"80 %* = the fewest seeds with power ≥ 80 %. Both are planning numbers computed from this "
+          f"run's effect sizes, which few seeds estimate poorly: they are not evidence. "
+          f"*Trainings converged* (main claims): of the trainings the claim's numbers rest on (the "
+          f"compared methods' φ at that N and the VAEs, and for TPA their cells of Fig. 5), how "
+          f"many met the convergence criterion of the table below; ⚠ marks a verdict resting on "
+          f"trainings that were still learning."]
+    return L
+
+
+def detail_lines(H, envs):
+    L = ["", "## The paper's claims in detail", ""]
+    for env in envs:
+        rows = [h for h in H if h["env"] == env]
+        if not rows:
+            continue
+        L.append(f"### {env_title(env)}")
+        for h in rows:
+            if h["deciding"] is None:
+                L.append(f"- **{h['claim']}**: not evaluated (no data)")
+                continue
+            L.append(f"- **{h['claim']}: {h['verdict']}** (paired t-test over seeds, α = {ALPHA}, "
+                     f"Holm within the claim; Δ with its 95 % CI). "
+                     + "; ".join(comparison_text(c) for c in h["comparisons"]))
+        L.append("")
+    if not any(ENV.get(e, {}).get("vae_weak_claim") for e in envs):
+        L.append("- *VAE weak on JacoRobot*: not evaluated — this run has no JacoRobot cells.")
+    return L

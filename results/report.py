@@ -1,0 +1,259 @@
+"""report.md, report.html and claims.json: the claims first, then the figures, learning curves
+and their convergence, the claims in detail, compute against the roofs, diagnostics, notes and
+the profile."""
+import html
+import json
+import math
+import os
+
+import numpy as np
+import pandas as pd
+
+import claims as claims_stats
+import plot_beyond
+from hypotheses import detail_lines, fmt, hypotheses, summary_lines
+from run_tables import ENV, env_title, main_tpa
+
+
+def convergence_lines(t):
+    """One line per (environment, kind, variant): how many of its trainings converged."""
+    tr = t["training"]
+    if tr.empty:
+        return []
+    L = ["", "## Did every training converge?", "",
+         "Converged: the mean loss over the last 10 % of the epochs differs from the 10 % before "
+         "by less than 1 % (+1e-4 absolute); a TPA cell counts when all of its heads did. "
+         "Per-task values: /tables/training.", "",
+         "| env | training | variant | epochs | converged | median Δ over the last 10 % |",
+         "|---|---|---|---:|---:|---:|"]
+    if "teacher" in tr:  # the [robustness] cells' trainings, one line per method
+        tr = tr.assign(variant=tr.variant.where(tr.teacher == "", tr.variant + " (noisy teachers)"))
+    for (env, kind, v), d in tr.groupby(["env", "kind", "variant"]):
+        L.append(f"| {env} | {kind} | {v} | {int(d.epochs.median())} | {int(d.converged.sum())} of "
+                 f"{len(d)} | {100 * d.loss_relative_change.median():+.2f} % |")
+    return L
+
+
+def vae_lines(res, t):
+    """The VAE's posterior (per-latent KL) and how alive each φ's last hidden layer is."""
+    vl = t["vae_latents"]
+    L = []
+    if not vl.empty:
+        L += ["", "## The VAE's posterior", "",
+              "A latent dimension with KL < 0.01 nats carries no information about the trajectory "
+              "(posterior collapse). Per dimension: /tables/vae_latents.", "",
+              "| env | seed | ELBO form | active latents (KL > 0.01) | KL per latent (nats) | "
+              "reconstruction MSE |", "|---|---:|---|---:|---|---:|"]
+        for (env, seed), d in vl.groupby(["env", "seed"]):
+            kl = d.sort_values("dim").kl.values
+            L.append(f"| {env} | {seed} | {d.elbo.iloc[0]} | {(kl > 0.01).sum()} of {len(kl)} | "
+                     f"{', '.join(f'{x:.3g}' for x in kl)} | {d.reconstruction_mse.iloc[0]:.4g} |")
+    dead = []
+    recs = res.records
+    if not recs.empty and "variant" in recs:
+        reps = recs[(recs.kind == "rep") & recs.arrays.str.split(",").map(lambda a: "dead_fraction" in a)]
+        for row in reps.itertuples():
+            df = res.array(row.key, "dead_fraction")
+            dead.append((row.env, row.variant, float(df[-1]) if len(df) else 0.0))
+    if dead:
+        d = pd.DataFrame(dead, columns=["env", "variant", "dead"])
+        L += ["", "## Dead units", "",
+              "Share of φ's last hidden layer that is 0 on every trajectory of Ξ (a φ whose layer "
+              "is all dead is a constant map: no head on it can learn, frozen or not).", "",
+              "| env | variant | representations | median dead share | max |", "|---|---|---:|---:|---:|"]
+        for (env, v), x in d.groupby(["env", "variant"]):
+            L.append(f"| {env} | {v} | {len(x)} | {x.dead.median():.2f} | {x.dead.max():.2f} |")
+    return L
+
+
+def compute_lines(res, tim):
+    a = res.provenance
+    if not len(tim):
+        return []
+    tim = tim.copy()
+    tim["cores"] = tim["threads"] if "threads" in tim else 1  # files before engine 0.4.0: 1
+    tim["core_seconds"] = tim.seconds * tim.cores
+    by = tim.groupby("kind").agg(tasks=("key", "count"), seconds=("seconds", "sum"),
+                                 core_seconds=("core_seconds", "sum"),
+                                 wide=("cores", lambda x: int((x > 1).sum())),
+                                 gflop=("flops", lambda x: x.sum() / 1e9))
+    by["GFLOP/s"] = by.gflop / by.seconds.where(by.seconds > 0)
+    by["per core"] = by.gflop / by.core_seconds.where(by.core_seconds > 0)
+    roof = float(a.get("roof_fp32_gflops_per_core", 0) or 0)  # one core's, measured by the run
+    roof_bf16 = float(a.get("roof_bf16_gflops_per_core", 0) or 0)  # bf16 runs with a bf16 unit
+    # Each task's compute roof: that of its precision on its cores (a column from 2026-12-03 on;
+    # before, the fp32 roof of its cores). A kind's share of a roof: the seconds its tasks would
+    # take at their roofs over the seconds they took.
+    if "compute_roof_gflops" in tim and (tim.compute_roof_gflops > 0).all():
+        compute = tim.compute_roof_gflops
+    else:
+        compute = roof * tim.cores
+    if roof:
+        tim["compute_seconds"] = tim.flops / 1e9 / compute
+        by["compute"] = tim.groupby("kind").compute_seconds.sum() / by.seconds.where(by.seconds > 0)
+    # The relevant roof of each task: the lower of its compute roof and its memory roof (tasks that
+    # stream their weights and Adam state; engines from 0.7.0 on).
+    relevant = "memory_roof_gflops" in tim and roof > 0
+    if relevant:
+        limit = compute.where(tim.memory_roof_gflops <= 0,
+                              np.minimum(compute, tim.memory_roof_gflops))
+        tim["ideal_seconds"] = tim.flops / 1e9 / limit
+        tim["streams"] = tim.memory_roof_gflops > 0
+        rel = tim.groupby("kind").agg(ideal=("ideal_seconds", "sum"), streams=("streams", "sum"))
+        by["relevant"] = rel.ideal / by.seconds.where(by.seconds > 0)
+        by["streams"] = rel.streams
+    L = ["", "## Compute by task kind (task-seconds, summed over tasks)", ""]
+    if roof:
+        L += [f"A task runs on one core, or on several when nothing else was ready or its chain "
+              f"was critical (column "
+              f"*on > 1 core*); this machine's fp32 roof is {roof:.0f} GFLOP/s per core (measured "
+              "at the start of the run), and % of roof is the share of its cores' roof a kind "
+              "held." + (f" Tasks whose products ran in bf16 are held to the bf16 unit's roof, "
+                         f"{roof_bf16:.0f} GFLOP/s per core." if roof_bf16 else ""), ""]
+    if relevant:
+        L += ["Tasks whose weights and Adam state do not fit a core's share of the caches stream "
+              "them from main memory every step (*memory-bound*, as the cost model counts bytes): "
+              "their memory roof is their FLOPs per byte streamed times the bandwidth the run "
+              "measured on one core (a STREAM triad). *% of the relevant roof* counts each task "
+              "against the lower of its two roofs.", ""]
+        L += ["| kind | tasks | on > 1 core | memory-bound | seconds | GFLOP | GFLOP/s | % of roof | "
+              "% of the relevant roof |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    else:
+        L += ["| kind | tasks | on > 1 core | seconds | GFLOP | GFLOP/s | % of roof |",
+              "|---|---:|---:|---:|---:|---:|---:|"]
+    for k, r in by.iterrows():
+        pct = f"{100 * r.compute:.0f} %" if roof and r.compute == r.compute else "—"
+        if relevant:
+            rp = f"{100 * r.relevant:.0f} %" if r.relevant == r.relevant else "—"
+            L.append(f"| {k} | {int(r.tasks)} | {int(r.wide)} | {int(r.streams)} | {r.seconds:.1f} | "
+                     f"{r.gflop:.1f} | {r['GFLOP/s']:.1f} | {pct} | {rp} |")
+        else:
+            L.append(f"| {k} | {int(r.tasks)} | {int(r.wide)} | {r.seconds:.1f} | {r.gflop:.1f} | "
+                     f"{r['GFLOP/s']:.1f} | {pct} |")
+    return L
+
+
+FIGURES = [("fig3_grid_similar", "Fig. 3"), ("fig4_fpe", "Fig. 4"), ("fig5_tpa", "Fig. 5"),
+           ("fig7_ablation", "Fig. 7")]
+
+
+def report(res, t, envs, out, notes, fig3_key, beyond=None):
+    """report.md and report.html: the summary table of claims first, then the figures, the
+    learning curves with their convergence table, the claims in detail, compute, diagnostics,
+    notes, and the profile's text last."""
+    fpe, tpa, tim = t["fpe"], t["tpa"], t["timings"]
+    beyond = beyond or {}
+    envs = [e for e in envs if ENV.get(e, {}).get("in_claims", 1)]  # e.g. Fig. 3's own env
+    a = res.provenance
+    H = hypotheses(fpe, tpa, envs, t.get("training"))
+    title = f"sirl-bench report: profile `{a.get('profile_name')}`"
+    L = [f"# {title}", ""] + summary_lines(H)
+    L += ["", f"Engine {a.get('engine_version')} (commit {a.get('git_commit')}), host "
+          f"{a.get('host')}, {a.get('threads')} threads; started {a.get('started')}, finished "
+          f"{a.get('finished')}, wall time {float(a.get('wall_seconds', 0)):.0f} s; tasks: "
+          f"{a.get('tasks_done')} of {a.get('tasks_total')} done"
+          + ("." if a.get("complete") else " — **PARTIAL RUN**: figures show gaps.")]
+    L += ["", "## Figures", ""]
+    for name, cap in FIGURES:
+        if os.path.exists(os.path.join(out, name + ".png")):
+            L += [f"![{cap}]({name}.png)", ""]
+    L += plot_beyond.active_lines(fpe, tim, beyond.get("active", []))
+    L += plot_beyond.robustness_lines(fpe, tpa, t["robust_fpe"], t["robust_tpa"],
+                                      beyond.get("robustness", []))
+    L += external_lines(fpe, tpa, envs)
+    L += beyond.get("hyper", [])
+    L += ["", "## Learning curves and convergence", ""]
+    if os.path.exists(os.path.join(out, "fig_learning_curves.png")):
+        L += ["![Learning curves](fig_learning_curves.png)", ""]
+    L += convergence_lines(t)
+    L += detail_lines(H, envs)
+    L += compute_lines(res, tim)
+    L += vae_lines(res, t)
+    if fig3_key:
+        L += ["", f"Fig. 3 uses the representation `{fig3_key}`."]
+    if notes:
+        L += ["", "## Notes", ""] + [f"- {n}" for n in notes]
+    prof = a.get("profile_text", "")
+    if prof:
+        L += ["", "## Configuration (the profile this file was run with)", "", "```toml",
+              prof.strip(), "```"]
+    L.append("")
+    text = "\n".join(L)
+    with open(os.path.join(out, "report.md"), "w") as fh:
+        fh.write(text)
+    with open(os.path.join(out, "report.html"), "w") as fh:
+        fh.write(report_html(title, "\n".join(L[2:])))
+    with open(os.path.join(out, "claims.json"), "w") as fh:
+        json.dump(json_safe([{k: v for k, v in h.items() if k != "deciding"} for h in H]), fh,
+                  indent=1)
+    return text
+
+
+def external_lines(fpe, tpa, envs):
+    """Each external method next to SIRL, per environment: FPE at the largest N and TPA (Fig. 5's
+    cells, mean over M) at the largest N, paired over seeds. Reported, not decided: these are not
+    claims of the paper."""
+    ext = sorted({v for d in (fpe, tpa) if not d.empty
+                  for v in d[d.method == "external"].variant.unique()})
+    if not ext:
+        return []
+    L = ["", "## Methods evaluated from outside the engine (`sirl evaluate`)", "",
+         "Each method's embeddings of Ξ ran through the engine's own FPE and frozen TPA cells (the "
+         "same rows, test rewards, pairs, M values, head initialisations and seeds as SIRL's), "
+         "so the difference from SIRL is paired by seed: Δ = method − SIRL with its 95 % t "
+         "interval and the two-sided paired t-test's p. No verdict: these are not claims of the "
+         "paper.", "",
+         "| env | method | metric | N | method | SIRL | Δ [95 % CI] | p | seeds |",
+         "|---|---|---|---:|---:|---:|---|---:|---:|"]
+    m = main_tpa(tpa)
+    for env in envs:
+        for v in ext:
+            rows = []
+            d = fpe[fpe.env == env] if not fpe.empty else fpe
+            if not d.empty and (d.variant == v).any():
+                N = d[d.variant == v].N.max()
+                at = [d[(d.variant == x) & (d.N == N)].set_index("seed").fpe for x in (v, "sirl")]
+                rows.append(("FPE (lower is better)", N, at))
+            d = m[m.env == env] if not m.empty else m
+            if not d.empty and (d.variant == v).any():
+                N = d[d.variant == v].N.max()
+                at = [d[(d.variant == x) & (d.N == N)].groupby("seed").tpa.mean()
+                      for x in (v, "sirl")]
+                rows.append(("TPA (frozen, mean over M)", N, at))
+            for metric, N, (a, b) in rows:
+                c = claims_stats.paired(v, a, b)
+                L.append(f"| {env_title(env)} | {v} | {metric} | {N} | {fmt(a.mean())} | "
+                         f"{fmt(b.mean())} | {fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, "
+                         f"{fmt(c['hi'], '+.4f')}] | {fmt(c['p'], '.3g')} | {c['n']} |")
+    return L
+
+
+def json_safe(x):
+    """Plain JSON: numpy scalars as Python numbers, nan/inf as null."""
+    if isinstance(x, dict):
+        return {k: json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [json_safe(v) for v in x]
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        return float(x) if math.isfinite(x) else None
+    return x
+
+
+CSS = ("body{font-family:system-ui,sans-serif;max-width:1200px;margin:1em auto;padding:0 1em}"
+       "table{border-collapse:collapse;margin:0.5em 0 1em}th,td{border:1px solid #bbb;"
+       "padding:3px 7px;font-size:0.9em;vertical-align:top}th{background:#eee}"
+       "caption{font-size:1.4em;font-weight:bold;text-align:left;padding:0.3em 0}"
+       "img{max-width:100%}pre{background:#f6f6f6;padding:0.6em;overflow-x:auto}")
+
+
+def report_html(title, body_md):
+    """The report's Markdown as HTML (Debian's python3-markdown, tables + fenced code). The
+    first element of the page is the summary table, its caption the report's title."""
+    import markdown
+    body = markdown.markdown(body_md, extensions=["tables", "fenced_code"])
+    t = html.escape(title.replace("`", ""))
+    body = body.replace("<table>", f'<table id="summary"><caption>{t}</caption>', 1)
+    return (f"<!doctype html><html><head><meta charset='utf-8'><title>{t}</title>"
+            f"<style>{CSS}</style></head><body>{body}</body></html>\n")
