@@ -48,7 +48,7 @@ void BM_SirlTrainingRun(benchmark::State& state) {
   const World& w = world(jaco);
   Hyper h = paper_hyper(jaco ? "jaco" : "grid");
   h.sirl.epochs = jaco ? 2 : 10;
-  const MethodConfig c{Method::sirl, jaco ? 200 : 1000, false, h, 1};
+  const MethodConfig c{Method::sirl, jaco ? 200 : 1000, false, h};
   double flops = 0;
   for (auto _ : state) flops = train_representation(w.d, w.b, c, 7).train_flops;
   state.counters["GFLOP/s"] =
@@ -73,7 +73,7 @@ void time_tpa_cell(benchmark::State& state, bool jaco, int epochs, int64_t M, bo
   mlp_init(phi.shape, phi.params.data(), rng);
   double flops = 0;
   for (auto _ : state)
-    flops = evaluate_tpa(phi, w.d, w.b.tpa, TpaConfig{M, frozen, h, 1}, 5).train_flops;
+    flops = evaluate_tpa(phi, w.d, w.b.tpa, TpaConfig{M, frozen, h}, 5).train_flops;
   state.counters["GFLOP/s"] =
       benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
 }

@@ -115,7 +115,8 @@ Ensemble make_ensemble(const MlpShape& shape, const ActiveConfig& cfg, uint64_t 
 
 // Scores [pool] of the candidate triplets under the members' embeddings.
 std::vector<double> score_pool(const Dataset& d, const std::vector<Triple>& pool,
-                               BatchedTrainer& ens, const ActiveConfig& cfg, double& flops) {
+                               BatchedTrainer& ens, const ActiveConfig& cfg, int threads,
+                               double& flops) {
   const MlpShape& shape = ens.shape;
   const int K = ens.models, dim = shape.out(), in = shape.in();
   // The distinct rows of the pool, embedded once per member.
@@ -130,8 +131,7 @@ std::vector<double> score_pool(const Dataset& d, const std::vector<Triple>& pool
     Representation rep;
     rep.shape = shape;
     rep.params.assign(ens.params.begin() + k * P, ens.params.begin() + (k + 1) * P);
-    embed(rep, X.data(), int64_t(rows.size()), emb.data() + size_t(k) * rows.size() * dim,
-          cfg.threads);
+    embed(rep, X.data(), int64_t(rows.size()), emb.data() + size_t(k) * rows.size() * dim, threads);
     flops += shape.forward_flops(int(rows.size()));
   }
   auto at = [&](int k, int32_t row) {
@@ -191,10 +191,12 @@ void check_config(const Dataset& d, const ActiveConfig& c) {
 // it between rounds.
 class ActiveSelection {
  public:
-  ActiveSelection(const Dataset& d, const Teacher& teacher, const ActiveConfig& cfg, uint64_t seed)
+  ActiveSelection(const Dataset& d, const Teacher& teacher, const ActiveConfig& cfg, uint64_t seed,
+                  const Execution& ex)
       : d_(d),
         teacher_(teacher),
         cfg_(cfg),
+        ex_(ex),
         shape_(phi_shape(d.input_dim, cfg.hyper)),
         ens_(make_ensemble(shape_, cfg, seed)),
         pool_rng_(seed_from_key("active/pool", seed)),
@@ -202,7 +204,7 @@ class ActiveSelection {
 
   ActiveQueries run() {
     // A rerun continues from the last round saved.
-    if (TrainingSnapshot s; cfg_.checkpointer && cfg_.checkpointer->load(s)) restore(s);
+    if (TrainingSnapshot s; ex_.checkpointer && ex_.checkpointer->load(s)) restore(s);
     while (out_.queries.count < cfg_.budget) {
       const int64_t before = out_.queries.count;
       const int64_t want = std::min(cfg_.batch, cfg_.budget - out_.queries.count);
@@ -216,7 +218,7 @@ class ActiveSelection {
         // Train the members on everything answered so far, then score the pool.
         train_members();
         const std::vector<double> score =
-            score_pool(d_, pool, ens_.trainer, cfg_, out_.train_flops);
+            score_pool(d_, pool, ens_.trainer, cfg_, ex_.threads, out_.train_flops);
         const double picked = ask_best(pool, score, want);
         double pool_mean = 0;
         for (double v : score) pool_mean += v / double(score.size());
@@ -225,7 +227,7 @@ class ActiveSelection {
         out_.pool_score.push_back(float(pool_mean));
       }
       ++out_.rounds;
-      if (cfg_.checkpointer && out_.queries.count < cfg_.budget && cfg_.checkpointer->due()) save();
+      if (ex_.checkpointer && out_.queries.count < cfg_.budget && ex_.checkpointer->due()) save();
     }
     return out_;
   }
@@ -277,7 +279,7 @@ class ActiveSelection {
               std::copy_n(out_.queries.idx.begin() + 3 * order[size_t(k)][i], 3,
                           batch_.begin() + (size_t(k) * b + i) * 3);
           triplet_train_step_batched(ens_.trainer, d_.inputs.data(), batch_.data(), b,
-                                     float(cfg_.hyper.triplet_margin), cfg_.threads);
+                                     float(cfg_.hyper.triplet_margin), ex_.threads);
           out_.train_flops += cfg_.members * shape_.train_flops(3 * b);
           return ens_.trainer.losses;
         });
@@ -347,12 +349,13 @@ class ActiveSelection {
     s.put_rng("active/answer_rng", answer_rng_);
     for (int k = 0; k < cfg_.members; ++k)
       s.put_rng("active/order/" + std::to_string(k), ens_.order[size_t(k)]);
-    cfg_.checkpointer->save(s);
+    ex_.checkpointer->save(s);
   }
 
   const Dataset& d_;
   const Teacher& teacher_;
   const ActiveConfig& cfg_;
+  const Execution& ex_;
   const MlpShape shape_;
   Ensemble ens_;
   Rng pool_rng_, answer_rng_;
@@ -364,10 +367,10 @@ class ActiveSelection {
 }  // namespace
 
 ActiveQueries select_active_queries(const Dataset& d, const Teacher& teacher,
-                                    const ActiveConfig& cfg, uint64_t seed) {
+                                    const ActiveConfig& cfg, uint64_t seed, const Execution& ex) {
   check_config(d, cfg);
   validate(teacher, d.feature_count());
-  return ActiveSelection(d, teacher, cfg, seed).run();
+  return ActiveSelection(d, teacher, cfg, seed, ex).run();
 }
 
 }  // namespace sirl

@@ -22,6 +22,7 @@
 #include "datasets/queries.h"
 #include "datasets/simulated_human.h"
 #include "engine/checkpoint.h"
+#include "engine/execution.h"
 #include "engine/hyperparams.h"
 
 namespace sirl {
@@ -45,8 +46,6 @@ struct ActiveConfig : ActiveRounds {
   Selection rule = Selection::vote;
   int64_t budget = 1000;  // triplets asked in all (the largest N of the cells that read them)
   Hyper hyper;            // φ's shape and the SIRL schedule's batch, Adam and margin
-  int threads = 1;
-  Checkpointer* checkpointer = nullptr;  // saves after a round when due; a rerun continues
 };
 
 struct ActiveQueries {
@@ -60,7 +59,8 @@ struct ActiveQueries {
 // Throws std::invalid_argument for a config that cannot work (K < 2, batch < 1, pool < batch,
 // budget above what Ξ can offer) and std::runtime_error if the members diverge.
 ActiveQueries select_active_queries(const Dataset& d, const Teacher& teacher,
-                                    const ActiveConfig& cfg, uint64_t seed);
+                                    const ActiveConfig& cfg, uint64_t seed,
+                                    const Execution& ex = {});  // checkpoints after rounds
 
 // ---- the scores (nats) ----
 // Pairs are numbered as the simulated human does: 0 = (1,2 | 3), 1 = (1,3 | 2), 2 = (2,3 | 1).

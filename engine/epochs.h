@@ -14,6 +14,7 @@
 
 #include "engine/checkpoint.h"
 #include "engine/convergence.h"
+#include "engine/execution.h"
 #include "engine/for_each_model.h"
 #include "kernels/rng.h"
 
@@ -181,7 +182,6 @@ std::vector<float> run_epochs_batched(int64_t n, int epochs, int batch, std::vec
 // result is the same for any thread count, stretch or resume.
 // An exception from `step` (out of memory, say) ends the stretch and is rethrown here, before any
 // checkpoint (for_each_model).
-inline constexpr int kStretchSteps = 32;
 struct ModelLoopOptions {
   const ResumableState* resume = nullptr;
   int stretch_steps = kStretchSteps;

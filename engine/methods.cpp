@@ -45,14 +45,14 @@ bool all_zero(const std::vector<float>& v) {
 constexpr float kFixedPointSlack = 1e-3f;
 
 void train_sirl(const Dataset& d, const QueryBundle& bundle, const MethodConfig& cfg, uint64_t seed,
-                Representation& rep) {
+                const Execution& ex, Representation& rep) {
   const TripletSet q = first_triplets(bundle.similarity, cfg.queries);
   const TrainSchedule& s = cfg.hyper.sirl;
   Trainer t(rep.shape, s.adam, rep.params);
   Rng order_rng(seed_from_key("sirl_order", seed));
   std::vector<int32_t> batch;
   const ResumableState resume =
-      adam_resumable(cfg.checkpointer, "sirl", t.params, t.adam, rep.train_flops);
+      adam_resumable(ex.checkpointer, "sirl", t.params, t.adam, rep.train_flops);
   const float margin = float(cfg.hyper.triplet_margin);
   const float inside = -kFixedPointSlack * std::max(margin, 1.f);
   // Per epoch: whether it started with every first moment 0, and whether every triplet so far
@@ -75,7 +75,7 @@ void train_sirl(const Dataset& d, const QueryBundle& bundle, const MethodConfig&
           std::copy_n(q.idx.begin() + 3 * rows[i], 3, batch.begin() + 3 * i);
         rep.train_flops += t.shape.train_flops(3 * b);
         const float loss =
-            triplet_train_step(t, d.inputs.data(), batch.data(), b, margin, cfg.threads);
+            triplet_train_step(t, d.inputs.data(), batch.data(), b, margin, ex.threads);
         if (idle) idle = triplet_max_hinge(t.tape.output(), b, t.shape.out(), margin) <= inside;
         return loss;
       },
@@ -91,7 +91,7 @@ void train_sirl(const Dataset& d, const QueryBundle& bundle, const MethodConfig&
 }
 
 void train_preference(const Dataset& d, const QueryBundle& bundle, const MethodConfig& cfg,
-                      uint64_t seed, Representation& rep) {
+                      uint64_t seed, const Execution& ex, Representation& rep) {
   const PreferenceSet* full = nullptr;
   int K = 0;
   switch (cfg.method) {
@@ -120,7 +120,7 @@ void train_preference(const Dataset& d, const QueryBundle& bundle, const MethodC
   std::vector<int32_t> pairs, human;
   std::vector<float> label;
   const ResumableState resume =
-      adam_resumable(cfg.checkpointer, "pref", t.params, t.adam, rep.train_flops);
+      adam_resumable(ex.checkpointer, "pref", t.params, t.adam, rep.train_flops);
   rep.loss_curve = run_epochs(
       q.count, s.epochs, s.batch, order_rng,
       [&](const int32_t* rows, int b) {
@@ -137,7 +137,7 @@ void train_preference(const Dataset& d, const QueryBundle& bundle, const MethodC
         rep.train_flops += t.shape.train_flops(2 * b);
         return multihead_preference_train_step(t, K, d.inputs.data(), pairs.data(), label.data(),
                                                human.data(), b, float(cfg.hyper.pref_l2),
-                                               cfg.threads);
+                                               ex.threads);
       },
       &resume);
   rep.params.assign(t.params.begin(), t.params.begin() + P);  // φ; the heads on the side
@@ -147,7 +147,8 @@ void train_preference(const Dataset& d, const QueryBundle& bundle, const MethodC
 }  // namespace
 
 Representation train_representation(const Dataset& d, const QueryBundle& bundle,
-                                    const MethodConfig& cfg, uint64_t seed, const VaeModel* vae) {
+                                    const MethodConfig& cfg, uint64_t seed, const VaeModel* vae,
+                                    const Execution& ex) {
   validate(cfg.hyper);
   const bool needs_vae = cfg.method == Method::vae || cfg.vae_pretrain;
   if (needs_vae && !vae)
@@ -173,9 +174,9 @@ Representation train_representation(const Dataset& d, const QueryBundle& bundle,
   const std::string what = std::string(method_name(cfg.method)) + (cfg.vae_pretrain ? "+vae" : "") +
                            " N=" + std::to_string(cfg.queries);
   if (cfg.method == Method::sirl)
-    train_sirl(d, bundle, cfg, seed, rep);
+    train_sirl(d, bundle, cfg, seed, ex, rep);
   else if (cfg.method != Method::random)
-    train_preference(d, bundle, cfg, seed, rep);
+    train_preference(d, bundle, cfg, seed, ex, rep);
   require_finite(rep.loss_curve, what + " loss");
   require_finite(rep.params, what + " weights");
   return rep;

@@ -6,6 +6,7 @@
 #include "datasets/dataset.h"
 #include "datasets/query_bundle.h"
 #include "engine/checkpoint.h"
+#include "engine/execution.h"
 #include "engine/hyperparams.h"
 #include "engine/representation.h"
 #include "engine/train_vae.h"
@@ -17,8 +18,6 @@ struct MethodConfig {
   int64_t queries = 0;  // N: similarity triplets (SIRL) or preference pairs (the Pref methods)
   bool vae_pretrain = false;  // start φ from the VAE encoder's mean head
   Hyper hyper;
-  int threads = 1;
-  Checkpointer* checkpointer = nullptr;  // saves / resumes the training (engine/checkpoint.h)
   // SIRL: end training where it reaches a fixed point (engine/methods.cpp; the same weights and
   // curve as running every epoch). false runs every epoch (the tests' reference).
   bool skip_fixed_point = true;
@@ -34,6 +33,6 @@ struct MethodConfig {
 // Throws std::invalid_argument on bad configs and std::runtime_error if training diverges.
 Representation train_representation(const Dataset& d, const QueryBundle& bundle,
                                     const MethodConfig& cfg, uint64_t seed,
-                                    const VaeModel* vae = nullptr);
+                                    const VaeModel* vae = nullptr, const Execution& ex = {});
 
 }  // namespace sirl

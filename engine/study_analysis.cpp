@@ -20,14 +20,14 @@ Representation train_sirl_on(const Dataset& d, const std::vector<int32_t>& tripl
   QueryBundle b;
   b.similarity.idx = triplets;
   b.similarity.count = int64_t(triplets.size() / 3);
-  MethodConfig m{Method::sirl, b.similarity.count, false, c.hyper, c.threads};
-  return train_representation(d, b, m, seed);
+  MethodConfig m{Method::sirl, b.similarity.count, false, c.hyper};
+  return train_representation(d, b, m, seed, nullptr, Execution{c.threads});
 }
 
 Representation random_phi(const Dataset& d, const StudyAnalysisConfig& c, uint64_t seed) {
   QueryBundle b;
-  return train_representation(d, b, MethodConfig{Method::random, 0, false, c.hyper, c.threads},
-                              seed);
+  return train_representation(d, b, MethodConfig{Method::random, 0, false, c.hyper}, seed, nullptr,
+                              Execution{c.threads});
 }
 
 // `splits` random 70/30 partitions of one participant's answered, non-tied preferences.
@@ -67,13 +67,15 @@ std::vector<double> tpa_accuracies(const Representation& rep, const Dataset& d,
                                    const std::vector<TpaSet>& sets, int64_t M,
                                    const StudyAnalysisConfig& c, uint64_t seed, bool frozen) {
   if (frozen)
-    return evaluate_tpa(rep, d, sets, TpaConfig{M, true, c.hyper, c.threads}, seed).accuracy;
+    return evaluate_tpa(rep, d, sets, TpaConfig{M, true, c.hyper}, seed, Execution{c.threads})
+        .accuracy;
   std::vector<double> acc;
   for (size_t k = 0; k < sets.size(); k += kUnfrozenChunk) {
     const std::vector<TpaSet> chunk(sets.begin() + k,
                                     sets.begin() + std::min(sets.size(), k + kUnfrozenChunk));
-    const TpaResult r = evaluate_tpa(rep, d, chunk, TpaConfig{M, false, c.hyper, c.threads},
-                                     seed_from_key("unfrozen_chunk/" + std::to_string(k), seed));
+    const TpaResult r = evaluate_tpa(rep, d, chunk, TpaConfig{M, false, c.hyper},
+                                     seed_from_key("unfrozen_chunk/" + std::to_string(k), seed),
+                                     Execution{c.threads});
     acc.insert(acc.end(), r.accuracy.begin(), r.accuracy.end());
   }
   return acc;
@@ -153,7 +155,8 @@ SimulatedTpa study_simulated_tpa(const Dataset& d, const Representation& sirl0,
         sample_tpa_set(d, c.simulated_queries, rewards, r, Teacher{}, sim_rng, c.train_fraction));
   const int64_t M = sim.front().train;
   SimulatedTpa t;
-  t.sirl = evaluate_tpa(sirl0, d, sim, TpaConfig{M, true, c.hyper, c.threads}, tpa_seed).accuracy;
+  t.sirl = evaluate_tpa(sirl0, d, sim, TpaConfig{M, true, c.hyper}, tpa_seed, Execution{c.threads})
+               .accuracy;
   t.random = tpa_accuracies(random0, d, sim, M, c, tpa_seed, c.random_frozen);
   t.random_other = tpa_accuracies(random0, d, sim, M, c, tpa_seed, !c.random_frozen);
   return t;

@@ -54,7 +54,7 @@ struct CellRows {
 };
 
 CellRows compact_rows(const Representation& rep, const Dataset& d, const std::vector<TpaSet>& sets,
-                      const TpaConfig& cfg) {
+                      const TpaConfig& cfg, int threads) {
   const size_t R = sets.size();
   std::vector<int32_t> compact(d.count, -1), used;
   auto remap = [&](int32_t row) {
@@ -74,7 +74,7 @@ CellRows compact_rows(const Representation& rep, const Dataset& d, const std::ve
       c.test[r].push_back(remap(p[i]));
   }
   if (cfg.frozen) {
-    c.X = embed_rows(rep, d, used, cfg.threads);
+    c.X = embed_rows(rep, d, used, threads);
     require_finite(c.X, "TPA: φ(ξ)");
   } else {
     const int64_t U = int64_t(used.size());
@@ -105,7 +105,7 @@ std::vector<float> initial_heads(const Representation& rep, const TpaConfig& cfg
 // cell's mean and standard deviation over heads. params: [R, P] (φ's weights first, unfrozen).
 void score_heads(const MlpShape& net, const std::vector<float>& params, const Representation& rep,
                  const CellRows& rows, const std::vector<TpaSet>& sets, const TpaConfig& cfg,
-                 TpaResult& res) {
+                 int threads, TpaResult& res) {
   const int R = int(sets.size());
   const size_t P = net.param_count(), P_phi = cfg.frozen ? 0 : rep.params.size();
   MlpTape<float> tape;
@@ -117,7 +117,7 @@ void score_heads(const MlpShape& net, const std::vector<float>& params, const Re
     const int n = int(pairs.size() / 2), w = net.in();
     xb.resize(size_t(2) * n * w);
     gather_by_role(rows.X.data(), w, pairs.data(), n, 2, xb.data());
-    mlp_forward(net, p, xb.data(), 2 * n, tape, cfg.threads);
+    mlp_forward(net, p, xb.data(), 2 * n, tape, threads);
     return preference_accuracy(tape.output(), labels, n);
   };
   for (int r = 0; r < R; ++r) {
@@ -138,7 +138,7 @@ void score_heads(const MlpShape& net, const std::vector<float>& params, const Re
 }  // namespace
 
 TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::vector<TpaSet>& sets,
-                       const TpaConfig& cfg, uint64_t seed) {
+                       const TpaConfig& cfg, uint64_t seed, const Execution& ex) {
   validate(cfg.hyper);
   check_sets(sets, cfg.M);
   if (rep.is_table() && !cfg.frozen)
@@ -146,7 +146,7 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
         "TPA: an external representation has no weights to fine-tune (frozen cells only)");
   const int R = int(sets.size());
   const int64_t M = cfg.M;
-  const CellRows rows = compact_rows(rep, d, sets, cfg);
+  const CellRows rows = compact_rows(rep, d, sets, cfg, ex.threads);
   const Hyper& h = cfg.hyper;
   const MlpShape net = tpa_network(rep.shape, h, cfg.frozen);
   BatchedTrainer t(net, R, h.tpa.adam, initial_heads(rep, cfg, size_t(R), net, seed));
@@ -166,16 +166,16 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
     epoch_flops += R * net.train_flops(2 * int(std::min<int64_t>(h.tpa.batch, M - i0)));
   const int64_t batches = (M + h.tpa.batch - 1) / h.tpa.batch;
   const ResumableState resume =
-      adam_resumable(cfg.checkpointer, "tpa", t.params, t.adam, res.train_flops);
+      adam_resumable(ex.checkpointer, "tpa", t.params, t.adam, res.train_flops);
   // Head by head: each head's steps in a row, so more of its weights and moments stay in cache
   // (the same bits as stepping all heads at once). Under tpa.stop = "converged" a head whose loss
   // has converged takes no further step.
   ModelLoopOptions loop;
   loop.resume = &resume;
-  loop.stretch_steps = cfg.stretch_steps;
+  loop.stretch_steps = ex.stretch_steps;
   loop.stop = tpa_stop_rule(h, cfg.frozen);
   ModelCurves run = run_epochs_model_by_model(
-      M, res.epochs, h.tpa.batch, order_rng, cfg.threads,
+      M, res.epochs, h.tpa.batch, order_rng, ex.threads,
       [&](int r, const int32_t* order, int b, int64_t step) {
         pairs[r].resize(size_t(b) * 2);
         label[r].resize(size_t(b));
@@ -204,7 +204,7 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   }
   require_finite(t.params, "TPA head weights");
 
-  score_heads(net, t.params, rep, rows, sets, cfg, res);
+  score_heads(net, t.params, rep, rows, sets, cfg, ex.threads, res);
   return res;
 }
 

@@ -9,6 +9,7 @@
 #include "datasets/queries.h"
 #include "engine/checkpoint.h"
 #include "engine/epochs.h"
+#include "engine/execution.h"
 #include "engine/hyperparams.h"
 #include "engine/representation.h"
 
@@ -19,11 +20,6 @@ struct TpaConfig {
   bool frozen = true;  // frozen: φ fixed, the head learns on φ(ξ); unfrozen: each head fine-tunes
                        // its own copy of φ (φ + head trained as one network)
   Hyper hyper;  // tpa.* (epochs, batch, Adam, hidden widths, L2)
-  int threads = 1;
-  Checkpointer* checkpointer = nullptr;  // saves / resumes the heads' training
-  // The heads train one after another, each this many steps in a row (rounded up to whole
-  // epochs) before the next; checkpoints fall between. Speed only: the result is the same.
-  int stretch_steps = kStretchSteps;
 };
 
 struct TpaResult {
@@ -49,6 +45,6 @@ MlpShape tpa_network(const MlpShape& phi, const Hyper& h, bool frozen);
 // Throws std::invalid_argument if M is outside [1, train] or a held-out split is empty, and
 // std::runtime_error if training diverges.
 TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::vector<TpaSet>& sets,
-                       const TpaConfig& cfg, uint64_t seed);
+                       const TpaConfig& cfg, uint64_t seed, const Execution& ex = {});
 
 }  // namespace sirl

@@ -51,8 +51,8 @@ void measure_posterior(const Dataset& d, VaeModel& m, int threads) {
 }
 }  // namespace
 
-VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads,
-                   Checkpointer* checkpointer) {
+VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, const Execution& ex) {
+  const int threads = ex.threads;
   validate(h);
   VaeModel m;
   m.elbo = vae_elbo_form(h);
@@ -75,7 +75,7 @@ VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads,
   int64_t rows_seen = 0;
   // At an epoch boundary the per-epoch sums are 0 and rows_seen is epochs × T: the weights, Adam,
   // the noise stream, the two curves and the FLOP count are the whole state.
-  const ResumableState resume{checkpointer,
+  const ResumableState resume{ex.checkpointer,
                               [&](TrainingSnapshot& snap) {
                                 put_adam(snap, "vae", m.params, adam);
                                 snap.put_rng("vae/noise", noise);

@@ -5,6 +5,7 @@
 
 #include "datasets/dataset.h"
 #include "engine/checkpoint.h"
+#include "engine/execution.h"
 #include "engine/hyperparams.h"
 #include "engine/representation.h"
 #include "kernels/vae.h"
@@ -35,8 +36,7 @@ VaeElbo vae_elbo_form(const Hyper& h);
 // Trains on all d.count trajectories with h.vae (epochs, batch, Adam) and h.vae_kl_weight; the
 // initial weights and the reparameterisation noise come from streams of `seed`.
 // Throws std::runtime_error if the loss or weights become non-finite.
-VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, int threads = 1,
-                   Checkpointer* checkpointer = nullptr);
+VaeModel train_vae(const Dataset& d, const Hyper& h, uint64_t seed, const Execution& ex = {});
 
 // φ = the encoder's mean head: the encoder with its last layer cut to the first d outputs (μ),
 // and, when vae.standardize, that layer rescaled so φ_k = (μ_k − mean_k) / std_k over Ξ.

@@ -211,7 +211,7 @@ void vae_cost(Task& t, const Profile& p) {
 void run_vae(const Task& t, RunContext& ctx, TaskRecord& r) {
   const auto checkpoint = ctx.checkpointer(t.key);
   const VaeModel v = train_vae(ctx.dataset(t.env), hyper_at(ctx.profile(), t.env, t.hyper),
-                               task_seed(t.env, t.seed, "vae"), t.threads, checkpoint.get());
+                               task_seed(t.env, t.seed, "vae"), {t.threads, checkpoint.get()});
   put_vae(v, r);
   r.num["flops"] = v.train_flops;
   record_convergence(v.loss_curve, r);
@@ -286,7 +286,7 @@ void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
   std::shared_ptr<const VaeModel> vae;
   if (reads_vae(t.variant)) vae = ctx.vae(t.input(vae_kind()));
   const auto checkpoint = ctx.checkpointer(t.key);
-  MethodConfig c{t.variant.method, t.N, t.variant.vae, h, t.threads, checkpoint.get()};
+  const MethodConfig c{t.variant.method, t.N, t.variant.vae, h};
   const QueryBundle* bundle = &ctx.bundle(t.env, t.seed, t.teacher);
   QueryBundle chosen;  // an active variant: the same bundle with the triplets it chose
   if (reads_active(t.variant)) {
@@ -295,8 +295,8 @@ void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
     bundle = &chosen;
   }
   // SIRL's φ starts from the same initialisation whichever way its triplets were chosen.
-  const Representation rep =
-      train_representation(d, *bundle, c, task_seed(t.env, t.seed, "phi"), vae.get());
+  const Representation rep = train_representation(d, *bundle, c, task_seed(t.env, t.seed, "phi"),
+                                                  vae.get(), {t.threads, checkpoint.get()});
   put_representation(rep, r);
   r.text["hyper"] = rep_hyper(t.variant, h);  // what this φ was trained with
   // FLOPs spent in this task: the VAE method's φ is the VAE task's encoder, trained there.
@@ -381,9 +381,8 @@ void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   const TpaResult res =
       evaluate_tpa(*ctx.representation(t.input(rep_kind())), ctx.dataset(t.env),
                    ctx.bundle(t.env, t.seed, t.teacher).tpa,
-                   TpaConfig{t.M, t.frozen, hyper_at(ctx.profile(), t.env, t.hyper), t.threads,
-                             checkpoint.get()},
-                   task_seed(t.env, t.seed, "tpa"));
+                   TpaConfig{t.M, t.frozen, hyper_at(ctx.profile(), t.env, t.hyper)},
+                   task_seed(t.env, t.seed, "tpa"), {t.threads, checkpoint.get()});
   r.num["tpa"] = res.mean;
   r.num["tpa_std"] = res.stddev;
   r.num["flops"] = res.train_flops;
@@ -442,14 +441,13 @@ void active_cost(Task& t, const Profile& p) {
 }
 
 void run_active(const Task& t, RunContext& ctx, TaskRecord& r) {
-  ActiveConfig c = active_config(t, ctx.profile());
-  c.threads = t.threads;
+  const ActiveConfig c = active_config(t, ctx.profile());
   const auto checkpoint = ctx.checkpointer(t.key);
-  c.checkpointer = checkpoint.get();
   // The teacher as the bundle has it (an attend teacher's mask drawn for this seed).
   const Teacher& teacher = ctx.bundle(t.env, t.seed, t.teacher).config.teacher;
   const ActiveQueries a =
-      select_active_queries(ctx.dataset(t.env), teacher, c, task_seed(t.env, t.seed, "active"));
+      select_active_queries(ctx.dataset(t.env), teacher, c, task_seed(t.env, t.seed, "active"),
+                            {t.threads, checkpoint.get()});
   put_triplets(a.queries, r);
   r.arrays["batch_score"] = TaskRecord::Array::of(a.batch_score);
   r.arrays["pool_score"] = TaskRecord::Array::of(a.pool_score);

@@ -108,11 +108,10 @@ TEST(ActiveSelection, AKilledSelectionResumesToTheSameQueries) {
   const ActiveQueries plain = select_active_queries(d, Teacher{}, small(Selection::vote), 4);
   MemoryCheckpointer cp;
   cp.stop_after = 3;
-  ActiveConfig c = small(Selection::vote);
-  c.checkpointer = &cp;
-  EXPECT_THROW(select_active_queries(d, Teacher{}, c, 4), Interrupted);
+  const ActiveConfig c = small(Selection::vote);
+  EXPECT_THROW(select_active_queries(d, Teacher{}, c, 4, {.checkpointer = &cp}), Interrupted);
   cp.stop_after = -1;
-  const ActiveQueries resumed = select_active_queries(d, Teacher{}, c, 4);
+  const ActiveQueries resumed = select_active_queries(d, Teacher{}, c, 4, {.checkpointer = &cp});
   EXPECT_EQ(resumed.queries.idx, plain.queries.idx);
   EXPECT_EQ(resumed.batch_score, plain.batch_score);
   EXPECT_EQ(resumed.train_flops, plain.train_flops);

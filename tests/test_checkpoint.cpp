@@ -51,9 +51,8 @@ TEST(Checkpoint, SirlResumesBitIdentical) {
   const World& w = world();
   const auto [plain, saving, resumed] = three_ways(
       [&](Checkpointer* c) {
-        MethodConfig cfg{Method::sirl, 300, false, short_hyper()};
-        cfg.checkpointer = c;
-        return train_representation(w.d, w.bundle, cfg, 5);
+        const MethodConfig cfg{Method::sirl, 300, false, short_hyper()};
+        return train_representation(w.d, w.bundle, cfg, 5, nullptr, {.checkpointer = c});
       },
       3);
   for (const Representation* r : {&saving, &resumed}) {
@@ -68,9 +67,8 @@ TEST(Checkpoint, PreferencePretrainingResumesBitIdentical) {
   const World& w = world();
   const auto [plain, saving, resumed] = three_ways(
       [&](Checkpointer* c) {
-        MethodConfig cfg{Method::multipref10, 300, false, short_hyper()};
-        cfg.checkpointer = c;
-        return train_representation(w.d, w.bundle, cfg, 5);
+        const MethodConfig cfg{Method::multipref10, 300, false, short_hyper()};
+        return train_representation(w.d, w.bundle, cfg, 5, nullptr, {.checkpointer = c});
       },
       5);
   for (const Representation* r : {&saving, &resumed}) {
@@ -83,8 +81,8 @@ TEST(Checkpoint, PreferencePretrainingResumesBitIdentical) {
 
 TEST(Checkpoint, VaeResumesBitIdentical) {
   const World& w = world();
-  const auto [plain, saving, resumed] =
-      three_ways([&](Checkpointer* c) { return train_vae(w.d, short_hyper(), 11, 1, c); }, 2);
+  const auto [plain, saving, resumed] = three_ways(
+      [&](Checkpointer* c) { return train_vae(w.d, short_hyper(), 11, {.checkpointer = c}); }, 2);
   for (const VaeModel* m : {&saving, &resumed}) {
     EXPECT_EQ(m->params, plain.params);
     EXPECT_EQ(m->loss_curve, plain.loss_curve);
@@ -104,10 +102,9 @@ TEST(Checkpoint, TpaHeadsFrozenAndUnfrozenResumeBitIdentical) {
     for (int stretch : {1, 2}) {
       const auto [plain, saving, resumed] = three_ways(
           [&](Checkpointer* c) {
-            TpaConfig cfg{20, frozen, short_hyper()};
-            cfg.checkpointer = c;
-            cfg.stretch_steps = stretch;
-            return evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, cfg, 3);
+            const TpaConfig cfg{20, frozen, short_hyper()};
+            return evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, cfg, 3,
+                                {.checkpointer = c, .stretch_steps = stretch});
           },
           4);
       for (const TpaResult* r : {&saving, &resumed}) {
@@ -125,10 +122,10 @@ TEST(Checkpoint, ConvergedHeadsResumeBitIdenticalWithTheirStoppingEpochs) {
   const World& w = world();
   const Hyper h = stopping_hyper(200, "converged");
   auto run = [&](Checkpointer* c) {
-    TpaConfig cfg{20, true, h};
-    cfg.checkpointer = c;
-    cfg.stretch_steps = 1;  // one step an epoch: a save after every epoch
-    return evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, cfg, 3);
+    const TpaConfig cfg{20, true, h};
+    // One step an epoch: a save after every epoch.
+    return evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, cfg, 3,
+                        {.checkpointer = c, .stretch_steps = 1});
   };
   // Interrupted right after the first head stopped (a stop at a stretch's end) and one epoch
   // later, while other heads still train.
@@ -152,9 +149,9 @@ TEST(Checkpoint, TheLastEpochIsNeverSavedAndResumingChangesTheOutcomeOnlyByTheSa
   // Saves come after epochs 1..E−1 (the finished training is the task's commit, not a snapshot).
   const World& w = world();
   MemoryCheckpointer c;
-  MethodConfig cfg{Method::sirl, 300, false, short_hyper()};
-  cfg.checkpointer = &c;
-  train_representation(w.d, w.bundle, cfg, 5);
+  const MethodConfig cfg{Method::sirl, 300, false, short_hyper()};
+  const Execution with_c{.checkpointer = &c};
+  train_representation(w.d, w.bundle, cfg, 5, nullptr, with_c);
   EXPECT_EQ(c.saves, 6);
   EXPECT_EQ(c.saved->epoch, 6);
   // A snapshot whose weights were perturbed resumes from those weights: the result differs, so
@@ -162,31 +159,31 @@ TEST(Checkpoint, TheLastEpochIsNeverSavedAndResumingChangesTheOutcomeOnlyByTheSa
   const Representation plain =
       train_representation(w.d, w.bundle, MethodConfig{Method::sirl, 300, false, short_hyper()}, 5);
   c.saved->floats["sirl/params"][0] += 0.5f;
-  EXPECT_NE(train_representation(w.d, w.bundle, cfg, 5).params, plain.params);
+  EXPECT_NE(train_representation(w.d, w.bundle, cfg, 5, nullptr, with_c).params, plain.params);
 }
 
 TEST(Checkpoint, ASnapshotThatDoesNotFitIsRefused) {
   const World& w = world();
   MemoryCheckpointer c;
-  MethodConfig cfg{Method::sirl, 300, false, short_hyper()};
-  cfg.checkpointer = &c;
+  const MethodConfig cfg{Method::sirl, 300, false, short_hyper()};
+  const Execution with_c{.checkpointer = &c};
   c.stop_after = 2;
-  EXPECT_THROW(train_representation(w.d, w.bundle, cfg, 5), Interrupted);
+  EXPECT_THROW(train_representation(w.d, w.bundle, cfg, 5, nullptr, with_c), Interrupted);
   c.stop_after = -1;
   TrainingSnapshot good = *c.saved;
   c.saved->floats["sirl/adam_m"].pop_back();  // weights of another shape
   try {
-    train_representation(w.d, w.bundle, cfg, 5);
+    train_representation(w.d, w.bundle, cfg, 5, nullptr, with_c);
     FAIL() << "a snapshot with the wrong shapes was applied";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("sirl/adam_m"), std::string::npos) << e.what();
   }
   c.saved = good;
   c.saved->epoch = 7;  // as many as the training has: not a snapshot this training writes
-  EXPECT_THROW(train_representation(w.d, w.bundle, cfg, 5), std::runtime_error);
+  EXPECT_THROW(train_representation(w.d, w.bundle, cfg, 5, nullptr, with_c), std::runtime_error);
   c.saved = good;
   c.saved->words.erase("loop/order");
-  EXPECT_THROW(train_representation(w.d, w.bundle, cfg, 5), std::runtime_error);
+  EXPECT_THROW(train_representation(w.d, w.bundle, cfg, 5, nullptr, with_c), std::runtime_error);
 }
 
 }  // namespace

@@ -51,10 +51,9 @@ TEST(Methods, SameSeedSameWeightsWhateverTheThreadCount) {
   const World& w = world();
   Hyper h = fast_hyper();
   h.sirl.epochs = 5;
-  MethodConfig c{Method::sirl, 200, false, h, 1};
+  const MethodConfig c{Method::sirl, 200, false, h};
   const Representation a = train_representation(w.d, w.bundle, c, 3);
-  c.threads = 2;
-  const Representation b = train_representation(w.d, w.bundle, c, 3);
+  const Representation b = train_representation(w.d, w.bundle, c, 3, nullptr, {.threads = 2});
   EXPECT_EQ(a.params, b.params);
   EXPECT_EQ(a.loss_curve, b.loss_curve);
   const Representation other = train_representation(w.d, w.bundle, c, 4);
@@ -67,7 +66,8 @@ TEST(Methods, VaeAndEmbeddingAreTheSameOnTwoThreads) {
   const World& w = world();
   Hyper h = fast_hyper();
   h.vae.epochs = 3;
-  const VaeModel v1 = train_vae(w.d, h, 5, 1), v2 = train_vae(w.d, h, 5, 2);
+  const VaeModel v1 = train_vae(w.d, h, 5, {.threads = 1}),
+                 v2 = train_vae(w.d, h, 5, {.threads = 2});
   EXPECT_EQ(v1.params, v2.params);
   EXPECT_EQ(v1.loss_curve, v2.loss_curve);
   EXPECT_EQ(v1.kl_per_dim, v2.kl_per_dim);
@@ -217,8 +217,8 @@ TEST(Methods, SirlSkipsToTheEndAtAFixedPointWithTheFullRunsBits) {
   MethodConfig skip = full;
   skip.skip_fixed_point = true;
   for (int threads : {1, 2}) {
-    skip.threads = threads;
-    const Representation r = train_representation(w.d, w.bundle, skip, 6);
+    const Representation r =
+        train_representation(w.d, w.bundle, skip, 6, nullptr, {.threads = threads});
     EXPECT_EQ(r.params, ref.params) << threads << " threads";
     EXPECT_EQ(r.loss_curve, ref.loss_curve) << threads << " threads";
     EXPECT_GT(r.skipped_flops, 0.0);

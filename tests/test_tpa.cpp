@@ -152,12 +152,12 @@ TEST(Tpa, SameResultWhateverTheHeadsStretchesAndTheThreadCount) {
   h.tpa.epochs = 10;
   h.tpa.batch = 16;  // M = 50: 4 steps an epoch; M = 30: 2
   for (bool frozen : {false, true}) {
-    TpaConfig c{frozen ? 50 : 30, frozen, h, 1};
+    const TpaConfig c{frozen ? 50 : 30, frozen, h};
     const TpaResult a = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 4);
     for (auto [threads, stretch] : {std::pair{2, kStretchSteps}, {1, 1}, {2, 5}}) {
-      c.threads = threads;
-      c.stretch_steps = stretch;  // 1 epoch; 2 or 3 epochs
-      const TpaResult b = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 4);
+      // Stretches of 1 epoch; 2 or 3 epochs.
+      const TpaResult b = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 4,
+                                       {.threads = threads, .stretch_steps = stretch});
       EXPECT_EQ(a.accuracy, b.accuracy) << "frozen " << frozen << ", stretch " << stretch;
       EXPECT_EQ(a.loss_curves, b.loss_curves) << "frozen " << frozen << ", stretch " << stretch;
       EXPECT_EQ(a.train_flops, b.train_flops) << "frozen " << frozen;
@@ -179,7 +179,7 @@ TEST(Tpa, AConvergedHeadIsTheFixedRunsHeadAtItsStoppingEpoch) {
   const World& w = world();
   const Hyper h = stopping_hyper(400, "converged");
   for (bool frozen : {true, false}) {
-    TpaConfig c{20, frozen, h, 1};
+    const TpaConfig c{20, frozen, h};
     const TpaResult conv = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 5);
     ASSERT_EQ(conv.head_epochs.size(), 20u);
     std::map<int, std::vector<int>> heads_at;  // stopping epoch → heads
@@ -217,9 +217,8 @@ TEST(Tpa, AConvergedHeadIsTheFixedRunsHeadAtItsStoppingEpoch) {
     EXPECT_NEAR(conv.train_flops, flops, 1e-9 * flops);
     EXPECT_LT(conv.train_flops, conv.protocol_flops);
     for (auto [threads, stretch] : {std::pair{2, kStretchSteps}, {1, 1}, {2, 7}}) {
-      c.threads = threads;
-      c.stretch_steps = stretch;
-      const TpaResult b = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 5);
+      const TpaResult b = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, c, 5,
+                                       {.threads = threads, .stretch_steps = stretch});
       EXPECT_EQ(b.head_epochs, conv.head_epochs) << threads << " threads, stretch " << stretch;
       EXPECT_EQ(b.accuracy, conv.accuracy) << threads << " threads, stretch " << stretch;
       EXPECT_TRUE(same_bits(b.loss_curves, conv.loss_curves)) << threads << " threads";

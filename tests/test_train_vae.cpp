@@ -42,7 +42,7 @@ TEST(TrainVae, JacoRobotVaeWithItsDefaultsReconstructsBetterThanTheMeanTrajector
   const Dataset d = jaco(640);
   Hyper h = paper_hyper("jaco");
   h.vae.epochs = 3;
-  const VaeModel v = train_vae(d, h, 11, 2);
+  const VaeModel v = train_vae(d, h, 11, {.threads = 2});
   const double bar = constant_predictor_mse(d);
   ASSERT_GT(bar, 0.1);  // Ξ varies: the bar is not trivially low
   EXPECT_LT(v.reconstruction_mse, 0.8 * bar) << "the VAE reconstructs no better than the mean";
