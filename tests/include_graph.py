@@ -27,7 +27,7 @@ def graph_of(files):
         comp = path.rsplit(".", 1)[0]
         deps = g.setdefault(comp, set())
         for inc in INCLUDE.findall(text):
-            if inc.split("/")[0] in ALLOWED and inc.rsplit(".", 1)[0] != comp:
+            if Path(inc).parts[0] in ALLOWED and inc.rsplit(".", 1)[0] != comp:
                 deps.add(inc.rsplit(".", 1)[0])
     return g
 
@@ -35,9 +35,9 @@ def graph_of(files):
 def upward(files):
     bad = []
     for path, text in files.items():
-        folder = path.split("/")[0]
+        folder = Path(path).parts[0]
         for inc in INCLUDE.findall(text):
-            target = inc.split("/")[0]
+            target = Path(inc).parts[0]
             if target in ALLOWED and target not in ALLOWED[folder]:
                 bad.append(f"{path} includes {inc} ({folder} may not include {target})")
     return bad
