@@ -651,36 +651,39 @@ const TaskKindSpec& tpa_kind() {
 }
 
 // The robustness cells: FPE and TPA cells of a noisy teacher, in tables of their own so the
-// main grid's tables (and their digests) do not change when a profile adds noise axes.
+// main grid's tables (and their digests) do not change when a profile adds noise axes. A twin is
+// its main kind with its own name, runner and table: the main table's columns but `dropped`, and
+// kTeacherColumns (the teacher among them) after the method's.
+namespace {
+TaskKindSpec robustness_twin(const TaskKindSpec& main, const char* name, const char* description,
+                             void (*run)(const Task&, RunContext&, TaskRecord&),
+                             std::initializer_list<std::string_view> dropped) {
+  TaskKindSpec k = main;
+  k.name = name;
+  k.description = description;
+  k.run = run;
+  k.table.kind = name;
+  k.table.name = name;
+  drop_columns(k.table, dropped);
+  k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
+                         kTeacherColumns.end());
+  return k;
+}
+}  // namespace
+
 const TaskKindSpec& robust_fpe_kind() {
-  static const TaskKindSpec kind = [] {
-    TaskKindSpec k = fpe_kind();
-    k.name = "robust_fpe";
-    k.description = "FPE of one φ trained on a noisy teacher's answers ([robustness])";
-    k.run = run_robust_fpe;
-    k.table.kind = "robust_fpe";
-    k.table.name = "robust_fpe";
-    drop_columns(k.table, {"teacher"});  // kTeacherColumns bring it, next to the method
-    k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
-                           kTeacherColumns.end());
-    return k;
-  }();
+  static const TaskKindSpec kind = robustness_twin(
+      fpe_kind(), "robust_fpe", "FPE of one φ trained on a noisy teacher's answers ([robustness])",
+      run_robust_fpe, {"teacher"});
   return kind;
 }
 
 const TaskKindSpec& robust_tpa_kind() {
-  static const TaskKindSpec kind = [] {
-    TaskKindSpec k = tpa_kind();
-    k.name = "robust_tpa";
-    k.description = "TPA of one φ, heads trained on a noisy teacher's labels ([robustness])";
-    k.run = run_robust_tpa;
-    k.table.kind = "robust_tpa";
-    k.table.name = "robust_tpa";
-    drop_columns(k.table, {"in_main", "in_ablation", "teacher"});  // in_main, in_ablation: no grid
-    k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
-                           kTeacherColumns.end());
-    return k;
-  }();
+  // No in_main, in_ablation: its cells belong to no figure's grid.
+  static const TaskKindSpec kind =
+      robustness_twin(tpa_kind(), "robust_tpa",
+                      "TPA of one φ, heads trained on a noisy teacher's labels ([robustness])",
+                      run_robust_tpa, {"in_main", "in_ablation", "teacher"});
   return kind;
 }
 
