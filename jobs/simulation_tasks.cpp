@@ -708,7 +708,7 @@ const TaskKindSpec& active_kind() {
 }
 
 namespace {
-[[maybe_unused]] const TaskKindRegistration registered[]{
+[[maybe_unused]] const TaskKindRegistration registered_simulation_kinds[]{
     TaskKindRegistration(vae_kind()),        TaskKindRegistration(rep_kind()),
     TaskKindRegistration(fpe_kind()),        TaskKindRegistration(tpa_kind()),
     TaskKindRegistration(robust_fpe_kind()), TaskKindRegistration(robust_tpa_kind()),

@@ -317,7 +317,7 @@ const TaskKindSpec& study_simulated_kind() {
 }
 
 namespace {
-[[maybe_unused]] const TaskKindRegistration registered[]{
+[[maybe_unused]] const TaskKindRegistration registered_study_kinds[]{
     TaskKindRegistration(study_rep_kind()), TaskKindRegistration(study_heldout_kind()),
     TaskKindRegistration(study_tpa_kind()), TaskKindRegistration(study_simulated_kind())};
 }  // namespace
