@@ -323,7 +323,7 @@ PendingSet find_pending(const Profile& p, const Plan& plan, const std::vector<ch
 
 // Runs the pending tasks (threads, or MPI workers), committing each to the cache as it
 // finishes. A task another run is computing is waited for and read, not computed twice.
-struct Execution {
+struct PlanExecution {
   const Profile& p;
   const Plan& plan;
   const std::vector<std::string>& digests;
@@ -589,7 +589,8 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   if (!o.quiet) announce_run(p, o, ps, threads, mpi_size);
   Progress progress(to_run, ps.flops, o.quiet);
   if (checkpoints) progress.set_resumed(resumed_keys(*checkpoints, plan, digests));
-  Execution exec{p, plan, digests, ps.pending, ctx, cache, sources, checkpoints.get(), o, progress};
+  PlanExecution exec{p,     plan,    digests,           ps.pending, ctx,
+                     cache, sources, checkpoints.get(), o,          progress};
   const std::exception_ptr failure =
       exec.run(threads,
                // Threads: the most cores one task takes; MPI: each worker rank's cores.
