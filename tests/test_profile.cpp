@@ -100,7 +100,7 @@ TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
   EXPECT_NE(m.find("must be an array of integers"), std::string::npos) << m;
 }
 
-// A φ of 10^8 × 10^8 weights needs ~1.5 million GiB to train: the run names the task and both
+// A φ of 10^8 × 10^8 weights needs ~149 million GiB to train: the run names the task and both
 // sizes before it allocates anything or writes a file.
 TEST(Profile, ARunRefusesATaskBeyondThisMachinesMemory) {
   const Profile p = parse_profile(
