@@ -7,21 +7,22 @@
 #include <string>
 #include <thread>
 
+#include "app/cluster_options.h"
 #include "app/commands.h"
+#include "jobs/cluster_prediction.h"
 #include "jobs/estimate.h"
 #include "jobs/plan.h"
 #include "jobs/profile.h"
 #include "jobs/progress.h"
 #include "jobs/run.h"
 #include "jobs/schedule_sim.h"
+#include "jobs/stop_request.h"
 #include "jobs/task_kinds.h"
 #include "jobs/task_runner.h"
 #include "results/file_lock.h"
 #include "results/results_file.h"
 
 namespace sirl::app {
-
-namespace {
 
 Profile load_or_usage(const std::string& name) {
   try {
@@ -35,8 +36,6 @@ int default_threads() {
   return std::max(1, int(std::thread::hardware_concurrency()));
 }
 
-}  // namespace
-
 int run_command(const std::string& profile_name, const std::string& out, int threads, bool force,
                 const std::string& shard, bool quiet, bool skip_study, double checkpoint_minutes,
                 int max_task_threads) {
@@ -48,6 +47,7 @@ int run_loaded_profile(Profile p, const std::string& out, int threads, bool forc
                        const std::string& shard, bool quiet, bool skip_study,
                        double checkpoint_minutes, int max_task_threads) {
   if (skip_study) p.study.enabled = false;
+  install_stop_handlers();  // SIGTERM / SIGUSR1 / Ctrl-C: checkpoint and stop (exit 75)
   RunOptions o;
   o.out = out;
   o.threads = threads;
@@ -136,20 +136,12 @@ void register_run(CLI::App& app, Runner& run) {
   };
 }
 
-// What `sirl plan` simulates when asked for a cluster (--nodes, --mpi, ...), with the machine's
-// defaults where the user says nothing.
-struct PlanClusterOptions {
-  int nodes = 1, cores_per_node = 0, threads_per_worker = 1, task_threads = 0;
-  bool mpi = false;
-  double node_bandwidth_gbs = 0, serial_fraction = 0.25;
-};
-
 // Main-memory bandwidth per core assumed when --node-bandwidth is not given: this machine's
 // STREAM triad on both cores (30.9 GB/s, docs/roofline.md) per core, up to a 12-channel DDR5-4800
 // socket's 460 GB/s.
 constexpr double kStreamPerCore = 15.5e9, kSocketBandwidth = 460e9;
 
-void print_schedule(const Plan& plan, const PlanEstimate& e, const PlanClusterOptions& o) {
+ClusterModel cluster_model(const PlanClusterOptions& o) {
   ClusterModel m;
   m.nodes = o.nodes;
   m.cores_per_node = o.cores_per_node > 0 ? o.cores_per_node : default_threads();
@@ -160,16 +152,18 @@ void print_schedule(const Plan& plan, const PlanEstimate& e, const PlanClusterOp
   m.node_bandwidth = o.node_bandwidth_gbs > 0
                          ? o.node_bandwidth_gbs * 1e9
                          : std::min(kSocketBandwidth, kStreamPerCore * m.cores_per_node);
-  ScheduleResult r, narrow;
-  const std::vector<char> all(plan.tasks.size(), 1);
+  return m;
+}
+
+void print_schedule(const Plan& plan, const PlanEstimate& e, const PlanClusterOptions& o) {
+  const ClusterModel m = cluster_model(o);
+  ClusterPrediction c;
   try {
-    r = simulate_schedule(plan, e.task_seconds, all, m);
-    ClusterModel one = m;
-    one.widen = false;
-    narrow = simulate_schedule(plan, e.task_seconds, all, one);
+    c = predict_cluster(plan, e, m, std::vector<char>(plan.tasks.size(), 1));
   } catch (const std::invalid_argument& x) {
     throw UsageError(x.what());
   }
+  const ScheduleResult& r = c.schedule;
   // Lower bounds on any schedule: every core busy on the work as measured on one core, and the
   // critical path with each of its tasks on the widest a task can be.
   const int widest = m.mpi ? std::max(1, m.cores_per_node - 1) : m.max_task_threads;
@@ -199,23 +193,20 @@ void print_schedule(const Plan& plan, const PlanEstimate& e, const PlanClusterOp
       "per node; %.0f ms per commit; %.1f ms per task to write the results file%s\n",
       m.serial_fraction, m.node_bandwidth * 1e-9, m.commit_seconds * 1e3,
       m.finish_seconds_per_task * 1e3, mpi_start);
-  // Building Ξ and the query bundles happens once per process outside the schedule's tasks:
-  // in the run (threads), or in every worker rank in parallel and once more on rank 0 for the
-  // results file (MPI).
-  const double data = e.setup_seconds * (m.mpi ? 2 : 1);
-  const double outside = data + m.finish_seconds_per_task * double(plan.tasks.size()) +
-                         (m.mpi ? m.mpi_start_seconds : 0);
-  const double wall = r.makespan + outside;
   std::printf(
       "  predicted makespan: %s (%.1f s)   (%.1f s of it outside the tasks: building the data, "
       "writing the results file%s; cores busy %.0f %% of the time; %s lost to memory "
       "bandwidth, summed over tasks)\n",
-      format_duration(wall).c_str(), wall, outside, m.mpi ? ", starting MPI" : "",
-      100 * r.utilisation, format_duration(r.bandwidth_stall).c_str());
+      format_duration(c.wall_seconds).c_str(), c.wall_seconds, c.outside_seconds,
+      m.mpi ? ", starting MPI" : "", 100 * r.utilisation,
+      format_duration(r.bandwidth_stall).c_str());
+  std::printf("  memory per node: %.0f MiB (its processes' datasets and the largest working sets "
+              "that can run there at once)\n",
+              c.memory_bytes_per_node / (1024.0 * 1024.0));
   std::printf(
       "  without widening (every task on %s): %s;  lower bounds: the work over every core %s, "
       "the critical path on %d cores %s\n",
-      m.mpi ? "its worker rank" : "one core", format_duration(narrow.makespan).c_str(),
+      m.mpi ? "its worker rank" : "one core", format_duration(c.narrow.makespan).c_str(),
       format_duration(work / task_cores).c_str(), widest,
       format_duration(r.critical_path_seconds / task_speedup(widest, m.serial_fraction)).c_str());
   std::printf("  critical path: %zu task(s), %s on one core each:\n", r.critical_path.size(),
@@ -387,15 +378,20 @@ void register_merge(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "merge",
       "Combine shard files (`sirl run --shard i/n`) of one profile into one results file.\n"
-      "Refuses files from different profiles or engine versions, and conflicting results.");
+      "Refuses files from different profiles or engine versions, and conflicting results; and\n"
+      "a merge that lacks some of the plan's tasks unless --partial.");
   static std::string out;
   static std::vector<std::string> inputs;
-  static bool force = false;
+  static bool force = false, partial = false;
   cmd->add_option("out", out, "Merged results file (a new file: see --force)")
       ->required()
       ->check(output_file());
   cmd->add_option("inputs", inputs, "Shard files")->required()->check(CLI::ExistingFile);
   cmd->add_flag("--force", force, "Replace OUT if it already exists (never one of the inputs)");
+  cmd->add_flag("--partial", partial,
+                "Write what the inputs hold even when tasks are missing (a shard failed or is "
+                "still running): the file lists them (/@missing_tasks), its figures show gaps "
+                "and its report marks what rests on them");
   run = [] {
     // A forgotten output name makes the first shard the output: never write over an input, and
     // never replace an existing file unless asked. The lock keeps a run writing OUT out.
@@ -439,11 +435,23 @@ void register_merge(CLI::App& app, Runner& run) {
       }
     }
     const Profile p = parse_profile(first.profile_text, inputs.front() + "@profile_text");
+    const Plan plan = make_plan(p);
+    const size_t total = plan.tasks.size();
+    if (!partial) {
+      std::vector<std::string> missing;
+      for (const Task& t : plan.tasks)
+        if (!all.count(t.key)) missing.push_back(t.key);
+      if (!missing.empty())
+        throw UsageError(std::to_string(missing.size()) + " of the plan's " +
+                         std::to_string(total) + " tasks are in none of the inputs (e.g. " +
+                         missing.front() +
+                         "): a shard is missing, failed or still running (`sirl status DIR` "
+                         "for a submission); --partial writes what there is");
+    }
     RunInfo info = first;
     info.shard = "";
     info.wall_seconds = wall;
     const size_t written = write_plan_records(out, p, info, all);
-    const size_t total = make_plan(p).tasks.size();
     std::printf("merged %zu files: %zu of %zu tasks%s → %s\n", inputs.size(), written, total,
                 written == total ? " (complete)" : " (INCOMPLETE)", out.c_str());
     return 0;

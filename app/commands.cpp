@@ -179,6 +179,8 @@ void register_all(CLI::App& app) {
   register_merge(app, runners()["merge"]);
   register_evaluate(app, runners()["evaluate"]);
   register_gc(app, runners()["gc"]);
+  register_submit(app, runners()["submit"]);
+  register_status(app, runners()["status"]);
   enforce_decimal_numbers(app);
 }
 

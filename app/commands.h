@@ -37,6 +37,8 @@ void register_plan(CLI::App& app, Runner& run);
 void register_export(CLI::App& app, Runner& run);
 void register_merge(CLI::App& app, Runner& run);
 void register_gc(CLI::App& app, Runner& run);
+void register_submit(CLI::App& app, Runner& run);
+void register_status(CLI::App& app, Runner& run);
 void register_evaluate(CLI::App& app, Runner& run);
 
 // The `--set KEY=VALUE` overrides of the command being run (jobs/profile.h, load_profile), and

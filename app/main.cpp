@@ -7,6 +7,7 @@
 
 #include "app/commands.h"
 #include "jobs/memory_reuse.h"
+#include "jobs/stop_request.h"
 
 int main(int argc, char** argv) {
   sirl::keep_freed_memory_for_reuse();  // before any thread exists (jobs/memory_reuse.h)
@@ -49,6 +50,12 @@ int main(int argc, char** argv) {
   } catch (const sirl::app::UsageError& e) {
     std::fprintf(stderr, "sirl: error: %s\n", e.what());
     return 2;
+  } catch (const sirl::StopRequested&) {
+    std::fprintf(stderr,
+                 "sirl: stopped on %s: every finished task is committed and every training in "
+                 "progress saved its state; rerun the same command to continue (exit %d)\n",
+                 sirl::stop_signal_name(), sirl::kExitStopped);
+    return sirl::kExitStopped;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "sirl: error: %s\n", e.what());
     return 1;

@@ -157,8 +157,9 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
   for (const auto& env : envs) {
     const Dataset d = time_setup(env, p, e);
     calibrate_rates(env, d, p, e);
-    e.peak_bytes += 4.0 * double(d.inputs.size() + d.features.size() * 2);
+    e.data_bytes += 4.0 * double(d.inputs.size() + d.features.size() * 2);
   }
+  e.peak_bytes += e.data_bytes;
   time_tasks(plan, threads, e);
   return e;
 }

@@ -17,6 +17,7 @@ struct PlanEstimate {
   double seconds_one_thread = 0;     // Σ task_seconds + commits
   double seconds = 0;     // the thread scheduler on `threads` cores, simulated (schedule_sim.h)
   double peak_bytes = 0;  // datasets + the `threads` largest working sets
+  double data_bytes = 0;  // the datasets every process holds (Ξ's inputs and features)
   // What a run spends outside its tasks, per environment: building Ξ (timed on a small Ξ and
   // scaled by the trajectory count) and one seed's query bundle. A run builds each once, inside
   // the first task that reads it; under MPI every worker rank builds what its tasks read, and

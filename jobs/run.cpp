@@ -20,6 +20,7 @@
 #include "jobs/progress.h"
 #include "jobs/provenance.h"
 #include "jobs/scheduler.h"
+#include "jobs/stop_request.h"
 #include "jobs/task_cache.h"
 #include "jobs/task_checkpoints.h"
 #include "jobs/task_digest.h"
@@ -73,6 +74,9 @@ size_t write_plan_records(const std::string& out, const Profile& p, RunInfo info
     if (auto it = all.find(t.key); it != all.end()) records.push_back(it->second);
   info.tasks_total = int64_t(plan.tasks.size());
   info.tasks_done = int64_t(records.size());
+  info.missing_tasks.clear();
+  for (const auto& t : plan.tasks)
+    if (!all.count(t.key)) info.missing_tasks += t.key + "\n";
   info.hyper_points = hyper_points_text(p);
   info.complete = records.size() == plan.tasks.size();
   RunContext ctx(p, [](const std::string& k) -> TaskRecord {
@@ -346,6 +350,8 @@ struct PlanExecution {
 
   void run_one(int i, int cores) {
     Task t = plan.tasks[size_t(i)];
+    // After a stop request no task starts; the scheduler then waits for those running.
+    if (stop_requested()) throw StopRequested("not started: " + t.key);
     t.threads = cores;
     const TaskCache::Claim claim = cache.claim(digests[size_t(i)], [&] {
       if (!o.quiet)
@@ -466,7 +472,7 @@ std::unique_ptr<CheckpointStore> open_checkpoints(const TaskCache& cache, const 
   auto checkpoints =
       std::make_unique<CheckpointStore>(cache.dir() / "checkpoints", o.checkpoint_seconds);
   ctx.set_checkpoints([&cs = *checkpoints, &plan, &digests](const std::string& key) {
-    return cs.for_task(digests[size_t(plan.index.at(key))]);
+    return cs.for_task(digests[size_t(plan.index.at(key))], key);
   });
   for (size_t i = 0; i < plan.tasks.size(); ++i)
     if (mine[i] && !pending[i]) checkpoints->remove(digests[i]);

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "jobs/stop_request.h"
 #include "results/h5.h"
 
 namespace sirl {
@@ -14,13 +15,19 @@ using Clock = std::chrono::steady_clock;
 
 class FileCheckpointer : public Checkpointer {
  public:
-  FileCheckpointer(TaskStore& store, std::string key, double interval)
-      : store_(store), key_(std::move(key)), interval_(interval), last_(Clock::now()) {}
+  FileCheckpointer(TaskStore& store, std::string key, std::string label, double interval)
+      : store_(store),
+        key_(std::move(key)),
+        label_(std::move(label)),
+        interval_(interval),
+        last_(Clock::now()) {}
 
   bool load(TrainingSnapshot& out) override {
     if (!store_.has(key_)) return false;
     try {
       out = record_snapshot(store_.load(key_));
+      std::fprintf(stderr, "sirl run: %s continues from its checkpoint at epoch %d\n",
+                   label_.c_str(), out.epoch);
       return true;
     } catch (const std::exception& e) {  // corrupt (and then removed by load) or not a snapshot
       std::fprintf(stderr,
@@ -31,17 +38,25 @@ class FileCheckpointer : public Checkpointer {
       return false;
     }
   }
+  // A stop request (jobs/stop_request.h) makes a save due at once; the training then ends here.
   bool due() override {
-    return std::chrono::duration<double>(Clock::now() - last_).count() >= interval_;
+    return stop_requested() ||
+           std::chrono::duration<double>(Clock::now() - last_).count() >= interval_;
   }
   void save(const TrainingSnapshot& s) override {
     store_.commit(snapshot_record(key_, s));
     last_ = Clock::now();
+    if (stop_requested()) {
+      std::fprintf(stderr, "sirl run: %s saved at epoch %d; stopping (%s)\n", label_.c_str(),
+                   s.epoch, stop_signal_name());
+      throw StopRequested(label_ + " stopped at epoch " + std::to_string(s.epoch));
+    }
   }
 
  private:
   TaskStore& store_;
   std::string key_;
+  std::string label_;  // the task's key, for messages
   double interval_;
   Clock::time_point last_;
 };
@@ -100,9 +115,10 @@ TrainingSnapshot record_snapshot(const TaskRecord& r) {
 CheckpointStore::CheckpointStore(std::filesystem::path dir, double interval_seconds)
     : store_(std::move(dir)), interval_(interval_seconds) {}
 
-std::unique_ptr<Checkpointer> CheckpointStore::for_task(const std::string& key) {
+std::unique_ptr<Checkpointer> CheckpointStore::for_task(const std::string& id,
+                                                       const std::string& label) {
   if (interval_ < 0) return nullptr;
-  return std::make_unique<FileCheckpointer>(store_, key, interval_);
+  return std::make_unique<FileCheckpointer>(store_, id, label, interval_);
 }
 
 }  // namespace sirl

@@ -18,8 +18,10 @@ class CheckpointStore {
  public:
   // interval_seconds 0: after every epoch (tests); a negative interval turns checkpoints off.
   CheckpointStore(std::filesystem::path dir, double interval_seconds);
-  // A checkpointer for one task's training (nullptr when checkpoints are off).
-  std::unique_ptr<Checkpointer> for_task(const std::string& key);
+  // A checkpointer for one task's training, filed under `id` (its task digest) and named `label`
+  // (its key) in messages; nullptr when checkpoints are off. Under a stop request
+  // (jobs/stop_request.h) it saves at the next epoch end and throws StopRequested.
+  std::unique_ptr<Checkpointer> for_task(const std::string& id, const std::string& label);
   // The task is committed: its checkpoint is no longer needed.
   void remove(const std::string& key) { store_.remove(key); }
   bool empty() const { return store_.empty(); }

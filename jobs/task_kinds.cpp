@@ -1,5 +1,7 @@
 #include "jobs/task_kinds.h"
 
+#include "jobs/stop_request.h"
+
 #include <algorithm>
 #include <chrono>
 #include <stdexcept>
@@ -139,6 +141,8 @@ TaskRecord run_task(const Task& t, RunContext& ctx) {
   kind.describe(t, r);
   try {
     kind.run(t, ctx, r);
+  } catch (const StopRequested&) {
+    throw;  // not a failure of the task: the run stops (jobs/stop_request.h)
   } catch (const std::exception& e) {
     throw std::runtime_error("task " + t.key + ": " + e.what());
   }

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
@@ -35,6 +36,30 @@ void fsync_path(const std::string& path) {
     ::close(fd);
   }
   crash_point();
+}
+
+void write_text_atomically(const std::string& path, const std::string& text) {
+  refuse_symlink(path);
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  {
+    std::FILE* f = std::fopen(tmp.c_str(), "wb");
+    if (!f) throw std::runtime_error(path + ": cannot write (" + std::strerror(errno) + ")");
+    const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+    const bool closed = std::fclose(f) == 0;
+    if (!ok || !closed) {
+      const int err = errno;
+      std::remove(tmp.c_str());
+      throw std::runtime_error(path + ": cannot write (" + std::strerror(err) + ")");
+    }
+  }
+  fsync_path(tmp);
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    std::remove(tmp.c_str());
+    throw std::runtime_error(path + ": cannot replace (" + std::strerror(err) + ")");
+  }
+  const auto slash = path.rfind('/');
+  fsync_path(slash == std::string::npos ? "." : path.substr(0, slash + 1));
 }
 
 uint64_t file_checksum(const std::string& path, uint64_t offset) {

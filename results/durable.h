@@ -21,6 +21,11 @@ void overwrite_head(const std::string& path, const std::string& head);
 // it holds the crash points: one before the fsync (the bytes written, not yet durable), one after.
 void fsync_path(const std::string& path);
 
+// Replaces `path` with `text` atomically (a temporary file named by the process, fsync, rename,
+// fsync of the folder): a reader sees the old file or the new one, never half of either. Throws
+// std::runtime_error naming the file when it cannot (a full disk, a read-only folder).
+void write_text_atomically(const std::string& path, const std::string& text);
+
 // Test hook: with SIRL_CRASH_AT=k in the environment, the process ends as kill -9 would (exit
 // code 137, no destructors, no flush) at its k-th crash point. tests/crash_walk.py walks k over
 // every crash point of a run and checks that each resumes to the file an uninterrupted run writes.

@@ -112,8 +112,10 @@ def hypotheses(fpe, tpa, envs, training=None):
     return H
 
 
-def summary_lines(H):
-    """The report's first table: one row per claim × environment."""
+def summary_lines(H, missing=None):
+    """The report's first table: one row per claim × environment. `missing`: environment → the
+    number of its tasks a partial merge lacks; those environments' verdicts are marked ⧗."""
+    missing = missing or {}
     L = ["| claim | environment | verdict | deciding comparison: Δ [95 % CI] | Holm p | seeds | "
          "power | seeds for 80 % | trainings converged |", "|---|---|---|---|---:|---:|---:|---:|---:|"]
     for h in H:
@@ -127,7 +129,8 @@ def summary_lines(H):
         s80 = h.get("seeds80")
         pw = h.get("power", math.nan)
         claim_text = f"**{h['claim']}**" if h["main"] else h["claim"]
-        L.append(f"| {claim_text} | {env_title(h['env'])} | **{h['verdict']}** | {label}: "
+        partial = " ⧗" if missing.get(h["env"]) else ""
+        L.append(f"| {claim_text} | {env_title(h['env'])} | **{h['verdict']}**{partial} | {label}: "
                  f"{fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, {fmt(c['hi'], '+.4f')}] | "
                  f"{fmt(c.get('p_holm'), '.3g')} | {c['n']} | {fmt(100 * pw, '.0f') + ' %' if pw == pw else '—'} | "
                  f"{s80 if s80 else f'> {claims_stats.MAX_SEEDS}' if pw == pw else '—'} | "
@@ -144,6 +147,12 @@ def summary_lines(H):
           f"compared methods' φ at that N and the VAEs, and for TPA their cells of Fig. 5), how "
           f"many met the convergence criterion of the table below; ⚠ marks a verdict resting on "
           f"trainings that were still learning."]
+    if missing:
+        L += ["", "⧗ **Partial merge**: the results lack "
+              + ", ".join(f"{n} {env_title(e)} task(s)" for e, n in sorted(missing.items()))
+              + " (a shard failed or had not finished; the file's `missing_tasks` lists them). "
+              "Verdicts marked ⧗ rest on the cells that exist: fewer seeds or M values than the "
+              "profile asks, and figures show gaps where cells are missing."]
     return L
 
 

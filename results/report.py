@@ -147,7 +147,11 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
     a = res.provenance
     H = hypotheses(fpe, tpa, envs, t.get("training"))
     title = f"sirl-bench report: profile `{a.get('profile_name')}`"
-    L = [f"# {title}", ""] + summary_lines(H)
+    missing = {}
+    for key in str(a.get("missing_tasks", "") or "").split():
+        env = key.partition("/")[0]  # a task key starts with its environment
+        missing[env] = missing.get(env, 0) + 1
+    L = [f"# {title}", ""] + summary_lines(H, missing)
     L += ["", f"Engine {a.get('engine_version')} (commit {a.get('git_commit')}), host "
           f"{a.get('host')}, {a.get('threads')} threads; started {a.get('started')}, finished "
           f"{a.get('finished')}, wall time {float(a.get('wall_seconds', 0)):.0f} s; tasks: "

@@ -357,6 +357,7 @@ void write_results_file(const std::string& path, const RunInfo& info,
       f.set_attr("/", "profile_text", info.profile_text);
       f.set_attr("/", "engine_version", info.engine_version);
       if (!info.hyper_points.empty()) f.set_attr("/", "hyper_points", info.hyper_points);
+      if (!info.missing_tasks.empty()) f.set_attr("/", "missing_tasks", info.missing_tasks);
       f.set_attr("/", "git_commit", info.git_commit);
       f.set_attr("/", "host", info.host);
       f.set_attr("/", "cpu_class", info.cpu_class);
@@ -499,6 +500,7 @@ RunInfo read_run_info(const std::string& path) {
   if (f.has_attr("/", "libraries")) i.libraries = f.attr_string("/", "libraries");
   if (f.has_attr("/", "kernel_paths")) i.kernel_paths = f.attr_string("/", "kernel_paths");
   if (f.has_attr("/", "hyper_points")) i.hyper_points = f.attr_string("/", "hyper_points");
+  if (f.has_attr("/", "missing_tasks")) i.missing_tasks = f.attr_string("/", "missing_tasks");
   if (f.has_attr("/", "roof_fp32_gflops_per_core"))
     i.roof_fp32_gflops = f.attr_double("/", "roof_fp32_gflops_per_core");
   if (f.has_attr("/", "roof_bf16_gflops_per_core"))

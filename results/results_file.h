@@ -58,6 +58,9 @@ struct RunInfo {
   std::string hyper_points;
   std::string started, finished;  // ISO 8601 UTC
   std::string shard;              // "i/n" for a shard file, "" for a whole run
+  // The keys of the plan's tasks a partial merge (`sirl merge --partial`) lacked, one per line;
+  // "" otherwise (a partial run's missing tasks are those of its plan not in /runs_index).
+  std::string missing_tasks;
   int64_t threads = 0, tasks_total = 0, tasks_done = 0;
   double wall_seconds = 0;
   bool complete = false;

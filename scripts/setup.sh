@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs every Debian package sirl-bench needs, skipping what is already present.
 # Idempotent: running it twice installs nothing the second time. Needs root (or sudo) only
-# when something is missing.
+# when something is missing. --tests adds what only the test suite needs: a one-node Slurm
+# (slurmctld, slurmd, munge; the Slurm test starts and stops its own daemons in a temporary
+# folder, with its own config and key).
 set -euo pipefail
 
 packages=(
@@ -27,6 +29,9 @@ packages=(
   # the user study: web server, browser-side packages from npm, the browser for its e2e test
   libcpp-httplib-dev nodejs chromium
 )
+if [ "${1:-}" = "--tests" ]; then
+  packages+=(slurmctld slurmd slurm-client munge)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

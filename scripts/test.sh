@@ -5,6 +5,7 @@
 # threaded paths (scripts/tsan.sh). SIRL_SANITIZE=0 skips both.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+./scripts/setup.sh --tests
 ./scripts/build.sh release
 ctest --preset release -j 2 "$@"
 if [ "${SIRL_SANITIZE:-1}" != 0 ]; then

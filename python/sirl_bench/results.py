@@ -200,6 +200,13 @@ class Results:
     def complete(self) -> bool:
         return bool(self.provenance.get("complete", 0))
 
+    @property
+    def missing_tasks(self) -> list:
+        """The task keys a partial merge (`sirl merge --partial`) lacked; [] for a merge that
+        had every task, and for a run (a partial run's missing tasks are its plan's keys not in
+        keys())."""
+        return self.provenance.get("missing_tasks", "").split()
+
     # --- task records ---
     def keys(self):
         """Every task key in the file, in the order the run committed them."""
