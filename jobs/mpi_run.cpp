@@ -17,6 +17,7 @@
 
 #include "jobs/ready_queue.h"
 #include "jobs/scheduler.h"
+#include "jobs/stop_request.h"
 #include "jobs/task_kinds.h"
 
 namespace sirl {
@@ -24,7 +25,17 @@ namespace sirl {
 namespace {
 // kReady: a worker's first message ("node name\tusable cores"); kTask: {task, threads};
 // kHold / kRelease: lend this worker's core to a task of its node, and take it back.
-enum Tag { kReady = 1, kTask = 2, kResult = 3, kError = 4, kStop = 5, kHold = 6, kRelease = 7 };
+// kStopped: the worker's task ended on a stop request (jobs/stop_request.h), its training saved.
+enum Tag {
+  kReady = 1,
+  kTask = 2,
+  kResult = 3,
+  kError = 4,
+  kStop = 5,
+  kHold = 6,
+  kRelease = 7,
+  kStopped = 8
+};
 bool g_released = false;
 
 // Waits for the next message from `source` (MPI_ANY_SOURCE: any rank), sleeping between polls
@@ -122,13 +133,13 @@ class Dispatcher {
   std::vector<int> run() {
     while (true) {
       hand_out();
-      if (busy_ == 0 && (queue_.remaining() == 0 || !error_.empty())) break;
+      if (busy_ == 0 && (queue_.remaining() == 0 || halted())) break;
       const MPI_Status st = wait_for_message(MPI_ANY_SOURCE);
       const std::string msg = recv_bytes(st);
       if (st.MPI_TAG == kReady)
         on_ready(st.MPI_SOURCE, msg);
-      else if (st.MPI_TAG == kResult || st.MPI_TAG == kError)
-        on_done(st.MPI_SOURCE, st.MPI_TAG == kError, msg);
+      else if (st.MPI_TAG == kResult || st.MPI_TAG == kError || st.MPI_TAG == kStopped)
+        on_done(st.MPI_SOURCE, st.MPI_TAG, msg);
     }
     // Every worker's first message is received, even when there was nothing to run.
     while (reported_ < size_ - 1) {
@@ -138,14 +149,19 @@ class Dispatcher {
     mpi_release_workers();
     if (failure_) std::rethrow_exception(failure_);
     if (!error_.empty()) throw std::runtime_error(error_);
+    if (queue_.remaining() > 0 && (stopped_ || stop_requested()))
+      throw StopRequested("the run stopped with tasks left");
     return ran_;
   }
 
  private:
   // Hands the ready tasks to idle workers. The first task waits for every worker's report: a
   // task borrows only workers it knows of.
+  // No task starts after a failure or a stop request (this rank's, or a worker's).
+  bool halted() const { return !error_.empty() || stopped_ || stop_requested(); }
+
   void hand_out() {
-    while (error_.empty() && reported_ == size_ - 1 && !idle_.empty() && !queue_.empty()) {
+    while (!halted() && reported_ == size_ - 1 && !idle_.empty() && !queue_.empty()) {
       const int w = idle_.front();
       idle_.pop_front();
       const int i = queue_.pop();
@@ -185,8 +201,9 @@ class Dispatcher {
     ++reported_;
   }
 
-  // Worker w finished its task: a result (a serialized record) or an error (its message).
-  void on_done(int w, bool failed, const std::string& msg) {
+  // Worker w finished its task: a result (a serialized record), an error (its message), or a
+  // stop (its training saved; the task stays pending for the rerun).
+  void on_done(int w, int tag, const std::string& msg) {
     const int i = running_[w];
     running_[w] = -1;
     --busy_;
@@ -196,7 +213,11 @@ class Dispatcher {
       idle_.push_back(x);
     }
     gang_[w].clear();
-    if (failed) {
+    if (tag == kStopped) {
+      stopped_ = true;
+      return;
+    }
+    if (tag == kError) {
       if (error_.empty()) error_ = "rank " + std::to_string(w) + ": " + msg;
       return;
     }
@@ -237,6 +258,7 @@ class Dispatcher {
   std::vector<int> node_, usable_, node_workers_;
   std::vector<std::vector<int>> gang_;
   std::string error_;           // the first failure, which stops dispatching
+  bool stopped_ = false;        // a worker's task ended on a stop request
   std::exception_ptr failure_;  // rank 0's own, rethrown as it was
 };
 
@@ -272,6 +294,8 @@ void mpi_work(const Plan& plan, RunContext& ctx) {
       Task t = plan.tasks.at(size_t(msg[0]));
       t.threads = std::max(1, msg[1]);
       send_bytes(serialize(run_task(t, ctx)), 0, kResult);
+    } catch (const StopRequested& e) {
+      send_bytes(e.what(), 0, kStopped);
     } catch (const std::exception& e) {
       send_bytes(e.what(), 0, kError);
     }

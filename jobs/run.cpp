@@ -151,6 +151,12 @@ RunSummary run_profile(const Profile& p, const RunOptions& o) {
       H5File f = H5File::open_read(o.out);
       return read_record(f, "/runs/" + key);
     });
+    // Trainings checkpoint into the cache rank 0 owns (the shared output folder), by digest:
+    // a rerun's worker, whichever rank it is, continues them.
+    CheckpointStore checkpoints(cache / "checkpoints", o.checkpoint_seconds);
+    ctx.set_checkpoints([&](const std::string& key) {
+      return checkpoints.for_task(digests[size_t(plan.index.at(key))], key);
+    });
     mpi_work(plan, ctx);
     mpi_stop();
     RunSummary s;
@@ -387,6 +393,7 @@ struct PlanExecution {
             mpi_dispatch(plan, pending, max_task_threads, [&](int i, const TaskRecord& r) {
               TaskRecord rec = r;
               commit(size_t(i), rec);
+              if (checkpoints) checkpoints->remove(digests[size_t(i)]);
               progress.task_done(rec.key, plan.tasks[i].flops, rec.num.at("seconds"));
             });
         if (!o.quiet) {
@@ -584,10 +591,9 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
     return it->second;
   });
 
-  // Training checkpoints, by task digest (not under MPI: its workers may not share this
-  // directory).
+  // Training checkpoints, by task digest (under MPI the workers save them into this cache too).
   std::unique_ptr<CheckpointStore> checkpoints;
-  if (mpi_size <= 1 && o.checkpoint_seconds >= 0)
+  if (o.checkpoint_seconds >= 0)
     checkpoints = open_checkpoints(cache, o, plan, digests, mine, ps.pending, ctx);
 
   measure_roofs(p, plan, ps.pending);  // now, on cores the tasks do not use yet

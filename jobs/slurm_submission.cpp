@@ -102,9 +102,12 @@ std::string slurm_script(const SlurmSubmission& s) {
                                return c.str();
                              }();
   if (s.mpi) {
-    // mpirun forwards SIGUSR1 to every rank; ranks are not bound to one core so that a big task
-    // may borrow its node's idle workers (sirl run --task-threads).
-    o << "mpirun --bind-to none " << quoted(s.sirl) << common << " --out "
+    // mpirun forwards SIGUSR1 to every rank. On SIGTERM it ends the ranks itself, killing them
+    // a second later unless told to wait: give them the time to save (Slurm's KillWait still
+    // bounds it). Ranks are not bound to one core so that a big task may borrow its node's idle
+    // workers (sirl run --task-threads).
+    o << "export OMPI_MCA_odls_base_sigkill_timeout=30\n"
+      << "mpirun --bind-to none " << quoted(s.sirl) << common << " --out "
       << quoted(s.shard_file(0).string()) << " --task-threads " << s.threads_per_worker << " &\n";
   } else {
     o << quoted(s.sirl) << common << " --shard \"$shard/" << s.shards

@@ -7,12 +7,13 @@
 2. one training interrupted twice mid-training: by the time-limit warning (SIGUSR1 to the batch
    shell: sirl saves and the script requeues the job) and by `scontrol requeue` (SIGTERM, as a
    pre-emption): each requeued job continues from the epoch the last one saved, and the result
-   equals an uninterrupted run's bits.
+   equals an uninterrupted run's bits;
+3. the MPI variant (one allocation, `mpirun` inside): a worker rank's training saves on the
+   warning, the job requeues itself and continues it to the same bits.
 Needs root and Debian's slurmctld, slurmd and munge (scripts/setup.sh --tests); skipped (77)
 without them, except under CI."""
 import os
 import re
-import subprocess
 import sys
 import tempfile
 import time
@@ -59,7 +60,13 @@ def same_results(a, b, what):
     return len(ta["tpa"]), len(wa)
 
 
+# Open MPI as root, on loopback (the job inherits this environment from sbatch).
+MPI_ENV = dict(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_btl="self,tcp",
+               OMPI_MCA_btl_tcp_if_include="lo", OMPI_MCA_oob_tcp_if_include="lo")
+
+
 def sirl(s, *args, expect=0):
+    s.env.update(MPI_ENV)
     p = s.run(SIRL, *args, check=False, timeout=600)
     if p.returncode != expect:
         fail(f"sirl {' '.join(args)} exited {p.returncode}, expected {expect}\n{p.stdout}\n{p.stderr}")
@@ -174,6 +181,35 @@ def training_requeued_twice(s, tmp):
           f"requeue), continued from each; the result equals an uninterrupted run")
 
 
+def mpi_run_requeued(s, tmp):
+    """The MPI variant: one allocation, rank 0 dispatching to a worker rank; the worker's training
+    saves into the submission's cache on the warning and the requeued job continues it."""
+    ref = tmp / "uninterrupted.h5"  # written by training_requeued_twice
+    sub = tmp / "mpi"
+    p = sirl(s, "submit", SLOW, "--mpi", "--cores-per-node", "2", "--checkpoint-minutes", "0",
+             "--out", str(sub), "--now")
+    job = job_id(p.stdout)
+    script = (sub / "sirl-slow-training.sbatch").read_text()
+    for line in ("#SBATCH --nodes=1", "#SBATCH --ntasks-per-node=2", "mpirun --bind-to none"):
+        if line not in script:
+            fail(f"the MPI script lacks '{line}':\n{script}")
+    checkpoints = sub / "tasks" / "checkpoints"
+    wait_for("the worker's first checkpoint", lambda: s.queue().get(job) == "RUNNING" and
+             checkpoints.is_dir() and any(checkpoints.glob("*.h5")), s)
+    s.run("scancel", "--batch", "--signal=USR1", job)
+    s.wait_idle()
+    out = "".join(f.read_text() for f in (sub / "logs").glob("*.out"))
+    stops = re.findall(r"saved at epoch (\d+); stopping", out)
+    resumes = re.findall(r"continues from its checkpoint at epoch (\d+)", out)
+    if len(stops) != 1 or resumes != stops:
+        fail(f"the worker should save once and the requeued job continue from there: saved at "
+             f"{stops}, continued from {resumes}\n{out}")
+    sirl(s, "merge", str(tmp / "mpi.h5"), str(sub / "slow-training.h5"))
+    same_results(ref, tmp / "mpi.h5", "MPI run requeued vs uninterrupted")
+    print(f"ok: MPI job stopped at epoch {stops[0]} (SIGUSR1 through mpirun), requeued itself, "
+          f"continued to the uninterrupted run's bits")
+
+
 def main():
     if os.geteuid() != 0:
         skip_or_fail("a one-node Slurm is started as root")
@@ -183,6 +219,7 @@ def main():
     with tempfile.TemporaryDirectory(prefix="sirl-submit-") as tmp, OneNodeSlurm() as s:
         array_with_a_failed_shard(s, Path(tmp))
         training_requeued_twice(s, Path(tmp))
+        mpi_run_requeued(s, Path(tmp))
     print(f"ok: Slurm tests in {time.time() - t0:.0f} s")
 
 
