@@ -70,10 +70,10 @@ std::string sbatch(const SlurmSubmission& s, const std::string& indices) {
 }
 
 // Each job's state in Slurm's queue ("PENDING", "RUNNING", ...; array tasks as "ID_i"), for the
-// jobs still known there. Empty when squeue is not available.
+// jobs still known there. `known` false (and nothing) when no Slurm answers here.
 std::map<std::string, std::string> queue_states(const SlurmSubmission& s, bool& known) {
   std::map<std::string, std::string> states;
-  known = std::system("command -v squeue >/dev/null 2>&1") == 0;
+  known = std::system("sinfo -h -o %a >/dev/null 2>&1") == 0;
   if (!known) return states;
   for (const std::string& job : s.jobs) {
     std::string out;
@@ -294,7 +294,8 @@ int rerun_failed(const SubmitOptions& o) {
   }
   bool known = false;
   const std::vector<int> again = shards_to_rerun(shard_reports(s, known));
-  if (!known) throw UsageError("squeue is not available: cannot tell which shards still run");
+  if (!known)
+    throw UsageError("no Slurm answers here (sinfo failed): cannot tell which shards still run");
   if (again.empty()) {
     std::printf("sirl submit: nothing to rerun in %s (every shard is complete or queued)\n",
                 s.dir.c_str());
@@ -333,7 +334,7 @@ void print_status(const SlurmSubmission& s, const std::vector<ShardReport>& repo
     std::snprintf(tasks, sizeof tasks, "%d/%d", r.committed, r.tasks);
     std::printf("%-6zu %-12s %-16s %-11d %-8d %-14s %s\n", i, state.c_str(), tasks,
                 r.checkpoints, r.state.starts,
-                known ? (r.queue.empty() ? "-" : r.queue.c_str()) : "(no squeue)",
+                known ? (r.queue.empty() ? "-" : r.queue.c_str()) : "(no Slurm)",
                 r.state.job.empty() ? "-" : (r.state.job + " on " + r.state.host + ", " +
                                              r.state.when).c_str());
   }
