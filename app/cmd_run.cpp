@@ -89,7 +89,10 @@ void register_run(CLI::App& app, Runner& run) {
       "Finished tasks are committed one by one to the task cache (OUT.tasks/, or --cache), filed\n"
       "by what each depends on: rerunning after a crash, or after editing the profile (one more\n"
       "seed, another method, a changed hyper-parameter), computes only the tasks whose inputs\n"
-      "changed. `sirl plan PROFILE --cache DIR` says how much is already there.");
+      "changed. `sirl plan PROFILE --cache DIR` says how much is already there.\n"
+      "SIGTERM, SIGUSR1 or Ctrl-C: every training in progress saves its state at its next epoch\n"
+      "end, the run writes what finished and exits 75; the same command continues (a second\n"
+      "Ctrl-C quits at once). Exit codes: 0 done, 1 a task or file failed, 2 usage, 75 stopped.");
   static std::string profile, out, shard;
   static int threads = 0;
   static bool force = false, quiet = false;

@@ -14,6 +14,7 @@ Needs root and Debian's slurmctld, slurmd and munge (scripts/setup.sh --tests); 
 without them, except under CI."""
 import os
 import re
+import subprocess
 import sys
 import tempfile
 import time
@@ -27,7 +28,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from one_node_slurm import OneNodeSlurm, missing_programs  # noqa: E402
 
 SIRL = os.environ["SIRL"]
-DATA = Path(os.environ["SIRL_SOURCE_DIR"]) / "tests" / "data"
+SRC = Path(os.environ["SIRL_SOURCE_DIR"])
+DATA = SRC / "tests" / "data"
 ENGINE_TEST, SLOW = str(DATA / "engine-test.toml"), str(DATA / "slow-training.toml")
 
 
@@ -121,8 +123,18 @@ def array_with_a_failed_shard(s, tmp):
         present = {k.decode() for k in f["runs_index"][:]}
         if f.attrs["complete"] != 0 or not missing or present & set(missing):
             fail("the partial merge should list its missing tasks, none of them present")
+    # The report of the partial merge marks the verdicts that rest on missing cells.
+    figs = tmp / "partial-figures"
+    r = subprocess.run(["/usr/bin/python3", str(SRC / "results" / "plot_figures.py"),
+                        str(tmp / "partial.h5"), "--out", str(figs)], capture_output=True,
+                       text=True, timeout=600)
+    if r.returncode != 0:
+        fail(f"plot_figures on the partial merge exited {r.returncode}\n{r.stderr}")
+    report = (figs / "report.md").read_text()
+    if "⧗ **Partial merge**" not in report or "** ⧗ |" not in report:
+        fail("the partial merge's report should mark its verdicts ⧗:\n" + report[:3000])
     print(f"ok: shard 1 failed, status named it; merge refused the gap; --partial lists "
-          f"{len(missing)} missing tasks")
+          f"{len(missing)} missing tasks and its report marks the verdicts resting on them")
 
     (sub / "shard-1.h5").rmdir()
     p = sirl(s, "submit", "--rerun-failed", "--out", str(sub))

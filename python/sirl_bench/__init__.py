@@ -14,4 +14,4 @@ from .results import (FLAG_COLUMNS, SCHEMA_VERSIONS, Results, ResultsError, clai
 
 __all__ = ["FLAG_COLUMNS", "SCHEMA_VERSIONS", "Results", "ResultsError", "claims", "datasets",
            "embedding_name", "open", "study_analysis", "typed", "write_embeddings"]
-__version__ = "0.11.0"
+__version__ = "0.12.0"
