@@ -13,7 +13,10 @@ PyTorch user may run it (default: the environment as it is; no-coretype: without
 OPENBLAS_CORETYPE; flush-denormal: torch.set_flush_denormal(True); no-mkldnn: oneDNN off);
 --best-of-configs runs each in its own process and keeps each case's fastest, naming its config.
 A case whose step runs below 20 % of the rate of a plain matrix product of its largest layer is
-marked suspect (its ratio against ours is not a fair one).
+marked suspect (its ratio against ours is not a fair one). Cases come in the forms people write:
+the plain one (a triplet's or a pair's members in separate forward passes, a loop over a cell's
+networks), `_stacked` (the members in one pass) and `_batched` (a cell's networks as one batched
+product per layer); a comparison takes the fastest form.
 Usage: /usr/bin/python3 bench/torch_reference.py [--repeats 5] [--threads 1] [--runs] [--cases a,b]
                                                  [--config NAME | --best-of-configs]
 """
@@ -64,7 +67,25 @@ def flops(widths, samples):
     return 3 * samples * sum(2 * widths[i] * widths[i + 1] for i in range(len(widths) - 1))
 
 
-def sirl_step_case(widths, B=64, T=1000):
+def triplet_embeddings(net, x, t, stacked):
+    """The three embeddings of a batch of triplets t [B, 3]: three forward passes, as people first
+    write it, or (stacked) one pass over the 3B rows, as a PyTorch user who cares writes it: one
+    product of 3B rows per layer instead of three of B, and no gradients accumulated across
+    passes (each a full read-modify-write of every weight gradient)."""
+    if stacked:
+        return net(x[t.reshape(-1)]).view(t.shape[0], 3, -1).unbind(1)
+    return net(x[t[:, 0]]), net(x[t[:, 1]]), net(x[t[:, 2]])
+
+
+def pair_rewards(net, inputs, pair, stacked):
+    """The rewards of both members of each pair [b, 2]: two passes, or (stacked) one."""
+    if stacked:
+        r = net(inputs[pair.reshape(-1)]).view(-1, 2)
+        return r[:, 0], r[:, 1]
+    return net(inputs[pair[:, 0]]).squeeze(1), net(inputs[pair[:, 1]]).squeeze(1)
+
+
+def sirl_step_case(widths, B=64, T=1000, stacked=False):
     net = mlp(widths)
     x = torch.randn(T, widths[0])
     trip = torch.randint(0, T, (B, 3))
@@ -72,7 +93,7 @@ def sirl_step_case(widths, B=64, T=1000):
     sched = torch.optim.lr_scheduler.ExponentialLR(opt, gamma=0.99999)
 
     def step():
-        e1, e2, en = net(x[trip[:, 0]]), net(x[trip[:, 1]]), net(x[trip[:, 2]])
+        e1, e2, en = triplet_embeddings(net, x, trip, stacked)
         d12 = ((e1 - e2) ** 2).sum(1)
         loss = (torch.relu(d12 - ((e1 - en) ** 2).sum(1) + 1) + torch.relu(d12 - ((e2 - en) ** 2).sum(1) + 1)).mean()
         opt.zero_grad()
@@ -187,7 +208,7 @@ def tpa_unfrozen_batched_case(phi_in, hidden, M=20, B=32, T=400):
     return step, flops(widths, 2 * B) * M
 
 
-def sirl_run_case(widths, N, epochs, T, B=64):
+def sirl_run_case(widths, N, epochs, T, B=64, stacked=False):
     """A whole SIRL training run as people write it: shuffled mini-batches, Adam + ExponentialLR."""
     x = torch.randn(T, widths[0])
     trip = torch.randint(0, T, (N, 3))
@@ -199,8 +220,7 @@ def sirl_run_case(widths, N, epochs, T, B=64):
         for _ in range(epochs):
             perm = torch.randperm(N)
             for i in range(0, N, B):
-                t = trip[perm[i:i + B]]
-                e1, e2, en = net(x[t[:, 0]]), net(x[t[:, 1]]), net(x[t[:, 2]])
+                e1, e2, en = triplet_embeddings(net, x, trip[perm[i:i + B]], stacked)
                 d12 = ((e1 - e2) ** 2).sum(1)
                 loss = (torch.relu(d12 - ((e1 - en) ** 2).sum(1) + 1)
                         + torch.relu(d12 - ((e2 - en) ** 2).sum(1) + 1)).mean()
@@ -211,7 +231,8 @@ def sirl_run_case(widths, N, epochs, T, B=64):
     return run, flops(widths, 3 * N * epochs)
 
 
-def tpa_cell_case(phi_widths, hidden, epochs, T, M=100, R=20, B=64, l2=10.0, frozen=True):
+def tpa_cell_case(phi_widths, hidden, epochs, T, M=100, R=20, B=64, l2=10.0, frozen=True,
+                  stacked=False):
     """One TPA cell as people write it: for each of R test rewards its own network and optimizer,
     trained on M pairs, shuffled mini-batches. Frozen: φ's embeddings computed once under no_grad,
     and a head on them; unfrozen: each reward fine-tunes its own copy of φ with its head (φ's
@@ -242,8 +263,7 @@ def tpa_cell_case(phi_widths, hidden, epochs, T, M=100, R=20, B=64, l2=10.0, fro
                 perm = torch.randperm(M)
                 for i in range(0, M, B):
                     idx = perm[i:i + B]
-                    ra = net(inputs[pairs[r, idx, 0]]).squeeze(1)
-                    rb = net(inputs[pairs[r, idx, 1]]).squeeze(1)
+                    ra, rb = pair_rewards(net, inputs, pairs[r, idx], stacked)
                     loss = (torch.nn.functional.binary_cross_entropy_with_logits(ra - rb, labels[r, idx])
                             + l2 * (ra ** 2 + rb ** 2).mean())
                     opt.zero_grad()
@@ -366,6 +386,8 @@ def main():
     cases = {
         "sirl_step_grid": sirl_step_case([19, 128, 128, 6]),
         "sirl_step_jaco": sirl_step_case([2037, 1024, 1024, 6]),
+        "sirl_step_grid_stacked": sirl_step_case([19, 128, 128, 6], stacked=True),
+        "sirl_step_jaco_stacked": sirl_step_case([2037, 1024, 1024, 6], stacked=True),
         "tpa_heads_grid": tpa_heads_case(128),
         "tpa_heads_grid_batched": tpa_heads_batched_case(128),
         "tpa_heads_jaco": tpa_heads_case(1024),
@@ -391,6 +413,25 @@ def main():
             "tpa_quick_cell_jaco_unfrozen": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=15,
                                                           T=2000, M=100, l2=1.0, frozen=False),
         }
+        # Each unit again as a PyTorch user who cares writes it: a triplet's or a pair's members
+        # in one forward pass (triplet_embeddings, pair_rewards).
+        stacked = {
+            "sirl_run_grid": (sirl_run_case, ([19, 128, 128, 6],), dict(N=1000, epochs=10, T=1960)),
+            "sirl_run_jaco": (sirl_run_case, ([2037, 1024, 1024, 6],), dict(N=200, epochs=2, T=2000)),
+            "tpa_cell_grid": (tpa_cell_case, ([19, 128, 128, 6], 128), dict(epochs=20, T=1960)),
+            "tpa_cell_jaco": (tpa_cell_case, ([2037, 1024, 1024, 6], 1024),
+                              dict(epochs=2, T=2000, l2=1.0)),
+            "tpa_small_cell_jaco_frozen": (tpa_cell_case, ([2037, 1024, 1024, 6], 1024),
+                                           dict(epochs=15, T=2000, M=10, l2=1.0)),
+            "tpa_small_cell_jaco_unfrozen": (tpa_cell_case, ([2037, 1024, 1024, 6], 1024),
+                                             dict(epochs=15, T=2000, M=10, l2=1.0, frozen=False)),
+            "tpa_quick_cell_jaco_frozen": (tpa_cell_case, ([2037, 1024, 1024, 6], 1024),
+                                           dict(epochs=15, T=2000, M=100, l2=1.0)),
+            "tpa_quick_cell_jaco_unfrozen": (tpa_cell_case, ([2037, 1024, 1024, 6], 1024),
+                                             dict(epochs=15, T=2000, M=100, l2=1.0, frozen=False)),
+        }
+        for name, (make, a, kw) in stacked.items():
+            runs[name + "_stacked"] = make(*a, **kw, stacked=True)
         cases.update(runs)
     if args.cases:
         wanted = args.cases.split(",")
@@ -405,7 +446,8 @@ def main():
         c0, w0 = cpu_seconds(), time.perf_counter()
         s = time_run(step, args.repeats) if name in runs else time_case(step, args.min_time, args.repeats)
         cpu = 100 * (cpu_seconds() - c0) / (time.perf_counter() - w0)
-        mm = matmul_gflops(*LARGEST[name]) if name in LARGEST else 0.0
+        base = name.removesuffix("_stacked").removesuffix("_batched")
+        mm = matmul_gflops(*LARGEST[base]) if base in LARGEST else 0.0
         g = fl / s * 1e-9
         out[name] = {"ms": s * 1e3, "gflops": g, "steps_per_s": 1 / s, "cpu_percent": cpu,
                      "matmul_gflops": mm, "suspect": bool(mm and g < SUSPECT_SHARE * mm)}

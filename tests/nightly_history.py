@@ -159,8 +159,32 @@ def main():
     if p.returncode != 0:
         fail(f"the dashboard in chromium: {p.stdout}{p.stderr}")
     print("nightly_history: dashboard:", p.stdout.strip())
-    print("nightly_history: OK")
+
+
+def torch_ratio_uses_the_fastest_form():
+    """bench/nightly's speed-up takes the fastest form of each PyTorch case (plain, stacked,
+    batched) and names it; a suspect fastest form gives no ratio."""
+    import importlib.machinery
+    import importlib.util
+    path = os.path.join(SRC, "bench", "nightly")
+    spec = importlib.util.spec_from_loader("nightly", importlib.machinery.SourceFileLoader("nightly", path))
+    nightly = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(nightly)
+    ours = "BM_SirlStep/in:2037/hidden:1024/threads:1/real_time"
+    micro = {ours: {"seconds": 0.010}}
+    torch_ = {"sirl_step_jaco": {"ms": 160.0, "cpu_percent": 99, "config": "default"},
+              "sirl_step_jaco_stacked": {"ms": 40.0, "cpu_percent": 99, "config": "no-coretype"}}
+    row = [r for r in nightly.torch_lines(micro, torch_) if r.startswith("| sirl_step_jaco ")]
+    if len(row) != 1 or "| stacked, no-coretype |" not in row[0] or "4.00×" not in row[0]:
+        fail(f"the ratio should be 40 ms / 10 ms against the stacked form: {row}")
+    torch_["sirl_step_jaco_stacked"]["suspect"] = True
+    row = [r for r in nightly.torch_lines(micro, torch_) if r.startswith("| sirl_step_jaco ")]
+    if "suspect baseline" not in row[0]:
+        fail(f"a suspect fastest form gives no ratio: {row}")
+    print("nightly_history: PyTorch ratios against the fastest form:", row[0])
 
 
 if __name__ == "__main__":
     main()
+    torch_ratio_uses_the_fastest_form()
+    print("nightly_history: OK")
