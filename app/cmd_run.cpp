@@ -203,9 +203,10 @@ void print_schedule(const Plan& plan, const PlanEstimate& e, const PlanClusterOp
       format_duration(c.wall_seconds).c_str(), c.wall_seconds, c.outside_seconds,
       m.mpi ? ", starting MPI" : "", 100 * r.utilisation,
       format_duration(r.bandwidth_stall).c_str());
-  std::printf("  memory per node: %.0f MiB (its processes' datasets and the largest working sets "
-              "that can run there at once)\n",
-              c.memory_bytes_per_node / (1024.0 * 1024.0));
+  std::printf(
+      "  memory per node: %.0f MiB (its processes' datasets and the largest working sets "
+      "that can run there at once)\n",
+      c.memory_bytes_per_node / (1024.0 * 1024.0));
   std::printf(
       "  without widening (every task on %s): %s;  lower bounds: the work over every core %s, "
       "the critical path on %d cores %s\n",
@@ -218,6 +219,64 @@ void print_schedule(const Plan& plan, const PlanEstimate& e, const PlanClusterOp
     std::printf("    %-44s %10s  %.1f GFLOP\n", plan.tasks[size_t(i)].key.c_str(),
                 format_duration(e.task_seconds[size_t(i)]).c_str(),
                 plan.tasks[size_t(i)].flops * 1e-9);
+}
+
+// `sirl plan --tasks`: one line per task (key, kind, GFLOP, MiB, the keys it reads).
+void print_task_list(const Plan& plan) {
+  for (const Task& t : plan.tasks) {
+    std::printf("%s %s %.6g %.6g", t.key.c_str(), t.kind.name(), t.flops * 1e-9,
+                t.bytes / (1024.0 * 1024.0));
+    for (int d : t.deps) std::printf(" %s", plan.tasks[size_t(d)].key.c_str());
+    std::printf("\n");
+  }
+}
+
+// The profile, its tasks and FLOPs per kind, and what a cache already holds of them.
+void print_plan_summary(const Profile& p, const Plan& plan, const std::string& cache) {
+  std::printf("profile %s (%s): %s\n", p.name.c_str(), p.path.c_str(), p.description.c_str());
+  std::printf("envs:");
+  for (const auto& e : p.envs) std::printf(" %s", e.c_str());
+  std::printf("   seeds: %zu   N (FPE): %zu values   N (TPA): %zu   M: %zu\n", p.seeds.size(),
+              p.fpe_N.size(), p.tpa.N.size(), p.tpa.M.size());
+  std::printf("\n%-16s %8s %14s  %s\n", "kind", "tasks", "GFLOP", "what it computes");
+  for (const TaskKindSpec* ks : task_kinds()) {
+    if (plan.count(*ks) == 0) continue;
+    std::printf("%-16s %8d %14.1f  %s\n", ks->name, plan.count(*ks), plan.flops(*ks) * 1e-9,
+                ks->description);
+  }
+  double total = 0, protocol = 0;
+  for (const auto& t : plan.tasks) total += t.flops, protocol += t.protocol_flops;
+  std::printf("%-16s %8zu %14.1f\n", "total", plan.tasks.size(), total * 1e-9);
+  if (protocol > total * (1 + 1e-9)) {
+    // Trainings that end early by rule: the FLOPs above are what they are expected to execute.
+    std::printf("%-16s %8s %14.1f  every epoch of every schedule; the rows above expect",
+                "protocol", "", protocol * 1e-9);
+    std::printf(" SIRL's exact skip%s (measured medians: jobs/expected_epochs.cpp)\n",
+                std::any_of(p.hyper.begin(), p.hyper.end(),
+                            [](const auto& kv) { return kv.second.tpa_stop != "fixed"; })
+                    ? " and converged reward heads"
+                    : "");
+  }
+  if (cache.empty()) return;
+  const CacheHoldings h = cache_holdings(plan, p, cache);
+  std::printf("\ncache %s: %d of %zu tasks already computed on this CPU class (%.1f of %.1f GFLOP)",
+              cache.c_str(), h.tasks, plan.tasks.size(), h.flops * 1e-9, total * 1e-9);
+  if (h.other_class > 0)
+    std::printf("; %d more on another class (%.1f GFLOP; sirl run --any-cpu-class reuses them)",
+                h.other_class, h.other_flops * 1e-9);
+  std::printf("\n");
+}
+
+// The calibration's measured rates, the data's build times and the memory estimate.
+void print_calibration(const PlanEstimate& e) {
+  std::printf("\nmeasured single-thread rates (+ the fixed cost of one call):");
+  for (const auto& [k, r] : e.gflops_per_s)
+    std::printf("  %s %.1f GFLOP/s + %.0f ms", k.c_str(), r, 1e3 * e.call_seconds.at(k));
+  std::printf("\nbuilding the data (one core, outside the tasks):");
+  for (const auto& [env, s] : e.dataset_seconds)
+    std::printf("  %s: Ξ %.1f s, a seed's queries %.2f s", env.c_str(), s,
+                e.bundle_seconds.at(env));
+  std::printf("\nmemory estimate: %.1f MiB\n", e.peak_bytes / (1024.0 * 1024.0));
 }
 
 void register_plan(CLI::App& app, Runner& run) {
@@ -279,66 +338,18 @@ void register_plan(CLI::App& app, Runner& run) {
     }
     const Plan plan = make_plan(p);
     if (list_tasks) {
-      for (const Task& t : plan.tasks) {
-        std::printf("%s %s %.6g %.6g", t.key.c_str(), t.kind.name(), t.flops * 1e-9,
-                    t.bytes / (1024.0 * 1024.0));
-        for (int d : t.deps) std::printf(" %s", plan.tasks[size_t(d)].key.c_str());
-        std::printf("\n");
-      }
+      print_task_list(plan);
       return 0;
     }
     const bool cluster = co.nodes > 1 || co.mpi || co.cores_per_node > 0;
     if (cluster && threads > 0)
       throw UsageError("--threads plans one machine; for a cluster give --cores-per-node");
     const int th = threads > 0 ? threads : default_threads();
-    std::printf("profile %s (%s): %s\n", p.name.c_str(), p.path.c_str(), p.description.c_str());
-    std::printf("envs:");
-    for (const auto& e : p.envs) std::printf(" %s", e.c_str());
-    std::printf("   seeds: %zu   N (FPE): %zu values   N (TPA): %zu   M: %zu\n", p.seeds.size(),
-                p.fpe_N.size(), p.tpa.N.size(), p.tpa.M.size());
-    std::printf("\n%-16s %8s %14s  %s\n", "kind", "tasks", "GFLOP", "what it computes");
-    for (const TaskKindSpec* ks : task_kinds()) {
-      if (plan.count(*ks) == 0) continue;
-      std::printf("%-16s %8d %14.1f  %s\n", ks->name, plan.count(*ks), plan.flops(*ks) * 1e-9,
-                  ks->description);
-    }
-    double total = 0, protocol = 0;
-    for (const auto& t : plan.tasks) total += t.flops, protocol += t.protocol_flops;
-    std::printf("%-16s %8zu %14.1f\n", "total", plan.tasks.size(), total * 1e-9);
-    if (protocol > total * (1 + 1e-9)) {
-      // Trainings that end early by rule: the FLOPs above are what they are expected to execute.
-      std::printf("%-16s %8s %14.1f  every epoch of every schedule; the rows above expect",
-                  "protocol", "", protocol * 1e-9);
-      std::printf(" SIRL's exact skip%s (measured medians: jobs/expected_epochs.cpp)\n",
-                  std::any_of(p.hyper.begin(), p.hyper.end(),
-                              [](const auto& kv) { return kv.second.tpa_stop != "fixed"; })
-                      ? " and converged reward heads"
-                      : "");
-    }
-    if (!cache.empty()) {
-      const CacheHoldings h = cache_holdings(plan, p, cache);
-      std::printf(
-          "\ncache %s: %d of %zu tasks already computed on this CPU class (%.1f of %.1f "
-          "GFLOP)",
-          cache.c_str(), h.tasks, plan.tasks.size(), h.flops * 1e-9, total * 1e-9);
-      if (h.other_class > 0)
-        std::printf(
-            "; %d more on another class (%.1f GFLOP; sirl run --any-cpu-class reuses "
-            "them)",
-            h.other_class, h.other_flops * 1e-9);
-      std::printf("\n");
-    }
+    print_plan_summary(p, plan, cache);
     std::fflush(stdout);
     std::fprintf(stderr, "calibrating on this machine...\n");
     const PlanEstimate e = estimate_plan(plan, p, th);
-    std::printf("\nmeasured single-thread rates (+ the fixed cost of one call):");
-    for (const auto& [k, r] : e.gflops_per_s)
-      std::printf("  %s %.1f GFLOP/s + %.0f ms", k.c_str(), r, 1e3 * e.call_seconds.at(k));
-    std::printf("\nbuilding the data (one core, outside the tasks):");
-    for (const auto& [env, s] : e.dataset_seconds)
-      std::printf("  %s: Ξ %.1f s, a seed's queries %.2f s", env.c_str(), s,
-                  e.bundle_seconds.at(env));
-    std::printf("\nmemory estimate: %.1f MiB\n", e.peak_bytes / (1024.0 * 1024.0));
+    print_calibration(e);
     PlanClusterOptions here = co;
     if (!cluster) here.cores_per_node = th;
     if (!cluster)
@@ -377,6 +388,37 @@ void register_export(CLI::App& app, Runner& run) {
   };
 }
 
+// Every task record of the shard files, once: files of one profile and engine, a task in two
+// files with the same results (timings aside). `wall` is the longest shard's wall time.
+std::map<std::string, TaskRecord> gather_shard_records(const std::vector<std::string>& inputs,
+                                                       const RunInfo& first, double& wall) {
+  std::map<std::string, TaskRecord> all;
+  for (const auto& in : inputs) {
+    const RunInfo info = read_run_info(in);
+    if (!info.verified) std::fprintf(stderr, "sirl merge: %s\n", unverified_note(in).c_str());
+    if (info.profile_text != first.profile_text)
+      throw UsageError(in + " was run under profile '" + info.profile_name + "', " +
+                       inputs.front() + " under '" + first.profile_name +
+                       "' (or its text differs)");
+    if (info.engine_version != first.engine_version)
+      throw UsageError(in + " comes from engine " + info.engine_version + ", " + inputs.front() +
+                       " from " + first.engine_version);
+    wall = std::max(wall, info.wall_seconds);
+    for (auto& r : read_results_records(in)) {
+      auto it = all.find(r.key);
+      if (it != all.end()) {
+        TaskRecord a = it->second, b = r;
+        a.num.erase("seconds");
+        b.num.erase("seconds");
+        if (!(a == b)) throw UsageError("task " + r.key + " has different results in two inputs");
+        continue;
+      }
+      all[r.key] = std::move(r);
+    }
+  }
+  return all;
+}
+
 void register_merge(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "merge",
@@ -412,31 +454,8 @@ void register_merge(CLI::App& app, Runner& run) {
     if (const auto dir = fs::path(out).parent_path(); !dir.empty()) fs::create_directories(dir);
     const FileLock lock(out, "sirl merge", "wait for it to finish, or choose another output");
     RunInfo first = read_run_info(inputs.front());
-    std::map<std::string, TaskRecord> all;
     double wall = 0;
-    for (const auto& in : inputs) {
-      const RunInfo info = read_run_info(in);
-      if (!info.verified) std::fprintf(stderr, "sirl merge: %s\n", unverified_note(in).c_str());
-      if (info.profile_text != first.profile_text)
-        throw UsageError(in + " was run under profile '" + info.profile_name + "', " +
-                         inputs.front() + " under '" + first.profile_name +
-                         "' (or its text differs)");
-      if (info.engine_version != first.engine_version)
-        throw UsageError(in + " comes from engine " + info.engine_version + ", " + inputs.front() +
-                         " from " + first.engine_version);
-      wall = std::max(wall, info.wall_seconds);
-      for (auto& r : read_results_records(in)) {
-        auto it = all.find(r.key);
-        if (it != all.end()) {
-          TaskRecord a = it->second, b = r;
-          a.num.erase("seconds");
-          b.num.erase("seconds");
-          if (!(a == b)) throw UsageError("task " + r.key + " has different results in two inputs");
-          continue;
-        }
-        all[r.key] = std::move(r);
-      }
-    }
+    const std::map<std::string, TaskRecord> all = gather_shard_records(inputs, first, wall);
     const Profile p = parse_profile(first.profile_text, inputs.front() + "@profile_text");
     const Plan plan = make_plan(p);
     const size_t total = plan.tasks.size();

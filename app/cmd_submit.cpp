@@ -90,9 +90,9 @@ std::map<std::string, std::string> queue_states(const SlurmSubmission& s, bool& 
 }
 
 bool live(const std::string& state) {
-  static const std::set<std::string> done = {"COMPLETED", "FAILED", "CANCELLED", "TIMEOUT",
-                                             "NODE_FAIL", "OUT_OF_MEMORY", "BOOT_FAIL",
-                                             "DEADLINE", "PREEMPTED"};
+  static const std::set<std::string> done = {"COMPLETED", "FAILED",    "CANCELLED",
+                                             "TIMEOUT",   "NODE_FAIL", "OUT_OF_MEMORY",
+                                             "BOOT_FAIL", "DEADLINE",  "PREEMPTED"};
   return !state.empty() && !done.count(state);
 }
 
@@ -186,8 +186,7 @@ void size_submission(SlurmSubmission& s, const Plan& plan, const PlanEstimate& e
       memory = std::max(memory, r.memory_bytes_per_node);
     }
     std::printf("predicted per shard on %d cores: %s to %s, memory up to %.0f MiB\n", s.cpus,
-                format_duration(shortest).c_str(), format_duration(longest).c_str(),
-                memory / kMiB);
+                format_duration(shortest).c_str(), format_duration(longest).c_str(), memory / kMiB);
   }
   s.time_minutes = int(std::ceil((o.time_factor * longest + s.signal_seconds) / 60.0)) + 5;
   s.memory_mib = int(std::ceil(1.25 * memory / kMiB)) + 512;
@@ -268,8 +267,7 @@ int submit_new(const SubmitOptions& o) {
   fs::permissions(s.script_path(), fs::perms::owner_exec | fs::perms::group_exec,
                   fs::perm_options::add);
   write_submission(s);
-  std::printf("wrote %s (and profile.toml, submission.toml beside it)\n",
-              s.script_path().c_str());
+  std::printf("wrote %s (and profile.toml, submission.toml beside it)\n", s.script_path().c_str());
   if (o.now) {
     s.jobs.push_back(sbatch(s, ""));
     write_submission(s);
@@ -278,8 +276,9 @@ int submit_new(const SubmitOptions& o) {
     std::printf("submit it: sbatch %s   (or add --now)\n", s.script_path().c_str());
   }
   std::printf("then: sirl status %s", s.dir.c_str());
-  if (!s.mpi) std::printf(";  sirl merge %s/%s.h5 %s/shard-*.h5", s.dir.c_str(), p.name.c_str(),
-                          s.dir.c_str());
+  if (!s.mpi)
+    std::printf(";  sirl merge %s/%s.h5 %s/shard-*.h5", s.dir.c_str(), p.name.c_str(),
+                s.dir.c_str());
   std::printf("\n");
   return 0;
 }
@@ -322,8 +321,8 @@ void print_status(const SlurmSubmission& s, const std::vector<ShardReport>& repo
   for (size_t i = 0; i < reports.size(); ++i) {
     const ShardReport& r = reports[i];
     std::string state = r.complete ? "complete" : phase_name(r.state.phase);
-    if (!r.complete && (r.state.phase == ShardState::kFailed ||
-                        r.state.phase == ShardState::kStopped))
+    if (!r.complete &&
+        (r.state.phase == ShardState::kFailed || r.state.phase == ShardState::kStopped))
       state += " (" + std::to_string(r.state.exit_code) + ")";
     // A log that says "running" with no job in the queue: the job died without a word
     // (killed, node lost).
@@ -332,11 +331,11 @@ void print_status(const SlurmSubmission& s, const std::vector<ShardReport>& repo
     complete += r.complete;
     char tasks[32];
     std::snprintf(tasks, sizeof tasks, "%d/%d", r.committed, r.tasks);
-    std::printf("%-6zu %-12s %-16s %-11d %-8d %-14s %s\n", i, state.c_str(), tasks,
-                r.checkpoints, r.state.starts,
-                known ? (r.queue.empty() ? "-" : r.queue.c_str()) : "(no Slurm)",
-                r.state.job.empty() ? "-" : (r.state.job + " on " + r.state.host + ", " +
-                                             r.state.when).c_str());
+    std::printf("%-6zu %-12s %-16s %-11d %-8d %-14s %s\n", i, state.c_str(), tasks, r.checkpoints,
+                r.state.starts, known ? (r.queue.empty() ? "-" : r.queue.c_str()) : "(no Slurm)",
+                r.state.job.empty()
+                    ? "-"
+                    : (r.state.job + " on " + r.state.host + ", " + r.state.when).c_str());
   }
   std::printf("%d of %zu complete", complete, reports.size());
   const std::vector<int> again = shards_to_rerun(reports);
@@ -368,7 +367,8 @@ void register_submit(CLI::App& app, Runner& run) {
       ->capture_default_str();
   cmd->add_option("--cpus-per-task", o.cpus, "Cores of each array task (default: this machine's)")
       ->check(CLI::Range(1, 4096));
-  auto* g = cmd->add_option_group("MPI", "One allocation running mpirun (as `sirl plan` models it)");
+  auto* g =
+      cmd->add_option_group("MPI", "One allocation running mpirun (as `sirl plan` models it)");
   g->add_option("--nodes", o.cluster.nodes, "Nodes (more than one implies --mpi)")
       ->check(CLI::Range(1, 100000));
   g->add_option("--cores-per-node", o.cluster.cores_per_node,
@@ -408,8 +408,9 @@ void register_submit(CLI::App& app, Runner& run) {
     const SubmitOptions& o = submit_options();
     if (o.rerun_failed) {
       if (!o.profile.empty())
-        throw UsageError("--rerun-failed reads the profile from --out's submission: give no "
-                         "PROFILE");
+        throw UsageError(
+            "--rerun-failed reads the profile from --out's submission: give no "
+            "PROFILE");
       return rerun_failed(o);
     }
     if (o.profile.empty()) throw UsageError("name a profile to submit (or --rerun-failed)");

@@ -17,8 +17,7 @@ ClusterPrediction predict_cluster(const Plan& plan, const PlanEstimate& e, const
   for (size_t i = 0; i < plan.tasks.size(); ++i)
     if (tasks[i]) ++count, sizes.push_back(plan.tasks[i].bytes);
   r.outside_seconds = e.setup_seconds * (m.mpi ? 2 : 1) +
-                      m.finish_seconds_per_task * double(count) +
-                      (m.mpi ? m.mpi_start_seconds : 0);
+                      m.finish_seconds_per_task * double(count) + (m.mpi ? m.mpi_start_seconds : 0);
   r.wall_seconds = r.schedule.makespan + r.outside_seconds;
   // Processes on the busiest node (node 0: under MPI it also holds rank 0) and how many tasks
   // run there at once.

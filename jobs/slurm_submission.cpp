@@ -80,8 +80,8 @@ std::string slurm_script(const SlurmSubmission& s) {
     << " s before the time limit, sirl saves every training in progress and exits " << kExitStopped
     << ",\n"
     << "# and this script requeues the job; a pre-emption (SIGTERM) requeues it by itself. A\n"
-    << "# requeued job continues from the checkpoints. `sirl status "
-    << s.dir.string() << "` shows\n"
+    << "# requeued job continues from the checkpoints. `sirl status " << s.dir.string()
+    << "` shows\n"
     << "# every shard; `sirl submit --rerun-failed --out " << s.dir.string()
     << "` resubmits the failed ones.\n"
     << sbatch_lines(s) << "set -u\n"
@@ -95,12 +95,12 @@ std::string slurm_script(const SlurmSubmission& s) {
   o << "state=\"$dir/state/shard-$shard.log\"\n"
     << "mkdir -p \"$dir/state\"\n"
     << "echo \"start $job $(hostname) $(date -u +%Y-%m-%dT%H:%M:%SZ)\" >> \"$state\"\n";
-  const std::string common = " run \"$dir/profile.toml\" --cache \"$dir/tasks\" --checkpoint-minutes " +
-                             [&] {
-                               std::ostringstream c;
-                               c << s.checkpoint_minutes;
-                               return c.str();
-                             }();
+  const std::string common =
+      " run \"$dir/profile.toml\" --cache \"$dir/tasks\" --checkpoint-minutes " + [&] {
+        std::ostringstream c;
+        c << s.checkpoint_minutes;
+        return c.str();
+      }();
   if (s.mpi) {
     // mpirun forwards SIGUSR1 to every rank. On SIGTERM it ends the ranks itself, killing them
     // a second later unless told to wait: give them the time to save (Slurm's KillWait still
@@ -172,8 +172,8 @@ SlurmSubmission read_submission(const fs::path& dir) {
   try {
     t = toml::parse_file(file.string());
   } catch (const toml::parse_error& e) {
-    throw std::runtime_error(file.string() + " is not a submission manifest: " +
-                             std::string(e.description()));
+    throw std::runtime_error(file.string() +
+                             " is not a submission manifest: " + std::string(e.description()));
   }
   auto need = [&](const char* key) -> toml::node& {
     toml::node* n = t.get(key);
@@ -183,8 +183,8 @@ SlurmSubmission read_submission(const fs::path& dir) {
   auto integer = [&](const char* key, int lo) {
     const auto v = need(key).value<int64_t>();
     if (!v || *v < lo || *v > 1000000)
-      throw std::runtime_error(file.string() + ": '" + key + "' is not an integer >= " +
-                               std::to_string(lo));
+      throw std::runtime_error(file.string() + ": '" + key +
+                               "' is not an integer >= " + std::to_string(lo));
     return int(*v);
   };
   auto text = [&](const char* key) {

@@ -17,15 +17,15 @@ namespace sirl {
 struct SlurmSubmission {
   std::string profile;  // the profile's name
   std::filesystem::path dir;
-  std::string sirl;    // absolute path of the sirl executable the jobs run
-  bool mpi = false;    // one allocation with mpirun inside, instead of a job array
-  int shards = 1;      // array tasks (1 under MPI)
-  int nodes = 1;       // MPI: nodes of the allocation
-  int cpus = 1;        // cores per array task, or per node under MPI
-  int threads_per_worker = 1;   // MPI: cores of each worker rank
-  int time_minutes = 60;        // --time
-  int memory_mib = 1024;        // --mem: per array task, or per node under MPI
-  int signal_seconds = 300;     // USR1 this long before the time limit
+  std::string sirl;            // absolute path of the sirl executable the jobs run
+  bool mpi = false;            // one allocation with mpirun inside, instead of a job array
+  int shards = 1;              // array tasks (1 under MPI)
+  int nodes = 1;               // MPI: nodes of the allocation
+  int cpus = 1;                // cores per array task, or per node under MPI
+  int threads_per_worker = 1;  // MPI: cores of each worker rank
+  int time_minutes = 60;       // --time
+  int memory_mib = 1024;       // --mem: per array task, or per node under MPI
+  int signal_seconds = 300;    // USR1 this long before the time limit
   double checkpoint_minutes = 5;
   std::string partition, account;  // "" = the cluster's default
   std::vector<std::string> jobs;   // Slurm job ids, in order of submission

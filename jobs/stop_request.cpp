@@ -1,8 +1,8 @@
 #include "jobs/stop_request.h"
 
+#include <unistd.h>
 #include <csignal>
 #include <cstring>
-#include <unistd.h>
 
 #include <atomic>
 

@@ -116,7 +116,7 @@ CheckpointStore::CheckpointStore(std::filesystem::path dir, double interval_seco
     : store_(std::move(dir)), interval_(interval_seconds) {}
 
 std::unique_ptr<Checkpointer> CheckpointStore::for_task(const std::string& id,
-                                                       const std::string& label) {
+                                                        const std::string& label) {
   if (interval_ < 0) return nullptr;
   return std::make_unique<FileCheckpointer>(store_, id, label, interval_);
 }

@@ -99,8 +99,9 @@ TEST(SlurmSubmission, AShardsLogSaysWhatBecameOfItsLastJob) {
   ShardState st = read_shard_state(s, 1);
   EXPECT_EQ(st.phase, ShardState::kStopped);
   EXPECT_EQ(st.exit_code, 75);
-  write("start 12_1 nodeA 2026-01-01T00:00:00Z\nexit 75 2026-01-01T01:00:00Z\n"
-        "start 12_1 nodeB 2026-01-01T01:01:00Z\n");
+  write(
+      "start 12_1 nodeA 2026-01-01T00:00:00Z\nexit 75 2026-01-01T01:00:00Z\n"
+      "start 12_1 nodeB 2026-01-01T01:01:00Z\n");
   st = read_shard_state(s, 1);
   EXPECT_EQ(st.phase, ShardState::kRunning);
   EXPECT_EQ(st.host, "nodeB");
@@ -147,9 +148,9 @@ TEST(SlurmSubmission, TheMpiScriptAsksForNodesAndRanks) {
   s.cpus = 64;
   s.threads_per_worker = 4;
   const std::string text = slurm_script(s);
-  for (const char* line : {"#SBATCH --nodes=8\n", "#SBATCH --ntasks-per-node=16\n",
-                           "#SBATCH --cpus-per-task=4\n", "mpirun --bind-to none",
-                           "--task-threads 4"})
+  for (const char* line :
+       {"#SBATCH --nodes=8\n", "#SBATCH --ntasks-per-node=16\n", "#SBATCH --cpus-per-task=4\n",
+        "mpirun --bind-to none", "--task-threads 4"})
     EXPECT_NE(text.find(line), std::string::npos) << line << "\n" << text;
   EXPECT_EQ(text.find("--array"), std::string::npos);
   EXPECT_EQ(s.shard_file(0), d.path() / "smoke.h5");
