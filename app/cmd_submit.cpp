@@ -101,6 +101,8 @@ struct ShardReport {
   bool complete = false;  // its results file is whole and checksummed
   int tasks = 0, committed = 0, checkpoints = 0;
   std::string queue;  // its job's state in Slurm's queue ("" = not there)
+  // Its tasks not committed yet, and whether a training of each saved a checkpoint.
+  std::vector<std::pair<std::string, bool>> open;
 };
 
 std::set<std::string> digests_in(const fs::path& dir) {
@@ -124,8 +126,10 @@ std::vector<ShardReport> shard_reports(const SlurmSubmission& s, bool& queue_kno
     for (size_t t = 0; t < plan.tasks.size(); ++t) {
       if (!mine[t]) continue;
       ++r.tasks;
-      r.committed += int(committed.count(digests[t]));
-      r.checkpoints += int(saved.count(digests[t]));
+      const bool done = committed.count(digests[t]) > 0, started = saved.count(digests[t]) > 0;
+      r.committed += int(done);
+      r.checkpoints += int(started);
+      if (!done) r.open.emplace_back(plan.tasks[t].key, started);
     }
     try {
       const RunInfo info = read_run_info(s.shard_file(i).string());
@@ -427,7 +431,11 @@ void register_status(CLI::App& app, Runner& run) {
       "stopped to be requeued, failed (with the exit code), lost (its log says running but no\n"
       "job is queued), with their committed tasks and saved checkpoints.");
   static std::string dir;
+  static bool tasks = false;
   cmd->add_option("dir", dir, "The submission's folder")->required()->check(CLI::ExistingDirectory);
+  cmd->add_flag("--tasks", tasks,
+                "Also list each incomplete shard's tasks not committed yet, marking those whose "
+                "training saved a checkpoint (in progress, or stopped mid-way)");
   run = [] {
     SlurmSubmission s;
     try {
@@ -438,6 +446,13 @@ void register_status(CLI::App& app, Runner& run) {
     bool known = false;
     const std::vector<ShardReport> reports = shard_reports(s, known);
     print_status(s, reports, known);
+    if (tasks)
+      for (size_t i = 0; i < reports.size(); ++i) {
+        if (reports[i].complete || reports[i].open.empty()) continue;
+        std::printf("\nshard %zu: %zu task(s) not committed\n", i, reports[i].open.size());
+        for (const auto& [key, started] : reports[i].open)
+          std::printf("  %s%s\n", key.c_str(), started ? "  (checkpoint saved)" : "");
+      }
     return 0;
   };
 }

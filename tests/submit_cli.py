@@ -47,6 +47,12 @@ with tempfile.TemporaryDirectory() as tmp:
     assert (sub / "profile.toml").read_text() == sirl("plan", "smoke", "--resolved").stdout
     status = sirl("status", str(sub)).stdout
     assert status.count("not started") == 3 and "(no Slurm)" in status, status
+    listed = sirl("status", str(sub), "--tasks").stdout
+    counts = [int(n) for n in re.findall(r"^\d+\s+not started\s+0/(\d+)", status, re.M)]
+    assert len(counts) == 3, status
+    for i, n in enumerate(counts):
+        assert f"shard {i}: {n} task(s) not committed" in listed, listed
+    assert "grid/s0/sirl/N100/rep" in listed and "(checkpoint saved)" not in listed, listed
     print(f"ok: an array of 3 shards written (--mem={mem}M); status: 3 not started")
 
     plan = sirl("plan", "smoke", "--nodes", "2", "--cores-per-node", "4").stdout
