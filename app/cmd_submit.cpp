@@ -217,7 +217,12 @@ void check_folder(const SlurmSubmission& s, const Profile& p, bool force) {
                      " holds a submission of another profile (or of another version of it): "
                      "choose another --out, or --force to replace it");
   bool known = false;
-  const SlurmSubmission old = read_submission(s.dir);
+  SlurmSubmission old;
+  try {
+    old = read_submission(s.dir);
+  } catch (const std::runtime_error& e) {
+    throw UsageError(std::string(e.what()) + " (--force replaces it)");
+  }
   for (const auto& [id, state] : queue_states(old, known))
     if (live(state))
       throw UsageError("job " + id + " of the submission in " + s.dir.string() + " is still " +
@@ -411,10 +416,10 @@ void register_submit(CLI::App& app, Runner& run) {
   run = [] {
     const SubmitOptions& o = submit_options();
     if (o.rerun_failed) {
-      if (!o.profile.empty())
+      if (!o.profile.empty() || !profile_settings().empty())
         throw UsageError(
-            "--rerun-failed reads the profile from --out's submission: give no "
-            "PROFILE");
+            "--rerun-failed reads the profile from --out's submission: give no PROFILE and no "
+            "--set");
       return rerun_failed(o);
     }
     if (o.profile.empty()) throw UsageError("name a profile to submit (or --rerun-failed)");

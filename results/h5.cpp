@@ -206,7 +206,7 @@ H5File H5File::open_rw(const std::string& path) {
 }
 
 H5File::H5File(H5File&& o) noexcept
-    : id_(o.id_), path_(std::move(o.path_)), compress_(o.compress_) {
+    : id_(o.id_), compress_(o.compress_), path_(std::move(o.path_)) {
   o.id_ = -1;
 }
 H5File::~H5File() {

@@ -68,6 +68,7 @@ with tempfile.TemporaryDirectory() as tmp:
     print(f"ok: plan and submit --nodes 2 agree: {plan_mem} MiB per node, {plan_t} s vs {sub_t} s")
 
     refused("give no PROFILE", "submit", "smoke", "--rerun-failed", "--out", str(sub))
+    refused("and no --set", "submit", "--rerun-failed", "--set", "seeds=[0]", "--out", str(sub))
     refused("--rerun-failed needs --out", "submit", "--rerun-failed")
     refused("no Slurm answers here", "submit", "--rerun-failed", "--out", str(sub))
     refused("name a profile", "submit")
