@@ -371,9 +371,10 @@ void register_submit(CLI::App& app, Runner& run) {
                   "Profile: a name in configs/ (" + bundled_profile_names() + ") or a .toml path");
   cmd->add_option("--out", o.out, "The submission's folder (default: out/PROFILE-slurm)")
       ->type_name("DIR");
-  cmd->add_option("--shards", o.shards, "Array tasks: the plan split into this many shards")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
+  CLI::Option* shards =
+      cmd->add_option("--shards", o.shards, "Array tasks: the plan split into this many shards")
+          ->check(CLI::Range(1, 100000))
+          ->capture_default_str();
   cmd->add_option("--cpus-per-task", o.cpus, "Cores of each array task (default: this machine's)")
       ->check(CLI::Range(1, 4096));
   auto* g =
@@ -413,7 +414,7 @@ void register_submit(CLI::App& app, Runner& run) {
                 "Write into a folder holding another profile's submission, or one whose jobs "
                 "still run");
   add_set_option(cmd);
-  run = [] {
+  run = [shards] {
     const SubmitOptions& o = submit_options();
     if (o.rerun_failed) {
       if (!o.profile.empty() || !profile_settings().empty())
@@ -423,7 +424,7 @@ void register_submit(CLI::App& app, Runner& run) {
       return rerun_failed(o);
     }
     if (o.profile.empty()) throw UsageError("name a profile to submit (or --rerun-failed)");
-    if ((o.cluster.mpi || o.cluster.nodes > 1) && o.shards != 4)
+    if ((o.cluster.mpi || o.cluster.nodes > 1) && shards->count() > 0)
       throw UsageError("--shards makes a job array; --nodes/--mpi one MPI job: give one of them");
     return submit_new(o);
   };

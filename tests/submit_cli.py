@@ -73,6 +73,7 @@ with tempfile.TemporaryDirectory() as tmp:
     refused("no Slurm answers here", "submit", "--rerun-failed", "--out", str(sub))
     refused("name a profile", "submit")
     refused("give one of them", "submit", "smoke", "--nodes", "2", "--shards", "3")
+    refused("give one of them", "submit", "smoke", "--mpi", "--shards", "4")
     refused("holds no submission", "status", str(tmp))
     refused("another profile", "submit", "quick", "--out", str(sub))
     (sub / "submission.toml").write_text("profile = 'smoke'\nshards = [")
