@@ -256,6 +256,11 @@ SlurmSubmission prepare(const SubmitOptions& o, const Profile& p) {
 
 int submit_new(const SubmitOptions& o) {
   const Profile p = load_or_usage(o.profile);
+  if (!is_plain_name(p.name))  // not echoed: it may hold a newline
+    throw UsageError(
+        "the profile's name cannot name a Slurm job and its files: use letters, "
+        "digits, '.', '_' and '-' only (" +
+        o.profile + ")");
   SlurmSubmission s = prepare(o, p);
   check_folder(s, p, o.force);
   const Plan plan = make_plan(p);

@@ -1,4 +1,5 @@
 #include "app/commands.h"
+#include "jobs/slurm_submission.h"
 
 #include <charconv>
 #include <set>
@@ -214,9 +215,7 @@ void check_replaceable(const std::string& out, const std::string& kind, bool for
 }
 
 std::string sh_quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
+  return shell_quoted(s);
 }
 
 std::vector<std::string> env_choices() {

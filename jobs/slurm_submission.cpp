@@ -15,13 +15,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Single-quoted for the shell.
-std::string quoted(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
 std::string sbatch_lines(const SlurmSubmission& s) {
   std::ostringstream o;
   o << "#SBATCH --job-name=sirl-" << s.profile << "\n";
@@ -60,6 +53,19 @@ fs::path SlurmSubmission::state_file(int i) const {
   return dir / "state" / ("shard-" + std::to_string(i) + ".log");
 }
 
+std::string shell_quoted(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+bool is_plain_name(const std::string& name) {
+  return !name.empty() && name.size() <= 128 && name.front() != '.' && name.front() != '-' &&
+         name.find_first_not_of(
+             "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789._-") ==
+             std::string::npos;
+}
+
 std::string slurm_time(int minutes) {
   minutes = std::max(1, minutes);
   char buf[32];
@@ -85,7 +91,7 @@ std::string slurm_script(const SlurmSubmission& s) {
     << "# every shard; `sirl submit --rerun-failed --out " << s.dir.string()
     << "` resubmits the failed ones.\n"
     << sbatch_lines(s) << "set -u\n"
-    << "dir=" << quoted(s.dir.string()) << "\n";
+    << "dir=" << shell_quoted(s.dir.string()) << "\n";
   if (s.mpi) {
     o << "shard=0\njob=\"$SLURM_JOB_ID\"\n";
   } else {
@@ -107,10 +113,11 @@ std::string slurm_script(const SlurmSubmission& s) {
     // bounds it). Ranks are not bound to one core so that a big task may borrow its node's idle
     // workers (sirl run --task-threads).
     o << "export OMPI_MCA_odls_base_sigkill_timeout=30\n"
-      << "mpirun --bind-to none " << quoted(s.sirl) << common << " --out "
-      << quoted(s.shard_file(0).string()) << " --task-threads " << s.threads_per_worker << " &\n";
+      << "mpirun --bind-to none " << shell_quoted(s.sirl) << common << " --out "
+      << shell_quoted(s.shard_file(0).string()) << " --task-threads " << s.threads_per_worker
+      << " &\n";
   } else {
-    o << quoted(s.sirl) << common << " --shard \"$shard/" << s.shards
+    o << shell_quoted(s.sirl) << common << " --shard \"$shard/" << s.shards
       << "\" --threads \"${SLURM_CPUS_PER_TASK:-" << s.cpus << "}\" \\\n"
       << "  --out \"$dir/shard-$shard.h5\" &\n";
   }
@@ -208,7 +215,7 @@ SlurmSubmission read_submission(const fs::path& dir) {
   if (const toml::array* a = need("jobs").as_array())
     for (const auto& j : *a)
       if (auto v = j.value<std::string>()) s.jobs.push_back(*v);
-  if (s.profile.empty() || s.profile.find('/') != std::string::npos)
+  if (!is_plain_name(s.profile))
     throw std::runtime_error(file.string() + ": 'profile' is not a profile name");
   return s;
 }

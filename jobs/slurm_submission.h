@@ -39,6 +39,14 @@ struct SlurmSubmission {
   std::filesystem::path state_file(int i) const;
 };
 
+// Single-quoted for /bin/sh: any text, one word.
+std::string shell_quoted(const std::string& s);
+
+// A profile name that may name files and a Slurm job: letters, digits, '.', '_', '-' (not first),
+// at most 128 characters. A submission refuses any other (a newline would add a line to the
+// batch script, a '/' would write outside its folder).
+bool is_plain_name(const std::string& name);
+
 // Slurm's --time value for a duration, rounded up to a whole minute: "D-HH:MM:00".
 std::string slurm_time(int minutes);
 

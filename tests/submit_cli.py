@@ -76,6 +76,9 @@ with tempfile.TemporaryDirectory() as tmp:
     refused("give one of them", "submit", "smoke", "--mpi", "--shards", "4")
     refused("holds no submission", "status", str(tmp))
     refused("another profile", "submit", "quick", "--out", str(sub))
+    hostile = tmp / "hostile.toml"  # a name that would add a line to the script and leave DIR
+    hostile.write_text('extends = "smoke"\nname = "x\\ntouch /tmp/pwned/y"\n')
+    refused("cannot name a Slurm job", "submit", str(hostile), "--out", str(tmp / "hostile"))
     (sub / "submission.toml").write_text("profile = 'smoke'\nshards = [")
     refused("is not a submission manifest", "status", str(sub))
     print("ok: wrong uses refused in one line (exit 2)")
