@@ -4,7 +4,7 @@
 #pragma once
 #include <string>
 
-#include "jobs/profile.h"
+#include "experiment/profile.h"
 #include "jobs/schedule_sim.h"
 
 namespace sirl::app {

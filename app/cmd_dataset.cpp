@@ -15,9 +15,9 @@
 #include "datasets/environments.h"
 #include "datasets/grid_robot.h"
 #include "datasets/jaco_robot.h"
-#include "jobs/install_paths.h"
-#include "jobs/profile.h"
-#include "jobs/task_runner.h"
+#include "experiment/install_paths.h"
+#include "experiment/profile.h"
+#include "experiment/task_runner.h"
 #include "results/dataset_store.h"
 #include "results/file_lock.h"
 #include "results/h5.h"
@@ -207,22 +207,8 @@ int run_inspect(const std::string& file, const std::string& env) {
   return 0;
 }
 
-}  // namespace
-
-void register_dataset(CLI::App& app, Runner& run) {
-  static DatasetArgs a;
-  auto* cmd = app.add_subcommand(
-      "dataset",
-      "Build an environment's trajectory space and query sets (answered by a simulated "
-      "teacher) and write them to HDF5 under /datasets/<env>/");
-  cmd->add_option("--env", a.env, "Environment")
-      ->check(CLI::IsMember(env_choices()))
-      ->capture_default_str();
-  cmd->add_option("--out", a.out, "Output HDF5 file (written atomically)")
-      ->required()
-      ->check(output_file());
-  cmd->add_flag("--force", a.force,
-                "Replace --out even if it is not a dataset file (a results or study file)");
+// JacoRobot's trajectory space: its size, where the laptop and the person stand, threads.
+void add_jaco_options(CLI::App* cmd, DatasetArgs& a) {
   cmd->add_option("--trajectories", a.trajectories,
                   "JacoRobot: start-goal pairs (one deformed trajectory each)")
       ->check(CLI::Range(int64_t(10), int64_t(10000000)))
@@ -239,6 +225,10 @@ void register_dataset(CLI::App& app, Runner& run) {
                   "Threads for JacoRobot generation (default: all cores; "
                   "the result does not depend on it)")
       ->check(CLI::Range(1, 4096));
+}
+
+// The seed and the sizes of the query sets.
+void add_query_options(CLI::App* cmd, DatasetArgs& a) {
   cmd->add_option("--seed", a.seed, "Seed of the rewards and query sets")->capture_default_str();
   cmd->add_option("--similarity", a.similarity, "Similarity triplets N")
       ->check(CLI::Range(int64_t(1), int64_t(10000000)))
@@ -254,6 +244,10 @@ void register_dataset(CLI::App& app, Runner& run) {
   cmd->add_option("--fpe", a.fpe, "Labelled trajectories for FPE (clamped to the dataset size)")
       ->check(CLI::Range(int64_t(2), int64_t(100000000)))
       ->capture_default_str();
+}
+
+// The simulated teacher who answers the queries.
+void add_teacher_options(CLI::App* cmd, DatasetArgs& a) {
   cmd->add_option("--beta", a.beta,
                   "Teacher's Boltzmann rationality (inf = perfect oracle, the paper's)")
       ->check(positive_number())
@@ -272,6 +266,10 @@ void register_dataset(CLI::App& app, Runner& run) {
   cmd->add_option("--features", a.features,
                   "Features the teacher perceives (default all), e.g. laptop_distance")
       ->delimiter(',');
+}
+
+// GridRobot's layout: the obstacles and the laptop.
+void add_grid_options(CLI::App* cmd, DatasetArgs& a) {
   cmd->add_option("--obstacle1", a.obstacle1, "GridRobot obstacle 1 cell x,y")
       ->delimiter(',')
       ->expected(2)
@@ -284,6 +282,28 @@ void register_dataset(CLI::App& app, Runner& run) {
       ->delimiter(',')
       ->expected(2)
       ->capture_default_str();
+}
+
+}  // namespace
+
+void register_dataset(CLI::App& app, Runner& run) {
+  static DatasetArgs a;
+  auto* cmd = app.add_subcommand(
+      "dataset",
+      "Build an environment's trajectory space and query sets (answered by a simulated "
+      "teacher) and write them to HDF5 under /datasets/<env>/");
+  cmd->add_option("--env", a.env, "Environment")
+      ->check(CLI::IsMember(env_choices()))
+      ->capture_default_str();
+  cmd->add_option("--out", a.out, "Output HDF5 file (written atomically)")
+      ->required()
+      ->check(output_file());
+  cmd->add_flag("--force", a.force,
+                "Replace --out even if it is not a dataset file (a results or study file)");
+  add_jaco_options(cmd, a);
+  add_query_options(cmd, a);
+  add_teacher_options(cmd, a);
+  add_grid_options(cmd, a);
   cmd->add_option("--profile", a.profile,
                   "Write the training data of a profile's run instead: per environment Ξ and "
                   "every seed's query sets under /datasets/<env>/seeds/s<seed>, built exactly as "
@@ -317,7 +337,7 @@ void register_render(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "render",
       "Draw a few JacoRobot end-effector paths over the table, laptop and human (PNG), from a\n"
-      "dataset or results file (results/render_jaco.py, Debian's /usr/bin/python3).");
+      "dataset or results file (report/render_jaco.py, Debian's /usr/bin/python3).");
   static std::string env = "jaco", file, out, ids = "0,1,2,3,4,5";
   cmd->add_option("--env", env, "Environment group (one with an arm view)")
       ->check(CLI::IsMember(arm_envs()))
@@ -330,7 +350,7 @@ void register_render(CLI::App& app, Runner& run) {
   run = [] {
     const auto q = sh_quote;
     const std::string cmdline =
-        q(python_interpreter()) + " " + q((data_dir() / "results" / "render_jaco.py").string()) +
+        q(python_interpreter()) + " " + q((data_dir() / "report" / "render_jaco.py").string()) +
         " " + q(file) + " --out " + q(out) + " --ids " + q(ids) + " --env " + q(env);
     const int rc = std::system(cmdline.c_str());
     return rc == 0 ? 0 : 1;

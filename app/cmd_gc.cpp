@@ -6,10 +6,10 @@
 #include <vector>
 
 #include "app/commands.h"
-#include "jobs/plan.h"
-#include "jobs/profile.h"
+#include "experiment/plan.h"
+#include "experiment/profile.h"
+#include "experiment/task_digest.h"
 #include "jobs/task_cache.h"
-#include "jobs/task_digest.h"
 
 namespace sirl::app {
 

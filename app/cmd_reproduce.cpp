@@ -5,17 +5,17 @@
 #include <string>
 
 #include "app/commands.h"
-#include "jobs/install_paths.h"
+#include "experiment/install_paths.h"
+#include "experiment/profile.h"
+#include "experiment/study_tasks.h"
 #include "jobs/mpi_run.h"
-#include "jobs/profile.h"
-#include "jobs/study_tasks.h"
 #include "results/results_file.h"
 #include "results/study_store.h"
 
 namespace sirl::app {
 
 void draw_figures(const std::string& results, const std::string& figures) {
-  const std::string script = (data_dir() / "results" / "plot_figures.py").string();
+  const std::string script = (data_dir() / "report" / "plot_figures.py").string();
   if (!std::filesystem::exists(script))
     throw std::runtime_error("plotting script not found: " + script);
   const std::string command = sh_quote(python_interpreter()) + " " + sh_quote(script) + " " +
@@ -29,7 +29,7 @@ void register_reproduce(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "reproduce",
       "The main job: run a profile's whole grid (`sirl run`), then draw every figure of the paper\n"
-      "and write the report from the results file (results/plot_figures.py, Debian's\n"
+      "and write the report from the results file (report/plot_figures.py, Debian's\n"
       "/usr/bin/python3 with h5py + matplotlib). Resumable: rerun after an interruption.");
   static std::string profile = "quick", out, figures;
   static int threads = 0;

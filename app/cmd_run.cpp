@@ -9,16 +9,16 @@
 
 #include "app/cluster_options.h"
 #include "app/commands.h"
+#include "experiment/plan.h"
+#include "experiment/profile.h"
+#include "experiment/task_kinds.h"
+#include "experiment/task_runner.h"
 #include "jobs/cluster_prediction.h"
 #include "jobs/estimate.h"
-#include "jobs/plan.h"
-#include "jobs/profile.h"
 #include "jobs/progress.h"
 #include "jobs/run.h"
 #include "jobs/schedule_sim.h"
 #include "jobs/stop_request.h"
-#include "jobs/task_kinds.h"
-#include "jobs/task_runner.h"
 #include "results/file_lock.h"
 #include "results/results_file.h"
 
@@ -251,7 +251,7 @@ void print_plan_summary(const Profile& p, const Plan& plan, const std::string& c
     // Trainings that end early by rule: the FLOPs above are what they are expected to execute.
     std::printf("%-16s %8s %14.1f  every epoch of every schedule; the rows above expect",
                 "protocol", "", protocol * 1e-9);
-    std::printf(" SIRL's exact skip%s (measured medians: jobs/expected_epochs.cpp)\n",
+    std::printf(" SIRL's exact skip%s (measured medians: experiment/expected_epochs.cpp)\n",
                 std::any_of(p.hyper.begin(), p.hyper.end(),
                             [](const auto& kv) { return kv.second.tpa_stop != "fixed"; })
                     ? " and converged reward heads"

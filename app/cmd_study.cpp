@@ -14,7 +14,7 @@
 #include "app/study_server.h"
 #include "datasets/study.h"
 #include "engine/study_analysis.h"
-#include "jobs/install_paths.h"
+#include "experiment/install_paths.h"
 #include "results/file_lock.h"
 #include "results/h5.h"
 #include "results/study_store.h"
@@ -138,26 +138,28 @@ void write_study_analysis(const std::string& study_file, const std::string& env,
   }
   std::filesystem::rename(h5 + ".partial", h5);
   const std::string cmd = sh_quote(python_interpreter()) + " " +
-                          sh_quote((data_dir() / "results" / "plot_study.py").string()) + " " +
+                          sh_quote((data_dir() / "report" / "plot_study.py").string()) + " " +
                           sh_quote(h5) + " --out " + sh_quote(out);
   if (std::system(cmd.c_str()) != 0) throw std::runtime_error("plotting failed: " + cmd);
 }
 
-void register_study(CLI::App& app, Runner& run) {
-  auto* study = app.add_subcommand(
-      "study",
-      "The user study (paper §5): collect answers in a browser (serve), import answers collected\n"
-      "elsewhere (import), simulate a cohort (simulate), and analyse a study file (analyze).");
-  study->require_subcommand(1);
+namespace {
 
-  // simulate
-  static std::string s_env = "jaco2", s_out;
-  static int64_t s_traj = 1000, s_sim = 100, s_pref = 100;
-  static int s_users = 10;
-  static double s_beta = 20, s_mistake = 0.05;
-  static uint64_t s_seed = 0;
-  static bool s_force = false;
-  auto* sim = study->add_subcommand(
+// `sirl study simulate`'s options.
+std::string s_env = "jaco2", s_out;
+int64_t s_traj = 1000, s_sim = 100, s_pref = 100;
+int s_users = 10;
+double s_beta = 20, s_mistake = 0.05;
+uint64_t s_seed = 0;
+bool s_force = false;
+
+// `sirl study analyze`'s options.
+std::string a_file, a_out;
+int a_seeds = 5, a_splits = 50, a_epochs = 0, a_tpa_epochs = 0, a_threads = 1;
+std::string a_random = "unfrozen";
+
+CLI::App* register_study_simulate(CLI::App& study) {
+  auto* sim = study.add_subcommand(
       "simulate",
       "Write a study file answered by simulated novices: noisy teachers (Boltzmann beta on the\n"
       "normalised features, mistakes), each with its own preference scenario (3 in 5 care\n"
@@ -187,12 +189,11 @@ void register_study(CLI::App& app, Runner& run) {
   sim->add_option("--out", s_out, "Study file to write")->required()->check(output_file());
   sim->add_flag("--force", s_force, "Replace --out even if it is not a study file");
   sim->callback([] {});
+  return sim;
+}
 
-  // analyze
-  static std::string a_file, a_out;
-  static int a_seeds = 5, a_splits = 50, a_epochs = 0, a_tpa_epochs = 0, a_threads = 1;
-  static std::string a_random = "unfrozen";
-  auto* ana = study->add_subcommand(
+CLI::App* register_study_analyze(CLI::App& study) {
+  auto* ana = study.add_subcommand(
       "analyze",
       "SIRL on the pooled similarity answers vs Random, as in the paper's §5: FPE (two-sided\n"
       "t-test over training seeds), TPA Real (70/30, cross-validated), Held-out (SIRL without\n"
@@ -221,7 +222,20 @@ void register_study(CLI::App& app, Runner& run) {
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
   ana->callback([] {});
+  return ana;
+}
 
+}  // namespace
+
+void register_study(CLI::App& app, Runner& run) {
+  auto* study = app.add_subcommand(
+      "study",
+      "The user study (paper §5): collect answers in a browser (serve), import answers collected\n"
+      "elsewhere (import), simulate a cohort (simulate), and analyse a study file (analyze).");
+  study->require_subcommand(1);
+
+  CLI::App* sim = register_study_simulate(*study);
+  CLI::App* ana = register_study_analyze(*study);
   register_study_serve(*study);
   register_study_import(*study);
 

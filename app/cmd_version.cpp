@@ -5,9 +5,9 @@
 #include "app/commands.h"
 #include "build_info.h"
 #include "jobs/provenance.h"
-#include "kernels/cpu_class.h"
 #include "kernels/gemm_bf16.h"
-#include "kernels/roofline.h"
+#include "probes/cpu_class.h"
+#include "probes/roofline.h"
 #include "results/results_file.h"
 
 namespace sirl::app {

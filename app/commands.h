@@ -41,8 +41,8 @@ void register_submit(CLI::App& app, Runner& run);
 void register_status(CLI::App& app, Runner& run);
 void register_evaluate(CLI::App& app, Runner& run);
 
-// The `--set KEY=VALUE` overrides of the command being run (jobs/profile.h, load_profile), and
-// the option that fills them, for every command that takes a profile.
+// The `--set KEY=VALUE` overrides of the command being run (experiment/profile.h, load_profile),
+// and the option that fills them, for every command that takes a profile.
 std::vector<std::string>& profile_settings();
 void add_set_option(CLI::App* cmd);
 
@@ -81,7 +81,7 @@ int study_simulate(const std::string& env, int64_t trajectories, int users, int6
                    const std::string& out, bool force = false);
 int study_analyze(const std::string& file, const std::string& out, int seeds, int splits,
                   int epochs, int tpa_epochs, int threads, bool random_frozen = false);
-// The analysis file (OUT/study_analysis.h5) and, through results/plot_study.py, Fig. 6 and
+// The analysis file (OUT/study_analysis.h5) and, through report/plot_study.py, Fig. 6 and
 // study_report.md. Shared by `sirl study analyze` and `sirl reproduce` (whose study ran as tasks).
 void write_study_analysis(const std::string& study_file, const std::string& env,
                           const StudyAnalysis& a, const StudyAnalysisConfig& c,
@@ -107,7 +107,7 @@ int run_loaded_profile(Profile p, const std::string& out, int threads, bool forc
                        const std::string& shard, bool quiet, bool skip_study = false,
                        double checkpoint_minutes = 5, int max_task_threads = 0);
 // Draws every figure and writes the report of a results file into `figures`
-// (results/plot_figures.py through Debian's python3); throws std::runtime_error if it fails.
+// (report/plot_figures.py through Debian's python3); throws std::runtime_error if it fails.
 void draw_figures(const std::string& results, const std::string& figures);
 
 void register_all(CLI::App& app);

@@ -19,7 +19,7 @@
 #include "datasets/environments.h"
 #include "datasets/study.h"
 #include "datasets/study_import.h"
-#include "jobs/install_paths.h"
+#include "experiment/install_paths.h"
 #include "results/file_lock.h"
 #include "results/h5.h"
 #include "results/study_store.h"

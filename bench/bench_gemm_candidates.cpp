@@ -128,7 +128,7 @@ void shapes(benchmark::internal::Benchmark* b) {
       {192, 19, 128},    {192, 128, 128},   {192, 128, 6},   // GridRobot φ
       {192, 2037, 1024}, {192, 1024, 1024}, {192, 1024, 6},  // JacoRobot φ
       {128, 6, 128},     {128, 128, 128},   {128, 128, 1},   // a TPA head
-      {128, 2037, 1024}, {128, 1024, 1024},                  // an unfrozen JacoRobot TPA head, 64 pairs
+      {128, 2037, 1024}, {128, 1024, 1024},  // an unfrozen JacoRobot TPA head, 64 pairs
   };
   for (const auto& l : layers)
     for (int op = 0; op < 3; ++op)

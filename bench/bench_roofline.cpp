@@ -13,7 +13,7 @@
 // Each runs on 1 thread and on every core (->Threads): the per-core and the machine roof (with
 // threads, the counter is the machine's total: Google Benchmark sums the threads' rates, each
 // over the shared wall time, so kAvgThreads undoes the double count).
-// The loops are the engine's own (kernels/peak_loops.h: `sirl run` measures its roofs with them
+// The loops are the engine's own (probes/peak_loops.h: `sirl run` measures its roofs with them
 // briefly); the instruction set is chosen at run time, like the engine's kernels.
 #include <benchmark/benchmark.h>
 
@@ -21,7 +21,7 @@
 #include <thread>
 #include <vector>
 
-#include "kernels/peak_loops.h"
+#include "probes/peak_loops.h"
 
 namespace {
 

@@ -85,13 +85,13 @@ std::vector<EnvSpec> built_in() {
   jaco.data_table = "jaco";
   // The paper's JacoRobot values (its appendix), and the VAE rate the engine lowers to 0.001:
   // the stated 0.01 diverges on this 2037→1024→1024 VAE (docs/fidelity-evidence.md).
-  jaco.hyper = {{"phi.hidden", "1024,1024"},
-                {"pref.l2", "1"},
-                {"pref.lr", "0.001"},
-                {"vae.lr", "0.001"},
-                {"tpa.epochs", "1000"},
-                {"tpa.hidden", "1024,1024"},
-                {"tpa.l2", "1"}};
+  jaco.hyper = {{"phi.hidden", std::vector<int>{1024, 1024}},
+                {"pref.l2", 1.0},
+                {"pref.lr", 0.001},
+                {"vae.lr", 0.001},
+                {"tpa.epochs", int64_t{1000}},
+                {"tpa.hidden", std::vector<int>{1024, 1024}},
+                {"tpa.l2", 1.0}};
   jaco.view = EnvView::arm;
   jaco.vae_weak_claim = true;
   jaco.in_study = false;  // the study runs on jaco2 (no human) or grid

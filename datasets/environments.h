@@ -11,6 +11,7 @@
 
 #include "datasets/dataset.h"
 #include "datasets/grid_robot.h"
+#include "datasets/hyper_value.h"
 #include "datasets/jaco_robot.h"
 
 namespace sirl {
@@ -35,9 +36,10 @@ struct TrajectoryView {
 enum class EnvView { plane, arm };
 
 // A hyper-parameter default that differs from the engine's (GridRobot's) values, as the profile
-// key and value `[hyper.<env>]` takes (engine/hyperparams.h applies them).
+// key and value `[hyper.<env>]` takes.
 struct HyperDefault {
-  std::string key, value;
+  std::string key;
+  HyperValue value;
 };
 
 struct EnvSpec {

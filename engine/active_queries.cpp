@@ -266,23 +266,34 @@ class ActiveSelection {
     return pool;
   }
 
-  // One round's epochs of every member on the n queries answered so far (each its own order).
+  // One round's epochs of every member on the n queries answered so far, member by member (each
+  // its own order stream; Adam's step count goes on from the rounds before).
   void train_members() {
     const int64_t n = out_.queries.count;
     const int B = cfg_.hyper.sirl.batch;
-    run_epochs_batched(
+    const float margin = float(cfg_.hyper.triplet_margin);
+    BatchedTrainer& ens = ens_.trainer;
+    const int64_t step0 = ens.adam.step, batches = (n + B - 1) / B;
+    member_batch_.resize(size_t(cfg_.members));
+    EpochLoopOptions loop;
+    loop.threads = ex_.threads;
+    loop.stretch_steps = ex_.stretch_steps;
+    run_model_epochs(
         n, cfg_.round_epochs, B, ens_.order,
-        [&](const std::vector<const int32_t*>& order, int b) -> const std::vector<float>& {
-          batch_.resize(size_t(cfg_.members) * b * 3);
-          for (int k = 0; k < cfg_.members; ++k)
-            for (int i = 0; i < b; ++i)
-              std::copy_n(out_.queries.idx.begin() + 3 * order[size_t(k)][i], 3,
-                          batch_.begin() + (size_t(k) * b + i) * 3);
-          triplet_train_step_batched(ens_.trainer, d_.inputs.data(), batch_.data(), b,
-                                     float(cfg_.hyper.triplet_margin), ex_.threads);
-          out_.train_flops += cfg_.members * shape_.train_flops(3 * b);
-          return ens_.trainer.losses;
-        });
+        [&](int k, const int32_t* order, int b, int64_t step) {
+          std::vector<int32_t>& batch = member_batch_[size_t(k)];
+          batch.resize(size_t(b) * 3);
+          for (int i = 0; i < b; ++i)
+            std::copy_n(out_.queries.idx.begin() + 3 * order[i], 3, batch.begin() + size_t(i) * 3);
+          return triplet_train_step_of_model(ens, k, adam_step_scalars(ens.adam_cfg, step0 + step),
+                                             d_.inputs.data(), batch.data(), b, margin);
+        },
+        [&](int e) { ens.adam.step = step0 + e * batches; }, loop);
+    // The round's FLOPs, batch by batch in the order the steps ran.
+    for (int e = 0; e < cfg_.round_epochs; ++e)
+      for (int64_t i0 = 0; i0 < n; i0 += B)
+        out_.train_flops +=
+            cfg_.members * shape_.train_flops(3 * int(std::min<int64_t>(B, n - i0)));
     for (float v : ens_.trainer.params)
       if (!std::isfinite(v))
         throw std::runtime_error("active selection: an ensemble member diverged");
@@ -361,7 +372,7 @@ class ActiveSelection {
   Rng pool_rng_, answer_rng_;
   ActiveQueries out_;
   std::set<Triple> asked_;
-  std::vector<int32_t> batch_;  // the members' batches of one step, member by member
+  std::vector<std::vector<int32_t>> member_batch_;  // [members][3b]: each member's batch
 };
 
 }  // namespace

@@ -2,12 +2,13 @@
 // instead of starting again: weights, Adam moments and step, random streams, the curves so far.
 // A training resumed from a snapshot ends bit-identical to one that was never interrupted.
 // The engine only fills and reads snapshots; where they are kept (a file next to the task
-// commits) is the job layer's business (jobs/task_runner.cpp).
+// commits) is the job layer's business (experiment/task_runner.cpp).
 #pragma once
 #include <array>
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,13 @@ class Checkpointer {
   // Asked after each epoch but the last: is a save due (e.g. minutes since the last one)?
   virtual bool due() = 0;
   virtual void save(const TrainingSnapshot& s) = 0;
+};
+
+// Thrown where work ends because a stop was requested (a checkpointer's `save` when the run was
+// asked to stop, a task not started: jobs/stop_request.h): the run treats it as a stop, not as a
+// failure of the task.
+struct StopRequested : std::runtime_error {
+  using std::runtime_error::runtime_error;
 };
 
 // What a training keeps between epochs besides the loop's own state (the epoch, the curve and

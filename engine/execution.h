@@ -9,7 +9,7 @@ namespace sirl {
 class Checkpointer;
 
 // Steps a model takes in a row before the next model's, when models train one after another
-// (engine/epochs.h, run_epochs_model_by_model): long enough that its weights stay in cache.
+// (engine/epochs.h, run_model_epochs): long enough that its weights stay in cache.
 inline constexpr int kStretchSteps = 32;
 
 struct Execution {

@@ -1,11 +1,12 @@
 #include "engine/hyperparams.h"
 
-#include <charconv>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
+#include <variant>
 
 #include "datasets/environments.h"
 
@@ -51,46 +52,70 @@ void for_each_field(H& h, F&& f) {
   f("precision", h.precision);
 }
 
-[[noreturn]] void bad(const std::string& key, const std::string& value, const char* expected) {
-  throw std::invalid_argument("hyper-parameter " + key + ": '" + value + "' is not " + expected);
+[[noreturn]] void bad(const std::string& key, const HyperValue& value, const char* expected) {
+  throw std::invalid_argument("hyper-parameter " + key + ": '" + hyper_value_text(value) +
+                              "' is not " + expected);
 }
 
-void parse(const std::string& key, const std::string& v, int& out) {
-  auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), out);
-  if (ec != std::errc() || p != v.data() + v.size()) bad(key, v, "an integer");
+// A value into its field, refused unless it is of the field's kind (an integer for an integer,
+// an integer or a number for a number, one width or a list of them for widths).
+void assign(const std::string& key, const HyperValue& v, int& out) {
+  const int64_t* i = std::get_if<int64_t>(&v);
+  if (!i || *i < std::numeric_limits<int>::min() || *i > std::numeric_limits<int>::max())
+    bad(key, v, "an integer");
+  out = int(*i);
 }
-void parse(const std::string& key, const std::string& v, double& out) {
-  auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), out);
-  if (ec != std::errc() || p != v.data() + v.size() || !std::isfinite(out))
+void assign(const std::string& key, const HyperValue& v, double& out) {
+  if (const int64_t* i = std::get_if<int64_t>(&v))
+    out = double(*i);
+  else if (const double* d = std::get_if<double>(&v); d && std::isfinite(*d))
+    out = *d;
+  else
     bad(key, v, "a finite number");
 }
-void parse(const std::string& key, const std::string& v, bool& out) {
-  if (v == "true" || v == "1")
-    out = true;
-  else if (v == "false" || v == "0")
-    out = false;
-  else
-    bad(key, v, "true or false");
+void assign(const std::string& key, const HyperValue& v, bool& out) {
+  const bool* b = std::get_if<bool>(&v);
+  if (!b) bad(key, v, "true or false");
+  out = *b;
 }
-void parse(const std::string& key, const std::string& v, std::vector<int>& out) {
-  std::vector<int> r;
-  std::stringstream ss(v);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    int x = 0;
-    parse(key, item, x);
-    r.push_back(x);
+void assign(const std::string& key, const HyperValue& v, std::vector<int>& out) {
+  if (std::holds_alternative<int64_t>(v)) {
+    int w = 0;
+    assign(key, v, w);
+    out = {w};
+  } else if (const auto* l = std::get_if<std::vector<int>>(&v); l && !l->empty()) {
+    out = *l;
+  } else {
+    bad(key, v, "a list of widths");
   }
-  if (r.empty()) bad(key, v, "a comma-separated list of widths");
-  out = r;
+}
+void assign(const std::string& key, const HyperValue& v, std::string& out) {
+  const std::string* s = std::get_if<std::string>(&v);
+  if (!s) bad(key, v, "a word");
+  out = *s;  // its words are checked by validate()
 }
 
-void parse(const std::string&, const std::string& v, std::string& out) {
-  out = v;  // checked by validate()
+HyperValue value_of(int v) {
+  return int64_t{v};
+}
+HyperValue value_of(double v) {
+  return v;
+}
+HyperValue value_of(bool v) {
+  return v;
+}
+HyperValue value_of(const std::string& v) {
+  return v;
+}
+HyperValue value_of(const std::vector<int>& v) {
+  return v;
 }
 
 std::string show(const std::string& v) {
   return v;
+}
+std::string show(int64_t v) {
+  return std::to_string(v);
 }
 std::string show(int v) {
   return std::to_string(v);
@@ -110,20 +135,35 @@ std::string show(const std::vector<int>& v) {
   return s;
 }
 
+[[noreturn]] void unknown_key(const std::string& key) {
+  std::string keys;
+  for (const auto& k : hyper_keys()) keys += (keys.empty() ? "" : ", ") + k;
+  throw std::invalid_argument("unknown hyper-parameter '" + key + "' (known: " + keys + ")");
+}
+
 }  // namespace
 
-void set_hyper(Hyper& h, const std::string& key, const std::string& value) {
+std::string hyper_value_text(const HyperValue& v) {
+  return std::visit([](const auto& x) { return show(x); }, v);
+}
+
+void set_hyper(Hyper& h, const std::string& key, const HyperValue& value) {
   bool found = false;
   for_each_field(h, [&](const std::string& name, auto& field) {
     if (name != key) return;
     found = true;
-    parse(key, value, field);
+    assign(key, value, field);
   });
-  if (!found) {
-    std::string keys;
-    for (const auto& k : hyper_keys()) keys += (keys.empty() ? "" : ", ") + k;
-    throw std::invalid_argument("unknown hyper-parameter '" + key + "' (known: " + keys + ")");
-  }
+  if (!found) unknown_key(key);
+}
+
+HyperValue hyper_value(const Hyper& h, const std::string& key) {
+  std::optional<HyperValue> out;
+  for_each_field(h, [&](const std::string& name, const auto& field) {
+    if (name == key) out = value_of(field);
+  });
+  if (!out) unknown_key(key);
+  return *out;
 }
 
 HyperType hyper_type(const std::string& key) {

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "datasets/hyper_value.h"
 #include "engine/convergence.h"
 #include "kernels/adam.h"
 
@@ -70,9 +71,15 @@ StopRule tpa_stop_rule(const Hyper& h, bool frozen);
 // name.
 Hyper paper_hyper(const std::string& env);
 
-// Sets one value by its dotted name from text ("3000", "0.004", "128,128", "true").
-// Throws std::invalid_argument naming the key and what was expected.
-void set_hyper(Hyper& h, const std::string& key, const std::string& value);
+// Sets one value by its dotted name (int64_t{3000}, 0.004, std::vector<int>{128, 128}, true).
+// Throws std::invalid_argument naming the key and what was expected: an integer key takes an
+// integer, a number key an integer or a number, a widths key one width or a list of them.
+void set_hyper(Hyper& h, const std::string& key, const HyperValue& value);
+// The value of a key (set_hyper(h2, key, hyper_value(h, key)) copies it exactly).
+HyperValue hyper_value(const Hyper& h, const std::string& key);
+// A value's canonical text: "3000", "0.0040000000000000001" (17 digits), "128,128", "true", a
+// word as it is. Hyper-parameter points are named by it (their task keys).
+std::string hyper_value_text(const HyperValue& v);
 
 // What a key's value is, so a profile can refuse a value of the wrong kind (30.0 or [30] for an
 // epoch count) before it becomes text: integer, number (integer or real), boolean, a list of

@@ -58,9 +58,7 @@ void train_sirl(const Dataset& d, const QueryBundle& bundle, const MethodConfig&
   // Per epoch: whether it started with every first moment 0, and whether every triplet so far
   // was inside its margin by the slack.
   bool epoch_start = true, moments_zero = false, idle = false;
-  double epoch_flops = 0;  // every epoch has the same batches
-  for (int64_t i0 = 0; i0 < q.count; i0 += s.batch)
-    epoch_flops += t.shape.train_flops(3 * int(std::min<int64_t>(s.batch, q.count - i0)));
+  const double epoch_flops = epoch_train_flops(t.shape, q.count, s.batch, 3);  // every epoch's
   int skipped = 0;
   rep.loss_curve = run_epochs(
       q.count, s.epochs, s.batch, order_rng,

@@ -2,7 +2,7 @@
 // Random representation — FPE per training seed; TPA "Real" (each participant's own preference
 // answers, 70/30 cross-validation splits), "Held-out" (SIRL trained without that participant's
 // similarity answers), "Simulated" (perfect preference queries for random rewards). The numbers
-// only: the statistics (t-test, ANOVAs) and Fig. 6 are drawn from them by results/plot_study.py.
+// only: the statistics (t-test, ANOVAs) and Fig. 6 are drawn from them by report/plot_study.py.
 #pragma once
 #include <cstdint>
 #include <functional>

@@ -161,21 +161,20 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   std::vector<std::vector<float>> label(R);
   // Every epoch has the same batches: 3 passes of each batch's 2b rows through R networks (a
   // head's share: epoch_flops / R).
-  double epoch_flops = 0;
-  for (int64_t i0 = 0; i0 < M; i0 += h.tpa.batch)
-    epoch_flops += R * net.train_flops(2 * int(std::min<int64_t>(h.tpa.batch, M - i0)));
+  const double epoch_flops = epoch_train_flops(net, M, h.tpa.batch, 2, R);
   const int64_t batches = (M + h.tpa.batch - 1) / h.tpa.batch;
   const ResumableState resume =
       adam_resumable(ex.checkpointer, "tpa", t.params, t.adam, res.train_flops);
   // Head by head: each head's steps in a row, so more of its weights and moments stay in cache
   // (the same bits as stepping all heads at once). Under tpa.stop = "converged" a head whose loss
   // has converged takes no further step.
-  ModelLoopOptions loop;
+  EpochLoopOptions loop;
   loop.resume = &resume;
+  loop.threads = ex.threads;
   loop.stretch_steps = ex.stretch_steps;
   loop.stop = tpa_stop_rule(h, cfg.frozen);
-  ModelCurves run = run_epochs_model_by_model(
-      M, res.epochs, h.tpa.batch, order_rng, ex.threads,
+  ModelCurves run = run_model_epochs(
+      M, res.epochs, h.tpa.batch, order_rng,
       [&](int r, const int32_t* order, int b, int64_t step) {
         pairs[r].resize(size_t(b) * 2);
         label[r].resize(size_t(b));

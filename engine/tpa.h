@@ -1,6 +1,6 @@
 // Test Preference Accuracy (paper §4.3): how well φ supports learning new rewards from M
 // preference pairs. One reward head per test reward; the heads of a cell train one after another,
-// each a stretch of steps in a row (engine/epochs.h, run_epochs_model_by_model).
+// each a stretch of steps in a row (engine/epochs.h, run_model_epochs).
 #pragma once
 #include <cstdint>
 #include <vector>

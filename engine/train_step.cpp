@@ -4,7 +4,6 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "engine/for_each_model.h"
 #include "kernels/bradley_terry_loss.h"
 #include "kernels/triplet_loss.h"
 
@@ -145,31 +144,7 @@ float step_of_model(BatchedTrainer& t, int m, const AdamStepScalars& step, const
   return t.losses[m];
 }
 
-// One step of every model of t, model by model (step_of_model), idx [M, B, roles]. The models are
-// independent, so the bits are the same for any thread count. loss(m, out, d_out) as above for
-// model m.
-template <typename Loss>
-float step_model_by_model(BatchedTrainer& t, const float* X, const int32_t* idx, int B, int roles,
-                          int threads, Loss&& loss) {
-  const int M = t.models;
-  const AdamStepScalars step = adam_begin_step(t.adam_cfg, t.adam);
-  for_each_model(M, threads, [&](int m) {
-    step_of_model(t, m, step, X, idx + size_t(m) * B * roles, B, roles,
-                  [&](const float* out, float* d_out) { return loss(m, out, d_out); });
-  });
-  float total = 0;
-  for (int m = 0; m < M; ++m) total += t.losses[m];
-  return total / M;
-}
-
 }  // namespace
-
-float preference_train_step_batched(BatchedTrainer& t, const float* X, const int32_t* pairs,
-                                    const float* label, int B, float l2_weight, int threads) {
-  return step_model_by_model(t, X, pairs, B, 2, threads, [&](int m, const float* r, float* dr) {
-    return bradley_terry_loss(r, label + size_t(m) * B, B, l2_weight, dr);
-  });
-}
 
 float preference_train_step_of_model(BatchedTrainer& t, int m, const AdamStepScalars& step,
                                      const float* X, const int32_t* pairs, const float* label,
@@ -179,13 +154,19 @@ float preference_train_step_of_model(BatchedTrainer& t, int m, const AdamStepSca
   });
 }
 
-float triplet_train_step_batched(BatchedTrainer& t, const float* X, const int32_t* triplets, int B,
-                                 float margin, int threads) {
+float triplet_train_step_of_model(BatchedTrainer& t, int m, const AdamStepScalars& step,
+                                  const float* X, const int32_t* triplets, int B, float margin) {
   const int d = t.shape.out();
-  return step_model_by_model(t, X, triplets, B, 3, threads,
-                             [&](int, const float* emb, float* demb) {
-                               return symmetric_triplet_loss(emb, B, d, margin, demb);
-                             });
+  return step_of_model(t, m, step, X, triplets, B, 3, [&](const float* emb, float* demb) {
+    return symmetric_triplet_loss(emb, B, d, margin, demb);
+  });
+}
+
+double epoch_train_flops(const MlpShape& s, int64_t n, int batch, int roles, int copies) {
+  double flops = 0;
+  for (int64_t i0 = 0; i0 < n; i0 += batch)
+    flops += copies * s.train_flops(roles * int(std::min<int64_t>(batch, n - i0)));
+  return flops;
 }
 
 }  // namespace sirl

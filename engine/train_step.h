@@ -50,7 +50,7 @@ float multihead_preference_train_step(Trainer& t, int K, const float* X, const i
 // each with its own weights, its own pairs and its own labels; one Adam over all M·P values.
 struct BatchedTrainer {
   // One model's activations and scratch: separate per model, so models can step on different
-  // threads, and at different steps (run_epochs_model_by_model).
+  // threads, and at different steps (run_model_epochs).
   struct ModelWork {
     MlpTape<float> tape;
     AlignedVector<float> x, d_out;  // gathered inputs [roles·B, in], ∂L/∂output [roles·B, out]
@@ -66,20 +66,23 @@ struct BatchedTrainer {
   BatchedTrainer(MlpShape s, int models, AdamConfig cfg, std::vector<float> initial_params);
 };
 
-// triplets [M, B, 3] = (P1, P2, N) row indices into X [T, in], each model its own B triplets:
-// the symmetric triplet step of each model at once (an ensemble of φ). Returns the mean loss.
-float triplet_train_step_batched(BatchedTrainer& t, const float* X, const int32_t* triplets, int B,
-                                 float margin, int threads = 1);
-
-// pairs [M, B, 2] row indices into X [T, in]; label [M, B]. Returns the mean loss over heads.
-float preference_train_step_batched(BatchedTrainer& t, const float* X, const int32_t* pairs,
-                                    const float* label, int B, float l2_weight, int threads = 1);
-
-// Model m's part of preference_train_step_batched alone, as Adam's step `step` (the same bits):
-// pairs [B, 2] row indices into X, label [B]. Sets and returns t.losses[m]; t.adam.step is the
-// caller's to keep. Calls for different models may run at once on different threads.
+// Model m's step alone, as Adam's step `step` (adam_step_scalars; a model's steps are counted by
+// its epoch loop, engine/epochs.h): gather, forward pass, loss and backward pass with its Adam
+// update back to back on the calling thread, so a head's weights, moments and activations stay in
+// cache from its forward to its backward pass. Sets and returns t.losses[m]; t.adam.step is the
+// caller's to keep. Calls for different models may run at once on different threads; each model's
+// bits are those of a Trainer of its own taking the same steps.
+// Preference (Bradley–Terry) heads: pairs [B, 2] row indices into X [T, in], label [B].
 float preference_train_step_of_model(BatchedTrainer& t, int m, const AdamStepScalars& step,
                                      const float* X, const int32_t* pairs, const float* label,
                                      int B, float l2_weight);
+// An ensemble of φ: triplets [B, 3] = (P1, P2, N) row indices into X [T, in].
+float triplet_train_step_of_model(BatchedTrainer& t, int m, const AdamStepScalars& step,
+                                  const float* X, const int32_t* triplets, int B, float margin);
+
+// FLOPs of one epoch over n examples in batches of `batch`, each example `roles` rows through s
+// (3 for triplets, 2 for pairs), for `copies` models: Σ over the epoch's batches of
+// copies · s.train_flops(roles · b), summed batch by batch as a step-by-step count would.
+double epoch_train_flops(const MlpShape& s, int64_t n, int batch, int roles, int copies = 1);
 
 }  // namespace sirl

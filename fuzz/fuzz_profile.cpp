@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string>
 
-#include "jobs/profile.h"
+#include "experiment/profile.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {

@@ -5,8 +5,8 @@
 #pragma once
 #include <vector>
 
+#include "experiment/plan.h"
 #include "jobs/estimate.h"
-#include "jobs/plan.h"
 #include "jobs/schedule_sim.h"
 
 namespace sirl {

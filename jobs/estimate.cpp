@@ -8,10 +8,10 @@
 #include "engine/fpe.h"
 #include "engine/methods.h"
 #include "engine/tpa.h"
+#include "experiment/study_tasks.h"
+#include "experiment/task_kinds.h"
 #include "jobs/schedule_sim.h"
 #include "jobs/scheduler.h"
-#include "jobs/study_tasks.h"
-#include "jobs/task_kinds.h"
 
 namespace sirl {
 

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "jobs/plan.h"
-#include "jobs/profile.h"
+#include "experiment/plan.h"
+#include "experiment/profile.h"
 
 namespace sirl {
 

@@ -15,10 +15,10 @@
 #include <string>
 #include <thread>
 
+#include "experiment/task_kinds.h"
 #include "jobs/ready_queue.h"
 #include "jobs/scheduler.h"
 #include "jobs/stop_request.h"
-#include "jobs/task_kinds.h"
 
 namespace sirl {
 

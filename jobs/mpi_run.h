@@ -6,8 +6,8 @@
 #include <functional>
 #include <vector>
 
-#include "jobs/plan.h"
-#include "jobs/task_runner.h"
+#include "experiment/plan.h"
+#include "experiment/task_runner.h"
 #include "results/task_record.h"
 
 namespace sirl {

@@ -6,7 +6,7 @@
 #include <set>
 #include <vector>
 
-#include "jobs/plan.h"
+#include "experiment/plan.h"
 
 namespace sirl {
 

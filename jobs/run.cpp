@@ -16,6 +16,9 @@
 #include <set>
 #include <stdexcept>
 
+#include "experiment/task_digest.h"
+#include "experiment/task_kinds.h"
+#include "experiment/task_runner.h"
 #include "jobs/mpi_run.h"
 #include "jobs/progress.h"
 #include "jobs/provenance.h"
@@ -23,13 +26,10 @@
 #include "jobs/stop_request.h"
 #include "jobs/task_cache.h"
 #include "jobs/task_checkpoints.h"
-#include "jobs/task_digest.h"
-#include "jobs/task_kinds.h"
-#include "jobs/task_runner.h"
-#include "kernels/cpu_class.h"
 #include "kernels/gemm_bf16.h"
 #include "kernels/rng.h"
-#include "kernels/roofline.h"
+#include "probes/cpu_class.h"
+#include "probes/roofline.h"
 #include "results/durable.h"
 #include "results/file_lock.h"
 #include "results/h5.h"
@@ -498,7 +498,7 @@ std::set<std::string> resumed_keys(const CheckpointStore& checkpoints, const Pla
   return resumed;
 }
 
-// Measures the roofs the results file records (kernels/roofline.h keeps them per process):
+// Measures the roofs the results file records (probes/roofline.h keeps them per process):
 // before the tasks, on cores they do not use yet; the memory roof only when a task streams.
 void measure_roofs(const Profile& p, const Plan& plan, const std::vector<char>& pending) {
   fp32_roof_gflops_per_core();

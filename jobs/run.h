@@ -6,8 +6,8 @@
 
 #include "results/results_file.h"
 
-#include "jobs/plan.h"
-#include "jobs/profile.h"
+#include "experiment/plan.h"
+#include "experiment/profile.h"
 
 namespace sirl {
 

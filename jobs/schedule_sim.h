@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "jobs/plan.h"
+#include "experiment/plan.h"
 #include "jobs/scheduler.h"  // task_speedup
 
 namespace sirl {

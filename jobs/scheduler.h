@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "jobs/plan.h"
+#include "experiment/plan.h"
 
 namespace sirl {
 

@@ -6,7 +6,7 @@
 // checkpoint. A second Ctrl-C ends the process at once (commits are atomic: nothing committed
 // is lost).
 #pragma once
-#include <stdexcept>
+#include "engine/checkpoint.h"  // StopRequested
 
 namespace sirl {
 
@@ -27,11 +27,5 @@ const char* stop_signal_name();
 void request_stop(int signal_number);
 // Clears it (tests only: a process normally stops once).
 void clear_stop_request();
-
-// Thrown where work ends because of the request (a training after saving its checkpoint, a task
-// not started): the run treats it as a stop, not as a failure.
-struct StopRequested : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
 
 }  // namespace sirl

@@ -1,5 +1,5 @@
-// The task cache: finished tasks filed by content (digest, jobs/task_digest.h) and CPU class, in
-// one directory that outlives any results file. `sirl run` reads what its plan's digests find
+// The task cache: finished tasks filed by content (digest, experiment/task_digest.h) and CPU class,
+// in one directory that outlives any results file. `sirl run` reads what its plan's digests find
 // there and commits what it computes; several runs, of one profile or of different ones, share
 // it, even at once:
 //   <dir>/<file>.h5            one committed task each (results/task_store.h), id <digest>-<class>

@@ -46,7 +46,7 @@ inline float divide_by_constant(float x, float c, float inv_c) {
 double adam_lr(const AdamConfig& cfg, int64_t t);
 
 // The scalars of step number `t` (1-based), whatever the state: models trained one after another
-// (engine/epochs.h, run_epochs_model_by_model) each need step t's while another is at another step.
+// (engine/epochs.h, run_model_epochs) each need step t's while another is at another step.
 AdamStepScalars adam_step_scalars(const AdamConfig& cfg, int64_t t);
 
 // Starts a step: counts it in `state` and returns its scalars.

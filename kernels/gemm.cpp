@@ -1,4 +1,5 @@
 #include "kernels/gemm.h"
+#include "kernels/gemm_blocking.h"
 
 #include <Eigen/Core>
 #include <algorithm>

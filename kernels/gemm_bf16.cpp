@@ -8,6 +8,7 @@
 
 #include "kernels/aligned_vector.h"
 #include "kernels/gemm.h"
+#include "kernels/gemm_blocking.h"
 #include "kernels/onednn_matmul.h"
 
 namespace sirl {

@@ -8,6 +8,7 @@
 #include "kernels/bf16.h"
 #include "kernels/gemm.h"
 #include "kernels/gemm_bf16.h"
+#include "kernels/product_plan.h"
 
 namespace sirl {
 
@@ -220,7 +221,10 @@ void step_layer_weights(const MlpShape& s, int l, MlpTape<float>& tape, float* g
   const uint16_t* gh = h ? bf16_copy(g, size_t(batch) * no, bf16_scratch()) : nullptr;
   const uint16_t* inh = h ? tape_copy(tape.in16, l).data() : nullptr;
   const uint16_t* Wh = h ? tape_copy(tape.w16, l).data() : nullptr;
-  const int width = gemm_column_slice(ni), slices = (ni + width - 1) / width;
+  // The weight gradient's parts (column slices or blocks of rows) and ∂L/∂input's.
+  const ProductPlan dw = plan_product(Product::tn, no, ni, batch, threads, h);
+  const ProductPlan dx = plan_product(Product::nn, batch, ni, no, 1, h);
+  const int width = dw.column_slice, slices = (ni + width - 1) / width;
   const auto slice = [&](int p) {
     const int j0 = p * width, nj = std::min(width, ni - j0);
     // d_in[:, j0..] [batch, nj] = g [batch, no] · W[:, j0..] [no, nj], with W before its update
@@ -238,18 +242,13 @@ void step_layer_weights(const MlpShape& s, int l, MlpTape<float>& tape, float* g
     // W[:, j0..] (row stride ni) with its scratch gradient [no, nj]
     adam_apply_rows(step, W + j0, ni, dw.data(), nj, m + w_off + j0, v + w_off + j0, no, nj);
   };
-  // fp32 products oneDNN serves, big layers libxsmm serves, and on one thread mid-sized ones go
-  // by blocks of W's rows (gemm.h, gemm_weight_row_block), and so do bf16 products of those
-  // shapes (gemm_bf16.h, gemm_bf16_weight_row_block): ∂L/∂input first, whole, from the old W,
-  // then each block: its gradient and its Adam update.
-  const int row_block = h ? gemm_bf16_weight_row_block(no, ni, batch, threads)
-                          : gemm_weight_row_block(no, ni, batch, threads);
-  // On one thread, for a big layer libxsmm serves, ∂L/∂input too goes block by block (its
-  // inner dimension is W's rows), each block of W read once, before its update (gemm.h:
-  // matmul_nn sums over the same blocks). With more threads the blocks run at once, and
-  // ∂L/∂input comes first.
-  const bool d_in_by_blocks =
-      !h && row_block && d_in && threads <= 1 && gemm_nn_by_k_blocks(batch, ni, no);
+  // A weight gradient that goes by blocks of W's rows (kernels/product_plan.h): ∂L/∂input
+  // first, whole, from the old W, then each block: its gradient and its Adam update.
+  const int row_block = dw.row_block;
+  // On one thread, where ∂L/∂input is a sum over the same blocks (its inner dimension is W's
+  // rows), it goes block by block too, each block of W read once, before its update. With more
+  // threads the blocks run at once, and ∂L/∂input comes first.
+  const bool d_in_by_blocks = row_block && d_in && threads <= 1 && dx.k_block == row_block;
   const auto rows = [&](int p) {
     const int i0 = p * row_block, mi = std::min(row_block, no - i0);
     // d_in [batch, ni] (+)= g[:, i0..] [batch, mi] · W[i0.., :] [mi, ni], W before its update

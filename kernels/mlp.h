@@ -78,12 +78,12 @@ void mlp_backward(const MlpShape& shape, const T* params, MlpTape<T>& tape,
 // The backward pass fused with the optimizer step: dout [batch, out] = ∂L/∂output, and every
 // weight and bias is updated by Adam (scalars `step` of adam_begin_step; moments m [P], v [P])
 // as soon as its gradient exists, one fixed column slice of a layer's weights at a time (the
-// slices of gemm_column_slice), after that slice has served the layer's ∂L/∂input. The whole
-// gradient is never stored: for networks larger than the cache this saves writing, zeroing and
-// re-reading a gradient buffer as large as the weights every step. The result is bit-identical
-// to mlp_backward into a zeroed gradient followed by adam_apply over [P] (a test checks it), for
-// any thread count. dx [batch, in], when not null, receives ∂L/∂x (from the weights before
-// the update, as mlp_backward's).
+// slices of its product plan, kernels/product_plan.h), after that slice has served the layer's
+// ∂L/∂input. The whole gradient is never stored: for networks larger than the cache this saves
+// writing, zeroing and re-reading a gradient buffer as large as the weights every step. The result
+// is bit-identical to mlp_backward into a zeroed gradient followed by adam_apply over [P] (a test
+// checks it), for any thread count. dx [batch, in], when not null, receives ∂L/∂x (from the weights
+// before the update, as mlp_backward's).
 void mlp_backward_adam(const MlpShape& shape, float* params, MlpTape<float>& tape,
                        const float* dout, const AdamStepScalars& step, float* m, float* v,
                        int threads = 1, float* dx = nullptr);

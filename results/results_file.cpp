@@ -103,18 +103,17 @@ struct CellFieldColumns {
   void push(const TaskRecord& r) {
     auto m = r.text.find("method"), s = r.text.find("selection"), h = r.text.find("hyper_point");
     hyper_point->strings.push_back(h != r.text.end() ? h->second : "");  // "" = the base point
-    // A VAE record trains the VAE baseline's encoder: its method is "vae".
-    method->strings.push_back(m != r.text.end() ? m->second : r.kind == "vae" ? "vae" : "");
+    method->strings.push_back(m != r.text.end() ? m->second : "");
     vae->ints.push_back(int64_t(num_or(r, "vae", 0)));
     selection->strings.push_back(s != r.text.end() ? s->second : "uniform");
     best_mode->ints.push_back(int64_t(num_or(r, "best_mode", 0)));
   }
 };
 
-// One row per TPA reward head (every "tpa" and robustness TPA record): its held-out and training
-// accuracy, the epochs it trained and whether it stopped before the schedule's end by the stopping
-// rule (tpa.stop = "converged"; `stop` names the cell's rule), its final loss and how far its copy
-// of φ moved (0 when frozen).
+// One row per TPA reward head (every TPA record, of the main grid or [robustness]): its held-out
+// and training accuracy, the epochs it trained and whether it stopped before the schedule's end by
+// the stopping rule (tpa.stop = "converged"; `stop` names the cell's rule), its final loss and how
+// far its copy of φ moved (0 when frozen).
 H5Table tpa_heads_table(const std::vector<TaskRecord>& records) {
   H5Table t;
   auto &key = t.add("key", C::String), &env = t.add("env", C::String),
@@ -186,7 +185,7 @@ H5Table training_table(const std::vector<TaskRecord>& records) {
     kind.strings.push_back(r.kind);
     key.strings.push_back(r.key);
     env.strings.push_back(need_text(r, "env"));
-    variant.strings.push_back(r.kind == "vae" ? "vae" : need_text(r, "variant"));
+    variant.strings.push_back(need_text(r, "variant"));
     N.ints.push_back(int64_t(num_or(r, "N", 0)));
     M.ints.push_back(int64_t(num_or(r, "M", 0)));
     frozen.ints.push_back(int64_t(num_or(r, "frozen", 0)));
@@ -214,8 +213,7 @@ H5Table vae_latents_table(const std::vector<TaskRecord>& records) {
        &elbo = t.add("elbo", C::String), &dim = t.add("dim", C::Int), &kl = t.add("kl", C::Double),
        &mse = t.add("reconstruction_mse", C::Double);
   for (const auto& r : records) {
-    if (r.kind != "vae") continue;
-    auto it = r.arrays.find("kl_per_dim");
+    auto it = r.arrays.find("kl_per_dim");  // a VAE's record
     if (it == r.arrays.end()) continue;
     for (size_t k = 0; k < it->second.data.size(); ++k) {
       env.strings.push_back(need_text(r, "env"));
@@ -250,7 +248,7 @@ H5Table timings_table(const std::vector<TaskRecord>& records, const Roofs& roofs
   auto &env = t.add("env", C::String), &seed = t.add("seed", C::Int),
        &teacher = t.add("teacher", C::String), &variant = t.add("variant", C::String);
   // Which CPU class computed it (a reused result may come from another class) and its content
-  // digest (jobs/task_digest.h); "" in files of engines before 0.10.0.
+  // digest (experiment/task_digest.h); "" in files of engines before 0.10.0.
   auto &cls = t.add("cpu_class", C::String), &digest = t.add("task_digest", C::String);
   CellFieldColumns cell(t);
   auto text_or = [](const TaskRecord& r, const char* k) {
@@ -261,7 +259,7 @@ H5Table timings_table(const std::vector<TaskRecord>& records, const Roofs& roofs
     env.strings.push_back(text_or(r, "env"));
     seed.ints.push_back(int64_t(num_or(r, "seed", -1)));
     teacher.strings.push_back(text_or(r, "teacher"));
-    variant.strings.push_back(r.kind == "vae" ? "vae" : text_or(r, "variant"));
+    variant.strings.push_back(text_or(r, "variant"));
     cls.strings.push_back(text_or(r, "cpu_class"));
     digest.strings.push_back(text_or(r, "task_digest"));
     cell.push(r);

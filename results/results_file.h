@@ -1,7 +1,7 @@
 // The run's results file (docs/ARCHITECTURE.md §5): root attributes describing the run, the
 // datasets, every task's record under /runs/<task key>, and long tables that pandas reads directly
 // (fpe and tpa are the FPE and TPA task kinds' tables, declared with them:
-// jobs/simulation_tasks.cpp):
+// experiment/simulation_tasks.cpp):
 //   /tables/fpe      env, method, variant, vae, N, seed, fpe, train_mse
 //   /tables/tpa      env, method, variant, vae, frozen, N, M, seed, tpa, tpa_std, tpa_train,
 //                    in_main (a Fig. 5 cell), in_ablation (a Fig. 7 cell)
@@ -35,7 +35,7 @@ inline constexpr int64_t kResultsSchemaVersion = 3;
 // cannot read.
 int64_t check_results_schema(const H5File& f);
 
-// One core's roofs as the writer of a results file measured them (kernels/roofline.h; 0: unknown).
+// One core's roofs as the writer of a results file measured them (probes/roofline.h; 0: unknown).
 struct Roofs {
   double fp32_gflops = 0;  // peak fp32 FMA
   double bf16_gflops = 0;  // the unit bf16 products ran on (0: no bf16 run, or bf16 emulated)
@@ -44,13 +44,13 @@ struct Roofs {
 
 struct RunInfo {
   std::string profile_name, profile_text, engine_version, git_commit, host;
-  double roof_fp32_gflops = 0;  // one core's fp32 roof, measured by the writer (kernels/roofline.h)
+  double roof_fp32_gflops = 0;  // one core's fp32 roof, measured by the writer (probes/roofline.h)
   double roof_bf16_gflops = 0;  // one core's bf16 roof, measured by a bf16 run's writer (else 0)
   double stream_gbs = 0;  // one core's main-memory bandwidth, measured by the writer (0: unknown)
-  std::string cpu_class;  // kernels/cpu_class.h ("" in files of engines before 0.3.0)
+  std::string cpu_class;  // probes/cpu_class.h ("" in files of engines before 0.3.0)
   bool verified = true;   // read_run_info: false when no checksum covered the file
   std::string libraries;  // compiler and library versions ("" in files before engine 0.8.0)
-  std::string kernel_paths;  // the instruction sets and backends that ran (kernels/cpu_class.h;
+  std::string kernel_paths;  // the instruction sets and backends that ran (probes/cpu_class.h;
                              // "" in files before engine 0.9.0)
   // The hyper-parameter points of environments with axes ([hyper.<env>] lists), one line per
   // environment: "<env>\t<base tag>\t<tag>…"; a table row's hyper_point "" is the base tag. ""
@@ -68,9 +68,9 @@ struct RunInfo {
   Roofs roofs() const { return {roof_fp32_gflops, roof_bf16_gflops, stream_gbs}; }
 };
 
-// A table of one kind's records (a task kind declares it: jobs/task_kinds.h): one row per record,
-// each column read from one record field (`key`: text for String columns, a number for Int and
-// Double). A record without the field is an error naming the task, never a silent 0.
+// A table of one kind's records (a task kind declares it: experiment/task_kinds.h): one row per
+// record, each column read from one record field (`key`: text for String columns, a number for Int
+// and Double). A record without the field is an error naming the task, never a silent 0.
 struct TableColumn {
   const char* name;
   H5Table::Column::Type type;

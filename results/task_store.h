@@ -2,7 +2,7 @@
 // directory, written to a temporary name, fsync'ed and renamed into place. A kill -9 at any
 // moment leaves each file either complete or absent, so a rerun trusts whatever it finds.
 // A commit is filed under an id: the task's key (training checkpoints, tests), or its content
-// digest and CPU class (`sirl run`'s cache, jobs/task_digest.h), so several runs of different
+// digest and CPU class (`sirl run`'s cache, experiment/task_digest.h), so several runs of different
 // profiles, even at once, share one directory.
 #pragma once
 #include <filesystem>

@@ -20,12 +20,11 @@ import tempfile
 import time
 
 import h5py
-import numpy as np
 import pandas as pd
 
 SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
-sys.path.insert(0, os.path.join(SRC, "results"))
+sys.path.insert(0, os.path.join(SRC, "report"))
 import plot_beyond  # noqa: E402
 
 PROFILE = """
@@ -159,7 +158,7 @@ def main():
             fail("a teacher's answer error differs between cells of one seed")
 
         figs = os.path.join(tmp, "figs")
-        p = subprocess.run(["/usr/bin/python3", os.path.join(SRC, "results", "plot_figures.py"),
+        p = subprocess.run(["/usr/bin/python3", os.path.join(SRC, "report", "plot_figures.py"),
                             one, "--out", figs], capture_output=True, text=True)
         if p.returncode != 0:
             fail(f"plot_figures exited {p.returncode}\n{p.stderr}")

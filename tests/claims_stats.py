@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""results/claims.py against hand-computed cases and closed forms: the paired t-test and its CI
+"""report/claims.py against hand-computed cases and closed forms: the paired t-test and its CI
 (df = 2 has a closed-form t distribution), Holm's adjusted p-values, the verdict rules, and the
 simulated power against scipy's noncentral-t power for one comparison."""
 import math
@@ -11,7 +11,7 @@ import pandas as pd
 from scipy import stats
 
 sys.path.insert(0, os.path.join(os.environ.get("SIRL_SOURCE_DIR", os.path.dirname(__file__) + "/.."),
-                                "results"))
+                                "report"))
 import claims  # noqa: E402
 
 

@@ -8,7 +8,6 @@ and no staging folder, temporary or partial file left behind.
 """
 import os
 import subprocess
-import sys
 import tempfile
 
 import h5py

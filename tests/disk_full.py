@@ -12,7 +12,6 @@ import os
 import resource
 import signal
 import subprocess
-import sys
 import tempfile
 
 SIRL = os.environ["SIRL"]

@@ -17,7 +17,7 @@ from scipy import stats
 SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
 SMOKE = os.path.join(SRC, "tests", "data", "engine-test.toml")  # smoke's plan, narrow nets
-PLOT = os.path.join(SRC, "results", "plot_figures.py")
+PLOT = os.path.join(SRC, "report", "plot_figures.py")
 FILES = [f"{n}.{e}" for n in ("fig3_grid_similar", "fig4_fpe", "fig5_tpa", "fig7_ablation",
                                "fig_learning_curves")
          for e in ("png", "pdf")] + ["report.md", "report.html", "figures.json"]

@@ -10,11 +10,13 @@ from pathlib import Path
 # What each folder may include (its own files and the layers below it).
 ALLOWED = {
     "kernels": {"kernels"},
+    "probes": {"probes", "kernels"},
     "datasets": {"datasets", "kernels"},
     "engine": {"engine", "datasets", "kernels"},
-    "results": {"results", "datasets", "kernels"},
-    "jobs": {"jobs", "engine", "datasets", "kernels", "results"},
-    "app": {"app", "jobs", "engine", "datasets", "kernels", "results"},
+    "results": {"results", "datasets", "kernels", "probes"},
+    "experiment": {"experiment", "engine", "datasets", "kernels", "results", "probes"},
+    "jobs": {"jobs", "experiment", "engine", "datasets", "kernels", "results", "probes"},
+    "app": {"app", "jobs", "experiment", "engine", "datasets", "kernels", "results", "probes"},
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 

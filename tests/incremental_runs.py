@@ -233,7 +233,7 @@ def main():
         figs = {}
         for name, path in (("axis", out), ("base", base), ("epochs", os.path.join(tmp, "epochs.h5"))):
             d = os.path.join(tmp, "figs-" + name)
-            p = subprocess.run(["/usr/bin/python3", os.path.join(SRC, "results", "plot_figures.py"),
+            p = subprocess.run(["/usr/bin/python3", os.path.join(SRC, "report", "plot_figures.py"),
                                 path, "--out", d], capture_output=True, text=True)
             if p.returncode != 0:
                 fail(f"plot_figures {name}: {p.stderr[-1500:]}")

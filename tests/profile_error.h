@@ -3,7 +3,7 @@
 #pragma once
 #include <string>
 
-#include "jobs/profile.h"
+#include "experiment/profile.h"
 
 namespace sirl::test {
 

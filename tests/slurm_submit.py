@@ -125,7 +125,7 @@ def array_with_a_failed_shard(s, tmp):
             fail("the partial merge should list its missing tasks, none of them present")
     # The report of the partial merge marks the verdicts that rest on missing cells.
     figs = tmp / "partial-figures"
-    r = subprocess.run(["/usr/bin/python3", str(SRC / "results" / "plot_figures.py"),
+    r = subprocess.run(["/usr/bin/python3", str(SRC / "report" / "plot_figures.py"),
                         str(tmp / "partial.h5"), "--out", str(figs)], capture_output=True,
                        text=True, timeout=600)
     if r.returncode != 0:

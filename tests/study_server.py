@@ -238,7 +238,6 @@ with tempfile.TemporaryDirectory() as tmp:
 
     # Slow and idle clients cannot starve a participant: 64 connections trickling one header line
     # per 0.5 s and 200 connected but silent ones, then a real request must be answered in < 2 s.
-    import socket
     import threading
     import time
     stop = threading.Event()

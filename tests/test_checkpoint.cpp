@@ -182,8 +182,32 @@ TEST(Checkpoint, ASnapshotThatDoesNotFitIsRefused) {
   c.saved->epoch = 7;  // as many as the training has: not a snapshot this training writes
   EXPECT_THROW(train_representation(w.d, w.bundle, cfg, 5, nullptr, with_c), std::runtime_error);
   c.saved = good;
-  c.saved->words.erase("loop/order");
+  c.saved->words.erase("loop/order/0");
   EXPECT_THROW(train_representation(w.d, w.bundle, cfg, 5, nullptr, with_c), std::runtime_error);
+}
+
+// A single training's snapshot as engines up to 0.12 wrote it (its curve so far as "loop/curve",
+// its order stream as "loop/order") resumes to the uninterrupted run's bits.
+TEST(Checkpoint, AnOlderSingleModelSnapshotResumesToTheSameBits) {
+  const World& w = world();
+  const MethodConfig cfg{Method::sirl, 300, false, short_hyper()};
+  const Representation plain = train_representation(w.d, w.bundle, cfg, 5, nullptr, {});
+  MemoryCheckpointer c;
+  const Execution with_c{.checkpointer = &c};
+  c.stop_after = 2;
+  EXPECT_THROW(train_representation(w.d, w.bundle, cfg, 5, nullptr, with_c), Interrupted);
+  c.stop_after = -1;
+  TrainingSnapshot& s = *c.saved;
+  ASSERT_GT(s.epoch, 0);
+  const std::vector<float>& curves = s.floats.at("loop/curves");
+  s.floats["loop/curve"].assign(curves.begin(), curves.begin() + s.epoch);
+  s.words["loop/order"] = s.words.at("loop/order/0");
+  for (const char* k : {"loop/curves", "loop/epochs_run", "loop/stopped"}) s.floats.erase(k);
+  s.words.erase("loop/order/0");
+  const Representation resumed = train_representation(w.d, w.bundle, cfg, 5, nullptr, with_c);
+  EXPECT_EQ(resumed.params, plain.params);
+  EXPECT_EQ(resumed.loss_curve, plain.loss_curve);
+  EXPECT_EQ(resumed.train_flops, plain.train_flops);
 }
 
 }  // namespace

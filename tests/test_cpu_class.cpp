@@ -5,9 +5,9 @@
 #include <cstring>
 #include <string>
 
-#include "kernels/cpu_class.h"
 #include "kernels/gemm.h"
 #include "kernels/onednn_matmul.h"
+#include "probes/cpu_class.h"
 
 namespace sirl {
 namespace {

@@ -8,10 +8,10 @@
 
 #include "datasets/environments.h"
 #include "engine/hyperparams.h"
-#include "jobs/profile.h"
+#include "experiment/profile.h"
 #include "jobs/run.h"
 #include "kernels/rng.h"
-#include "kernels/roofline.h"
+#include "probes/roofline.h"
 #include "results/h5.h"
 #include "results/results_file.h"
 #include "tests/scratch_dir.h"
@@ -63,7 +63,7 @@ EnvSpec toy_spec() {
   e.name = "toyline";
   e.title = "Toy lines";
   e.description = "a test's toy environment";
-  e.hyper = {{"phi.hidden", "16,16"}, {"tpa.hidden", "8"}};
+  e.hyper = {{"phi.hidden", std::vector<int>{16, 16}}, {"tpa.hidden", std::vector<int>{8}}};
   e.make = make_toy;
   e.trajectories = [](const EnvConfig&) { return kToyCount; };
   e.input_dim = [](const EnvConfig&) { return 2 * kToyPoints; };
@@ -219,7 +219,7 @@ M = [16]
 
 // precision = "bf16": every record of a task whose networks ran in bf16 says so (rep, tpa), FPE's
 // linear probe does not; the results file carries a bf16 roof exactly where this CPU has a bf16
-// unit (kernels/roofline.h), and an fp32 run never does.
+// unit (probes/roofline.h), and an fp32 run never does.
 TEST(Environments, ABf16RunMarksItsNetworkTasksAndRecordsItsRoof) {
   register_toy_once();
   const std::string profile = R"(

@@ -44,21 +44,23 @@ TEST(Epochs, EveryExampleOncePerEpochInBatchesWithAShortLastOne) {
   for (int e = 0; e < 3; ++e) EXPECT_FLOAT_EQ(curve[e], float(expected[e]));
 }
 
-TEST(Epochs, TheBatchedFormGivesEachModelItsOwnOrderAndTheSameBatchSizes) {
+TEST(Epochs, EveryModelDrawsItsOwnOrderFromItsStreamInTheSameBatchSizes) {
   std::vector<Rng> rngs{Rng(1), Rng(2)};
   Rng solo(1);
   std::vector<int32_t> order0;
-  std::vector<int> sizes;
-  std::vector<float> losses(2);
-  const auto curves = run_epochs_batched(
-      7, 2, 3, rngs,
-      [&](const std::vector<const int32_t*>& rows, int b) -> const std::vector<float>& {
-        sizes.push_back(b);
-        order0.insert(order0.end(), rows[0], rows[0] + b);
-        losses = {1.0f, float(b)};
-        return losses;
-      });
-  EXPECT_EQ(sizes, (std::vector<int>{3, 3, 1, 3, 3, 1}));
+  std::vector<std::vector<int>> sizes(2);
+  EpochLoopOptions lockstep;
+  lockstep.stretch_steps = 0;  // one epoch a stretch
+  const auto curves = run_model_epochs(
+                          7, 2, 3, rngs,
+                          [&](int m, const int32_t* rows, int b, int64_t) {
+                            sizes[m].push_back(b);
+                            if (m == 0) order0.insert(order0.end(), rows, rows + b);
+                            return m == 0 ? 1.0f : float(b);
+                          },
+                          [](int) {}, lockstep)
+                          .curves;
+  for (int m = 0; m < 2; ++m) EXPECT_EQ(sizes[m], (std::vector<int>{3, 3, 1, 3, 3, 1}));
   // Model 0's order is what one model with the same stream would draw.
   std::vector<int32_t> expect, o;
   for (int e = 0; e < 2; ++e) {
@@ -87,31 +89,37 @@ struct ToyModels {
   }
 };
 
-TEST(Epochs, ModelByModelIsTheBatchedTrainingInAnotherOrderWhateverTheStretchAndThreadCount) {
+TEST(Epochs, EveryModelTakesTheStepsOfAHandWrittenLoopWhateverTheStretchAndThreadCount) {
   const int R = 3, epochs = 5, batch = 3;
   const int64_t n = 7;  // 3 batches an epoch: 3, 3, 1
-  // The reference: every model one step at a time, step numbers counted from 1.
+  // The reference, written out: every epoch each model shuffles from its own stream and takes
+  // its batches, its steps numbered from 1; curves [R, epochs] of the b-weighted mean loss.
   std::vector<Rng> rngs_b{Rng(1), Rng(2), Rng(3)};
   ToyModels ref(R);
-  int64_t t = 0;
-  std::vector<float> losses(R);
-  const auto curves_b = run_epochs_batched(
-      n, epochs, batch, rngs_b,
-      [&](const std::vector<const int32_t*>& rows, int b) -> const std::vector<float>& {
-        ++t;
-        for (int m = 0; m < R; ++m) losses[m] = ref.step(m, rows[m], b, t);
-        return losses;
-      });
-  ASSERT_EQ(t, epochs * 3);
+  std::vector<float> curves_b(size_t(R) * epochs);
+  std::vector<int64_t> t(R, 0);
+  for (int e = 0; e < epochs; ++e)
+    for (int m = 0; m < R; ++m) {
+      std::vector<int32_t> order;
+      shuffle_order(n, rngs_b[m], order);
+      double sum = 0;
+      for (int64_t i0 = 0; i0 < n; i0 += batch) {
+        const int b = int(std::min<int64_t>(batch, n - i0));
+        sum += double(ref.step(m, order.data() + i0, b, ++t[m])) * b;
+      }
+      curves_b[size_t(m) * epochs + e] = float(sum / double(n));
+    }
+  ASSERT_EQ(t[0], epochs * 3);
   for (int threads : {1, 2})
     for (int stretch : {1, 4, 100}) {  // 1 epoch, 2 epochs (4 steps), all epochs
       std::vector<Rng> rngs{Rng(1), Rng(2), Rng(3)};
       ToyModels toy(R);
       std::vector<int> at;
-      ModelLoopOptions opt;
+      EpochLoopOptions opt;
+      opt.threads = threads;
       opt.stretch_steps = stretch;
-      const auto curves = run_epochs_model_by_model(
-                              n, epochs, batch, rngs, threads,
+      const auto curves = run_model_epochs(
+                              n, epochs, batch, rngs,
                               [&](int m, const int32_t* rows, int b, int64_t step) {
                                 return toy.step(m, rows, b, step);
                               },
@@ -123,7 +131,7 @@ TEST(Epochs, ModelByModelIsTheBatchedTrainingInAnotherOrderWhateverTheStretchAnd
                                          : stretch == 4 ? std::vector<int>{2, 4, 5}
                                                         : std::vector<int>{5};
       EXPECT_EQ(at, expect_at) << "stretch " << stretch;
-      for (int m = 0; m < R; ++m)  // the order streams end where the batched loop left them
+      for (int m = 0; m < R; ++m)  // the order streams end where the reference left them
         EXPECT_EQ(rngs[m].uniform_int(1000000), Rng(rngs_b[m]).uniform_int(1000000));
     }
 }
@@ -159,11 +167,12 @@ TEST(Epochs, EachModelStopsOnItsOwnCurveWithTheFixedRunsBitsWhateverTheThreadCou
     for (int stretch : {1, 4, 1000}) {
       std::vector<Rng> rngs{Rng(1), Rng(2), Rng(3)};
       ToyModels toy(R);
-      ModelLoopOptions opt;
+      EpochLoopOptions opt;
+      opt.threads = threads;
       opt.stretch_steps = stretch;
       opt.stop = rule;
-      const ModelCurves out = run_epochs_model_by_model(
-          n, epochs, batch, rngs, threads,
+      const ModelCurves out = run_model_epochs(
+          n, epochs, batch, rngs,
           [&](int m, const int32_t* rows, int b, int64_t t) {
             toy.step(m, rows, b, t);
             return loss(m, t);
@@ -174,8 +183,8 @@ TEST(Epochs, EachModelStopsOnItsOwnCurveWithTheFixedRunsBitsWhateverTheThreadCou
         // The reference: model m alone, a fixed run of its epochs.
         std::vector<Rng> one{Rng(uint64_t(m + 1))};
         ToyModels ref(1);
-        run_epochs_model_by_model(
-            n, expect_epochs[m], batch, one, 1,
+        run_model_epochs(
+            n, expect_epochs[m], batch, one,
             [&](int, const int32_t* rows, int b, int64_t t) { return ref.step(0, rows, b, t); },
             [](int) {});
         EXPECT_EQ(toy.state[m], ref.state[0]) << "model " << m << ", stretch " << stretch;
@@ -215,6 +224,28 @@ TEST(Epochs, AFixedPointEndsTheLoopAndFillsTheCurveWithItsLoss) {
   EXPECT_EQ(never.size(), 10u);
 }
 
+// Among several models, one at its fixed point stops stepping and repeats its last loss; the
+// others run every epoch, whatever the threads and stretch.
+TEST(Epochs, AModelAtItsFixedPointStopsAloneAndKeepsItsLastLoss) {
+  for (int threads : {1, 2})
+    for (int stretch : {0, 5}) {
+      std::vector<Rng> rngs{Rng(1), Rng(2)};
+      std::vector<int> steps(2, 0);
+      EpochLoopOptions opt;
+      opt.threads = threads;
+      opt.stretch_steps = stretch;
+      opt.at_fixed_point = [](int m, int done) { return m == 1 && done == 3; };
+      const ModelCurves out = run_model_epochs(
+          4, 6, 2, rngs, [&](int m, const int32_t*, int, int64_t) { return float(++steps[m]); },
+          [](int) {}, opt);
+      EXPECT_EQ(steps, (std::vector<int>{12, 6})) << threads << " threads, stretch " << stretch;
+      EXPECT_EQ(out.epochs_run, (std::vector<int>{6, 3}));
+      // Model 1's epochs: steps (1 2) (3 4) (5 6), then its last loss 5.5 repeated.
+      const std::vector<float> c1(out.curves.begin() + 6, out.curves.end());
+      EXPECT_EQ(c1, (std::vector<float>{1.5f, 3.5f, 5.5f, 5.5f, 5.5f, 5.5f}));
+    }
+}
+
 TEST(Epochs, AStepThatThrowsInTheModelByModelLoopReachesTheCallerWhateverTheThreadCount) {
   // Models 1 and 2 fail at their second step; the lowest model's exception comes out, and no
   // checkpoint of the half-done stretch is taken (at_epoch is not called).
@@ -222,13 +253,15 @@ TEST(Epochs, AStepThatThrowsInTheModelByModelLoopReachesTheCallerWhateverTheThre
     std::vector<Rng> rngs{Rng(1), Rng(2), Rng(3)};
     int at_epochs = 0;
     try {
-      run_epochs_model_by_model(
-          4, 3, 2, rngs, threads,
+      EpochLoopOptions opt;
+      opt.threads = threads;
+      run_model_epochs(
+          4, 3, 2, rngs,
           [&](int m, const int32_t*, int, int64_t t) -> float {
             if (m > 0 && t == 2) throw std::runtime_error("model " + std::to_string(m));
             return 0.f;
           },
-          [&](int) { ++at_epochs; });
+          [&](int) { ++at_epochs; }, opt);
       ADD_FAILURE() << "no exception, threads " << threads;
     } catch (const std::runtime_error& e) {
       EXPECT_STREQ(e.what(), "model 1") << "threads " << threads;

@@ -4,10 +4,10 @@
 #include <algorithm>
 #include <string>
 
+#include "experiment/plan.h"
+#include "experiment/profile.h"
+#include "experiment/simulation_tasks.h"
 #include "jobs/estimate.h"
-#include "jobs/plan.h"
-#include "jobs/profile.h"
-#include "jobs/simulation_tasks.h"
 #include "tests/small_profile.h"
 
 namespace sirl {

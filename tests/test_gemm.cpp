@@ -17,6 +17,7 @@
 
 #include "kernels/aligned_vector.h"
 #include "kernels/gemm.h"
+#include "kernels/gemm_blocking.h"
 #include "kernels/rng.h"
 
 namespace sirl {

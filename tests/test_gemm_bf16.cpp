@@ -16,6 +16,7 @@
 #include "kernels/bf16.h"
 #include "kernels/gemm.h"
 #include "kernels/gemm_bf16.h"
+#include "kernels/gemm_blocking.h"
 #include "kernels/rng.h"
 
 namespace sirl {

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "jobs/plan.h"
-#include "jobs/profile.h"
-#include "jobs/simulation_tasks.h"
-#include "jobs/task_digest.h"
+#include "experiment/plan.h"
+#include "experiment/profile.h"
+#include "experiment/simulation_tasks.h"
+#include "experiment/task_digest.h"
 #include "tests/profile_error.h"
 #include "tests/small_profile.h"
 

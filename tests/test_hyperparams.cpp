@@ -1,6 +1,7 @@
 // The paper's hyper-parameters per environment, and setting them by name.
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -32,29 +33,37 @@ TEST(Hyper, PaperValuesPerEnvironment) {
   EXPECT_THROW(paper_hyper("mars"), std::invalid_argument);
 }
 
-TEST(Hyper, SetByNameRoundTripsThroughDescribe) {
+TEST(Hyper, SetByNameCopiesEveryKeyExactly) {
   Hyper h = paper_hyper("grid");
-  set_hyper(h, "sirl.epochs", "42");
-  set_hyper(h, "tpa.lr", "0.0025");
-  set_hyper(h, "phi.hidden", "64,32");
-  set_hyper(h, "phi.relu_output", "true");
+  set_hyper(h, "sirl.epochs", int64_t{42});
+  set_hyper(h, "tpa.lr", 0.0025);
+  set_hyper(h, "pref.l2", int64_t{3});  // an integer where a number is asked
+  set_hyper(h, "phi.hidden", std::vector<int>{64, 32});
+  set_hyper(h, "tpa.hidden", int64_t{16});  // one width
+  set_hyper(h, "phi.relu_output", true);
+  set_hyper(h, "tpa.stop", std::string("converged"));
+  EXPECT_EQ(h.sirl.epochs, 42);
+  EXPECT_DOUBLE_EQ(h.tpa.adam.lr, 0.0025);
+  EXPECT_EQ(h.pref_l2, 3.0);
+  EXPECT_EQ(h.phi_hidden, (std::vector<int>{64, 32}));
+  EXPECT_EQ(h.tpa_hidden, (std::vector<int>{16}));
+  EXPECT_TRUE(h.phi_relu_output);
+  EXPECT_EQ(h.tpa_stop, "converged");
   Hyper back = paper_hyper("jaco");
-  std::string text = describe(h);
-  for (size_t p = 0; p < text.size();) {
-    const size_t eol = text.find('\n', p), eq = text.find(" = ", p);
-    set_hyper(back, text.substr(p, eq - p), text.substr(eq + 3, eol - eq - 3));
-    p = eol + 1;
-  }
-  EXPECT_EQ(describe(back), text);
-  EXPECT_EQ(back.sirl.epochs, 42);
-  EXPECT_EQ(back.phi_hidden, (std::vector<int>{64, 32}));
-  EXPECT_DOUBLE_EQ(back.tpa.adam.lr, 0.0025);
-  EXPECT_TRUE(back.phi_relu_output);
+  for (const std::string& k : hyper_keys()) set_hyper(back, k, hyper_value(h, k));
+  EXPECT_EQ(describe(back), describe(h));
+  // The canonical texts: what names a hyper-parameter point.
+  EXPECT_EQ(hyper_value_text(int64_t{3000}), "3000");
+  EXPECT_EQ(hyper_value_text(0.5), "0.5");
+  EXPECT_EQ(hyper_value_text(0.004), "0.0040000000000000001");
+  EXPECT_EQ(hyper_value_text(std::vector<int>{128, 64}), "128,64");
+  EXPECT_EQ(hyper_value_text(false), "false");
+  EXPECT_EQ(hyper_value_text(std::string("bf16")), "bf16");
 }
 
 TEST(Hyper, BadKeysAndValuesAreRejectedWithTheirName) {
   Hyper h;
-  auto message = [&](const char* k, const char* v) {
+  auto message = [&](const char* k, const HyperValue& v) {
     try {
       set_hyper(h, k, v);
     } catch (const std::invalid_argument& e) {
@@ -62,11 +71,18 @@ TEST(Hyper, BadKeysAndValuesAreRejectedWithTheirName) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(message("sirl.epoch", "3").find("unknown hyper-parameter 'sirl.epoch'"),
+  EXPECT_NE(message("sirl.epoch", int64_t{3}).find("unknown hyper-parameter 'sirl.epoch'"),
             std::string::npos);
-  EXPECT_NE(message("sirl.epochs", "3.5").find("sirl.epochs"), std::string::npos);
-  EXPECT_NE(message("tpa.lr", "fast").find("a finite number"), std::string::npos);
-  EXPECT_NE(message("phi.relu_output", "yes").find("true or false"), std::string::npos);
+  EXPECT_NE(message("sirl.epochs", 3.5).find("sirl.epochs: '3.5' is not an integer"),
+            std::string::npos);
+  EXPECT_NE(message("sirl.epochs", int64_t{1} << 40).find("is not an integer"), std::string::npos);
+  EXPECT_NE(message("tpa.lr", std::string("fast")).find("'fast' is not a finite number"),
+            std::string::npos);
+  EXPECT_NE(message("tpa.lr", std::numeric_limits<double>::infinity()).find("a finite number"),
+            std::string::npos);
+  EXPECT_NE(message("phi.relu_output", int64_t{1}).find("true or false"), std::string::npos);
+  EXPECT_NE(message("phi.hidden", std::vector<int>{}).find("a list of widths"), std::string::npos);
+  EXPECT_NE(message("precision", 16.0).find("a word"), std::string::npos);
   Hyper bad;
   bad.sirl.adam.decay = 1.5;
   EXPECT_THROW(validate(bad), std::invalid_argument);

@@ -12,9 +12,9 @@
 #include "datasets/grid_robot.h"
 #include "datasets/query_bundle.h"
 #include "datasets/simulated_human.h"
-#include "jobs/plan.h"
-#include "jobs/profile.h"
-#include "jobs/simulation_tasks.h"
+#include "experiment/plan.h"
+#include "experiment/profile.h"
+#include "experiment/simulation_tasks.h"
 #include "tests/profile_error.h"
 
 namespace sirl {

@@ -5,10 +5,10 @@
 #include <string>
 #include <vector>
 
-#include "jobs/plan.h"
-#include "jobs/profile.h"
+#include "experiment/plan.h"
+#include "experiment/profile.h"
+#include "experiment/simulation_tasks.h"
 #include "jobs/run.h"
-#include "jobs/simulation_tasks.h"
 #include "tests/small_profile.h"
 
 namespace sirl {

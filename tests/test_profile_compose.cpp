@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "jobs/plan.h"
-#include "jobs/profile.h"
-#include "jobs/simulation_tasks.h"
+#include "experiment/plan.h"
+#include "experiment/profile.h"
+#include "experiment/simulation_tasks.h"
 #include "tests/small_profile.h"
 
 namespace sirl {

@@ -10,7 +10,7 @@
 #include <set>
 #include <stdexcept>
 
-#include "jobs/task_kinds.h"
+#include "experiment/task_kinds.h"
 #include "results/h5.h"
 #include "results/results_file.h"
 #include "tests/scratch_dir.h"

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "jobs/plan.h"
-#include "jobs/profile.h"
+#include "experiment/plan.h"
+#include "experiment/profile.h"
 #include "jobs/scheduler.h"
 #include "tests/small_profile.h"
 

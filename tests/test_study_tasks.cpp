@@ -1,16 +1,16 @@
-// jobs/study_tasks: the user study as task kinds of the plan. Run through the batch engine (tasks
-// on two threads, committed, assembled from the results file), it must give exactly the numbers
-// `sirl study analyze` computes in one call on the same cohort.
+// experiment/study_tasks: the user study as task kinds of the plan. Run through the batch engine
+// (tasks on two threads, committed, assembled from the results file), it must give exactly the
+// numbers `sirl study analyze` computes in one call on the same cohort.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 
 #include "engine/study_analysis.h"
-#include "jobs/plan.h"
-#include "jobs/profile.h"
+#include "experiment/plan.h"
+#include "experiment/profile.h"
+#include "experiment/study_tasks.h"
 #include "jobs/run.h"
-#include "jobs/study_tasks.h"
 #include "results/results_file.h"
 #include "tests/scratch_dir.h"
 

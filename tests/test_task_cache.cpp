@@ -13,10 +13,10 @@
 #include <string>
 #include <thread>
 
-#include "jobs/plan.h"
-#include "jobs/profile.h"
+#include "experiment/plan.h"
+#include "experiment/profile.h"
+#include "experiment/task_digest.h"
 #include "jobs/task_cache.h"
-#include "jobs/task_digest.h"
 #include "results/h5.h"
 #include "tests/scratch_dir.h"
 #include "tests/small_profile.h"

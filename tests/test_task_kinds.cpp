@@ -5,10 +5,10 @@
 #include <set>
 #include <string>
 
-#include "jobs/plan.h"
-#include "jobs/profile.h"
-#include "jobs/simulation_tasks.h"
-#include "jobs/task_kinds.h"
+#include "experiment/plan.h"
+#include "experiment/profile.h"
+#include "experiment/simulation_tasks.h"
+#include "experiment/task_kinds.h"
 #include "tests/small_profile.h"
 
 namespace sirl {

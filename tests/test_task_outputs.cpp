@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "jobs/task_outputs.h"
+#include "experiment/task_outputs.h"
 #include "results/h5.h"
 #include "results/task_record.h"
 #include "tests/scratch_dir.h"

@@ -400,7 +400,7 @@ def open(path) -> Results:  # noqa: A001 (the package's entry point: sirl_bench.
 
 def claims(figures_dir) -> pd.DataFrame:
     """The report's verdicts, one row per hypothesis (env, name, verdict, comparisons, power,
-    ...), from claims.json in the folder `sirl reproduce --figures` (or results/plot_figures.py)
+    ...), from claims.json in the folder `sirl reproduce --figures` (or report/plot_figures.py)
     wrote."""
     import builtins
     import os

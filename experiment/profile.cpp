@@ -1,0 +1,1026 @@
+#include "experiment/profile.h"
+
+#include "experiment/install_paths.h"
+
+#include "datasets/environments.h"
+#include "datasets/study.h"
+
+#include <toml++/toml.h>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <set>
+#include <sstream>
+
+namespace sirl {
+
+std::string Variant::name() const {
+  if (method == Method::external) return external;
+  return std::string(method_name(method)) + (vae ? "+vae" : "") +
+         (selection == Selection::uniform ? "" : std::string("@") + selection_name(selection));
+}
+
+Variant parse_variant(const std::string& name) {
+  Variant v;
+  std::string base = name;
+  if (const size_t at = base.find('@'); at != std::string::npos) {
+    v.selection = parse_selection(base.substr(at + 1));
+    base.resize(at);
+    if (base != "sirl" && base != "sirl+vae")
+      throw std::invalid_argument("'" + name +
+                                  "': query selection (@vote, @infogain) applies only to sirl and "
+                                  "sirl+vae, whose triplets it chooses");
+  }
+  const std::string suffix = "+vae";
+  if (base.size() > suffix.size() &&
+      base.compare(base.size() - suffix.size(), suffix.size(), suffix) == 0) {
+    v.vae = true;
+    base.resize(base.size() - suffix.size());
+  }
+  v.method = parse_method(base);
+  if (v.method == Method::external)
+    throw std::invalid_argument(
+        "'external' is not a method name: declare a representation "
+        "trained elsewhere as [external.<name>] (or use `sirl evaluate`)");
+  if (v.vae && !accepts_vae_pretrain(v.method))
+    throw std::invalid_argument("'" + name +
+                                "': VAE pre-training applies only to sirl, multipref10, "
+                                "multipref50 and singlepref");
+  return v;
+}
+
+std::vector<bool> frozen_settings(const TpaGrid& grid, const Variant& v) {
+  if (v.method == Method::external) return {true};  // no weights to fine-tune
+  if (!grid.frozen.empty()) return grid.frozen;
+  return {is_best_mode(v, true)};
+}
+
+bool is_best_mode(const Variant& v, bool frozen) {
+  return frozen == (v.method == Method::sirl || v.method == Method::external);
+}
+
+std::string external_name_problem(const std::string& name) {
+  if (name.empty() || name.size() > 40 || !(name[0] >= 'a' && name[0] <= 'z'))
+    return "an external method's name is 1 to 40 characters, starting with a-z";
+  for (char c : name)
+    if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-'))
+      return "an external method's name holds only a-z, 0-9, '_' and '-' (got '" + name + "')";
+  try {
+    parse_method(name);
+    return "'" + name + "' is a built-in method's name; choose another for an external method";
+  } catch (const std::invalid_argument&) {
+  }
+  return "";
+}
+
+bool runs_in(const Profile& p, const Variant& v, const std::string& env) {
+  if (v.method != Method::external) return true;
+  const auto& envs = external_method(p, v.external).envs;
+  return std::find(envs.begin(), envs.end(), env) != envs.end();
+}
+
+const ExternalMethod& external_method(const Profile& p, const std::string& name) {
+  for (const auto& e : p.external)
+    if (e.name == name) return e;
+  throw std::invalid_argument("profile " + p.name + " has no external method '" + name + "'");
+}
+
+namespace {
+
+// Reads a parsed TOML document, checking every key; errors carry "file:line: ".
+class Reader {
+ public:
+  Reader(const toml::table& root, std::string path) : root_(root), path_(std::move(path)) {}
+
+  [[noreturn]] void fail(const toml::node* n, const std::string& what) const {
+    // The file that set the value: a parent profile's (extends) or "--set", not always this one.
+    std::string where = n && n->source().path ? *n->source().path : path_;
+    if (n && n->source().begin.line > 0) where += ":" + std::to_string(n->source().begin.line);
+    throw ProfileError(where + ": " + what);
+  }
+
+  void only_keys(const toml::table& t, const std::string& table,
+                 const std::set<std::string>& allowed) const {
+    for (auto&& [k, v] : t)
+      if (!allowed.count(std::string(k.str()))) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        fail(&v, "unknown key '" + std::string(k.str()) + "' in " + table +
+                     " (expected one of: " + list + ")");
+      }
+  }
+
+  const toml::table* table(const toml::table& t, const char* key, bool required) const {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) fail(&t, std::string("missing table [") + key + "]");
+      return nullptr;
+    }
+    if (!n->is_table()) fail(n, std::string(key) + " must be a table");
+    return n->as_table();
+  }
+
+  std::string string(const toml::table& t, const char* key, const std::string& def,
+                     bool required = false) const {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) fail(&t, std::string("missing key '") + key + "'");
+      return def;
+    }
+    if (!n->is_string()) fail(n, std::string(key) + " must be a string");
+    return std::string(*n->value<std::string>());
+  }
+
+  int64_t integer(const toml::table& t, const char* key, int64_t def, int64_t lo,
+                  int64_t hi) const {
+    const toml::node* n = t.get(key);
+    if (!n) return def;
+    if (!n->is_integer()) fail(n, std::string(key) + " must be an integer");
+    const int64_t v = *n->value<int64_t>();
+    if (v < lo || v > hi)
+      fail(n, std::string(key) + " = " + std::to_string(v) + " is outside [" + std::to_string(lo) +
+                  ", " + std::to_string(hi) + "]");
+    return v;
+  }
+
+  double number(const toml::table& t, const char* key, double def, double lo, double hi) const {
+    const toml::node* n = t.get(key);
+    return n ? number_of(*n, n, key, lo, hi) : def;
+  }
+
+  // A number (or "inf") in [lo, hi]; `where` is the node errors point at.
+  double number_of(const toml::node& n, const toml::node* where, const char* key, double lo,
+                   double hi) const {
+    double v = 0;
+    if (n.is_integer())
+      v = double(*n.value<int64_t>());
+    else if (n.is_floating_point())
+      v = *n.value<double>();
+    else if (n.is_string() && (*n.value<std::string>() == "inf"))
+      v = std::numeric_limits<double>::infinity();
+    else
+      fail(where, std::string(key) + " must be a number");
+    if (!(v >= lo && v <= hi)) {
+      auto g = [](double x) {
+        std::ostringstream o;
+        o << x;
+        return o.str();
+      };
+      fail(where, std::string(key) + " = " + g(v) + " is outside [" + g(lo) + ", " + g(hi) + "]");
+    }
+    return v;
+  }
+
+  std::vector<int64_t> int_list(const toml::table& t, const char* key, int64_t lo, int64_t hi,
+                                bool required) const {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) fail(&t, std::string("missing key '") + key + "'");
+      return {};
+    }
+    if (!n->is_array()) fail(n, std::string(key) + " must be an array of integers");
+    std::vector<int64_t> out;
+    for (auto&& e : *n->as_array()) {
+      if (!e.is_integer()) fail(n, std::string(key) + " must contain only integers");
+      const int64_t v = *e.value<int64_t>();
+      if (v < lo || v > hi)
+        fail(n, std::string(key) + ": " + std::to_string(v) + " is outside [" + std::to_string(lo) +
+                    ", " + std::to_string(hi) + "]");
+      if (std::find(out.begin(), out.end(), v) != out.end())
+        fail(n, std::string(key) + ": " + std::to_string(v) + " is listed twice");
+      out.push_back(v);
+    }
+    if (required && out.empty()) fail(n, std::string(key) + " must not be empty");
+    return out;
+  }
+
+  std::vector<std::string> string_list(const toml::table& t, const char* key, bool required) const {
+    const toml::node* n = t.get(key);
+    if (!n) {
+      if (required) fail(&t, std::string("missing key '") + key + "'");
+      return {};
+    }
+    if (!n->is_array()) fail(n, std::string(key) + " must be an array of strings");
+    std::vector<std::string> out;
+    for (auto&& e : *n->as_array()) {
+      if (!e.is_string()) fail(n, std::string(key) + " must contain only strings");
+      out.push_back(std::string(*e.value<std::string>()));
+    }
+    if (required && out.empty()) fail(n, std::string(key) + " must not be empty");
+    return out;
+  }
+
+  std::vector<Variant> variants(const toml::table& t, const char* key) const {
+    std::vector<Variant> out;
+    for (const auto& s : string_list(t, key, true)) {
+      try {
+        out.push_back(parse_variant(s));
+      } catch (const std::invalid_argument& e) {
+        fail(t.get(key), std::string(key) + ": " + e.what());
+      }
+      for (size_t i = 0; i + 1 < out.size(); ++i)
+        if (out[i].name() == out.back().name())
+          fail(t.get(key), std::string(key) + ": '" + s + "' is listed twice");
+    }
+    return out;
+  }
+
+  const toml::table& root() const { return root_; }
+
+ private:
+  const toml::table& root_;
+  std::string path_;
+};
+
+// A TOML scalar or array as the typed value set_hyper takes, refused unless its TOML type is the
+// key's (an integer key takes 30, not 30.0, "30" or [30]; a number key takes 30 or 0.5).
+HyperValue hyper_value(const Reader& r, const toml::node& n, const std::string& key) {
+  HyperType want{};
+  try {
+    want = hyper_type(key);
+  } catch (const std::invalid_argument&) {
+    r.fail(
+        &n, "unknown hyper-parameter '" + key + "' (known: " + [] {
+          std::string keys;
+          for (const auto& k : hyper_keys()) keys += (keys.empty() ? "" : ", ") + k;
+          return keys;
+        }() + ")");
+  }
+  const bool ok = want == HyperType::integer        ? n.is_integer()
+                  : want == HyperType::number       ? n.is_integer() || n.is_floating_point()
+                  : want == HyperType::boolean      ? n.is_boolean()
+                  : want == HyperType::integer_list ? n.is_array() || n.is_integer()
+                                                    : n.is_string();
+  if (!ok) r.fail(&n, key + " must be " + hyper_type_name(want));
+  if (n.is_integer()) return *n.value<int64_t>();
+  if (n.is_floating_point()) return *n.value<double>();
+  if (n.is_boolean()) return *n.value<bool>();
+  if (n.is_string()) return *n.value<std::string>();
+  std::vector<int> widths;
+  for (auto&& e : *n.as_array()) {
+    const std::optional<int64_t> w = e.is_integer() ? e.value<int64_t>() : std::nullopt;
+    if (!w || *w < std::numeric_limits<int>::min() || *w > std::numeric_limits<int>::max())
+      r.fail(&n, key + " must be an array of integers");
+    widths.push_back(int(*w));
+  }
+  return widths;
+}
+
+// [tpa]: methods, N, M and which of frozen/unfrozen to run.
+void parse_tpa(const Reader& r, const toml::table& tpa, TpaGrid& g,
+               const std::string& table = "[tpa]") {
+  r.only_keys(tpa, table, {"methods", "N", "M", "frozen"});
+  g.methods = r.variants(tpa, "methods");
+  g.N = r.int_list(tpa, "N", 1, 10'000'000, true);
+  g.M = r.int_list(tpa, "M", 1, 10'000'000, true);
+  if (const toml::node* f = tpa.get("frozen")) {
+    if (f->is_string()) {
+      if (*f->value<std::string>() != "best")
+        r.fail(f, "frozen must be \"best\" or an array of booleans");
+    } else if (f->is_array()) {
+      for (auto&& e : *f->as_array()) {
+        if (!e.is_boolean()) r.fail(f, "frozen must be \"best\" or an array of booleans");
+        g.frozen.push_back(*e.value<bool>());
+      }
+      if (g.frozen.empty()) r.fail(f, "frozen must not be empty");
+    } else {
+      r.fail(f, "frozen must be \"best\" or an array of booleans");
+    }
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// Each environment's table takes the axis keys; the table named by an environment's data_table
+// ([jaco] for both JacoRobot variants) also sets Ξ.
+void parse_data_tables(Reader& r, const toml::table& root, EnvConfig& data) {
+  const std::set<std::string> axis_keys{"seeds",      "fpe_N",      "tpa_N",        "tpa_M",
+                                        "ablation_N", "ablation_M", "store_weights"};
+  std::set<std::string> data_tables;
+  for (const auto& e : environments())
+    if (!e.data_table.empty()) data_tables.insert(e.data_table);
+  for (const auto& e : environments()) {
+    const auto* t = r.table(root, e.name.c_str(), false);
+    if (!t) continue;
+    std::set<std::string> keys = axis_keys;
+    if (data_tables.count(e.name)) keys.insert({"trajectories", "data_seed", "max_deformation"});
+    r.only_keys(*t, "[" + e.name + "]", keys);
+    if (!data_tables.count(e.name)) continue;
+    data.jaco.trajectories = r.integer(*t, "trajectories", 10000, 100, 10'000'000);
+    data.jaco.seed = uint64_t(r.integer(*t, "data_seed", 0, 0, 1'000'000'000));
+    data.jaco.max_deformation = r.number(*t, "max_deformation", 0.5, 0, 3.14159);
+  }
+  data.jaco.threads = 1;  // generated inside one task; the data never depends on it
+}
+
+bool env_is_study(const std::string& name) {
+  for (const auto& e : environments())
+    if (e.name == name) return e.in_study;
+  return false;
+}
+
+}  // namespace
+
+namespace {
+
+// [queries] and [teacher]: the budgets and the simulated human.
+void parse_queries(Reader& r, const toml::table& root, Profile& p) {
+  if (const auto* q = r.table(root, "queries", false)) {
+    r.only_keys(*q, "[queries]", {"similarity", "preference", "tpa_pairs", "fpe_trajectories"});
+    p.queries.similarity = r.integer(*q, "similarity", 1000, 1, 10'000'000);
+    p.queries.preference = r.integer(*q, "preference", 1000, 1, 10'000'000);
+    p.queries.tpa_pairs = r.integer(*q, "tpa_pairs", 250, 2, 10'000'000);
+    p.queries.fpe_trajectories = r.integer(*q, "fpe_trajectories", 1000, 2, 10'000'000);
+  }
+  const auto* t = r.table(root, "teacher", false);
+  if (!t) return;
+  r.only_keys(*t, "[teacher]", {"beta", "mistake", "skip", "equal", "attend"});
+  const double inf = std::numeric_limits<double>::infinity();
+  struct Axis {
+    const char* key;
+    double def, lo, hi;
+  };
+  // A scalar sets the main teacher; a list keeps the main teacher's default for that key and
+  // makes each listed value one teacher of a noise axis (its cells: [robustness]).
+  std::vector<std::pair<Axis, std::vector<double>>> lists;
+  std::map<std::string, double> main;
+  for (const Axis& a :
+       {Axis{"beta", inf, 0, inf}, Axis{"mistake", 0, 0, 1}, Axis{"attend", 1, 1e-9, 1}}) {
+    const toml::node* n = t->get(a.key);
+    main[a.key] = a.def;
+    if (!n) continue;
+    if (!n->is_array()) {
+      main[a.key] = r.number_of(*n, n, a.key, a.lo, a.hi);
+      continue;
+    }
+    std::vector<double> values;
+    for (auto&& e : *n->as_array()) {
+      const double v = r.number_of(e, n, a.key, a.lo, a.hi);
+      if (std::find(values.begin(), values.end(), v) != values.end())
+        r.fail(n, std::string(a.key) + ": a value is listed twice");
+      values.push_back(v);
+    }
+    if (values.empty()) r.fail(n, std::string(a.key) + " must not be an empty list");
+    lists.push_back({a, values});
+  }
+  p.queries.teacher.beta = main["beta"];
+  p.queries.teacher.mistake = main["mistake"];
+  p.queries.attend = main["attend"];
+  p.queries.teacher.skip = r.number(*t, "skip", 0, 0, inf);
+  p.queries.teacher.equal = r.number(*t, "equal", 0, 0, inf);
+  for (const auto& [a, values] : lists)
+    for (double v : values) {
+      if (v == a.def) continue;  // the main teacher itself: the axis's reference point
+      TeacherPoint tp;
+      tp.axis = a.key;
+      tp.level = v;
+      std::ostringstream o;
+      o << a.key << "=" << v;
+      tp.tag = o.str();
+      tp.queries = p.queries;
+      if (tp.axis == "beta") tp.queries.teacher.beta = v;
+      if (tp.axis == "mistake") tp.queries.teacher.mistake = v;
+      if (tp.axis == "attend") tp.queries.attend = v;
+      p.robustness.teachers.push_back(tp);
+    }
+}
+
+// [active] and [active.<env>]: the active variants' selection settings.
+void parse_active(Reader& r, const toml::table& root, Profile& p) {
+  for (const auto& env : p.envs) p.active[env] = ActiveRounds{};
+  const auto* at = r.table(root, "active", false);
+  if (!at) return;
+  const std::set<std::string> keys{"members", "pool", "batch", "round_epochs", "mu"};
+  auto read = [&](const toml::table& t, const std::string& name, ActiveRounds& a) {
+    a.members = int(r.integer(t, "members", a.members, 2, 64));
+    a.pool = r.integer(t, "pool", a.pool, 1, 10'000'000);
+    a.batch = r.integer(t, "batch", a.batch, 1, 10'000'000);
+    a.round_epochs = int(r.integer(t, "round_epochs", a.round_epochs, 1, 1'000'000));
+    a.mu = r.number(t, "mu", a.mu, 1e-9, 1e9);
+    if (a.pool < a.batch)
+      r.fail(&t, name + ": pool = " + std::to_string(a.pool) + " is below batch = " +
+                     std::to_string(a.batch) + " (a round picks its batch from the pool)");
+  };
+  std::set<std::string> allowed = keys;
+  for (const auto& env : p.envs) allowed.insert(env);
+  r.only_keys(*at, "[active]", allowed);
+  ActiveRounds all;
+  read(*at, "[active]", all);
+  for (const auto& env : p.envs) {
+    p.active[env] = all;
+    if (const auto* et = r.table(*at, env.c_str(), false)) {
+      r.only_keys(*et, "[active." + env + "]", keys);
+      read(*et, "[active." + env + "]", p.active[env]);
+    }
+  }
+}
+
+// [robustness]: which cells the noisy teachers of [teacher]'s lists run.
+void parse_robustness(Reader& r, const toml::table& root, Profile& p) {
+  const auto* rb = r.table(root, "robustness", false);
+  const bool lists = !p.robustness.teachers.empty();
+  if (!rb) {
+    if (lists)
+      r.fail(root.get("teacher"),
+             "[teacher] lists noisy teachers but there is no [robustness] table saying which "
+             "cells they run (methods, N, M)");
+    return;
+  }
+  if (!lists)
+    r.fail(rb,
+           "[robustness] needs noisy teachers: give a list for beta, mistake or attend in "
+           "[teacher] (e.g. beta = [10, 1, 0])");
+  r.only_keys(*rb, "[robustness]", {"methods", "N", "M", "frozen"});
+  parse_tpa(r, *rb, p.robustness, "[robustness]");  // its cells, as a [tpa] table's
+}
+
+// [fpe], [tpa], [ablation]: which cells run.
+void parse_cells(Reader& r, const toml::table& root, Profile& p) {
+  // A profile runs any part of the grid: [fpe], [tpa] and [ablation] are each optional, but at
+  // least one must be there.
+  const auto* fpe = r.table(root, "fpe", false);
+  const auto* tpa = r.table(root, "tpa", false);
+  if (!fpe && !tpa && !r.table(root, "ablation", false) && !r.table(root, "study", false) &&
+      !r.table(root, "robustness", false))
+    r.fail(&root,
+           "nothing to run: give at least one of [fpe], [tpa], [ablation], [robustness] or "
+           "[study]");
+  if (fpe) {
+    r.only_keys(*fpe, "[fpe]", {"methods", "N"});
+    p.fpe_methods = r.variants(*fpe, "methods");
+    p.fpe_N = r.int_list(*fpe, "N", 1, 10'000'000, true);
+  }
+  if (tpa) parse_tpa(r, *tpa, p.tpa);
+
+  if (const auto* ab = r.table(root, "ablation", false)) {
+    r.only_keys(*ab, "[ablation]", {"methods", "N", "M"});
+    for (const auto& s : r.string_list(*ab, "methods", true)) {
+      try {
+        p.ablation_methods.push_back(parse_method(s));
+      } catch (const std::invalid_argument& e) {
+        r.fail(ab->get("methods"), std::string("methods: ") + e.what());
+      }
+    }
+    p.ablation_N = r.int_list(*ab, "N", 1, 10'000'000, true);
+    p.ablation_M = r.int_list(*ab, "M", 1, 10'000'000, true);
+  }
+}
+
+// [external.<name>]: representations trained elsewhere, each joining [fpe] and [tpa] (frozen).
+void parse_external(Reader& r, const toml::table& root, Profile& p) {
+  const auto* ext = r.table(root, "external", false);
+  if (!ext) return;
+  namespace fs = std::filesystem;
+  const fs::path base =
+      p.path.empty() || p.path[0] == '<' ? fs::current_path() : fs::absolute(p.path).parent_path();
+  for (auto&& [k, node] : *ext) {
+    const std::string name(k.str());
+    if (!node.is_table()) r.fail(&node, "[external." + name + "] must be a table");
+    const toml::table& t = *node.as_table();
+    if (const std::string why = external_name_problem(name); !why.empty()) r.fail(&node, why);
+    r.only_keys(t, "[external." + name + "]", {"embeddings", "xxh3", "description", "envs"});
+    ExternalMethod m;
+    m.name = name;
+    m.embeddings = r.string(t, "embeddings", "", true);
+    if (m.embeddings.empty()) r.fail(t.get("embeddings"), "embeddings must name a file");
+    m.embeddings = (base / m.embeddings).lexically_normal().string();
+    m.xxh3 = r.string(t, "xxh3", "", true);
+    if (m.xxh3.size() != 32 || m.xxh3.find_first_not_of("0123456789abcdef") != std::string::npos)
+      r.fail(t.get("xxh3"),
+             "xxh3 must be the file's XXH3-128 as 32 lowercase hex digits (`xxh128sum " +
+                 m.embeddings + "` prints it)");
+    m.description = r.string(t, "description", "");
+    m.envs = t.get("envs") ? r.string_list(t, "envs", true) : p.envs;
+    for (const auto& e : m.envs)
+      if (std::find(p.envs.begin(), p.envs.end(), e) == p.envs.end())
+        r.fail(t.get("envs"), "envs: '" + e + "' is not one of the profile's envs");
+    Variant v;
+    v.method = Method::external;
+    v.external = name;
+    if (!p.fpe_N.empty()) p.fpe_methods.push_back(v);
+    if (!p.tpa.N.empty()) p.tpa.methods.push_back(v);
+    p.external.push_back(std::move(m));
+  }
+}
+
+// Per environment: the top-level axes unless its own table overrides them.
+void parse_env_axes(Reader& r, const toml::table& root, Profile& p) {
+  for (const auto& env : p.envs) {
+    EnvAxes g{p.seeds, p.fpe_N, p.tpa.N, p.tpa.M, p.ablation_N, p.ablation_M};
+    g.store_weights = !env_spec(env).sampled;  // JacoRobot's 3.1 M-float networks: off
+    if (const auto* t = r.table(root, env.c_str(), false)) {
+      auto axis = [&](const char* key, std::vector<int64_t>& out, int64_t lo, int64_t hi) {
+        // An empty list is allowed here: "this environment runs no such cell".
+        if (t->get(key)) out = r.int_list(*t, key, lo, hi, false);
+      };
+      axis("seeds", g.seeds, 0, 1'000'000'000);
+      if (g.seeds.empty()) r.fail(t->get("seeds"), "seeds must not be empty");
+      axis("fpe_N", g.fpe_N, 1, 10'000'000);
+      axis("tpa_N", g.tpa_N, 1, 10'000'000);
+      axis("tpa_M", g.tpa_M, 1, 10'000'000);
+      axis("ablation_N", g.ablation_N, 1, 10'000'000);
+      axis("ablation_M", g.ablation_M, 1, 10'000'000);
+      if (const toml::node* w = t->get("store_weights")) {
+        if (!w->is_boolean()) r.fail(w, "store_weights must be true or false");
+        g.store_weights = *w->value<bool>();
+      }
+    }
+    p.axes[env] = g;
+  }
+}
+
+// [study]: the simulated cohort of the user-study pipeline.
+void parse_study(Reader& r, const toml::table& root, Profile& p) {
+  if (const auto* st = r.table(root, "study", false)) {
+    r.only_keys(*st, "[study]",
+                {"env", "trajectories", "users", "similarity", "preference", "beta", "mistake",
+                 "epochs", "tpa_epochs", "seeds", "splits", "random"});
+    StudyPlan& sp = p.study;
+    CohortConfig& c = sp.cohort;
+    sp.enabled = true;
+    c.env = r.string(*st, "env", c.env);
+    if (!env_is_study(c.env)) r.fail(st->get("env"), "[study] env must be " + study_env_names());
+    c.trajectories = r.integer(*st, "trajectories", 1000, 10, 1'000'000);
+    c.users = int(r.integer(*st, "users", 10, 2, 10'000));
+    c.similarity = r.integer(*st, "similarity", 100, 1, 100'000);
+    c.preference = r.integer(*st, "preference", 100, 4, 100'000);
+    c.beta = r.number(*st, "beta", 20, 1e-9, std::numeric_limits<double>::infinity());
+    c.mistake = r.number(*st, "mistake", 0.05, 0, 1);
+    sp.epochs = int(r.integer(*st, "epochs", 3000, 1, 1'000'000));
+    sp.tpa_epochs = int(r.integer(*st, "tpa_epochs", 1000, 1, 1'000'000));
+    sp.seeds = int(r.integer(*st, "seeds", 5, 2, 100));
+    sp.splits = int(r.integer(*st, "splits", 50, 1, 1000));
+    const std::string random = r.string(*st, "random", "unfrozen");
+    if (random != "unfrozen" && random != "frozen")
+      r.fail(st->get("random"), "[study] random must be \"unfrozen\" or \"frozen\"");
+    sp.random_frozen = random == "frozen";
+  }
+}
+
+// Whether a [hyper] value is an axis: a list of values for a key that takes one (a list of
+// lists for a width list).
+bool is_hyper_axis(const toml::node& v, const std::string& key) {
+  const auto* a = v.as_array();
+  if (!a) return false;
+  HyperType want{};
+  try {
+    want = hyper_type(key);
+  } catch (const std::invalid_argument&) {
+    return false;  // hyper_value names the unknown key
+  }
+  return want != HyperType::integer_list || (!a->empty() && (*a)[0].is_array());
+}
+
+// An axis's values; refuses an empty list and a repeated value.
+std::vector<HyperValue> hyper_axis_values(const Reader& r, const toml::node& v,
+                                          const std::string& key) {
+  std::vector<HyperValue> out;
+  for (auto&& e : *v.as_array()) {
+    HyperValue value = hyper_value(r, e, key);  // fails with file:line itself
+    // Two values are one when their texts are (1 and 1.0 for a number): a point's name is its text.
+    const std::string text = hyper_value_text(value);
+    if (std::any_of(out.begin(), out.end(),
+                    [&](const HyperValue& o) { return hyper_value_text(o) == text; }))
+      r.fail(&e, key + ": the value " + text + " is listed twice");
+    out.push_back(std::move(value));
+  }
+  if (out.empty()) r.fail(&v, key + ": an axis needs at least one value");
+  return out;
+}
+
+struct HyperAxis {
+  std::string key;
+  std::vector<HyperValue> values;
+  const toml::node* node;
+};
+
+using HyperAxes = std::map<std::string, std::vector<HyperAxis>>;  // per environment
+
+// [hyper.all] then [hyper.<env>], each table's keys in toml++ order: a single value sets the
+// environment's base point, a list makes (or replaces) an axis.
+HyperAxes read_hyper_tables(Reader& r, const toml::table& hy, Profile& p) {
+  HyperAxes axes;
+  std::set<std::string> allowed{"all"};
+  for (const auto& e : p.envs) allowed.insert(e);
+  r.only_keys(hy, "[hyper] (one sub-table per environment, or 'all')", allowed);
+  std::vector<std::string> scopes{"all"};
+  scopes.insert(scopes.end(), p.envs.begin(), p.envs.end());
+  for (const std::string& scope : scopes) {
+    const auto* t = r.table(hy, scope.c_str(), false);
+    if (!t) continue;
+    for (auto&& [k, v] : *t) {
+      const std::string key(k.str());
+      for (auto& [env, h] : p.hyper) {
+        if (scope != "all" && env != scope) continue;
+        auto& env_axes = axes[env];
+        std::erase_if(env_axes, [&](const HyperAxis& a) { return a.key == key; });
+        if (is_hyper_axis(v, key)) {
+          env_axes.push_back({key, hyper_axis_values(r, v, key), &v});
+          continue;
+        }
+        const HyperValue value = hyper_value(r, v, key);  // fails with file:line itself
+        try {
+          set_hyper(h, key, value);
+        } catch (const std::invalid_argument& e) {
+          r.fail(&v, e.what());
+        }
+      }
+    }
+  }
+  return axes;
+}
+
+// Every combination of an environment's axes (p.hyper_points), the first values' being the base
+// point (p.hyper).
+void expand_hyper_points(Reader& r, const HyperAxes& axes, Profile& p) {
+  for (const auto& [env, env_axes] : axes) {
+    if (env_axes.empty()) continue;
+    std::vector<std::vector<std::pair<std::string, HyperValue>>> points{{}};
+    for (const HyperAxis& a : env_axes) {
+      std::vector<std::vector<std::pair<std::string, HyperValue>>> next;
+      for (const auto& pt : points)
+        for (const HyperValue& value : a.values) {
+          next.push_back(pt);
+          next.back().push_back({a.key, value});
+        }
+      points = std::move(next);
+    }
+    if (points.size() > 256)
+      r.fail(env_axes.back().node, "[hyper." + env + "]: " + std::to_string(points.size()) +
+                                       " combinations of hyper-parameter values (at most 256)");
+    const Hyper base = p.hyper[env];
+    for (size_t i = 0; i < points.size(); ++i) {
+      HyperPoint hp{"", base};
+      for (const auto& kv : points[i]) {
+        const std::string& key = kv.first;  // (a structured binding cannot be captured in C++20)
+        hp.tag += (hp.tag.empty() ? "" : ";") + key + "=" + hyper_value_text(kv.second);
+        try {
+          set_hyper(hp.hyper, key, kv.second);
+        } catch (const std::invalid_argument& e) {
+          const auto it = std::find_if(env_axes.begin(), env_axes.end(),
+                                       [&](const HyperAxis& a) { return a.key == key; });
+          r.fail(it->node, e.what());
+        }
+      }
+      if (i == 0) p.hyper[env] = hp.hyper;
+      p.hyper_points[env].push_back(std::move(hp));
+    }
+  }
+}
+
+// Every point's values valid. (Whether its networks fit this machine's memory is the run's
+// question, not the profile's: `sirl run` checks each task's working set before it starts.)
+void check_hyper_points(Reader& r, const toml::table& hy, Profile& p) {
+  std::vector<std::pair<std::string, Hyper*>> all;  // every point's values
+  for (auto& [env, h] : p.hyper) all.push_back({env, &h});
+  for (auto& [env, pts] : p.hyper_points)
+    for (auto& pt : pts) all.push_back({env, &pt.hyper});
+  for (auto& [env, hp] : all) {
+    const Hyper& h = *hp;
+    try {
+      validate(h);
+    } catch (const std::invalid_argument& e) {
+      r.fail(&hy, std::string("[hyper.") + env + "]: " + e.what());
+    }
+  }
+}
+
+// The paper's hyper-parameters per environment, then [hyper.all] and [hyper.<env>] overrides. A
+// key given a list of values is an axis: the environment's cells run at every combination of its
+// axes' values, the first value of each being the base point (p.hyper, tasks without a point).
+void parse_hyper(Reader& r, const toml::table& root, Profile& p) {
+  for (const auto& env : p.envs) {
+    p.hyper[env] = paper_hyper(env);
+    p.hyper[env].precision = p.precision;
+  }
+  const auto* hy = r.table(root, "hyper", false);
+  if (!hy) return;
+  const HyperAxes axes = read_hyper_tables(r, *hy, p);
+  expand_hyper_points(r, axes, p);
+  check_hyper_points(r, *hy, p);
+}
+
+// Cross-checks: budgets must cover the grid.
+void check_budgets(Reader& r, const toml::table& root, const Profile& p) {
+  auto check_n = [&](const std::vector<int64_t>& Ns, const char* table, bool has_mp50) {
+    for (int64_t N : Ns) {
+      if (N > p.queries.similarity || N > p.queries.preference)
+        r.fail(root.get(table), std::string("[") + table + "] N = " + std::to_string(N) +
+                                    " exceeds the query budget ([queries] similarity = " +
+                                    std::to_string(p.queries.similarity) +
+                                    ", preference = " + std::to_string(p.queries.preference) + ")");
+      if (has_mp50 && N < 50)
+        r.fail(root.get(table),
+               std::string("[") + table + "] N = " + std::to_string(N) +
+                   " is below 50, the MultiPref-50 minimum of one query per human");
+    }
+  };
+  auto has_mp50 = [](const std::vector<Variant>& vs) {
+    for (const auto& v : vs)
+      if (v.method == Method::multipref50) return true;
+    return false;
+  };
+  const int64_t tpa_train = tpa_train_count(p.queries.tpa_pairs);
+  for (const auto& [env, g] : p.axes) {
+    check_n(g.fpe_N, "fpe", has_mp50(p.fpe_methods));
+    check_n(g.tpa_N, "tpa", has_mp50(p.tpa.methods));
+    check_n(g.ablation_N, "ablation",
+            std::find(p.ablation_methods.begin(), p.ablation_methods.end(), Method::multipref50) !=
+                p.ablation_methods.end());
+    check_n(p.robustness.N, "robustness", has_mp50(p.robustness.methods));
+    for (const auto* Ms : {&g.tpa_M, &g.ablation_M, &p.robustness.M})
+      for (int64_t M : *Ms)
+        if (M > tpa_train)
+          r.fail(
+              root.get(Ms == &g.tpa_M ? "tpa" : (Ms == &g.ablation_M ? "ablation" : "robustness")),
+              "M = " + std::to_string(M) + " exceeds the " + std::to_string(tpa_train) +
+                  " training pairs per test reward (80 % of [queries] tpa_pairs = " +
+                  std::to_string(p.queries.tpa_pairs) + ")");
+  }
+}
+
+}  // namespace
+
+namespace {
+
+toml::table parse_toml(const std::string& text, const std::string& path) {
+  try {
+    return toml::parse(text, path);
+  } catch (const toml::parse_error& e) {
+    throw ProfileError(path + ":" + std::to_string(e.source().begin.line) + ": " +
+                       std::string(e.description()));
+  }
+}
+
+Profile parse_profile_table(const toml::table& root, const std::string& text,
+                            const std::string& path);
+
+}  // namespace
+
+Profile parse_profile(const std::string& text, const std::string& path) {
+  const toml::table root = parse_toml(text, path);
+  if (root.contains("extends"))
+    throw ProfileError(path +
+                       ": `extends` needs the profile's file (load_profile resolves it); "
+                       "a stored profile text is always resolved");
+  return parse_profile_table(root, text, path);
+}
+
+namespace {
+
+Profile parse_profile_table(const toml::table& root, const std::string& text,
+                            const std::string& path) {
+  Reader r(root, path);
+  std::set<std::string> top{"name",    "description", "envs",   "seeds",     "queries",
+                            "teacher", "fpe",         "tpa",    "ablation",  "hyper",
+                            "study",   "robustness",  "active", "precision", "external"};
+  for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
+  r.only_keys(root, "the profile", top);
+  Profile p;
+  p.path = path;
+  p.text = text;
+  p.name = r.string(root, "name", "", true);
+  p.description = r.string(root, "description", "");
+  p.envs = r.string_list(root, "envs", true);
+  for (const auto& e : p.envs) {
+    try {
+      env_spec(e);
+    } catch (const std::invalid_argument& err) {
+      r.fail(root.get("envs"), err.what());
+    }
+  }
+  parse_data_tables(r, root, p.data);
+  p.precision = r.string(root, "precision", "fp32");
+  try {
+    validate_precision(p.precision);
+  } catch (const std::invalid_argument& e) {
+    r.fail(root.get("precision"), e.what());
+  }
+  p.seeds = r.int_list(root, "seeds", 0, 1'000'000'000, true);
+  parse_queries(r, root, p);
+  parse_cells(r, root, p);
+  parse_external(r, root, p);
+  parse_robustness(r, root, p);
+  parse_active(r, root, p);
+  parse_env_axes(r, root, p);
+  parse_study(r, root, p);
+  parse_hyper(r, root, p);
+  check_budgets(r, root, p);
+  return p;
+}
+
+}  // namespace
+
+const QueryBundleConfig& queries_for(const Profile& p, const std::string& teacher) {
+  if (teacher.empty()) return p.queries;
+  for (const auto& t : p.robustness.teachers)
+    if (t.tag == teacher) return t.queries;
+  throw std::invalid_argument("profile " + p.name + " has no teacher '" + teacher + "'");
+}
+
+std::vector<std::string> hyper_point_tags(const Profile& p, const std::string& env) {
+  std::vector<std::string> tags{""};
+  if (auto it = p.hyper_points.find(env); it != p.hyper_points.end())
+    for (size_t i = 1; i < it->second.size(); ++i) tags.push_back(it->second[i].tag);
+  return tags;
+}
+
+std::string hyper_points_text(const Profile& p) {
+  std::string s;
+  for (const auto& [env, pts] : p.hyper_points) {
+    s += env;
+    for (const HyperPoint& hp : pts) s += "\t" + hp.tag;
+    s += "\n";
+  }
+  return s;
+}
+
+const Hyper& hyper_at(const Profile& p, const std::string& env, const std::string& tag) {
+  if (tag.empty()) return p.hyper.at(env);
+  if (auto it = p.hyper_points.find(env); it != p.hyper_points.end())
+    for (const HyperPoint& hp : it->second)
+      if (hp.tag == tag) return hp.hyper;
+  throw std::invalid_argument("no hyper-parameter point '" + tag + "' in environment " + env);
+}
+
+bool runs_bf16(const Profile& p) {
+  if (p.precision == "bf16") return true;
+  for (const auto& [env, h] : p.hyper)
+    if (bf16_products(h)) return true;
+  for (const auto& [env, pts] : p.hyper_points)
+    for (const HyperPoint& hp : pts)
+      if (bf16_products(hp.hyper)) return true;
+  return false;
+}
+
+const std::string& precision_of(const Profile& p, const std::string& env) {
+  const auto it = p.hyper.find(env);
+  return it == p.hyper.end() ? p.precision : it->second.precision;
+}
+
+std::string bundled_profile_names() {
+  namespace fs = std::filesystem;
+  std::vector<std::string> names;
+  std::error_code ec;
+  fs::path dir;
+  try {
+    dir = data_dir() / "configs";
+  } catch (const std::runtime_error& e) {
+    return std::string("none: ") + e.what();
+  }
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (e.path().extension() == ".toml") names.push_back(e.path().stem().string());
+  std::sort(names.begin(), names.end());
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s.empty() ? "none found in " + dir.string() : s;
+}
+
+namespace {
+
+// over's keys on top of base's: tables merge key by key, any other value (arrays included)
+// replaces base's. Nodes keep their source (file and line), so errors still point at the file
+// that set the value.
+// (Nodes are moved, never copied: toml++ keeps a node's source only when it moves.)
+void merge_into(toml::table& base, toml::table&& over) {
+  for (auto&& [k, v] : over) {
+    toml::node* b = base.get(k.str());
+    if (b && b->is_table() && v.is_table())
+      merge_into(*b->as_table(), std::move(*v.as_table()));
+    else
+      base.insert_or_assign(k, std::move(v));
+  }
+}
+
+// The file of a profile named by path or bare name ("quick": configs/quick.toml here or among the
+// installed profiles); `near` is the folder of the profile that names it (extends), searched first.
+std::filesystem::path find_profile(const std::string& path_or_name,
+                                   const std::filesystem::path& near = {});
+
+// A profile file with its parents (`extends = "quick"` or a list, merged left to right, then the
+// file's own keys on top), resolved recursively; `chain` catches a cycle.
+toml::table resolve_profile(const std::filesystem::path& file, std::vector<std::string>& chain,
+                            bool& composed) {
+  namespace fs = std::filesystem;
+  const std::string id = fs::weakly_canonical(file).string();
+  if (std::find(chain.begin(), chain.end(), id) != chain.end())
+    throw ProfileError(file.string() + ": `extends` makes a cycle (" + chain.front() + " → … → " +
+                       id + ")");
+  chain.push_back(id);
+  std::ifstream in(file);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  if (!in && !in.eof()) throw ProfileError(file.string() + ": cannot read");
+  toml::table own = parse_toml(ss.str(), file.string());
+  const toml::node* ext = own.get("extends");
+  if (!ext) {
+    chain.pop_back();
+    return own;
+  }
+  composed = true;
+  std::vector<std::string> parents;
+  auto bad = [&] {
+    throw ProfileError(file.string() + ":" + std::to_string(ext->source().begin.line) +
+                       ": extends must be a profile name or path, or a list of them");
+  };
+  if (ext->is_string()) {
+    parents.push_back(*ext->value<std::string>());
+  } else if (const auto* a = ext->as_array()) {
+    for (auto&& e : *a) {
+      if (!e.is_string()) bad();
+      parents.push_back(*e.value<std::string>());
+    }
+  } else {
+    bad();
+  }
+  if (parents.empty()) bad();
+  toml::table merged;
+  for (const auto& parent : parents)
+    merge_into(merged, resolve_profile(find_profile(parent, file.parent_path()), chain, composed));
+  own.erase("extends");
+  merge_into(merged, std::move(own));
+  chain.pop_back();
+  return merged;
+}
+
+// "KEY=VALUE" as a one-line TOML document (KEY may be dotted: hyper.grid."sirl.epochs").
+toml::table parse_setting(const std::string& setting) {
+  const size_t eq = setting.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw ProfileError("--set " + setting + ": expected KEY=VALUE, e.g. seeds=[0,1] or " +
+                       "hyper.grid.\"sirl.epochs\"=100");
+  try {
+    return toml::parse(setting.substr(0, eq) + " = " + setting.substr(eq + 1), "--set " + setting);
+  } catch (const toml::parse_error& e) {
+    throw ProfileError("--set " + setting + ": " + std::string(e.description()) +
+                       " (VALUE is TOML: a number, true/false, a \"string\" or an [array])");
+  }
+}
+
+}  // namespace
+
+Profile load_profile(const std::string& path_or_name, const std::vector<std::string>& settings) {
+  const std::filesystem::path file = find_profile(path_or_name);
+  std::vector<std::string> chain;
+  bool composed = false;
+  toml::table root = resolve_profile(file, chain, composed);
+  if (!composed && settings.empty()) {  // the file as written is the profile's text
+    std::ifstream in(file);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return parse_profile(ss.str(), file.string());
+  }
+  for (const auto& s : settings) merge_into(root, parse_setting(s));
+  // The resolved profile is the one recorded (results, resume, merge): one self-contained text.
+  std::ostringstream text;
+  text << "# " << file.string() << (composed ? " with its parents (extends)" : "");
+  for (const auto& s : settings) text << ", --set " << s;
+  text << ", resolved\n" << root << "\n";
+  return parse_profile_table(root, text.str(), file.string());
+}
+
+namespace {
+
+std::filesystem::path find_profile(const std::string& path_or_name,
+                                   const std::filesystem::path& near) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> candidates{path_or_name};
+  fs::path bundled;
+  std::string missing_data;
+  if (fs::path(path_or_name).extension() != ".toml") {
+    candidates.push_back(fs::path("configs") / (path_or_name + ".toml"));
+    try {
+      bundled = data_dir() / "configs";
+      candidates.push_back(bundled / (path_or_name + ".toml"));
+    } catch (const std::runtime_error& e) {  // no bundled profiles: said in the error below
+      missing_data = e.what();
+    }
+  }
+  if (!near.empty()) {
+    const fs::path rel = near / path_or_name;
+    candidates.insert(candidates.begin(), rel);
+    if (rel.extension() != ".toml")
+      candidates.insert(candidates.begin() + 1, rel.string() + ".toml");
+  }
+  for (const auto& c : candidates) {
+    std::error_code ec;
+    if (fs::is_regular_file(c, ec)) return c;
+  }
+  throw ProfileError(
+      "profile '" + path_or_name + "' not found (looked for " + candidates.front().string() +
+      (candidates.size() > 1
+           ? ", configs/" + path_or_name + ".toml" +
+                 (bundled.empty() ? std::string()
+                                  : " and " + (bundled / path_or_name).string() + ".toml")
+           : std::string()) +
+      ")" + (missing_data.empty() ? std::string() : "; " + missing_data));
+}
+
+}  // namespace
+
+}  // namespace sirl

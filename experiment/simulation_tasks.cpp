@@ -1,0 +1,735 @@
+#include "experiment/simulation_tasks.h"
+
+#include <algorithm>
+#include <initializer_list>
+#include <string_view>
+
+#include "datasets/environments.h"
+#include "datasets/queries.h"
+#include "engine/convergence.h"
+#include "engine/fpe.h"
+#include "engine/methods.h"
+#include "engine/tpa.h"
+#include "experiment/expected_epochs.h"
+#include "experiment/task_outputs.h"
+#include "experiment/task_settings.h"
+#include "kernels/vae.h"
+#include "results/external_embeddings.h"
+
+namespace sirl {
+
+std::string vae_key(const std::string& env, int64_t seed) {
+  return env + "/s" + std::to_string(seed) + "/vae";
+}
+
+namespace {
+// "<env>/s<seed>[/<teacher>]/<variant>[/N<N>]/"
+std::string cell_prefix(const std::string& env, int64_t seed, const std::string& teacher,
+                        const Variant& v, int64_t N) {
+  std::string k = env + "/s" + std::to_string(seed) + "/";
+  if (!teacher.empty()) k += teacher + "/";
+  k += v.name();
+  if (uses_queries(v.method)) k += "/N" + std::to_string(N);
+  return k + "/";
+}
+std::string cell_prefix(const Task& t) {
+  return cell_prefix(t.env, t.seed, t.teacher, t.variant, t.N);
+}
+// The teacher of the φ a cell reads: none for a method that learns from no answers.
+std::string rep_teacher(const Variant& v, const std::string& teacher) {
+  return uses_queries(v.method) ? teacher : "";
+}
+}  // namespace
+
+std::string rep_key(const std::string& env, int64_t seed, const Variant& v, int64_t N,
+                    const std::string& teacher) {
+  return cell_prefix(env, seed, rep_teacher(v, teacher), v, N) + "rep";
+}
+
+Task experiment_cell(TaskKind kind, const std::string& env, int64_t seed, const Variant& v,
+                     int64_t N, const std::string& teacher) {
+  Task t;
+  t.kind = kind;
+  t.env = env;
+  t.seed = seed;
+  t.variant = v;
+  t.N = uses_queries(v.method) ? N : 0;
+  const bool heads_learn = kind == tpa_kind() || kind == robust_tpa_kind();
+  t.teacher = heads_learn ? teacher : rep_teacher(v, teacher);
+  return t;
+}
+
+namespace {
+
+// ---- sizes the cost models read ----
+
+// φ's shape and the trajectory space of one environment under a profile.
+struct EnvSizes {
+  const Hyper& h;
+  int input_dim;
+  int64_t trajectories;
+  MlpShape phi;
+};
+EnvSizes env_sizes(const Task& t, const Profile& p) {
+  const EnvSpec& e = env_spec(t.env);
+  const Hyper& h = hyper_at(p, t.env, t.hyper);
+  const int in = e.input_dim(p.data);
+  return {h, in, e.trajectories(p.data), phi_shape(in, h)};
+}
+
+// Bytes of one training: params, gradient, Adam's m and v, and one batch's activations.
+double working_set(const MlpShape& s, int batch_rows) {
+  double act = 0;
+  for (int w : s.widths) act += double(w) * batch_rows;
+  return 4.0 * (4.0 * double(s.param_count()) + 2 * act);
+}
+
+// Main-memory traffic of an Adam training whose state (weights and both moments, plus a
+// gradient's worth of slack: 16 bytes a parameter) does not fit a core's share of the caches
+// (kCacheShare: Zen 4's 1 MiB L2 + a 32 MiB L3 shared by 8 cores). Every optimizer step reads the
+// weights three times (the forward pass, ∂L/∂input, Adam's update) and Adam's m and v, and writes
+// the weights, m and v: 8 floats = 32 bytes a parameter. (The gradient is never stored: every
+// step fuses Adam into its backward pass, kernels/mlp.h.) `models` step side by side, one step
+// of each in turn (an active-selection ensemble), so all of their states must fit.
+constexpr double kCacheShare = 5.0 * 1024 * 1024;
+double stream_bytes(const MlpShape& s, int64_t rows_per_epoch, int batch, int epochs,
+                    int models = 1) {
+  const double state = 16.0 * double(s.param_count()) * models;
+  if (state <= kCacheShare) return 0;
+  const double steps = double(epochs) * double((rows_per_epoch + batch - 1) / std::max(1, batch));
+  return 32.0 * double(s.param_count()) * models * steps;
+}
+
+// ---- what the runners share ----
+
+// The convergence verdict of a loss curve (engine/convergence.h), as record fields.
+void record_convergence(const std::vector<float>& curve, TaskRecord& r) {
+  const Convergence c = check_convergence(curve);
+  r.num["converged"] = c.converged;
+  r.num["loss_relative_change"] = c.relative_change;
+}
+
+// φ over the whole trajectory space: the embedding [T, d] (a product of the run, not only an
+// input of FPE/TPA) and the dead-unit fraction of each hidden layer. Returns its FLOPs.
+double record_embedding(const Representation& rep, const Dataset& d, TaskRecord& r) {
+  const EmbeddingPass e = embed_all(rep, d.inputs.data(), d.count);
+  r.arrays["embedding"] =
+      TaskRecord::Array::of(e.embedding, {uint64_t(d.count), uint64_t(rep.dim())});
+  r.arrays["dead_fraction"] = TaskRecord::Array::of(e.dead_fraction);
+  return rep.shape.forward_flops(int(d.count));
+}
+
+Task vae_input(const Task& t) {
+  Task v;
+  v.kind = vae_kind();
+  v.env = t.env;
+  v.seed = t.seed;
+  v.hyper = t.hyper;
+  return v;
+}
+std::string active_key(const std::string& env, int64_t seed, Selection rule,
+                       const std::string& teacher) {
+  return env + "/s" + std::to_string(seed) + "/" + (teacher.empty() ? "" : teacher + "/") +
+         "active/" + selection_name(rule);
+}
+Task active_input(const Task& t) {
+  Task a;
+  a.kind = active_kind();
+  a.env = t.env;
+  a.seed = t.seed;
+  a.teacher = t.teacher;
+  a.hyper = t.hyper;
+  a.variant = Variant{Method::sirl, false, t.variant.selection};
+  return a;
+}
+bool reads_active(const Variant& v) {
+  return v.selection != Selection::uniform;
+}
+
+Task rep_input(const Task& t) {
+  Task r = experiment_cell(rep_kind(), t.env, t.seed, t.variant, t.N, t.teacher);
+  r.hyper = t.hyper;
+  return r;
+}
+std::string input_rep_key(const Task& t) {
+  return rep_key(t.env, t.seed, t.variant, t.N, t.teacher);
+}
+
+// Every task of the experiment shards with its φ; a VAE or an active query set goes to every
+// shard that needs it.
+std::string by_representation(const Task& t) {
+  return t.kind == vae_kind() || t.kind == active_kind() ? "" : input_rep_key(t);
+}
+
+// What a record says about its task: env and seed, and for φ and its cells the method and sizes.
+void describe_variant(const Task& t, TaskRecord& r) {
+  describe_env_and_seed(t, r);
+  r.text["method"] = method_name(t.variant.method);
+  r.text["variant"] = t.variant.name();
+  r.text["selection"] = selection_name(t.variant.selection);
+  r.text["teacher"] = t.teacher;  // "" = the profile's main teacher
+  r.num["vae"] = t.variant.vae;
+  r.num["N"] = double(t.N);
+}
+// A robustness cell also names its teacher, the noise axis and level, and how far the answers
+// it learned from are from the perfect oracle's (AnswerError).
+void record_teacher(const Task& t, RunContext& ctx, TaskRecord& r) {
+  r.text["teacher"] = t.teacher;
+  for (const auto& tp : ctx.profile().robustness.teachers)
+    if (tp.tag == t.teacher) {
+      r.text["axis"] = tp.axis;
+      r.num["level"] = tp.level;
+    }
+  const AnswerError& e = ctx.bundle(t.env, t.seed, t.teacher).answer_error;
+  r.num["similarity_error"] = e.similarity;
+  r.num["preference_error"] = e.preference;
+}
+void describe_tpa(const Task& t, TaskRecord& r) {
+  describe_variant(t, r);
+  r.num["M"] = double(t.M);
+  r.num["frozen"] = t.frozen;
+  r.num["best_mode"] = is_best_mode(t.variant, t.frozen);
+  r.num["in_main"] = t.in_main;  // a cell of Fig. 5 ([tpa]), of Fig. 7 ([ablation]), or both
+  r.num["in_ablation"] = t.in_ablation;
+}
+
+// ---- vae ----
+
+void vae_cost(Task& t, const Profile& p) {
+  const EnvSizes z = env_sizes(t, p);
+  const VaeShape vs = make_vae_shape(z.input_dim, z.h.phi_hidden, z.h.embedding_dim);
+  // training, then one pass over Ξ measuring the posterior (train_vae)
+  t.flops = vs.encoder.train_flops(z.trajectories, z.h.vae.epochs) +
+            vs.decoder.train_flops(z.trajectories, z.h.vae.epochs) +
+            vs.encoder.forward_flops(int(z.trajectories)) +
+            vs.decoder.forward_flops(int(z.trajectories));
+  t.bytes = working_set(vs.encoder, z.h.vae.batch) + working_set(vs.decoder, z.h.vae.batch);
+  t.stream_bytes = stream_bytes(vs.encoder, z.trajectories, z.h.vae.batch, z.h.vae.epochs) +
+                   stream_bytes(vs.decoder, z.trajectories, z.h.vae.batch, z.h.vae.epochs);
+}
+
+bool name_vae_cell(TaskRecord& r);
+
+void run_vae(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const auto checkpoint = ctx.checkpointer(t.key);
+  const VaeModel v = train_vae(ctx.dataset(t.env), hyper_at(ctx.profile(), t.env, t.hyper),
+                               task_seed(t.env, t.seed, "vae"), {t.threads, checkpoint.get()});
+  put_vae(v, r);
+  r.num["flops"] = v.train_flops;
+  record_convergence(v.loss_curve, r);
+  name_vae_cell(r);
+  ctx.keep(t.key, std::make_shared<const VaeModel>(get_vae(r)));
+}
+
+// The tables' cell fields of a VAE record: the VAE baseline's encoder is what it trains, so its
+// method and variant are "vae". (Outputs, not described fields: the task's digest does not read
+// them, and records of engines before 0.13.0, which lack them, are completed with them.)
+bool vae_lacks_cell_fields(const TaskRecord& r) {
+  return !r.text.count("variant");
+}
+bool name_vae_cell(TaskRecord& r) {
+  r.text["method"] = "vae";
+  r.text["variant"] = "vae";
+  return true;
+}
+
+// ---- rep ----
+
+bool reads_vae(const Variant& v) {
+  return v.vae || v.method == Method::vae;
+}
+
+// The hyper-parameters a representation's training reads: φ's shape and the precision, its
+// method's schedule, and the VAE's when it starts from (or is) the VAE's encoder.
+std::string rep_hyper(const Variant& v, const Hyper& h) {
+  std::string s = hyper_lines(h, {"phi.", "precision"});
+  if (v.method == Method::sirl)
+    s += hyper_lines(h, {"sirl."});
+  else if (uses_queries(v.method))
+    s += hyper_lines(h, {"pref."});
+  if (reads_vae(v)) s += hyper_lines(h, {"vae."});
+  return s;
+}
+
+void rep_cost(Task& t, const Profile& p) {
+  const EnvSizes z = env_sizes(t, p);
+  t.flops = 0;
+  if (t.variant.method == Method::external) {  // reads its embedding of Ξ: no arithmetic
+    t.protocol_flops = 0;
+    t.bytes = 4.0 * double(z.trajectories) * double(z.h.embedding_dim);
+    return;
+  }
+  if (t.variant.method == Method::sirl) {
+    t.protocol_flops = z.phi.train_flops(3 * t.N, z.h.sirl.epochs);
+    // Trainings end at their fixed point (the exact skip): what they are expected to run.
+    t.flops = t.protocol_flops;
+    if (const double e = expected_sirl_epochs(t.env, t.N, t.variant.vae, z.h); e < z.h.sirl.epochs)
+      t.flops *= e / z.h.sirl.epochs;
+    t.bytes = working_set(z.phi, 3 * z.h.sirl.batch);
+    t.stream_bytes = stream_bytes(z.phi, 3 * t.N, 3 * z.h.sirl.batch, z.h.sirl.epochs);
+  } else if (uses_queries(t.variant.method)) {
+    t.flops = z.phi.train_flops(2 * t.N, z.h.pref.epochs);
+    t.bytes = working_set(z.phi, 2 * z.h.pref.batch);
+    t.stream_bytes = stream_bytes(z.phi, 2 * t.N, 2 * z.h.pref.batch, z.h.pref.epochs);
+    t.protocol_flops = t.flops;
+  }
+  t.flops += z.phi.forward_flops(int(z.trajectories));  // the embedding of Ξ it stores
+  t.protocol_flops += z.phi.forward_flops(int(z.trajectories));
+}
+
+// An external method's "training" is reading its embedding of Ξ for this (env, seed, N): the
+// record holds it as a learned φ's holds its own, so FPE and TPA read it the same way.
+void run_external_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const ExternalMethod& m = external_method(ctx.profile(), t.variant.external);
+  const Dataset& d = ctx.dataset(t.env);
+  ExternalEmbedding e = read_external_embedding(m.embeddings, m.xxh3, t.env, t.seed, t.N, d.count);
+  const Representation rep = table_representation(std::move(e.values), d.count, e.dim, d.input_dim);
+  put_representation(rep, r);
+  r.arrays["embedding"] = TaskRecord::Array::of(rep.table, {uint64_t(d.count), uint64_t(e.dim)});
+  r.text["embeddings_file"] = m.embeddings;
+  r.text["embeddings_xxh3"] = m.xxh3;
+  r.num["flops"] = 0;
+  r.num["protocol_flops"] = 0;
+  if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
+  ctx.keep(t.key, std::make_shared<const Representation>(get_representation(r)));
+}
+
+void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
+  if (t.variant.method == Method::external) return run_external_rep(t, ctx, r);
+  const Hyper& h = hyper_at(ctx.profile(), t.env, t.hyper);
+  const Dataset& d = ctx.dataset(t.env);
+  std::shared_ptr<const VaeModel> vae;
+  if (reads_vae(t.variant)) vae = ctx.vae(t.input(vae_kind()));
+  const auto checkpoint = ctx.checkpointer(t.key);
+  const MethodConfig c{t.variant.method, t.N, t.variant.vae, h};
+  const QueryBundle* bundle = &ctx.bundle(t.env, t.seed, t.teacher);
+  QueryBundle chosen;  // an active variant: the same bundle with the triplets it chose
+  if (reads_active(t.variant)) {
+    chosen = *bundle;
+    chosen.similarity = *ctx.triplets(t.input(active_kind()));
+    bundle = &chosen;
+  }
+  // SIRL's φ starts from the same initialisation whichever way its triplets were chosen.
+  const Representation rep = train_representation(d, *bundle, c, task_seed(t.env, t.seed, "phi"),
+                                                  vae.get(), {t.threads, checkpoint.get()});
+  put_representation(rep, r);
+  r.text["hyper"] = rep_hyper(t.variant, h);  // what this φ was trained with
+  // FLOPs spent in this task: the VAE method's φ is the VAE task's encoder, trained there.
+  r.num["flops"] =
+      (t.variant.method == Method::vae ? 0.0 : rep.train_flops) + record_embedding(rep, d, r);
+  // The protocol's count: what the epochs skipped at a fixed point would have added.
+  r.num["protocol_flops"] = r.num["flops"] + rep.skipped_flops;
+  if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
+  if (t.variant.method != Method::vae && t.variant.method != Method::random)
+    record_convergence(rep.loss_curve, r);
+  ctx.keep(t.key, std::make_shared<const Representation>(get_representation(r)));
+}
+
+// ---- fpe ----
+
+// FPE reads φ(ξ) from its representation's stored embedding of Ξ; what it computes is the
+// linear probe: the normal equations [d+1, d+1] and [d+1, F] over the training rows, and the
+// predictions of every row (d = embedding width, F ≤ 8 features: the count is an estimate).
+double probe_flops(int64_t rows, int d) {
+  constexpr int kFeatures = 8;
+  return 2.0 * double(rows) * (d + 1) * (d + 1 + 2 * kFeatures);
+}
+
+void fpe_cost(Task& t, const Profile& p) {
+  const EnvSizes z = env_sizes(t, p);
+  t.flops = probe_flops(p.queries.fpe_trajectories, z.h.embedding_dim);
+  t.bytes = 4.0 * double(p.queries.fpe_trajectories) * (z.h.embedding_dim + 16);
+}
+
+// FPE's labelled trajectories are the true features whoever the teacher (its split is drawn
+// from a stream no teacher touches, so every teacher's φ is probed on the same rows).
+void run_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const auto rep = ctx.representation(t.input(rep_kind()));
+  const FpeSplit& split = ctx.bundle(t.env, t.seed).fpe;
+  const FpeResult f = evaluate_fpe(*rep, ctx.dataset(t.env), split);
+  r.num["fpe"] = f.fpe;
+  r.num["train_mse"] = f.train_mse;
+  r.num["flops"] = probe_flops(int64_t(split.train.size() + split.test.size()), rep->dim());
+}
+// The same, and what a robustness row says of its teacher's answers.
+void run_robust_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
+  run_fpe(t, ctx, r);
+  record_teacher(t, ctx, r);
+}
+
+// ---- tpa ----
+
+void tpa_cost(Task& t, const Profile& p) {
+  const EnvSizes z = env_sizes(t, p);
+  const MlpShape net = tpa_network(z.phi, z.h, t.frozen);
+  t.protocol_flops = kTestRewards * net.train_flops(2 * t.M, z.h.tpa.epochs);
+  // Under tpa.stop = "converged" the heads stop early: what they are expected to run.
+  t.flops = t.protocol_flops;
+  if (const double e = expected_head_epochs(t.env, t.frozen, t.M, z.h); e < z.h.tpa.epochs)
+    t.flops *= e / z.h.tpa.epochs;
+  t.bytes = kTestRewards * working_set(net, 2 * z.h.tpa.batch);
+  // The heads train one after another (engine/tpa.h): what must fit the cache is one head's.
+  t.stream_bytes = kTestRewards * stream_bytes(net, 2 * t.M, 2 * z.h.tpa.batch, z.h.tpa.epochs);
+  if (t.flops < t.protocol_flops) t.stream_bytes *= t.flops / t.protocol_flops;
+}
+
+// Converged when every head's loss curve is (the fraction tells how many were); the relative
+// change reported is the median head's.
+void record_heads_convergence(const TpaResult& res, TaskRecord& r) {
+  const uint64_t R = res.accuracy.size();
+  int converged = 0;
+  std::vector<double> change;
+  for (uint64_t k = 0; k < R; ++k) {
+    const auto* c = res.loss_curves.data() + k * res.epochs;  // NaN after a head's stop
+    const Convergence v = check_convergence(std::vector<float>(c, c + res.head_epochs[k]));
+    converged += v.converged;
+    change.push_back(v.relative_change);
+  }
+  std::sort(change.begin(), change.end());
+  r.num["converged"] = converged == int(R);
+  r.num["converged_fraction"] = R ? double(converged) / double(R) : 0.0;
+  r.num["loss_relative_change"] = R ? change[R / 2] : 0.0;
+}
+
+void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const auto checkpoint = ctx.checkpointer(t.key);
+  const TpaResult res =
+      evaluate_tpa(*ctx.representation(t.input(rep_kind())), ctx.dataset(t.env),
+                   ctx.bundle(t.env, t.seed, t.teacher).tpa,
+                   TpaConfig{t.M, t.frozen, hyper_at(ctx.profile(), t.env, t.hyper)},
+                   task_seed(t.env, t.seed, "tpa"), {t.threads, checkpoint.get()});
+  r.num["tpa"] = res.mean;
+  r.num["tpa_std"] = res.stddev;
+  r.num["flops"] = res.train_flops;
+  r.num["protocol_flops"] = res.protocol_flops;
+  const uint64_t R = res.accuracy.size();
+  r.arrays["accuracy"] =
+      TaskRecord::Array::of(std::vector<float>(res.accuracy.begin(), res.accuracy.end()));
+  r.arrays["train_accuracy"] = TaskRecord::Array::of(
+      std::vector<float>(res.train_accuracy.begin(), res.train_accuracy.end()));
+  double train_mean = 0;
+  for (double a : res.train_accuracy) train_mean += a / double(R);
+  r.num["tpa_train"] = train_mean;
+  r.arrays["loss_curves"] = TaskRecord::Array::of(res.loss_curves, {R, uint64_t(res.epochs)});
+  r.arrays["phi_drift"] = TaskRecord::Array::of(res.phi_drift);
+  // Each head's epochs trained; a head below the cap stopped by tpa.stop = "converged".
+  r.arrays["head_epochs"] =
+      TaskRecord::Array::of(std::vector<float>(res.head_epochs.begin(), res.head_epochs.end()));
+  r.text["stop"] =  // the rule this cell's heads ran under
+      tpa_stop_rule(hyper_at(ctx.profile(), t.env, t.hyper), t.frozen).converged ? "converged"
+                                                                                 : "fixed";
+  record_heads_convergence(res, r);
+  if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
+}
+void run_robust_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
+  run_tpa(t, ctx, r);
+  record_teacher(t, ctx, r);
+}
+
+// ---- active ----
+
+ActiveConfig active_config(const Task& t, const Profile& p) {
+  ActiveConfig c;
+  static_cast<ActiveRounds&>(c) = p.active.at(t.env);
+  c.rule = t.variant.selection;
+  c.budget = queries_for(p, t.teacher).similarity;  // as many as the uniform set holds
+  c.hyper = hyper_at(p, t.env, t.hyper);
+  return c;
+}
+
+void active_cost(Task& t, const Profile& p) {
+  const EnvSizes z = env_sizes(t, p);
+  const ActiveConfig c = active_config(t, p);
+  // Round r ≥ 1 trains K members for E epochs on the r·batch triplets answered before it, then
+  // embeds its pool's rows (≤ 3·pool) with each member.
+  t.flops = 0;
+  const int64_t rounds = (c.budget + c.batch - 1) / c.batch;
+  for (int64_t r = 1; r < rounds; ++r) {
+    t.flops += c.members * z.phi.train_flops(3 * std::min(c.budget, r * c.batch), c.round_epochs);
+    t.flops += c.members * z.phi.forward_flops(int(std::min<int64_t>(3 * c.pool, z.trajectories)));
+  }
+  t.bytes = c.members * working_set(z.phi, 3 * z.h.sirl.batch);
+  t.stream_bytes = 0;
+  for (int64_t r = 1; r < rounds; ++r)
+    t.stream_bytes += stream_bytes(z.phi, 3 * std::min(c.budget, r * c.batch), 3 * z.h.sirl.batch,
+                                   c.round_epochs, c.members);
+}
+
+void run_active(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const ActiveConfig c = active_config(t, ctx.profile());
+  const auto checkpoint = ctx.checkpointer(t.key);
+  // The teacher as the bundle has it (an attend teacher's mask drawn for this seed).
+  const Teacher& teacher = ctx.bundle(t.env, t.seed, t.teacher).config.teacher;
+  const ActiveQueries a =
+      select_active_queries(ctx.dataset(t.env), teacher, c, task_seed(t.env, t.seed, "active"),
+                            {t.threads, checkpoint.get()});
+  put_triplets(a.queries, r);
+  r.arrays["batch_score"] = TaskRecord::Array::of(a.batch_score);
+  r.arrays["pool_score"] = TaskRecord::Array::of(a.pool_score);
+  r.num["rounds"] = a.rounds;
+  r.num["flops"] = a.train_flops;
+  ctx.keep(t.key, std::make_shared<const TripletSet>(get_triplets(r)));
+}
+
+void describe_active(const Task& t, TaskRecord& r) {
+  describe_env_and_seed(t, r);
+  r.text["selection"] = selection_name(t.variant.selection);
+  r.text["teacher"] = t.teacher;
+}
+
+std::string tpa_cell_key(const Task& t) {
+  return cell_prefix(t) + "tpa/M" + std::to_string(t.M) + (t.frozen ? "/frozen" : "/unfrozen");
+}
+
+// ---- settings: what each kind reads of the profile (experiment/task_settings.h) ----
+
+std::string vae_settings(const Task& t, const Profile& p) {
+  return describe_data(p, t.env) +
+         hyper_lines(hyper_at(p, t.env, t.hyper), {"phi.", "vae.", "precision"});
+}
+
+std::string rep_settings(const Task& t, const Profile& p) {
+  if (t.variant.method == Method::external)
+    return describe_data(p, t.env) + describe_external(external_method(p, t.variant.external));
+  // Every φ is handed its seed's query bundle (methods that ask nothing ignore it).
+  return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
+         rep_hyper(t.variant, hyper_at(p, t.env, t.hyper));
+}
+
+// The probe's split comes from the main teacher's bundle; a robustness row also states its own
+// teacher's answer error.
+std::string fpe_settings(const Task& t, const Profile& p) {
+  return describe_data(p, t.env) + describe_queries(p.queries) +
+         (t.teacher.empty() ? "" : describe_queries(queries_for(p, t.teacher)));
+}
+
+std::string tpa_settings(const Task& t, const Profile& p) {
+  return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
+         hyper_lines(hyper_at(p, t.env, t.hyper), {"phi.", "tpa.", "precision"});
+}
+
+std::string active_settings(const Task& t, const Profile& p) {
+  return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
+         describe_active(p.active.at(t.env)) +
+         hyper_lines(hyper_at(p, t.env, t.hyper), {"phi.", "sirl.", "precision"});
+}
+
+using C = H5Table::Column;
+
+// The columns a robustness row adds: who taught, on which axis at which level, and how far its
+// answers were from the perfect oracle's.
+const std::vector<TableColumn> kTeacherColumns{{"teacher", C::String, "teacher"},
+                                               {"axis", C::String, "axis"},
+                                               {"level", C::Double, "level"},
+                                               {"similarity_error", C::Double, "similarity_error"},
+                                               {"preference_error", C::Double, "preference_error"}};
+
+void drop_columns(CellTableSpec& t, std::initializer_list<std::string_view> names) {
+  std::erase_if(t.columns, [&](const TableColumn& c) {
+    return std::find(names.begin(), names.end(), std::string_view(c.name)) != names.end();
+  });
+}
+
+}  // namespace
+
+bool lacks_cell_fields(const TaskRecord& r) {
+  return r.kind != "vae" && r.text.count("variant") && !r.text.count("selection");
+}
+
+bool complete_cell_fields(TaskRecord& r) {
+  if (!lacks_cell_fields(r)) return false;
+  const Variant variant = parse_variant(r.text.at("variant"));
+  r.text["selection"] = selection_name(variant.selection);
+  r.text.emplace("teacher", "");  // a robustness record names its own
+  if (r.num.count("frozen") && !r.num.count("best_mode"))
+    r.num["best_mode"] = is_best_mode(variant, r.num.at("frozen") != 0);
+  return true;
+}
+
+const TaskKindSpec& vae_kind() {
+  static const TaskKindSpec kind{
+      .name = "vae",
+      .description = "a VAE over Ξ per (env, seed): pre-training and the VAE baseline",
+      .key = [](const Task& t) { return vae_key(t.env, t.seed); },
+      .inputs = [](const Task&, const Profile&) { return std::vector<Task>{}; },
+      .settings = vae_settings,
+      .cost = vae_cost,
+      .rate = [](const Task&) { return "vae"; },
+      .shard_group = by_representation,
+      .bf16_products = env_precision_is_bf16,
+      .stores_weights = true,
+      .describe = describe_env_and_seed,
+      .run = run_vae,
+      .table = {},
+      .lacks_fields = vae_lacks_cell_fields,
+      .complete_fields = name_vae_cell,
+  };
+  return kind;
+}
+
+const TaskKindSpec& rep_kind() {
+  static const TaskKindSpec kind{
+      .name = "rep",
+      .description = "a representation φ per (env, seed, method, N), its embedding of Ξ",
+      .key = [](const Task& t) { return input_rep_key(t); },
+      .inputs =
+          [](const Task& t, const Profile&) {
+            std::vector<Task> in;
+            if (reads_vae(t.variant)) in.push_back(vae_input(t));
+            if (reads_active(t.variant)) in.push_back(active_input(t));
+            return in;
+          },
+      .settings = rep_settings,
+      .cost = rep_cost,
+      .rate =
+          [](const Task& t) { return t.variant.method == Method::sirl ? "rep_sirl" : "rep_pref"; },
+      .shard_group = by_representation,
+      .bf16_products = env_precision_is_bf16,
+      .stores_weights = true,
+      .describe = describe_variant,
+      .run = run_rep,
+      .table = {},
+      .lacks_fields = lacks_cell_fields,
+      .complete_fields = complete_cell_fields,
+  };
+  return kind;
+}
+
+const TaskKindSpec& fpe_kind() {
+  static const TaskKindSpec kind{
+      .name = "fpe",
+      .description = "FPE of one φ: a linear probe's held-out error",
+      .key = [](const Task& t) { return cell_prefix(t) + "fpe"; },
+      .inputs = [](const Task& t, const Profile&) { return std::vector<Task>{rep_input(t)}; },
+      .settings = fpe_settings,
+      .cost = fpe_cost,
+      .rate = [](const Task&) { return "fpe"; },
+      .shard_group = by_representation,
+      .bf16_products = never_bf16,
+      .stores_weights = true,
+      .describe = describe_variant,
+      .run = run_fpe,
+      .table = {"fpe",
+                "fpe",
+                {{"env", C::String, "env"},
+                 {"method", C::String, "method"},
+                 {"variant", C::String, "variant"},
+                 {"vae", C::Int, "vae"},
+                 {"N", C::Int, "N"},
+                 {"seed", C::Int, "seed"},
+                 {"fpe", C::Double, "fpe"},
+                 {"train_mse", C::Double, "train_mse"},
+                 {"selection", C::String, "selection"},
+                 {"teacher", C::String, "teacher"},
+                 {"hyper_point", C::String, "hyper_point", true}}},
+      .lacks_fields = lacks_cell_fields,
+      .complete_fields = complete_cell_fields,
+  };
+  return kind;
+}
+
+const TaskKindSpec& tpa_kind() {
+  static const TaskKindSpec kind{
+      .name = "tpa",
+      .description = "TPA of one φ at M pairs, frozen or unfrozen: 20 reward heads",
+      .key = tpa_cell_key,
+      .inputs = [](const Task& t, const Profile&) { return std::vector<Task>{rep_input(t)}; },
+      .settings = tpa_settings,
+      .cost = tpa_cost,
+      .rate = [](const Task& t) { return t.frozen ? "tpa_frozen" : "tpa_unfrozen"; },
+      .shard_group = by_representation,
+      .bf16_products = env_precision_is_bf16,
+      .stores_weights = true,
+      .describe = describe_tpa,
+      .run = run_tpa,
+      .table = {"tpa",
+                "tpa",
+                {{"env", C::String, "env"},
+                 {"method", C::String, "method"},
+                 {"variant", C::String, "variant"},
+                 {"vae", C::Int, "vae"},
+                 {"frozen", C::Int, "frozen"},
+                 {"N", C::Int, "N"},
+                 {"M", C::Int, "M"},
+                 {"seed", C::Int, "seed"},
+                 {"tpa", C::Double, "tpa"},
+                 {"tpa_std", C::Double, "tpa_std"},
+                 {"tpa_train", C::Double, "tpa_train"},
+                 {"in_main", C::Int, "in_main"},
+                 {"in_ablation", C::Int, "in_ablation"},
+                 {"selection", C::String, "selection"},
+                 {"teacher", C::String, "teacher"},
+                 {"best_mode", C::Int, "best_mode"},
+                 {"hyper_point", C::String, "hyper_point", true}}},
+      .lacks_fields = lacks_cell_fields,
+      .complete_fields = complete_cell_fields,
+  };
+  return kind;
+}
+
+// The robustness cells: FPE and TPA cells of a noisy teacher, in tables of their own so the
+// main grid's tables (and their digests) do not change when a profile adds noise axes. A twin is
+// its main kind with its own name, runner and table: the main table's columns but `dropped`, and
+// kTeacherColumns (the teacher among them) after the method's.
+namespace {
+TaskKindSpec robustness_twin(const TaskKindSpec& main, const char* name, const char* description,
+                             void (*run)(const Task&, RunContext&, TaskRecord&),
+                             std::initializer_list<std::string_view> dropped) {
+  TaskKindSpec k = main;
+  k.name = name;
+  k.description = description;
+  k.run = run;
+  k.table.kind = name;
+  k.table.name = name;
+  drop_columns(k.table, dropped);
+  k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
+                         kTeacherColumns.end());
+  return k;
+}
+}  // namespace
+
+const TaskKindSpec& robust_fpe_kind() {
+  static const TaskKindSpec kind = robustness_twin(
+      fpe_kind(), "robust_fpe", "FPE of one φ trained on a noisy teacher's answers ([robustness])",
+      run_robust_fpe, {"teacher"});
+  return kind;
+}
+
+const TaskKindSpec& robust_tpa_kind() {
+  // No in_main, in_ablation: its cells belong to no figure's grid.
+  static const TaskKindSpec kind =
+      robustness_twin(tpa_kind(), "robust_tpa",
+                      "TPA of one φ, heads trained on a noisy teacher's labels ([robustness])",
+                      run_robust_tpa, {"in_main", "in_ablation", "teacher"});
+  return kind;
+}
+
+const TaskKindSpec& active_kind() {
+  static const TaskKindSpec kind{
+      .name = "active",
+      .description = "the triplets an active SIRL variant asks, chosen round by round",
+      .key =
+          [](const Task& t) { return active_key(t.env, t.seed, t.variant.selection, t.teacher); },
+      .inputs = [](const Task&, const Profile&) { return std::vector<Task>{}; },
+      .settings = active_settings,
+      .cost = active_cost,
+      .rate = [](const Task&) { return "rep_sirl"; },
+      .shard_group = by_representation,
+      .bf16_products = env_precision_is_bf16,
+      .stores_weights = true,
+      .describe = describe_active,
+      .run = run_active,
+      .table = {},
+  };
+  return kind;
+}
+
+namespace {
+[[maybe_unused]] const TaskKindRegistration registered_simulation_kinds[]{
+    TaskKindRegistration(vae_kind()),        TaskKindRegistration(rep_kind()),
+    TaskKindRegistration(fpe_kind()),        TaskKindRegistration(tpa_kind()),
+    TaskKindRegistration(robust_fpe_kind()), TaskKindRegistration(robust_tpa_kind()),
+    TaskKindRegistration(active_kind())};
+}  // namespace
+
+}  // namespace sirl

@@ -1,0 +1,82 @@
+#!/usr/bin/python3
+"""Draws the paper's figures and a report from a sirl-bench results file (HDF5 only).
+
+    /usr/bin/python3 report/plot_figures.py RESULTS.h5 --out FIGURE_DIR
+
+Writes fig3_grid_similar.{png,pdf}, fig4_fpe.{png,pdf}, fig5_tpa.{png,pdf},
+fig7_ablation.{png,pdf}, fig_learning_curves.{png,pdf} and report.md (+ report.html). Reads only
+the file: /tables/*, /runs/... and /datasets/... . Every figure plots what the file holds (which
+cells belong to Fig. 5 or Fig. 7 is a column of /tables/tpa), never a re-reading of the profile.
+A partial file (an interrupted run) plots with gaps and notes, never zeros.
+
+The work is in four modules beside it: run_tables.py (the file's tables and environments),
+figures.py (the figures), hypotheses.py (the claims decided) and report.py (the report).
+"""
+
+import argparse
+import json
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import figures  # noqa: E402
+import plot_beyond  # noqa: E402
+import plot_hyper  # noqa: E402
+import report  # noqa: E402
+import run_tables  # noqa: E402
+import sirl_bench  # noqa: E402  (run_tables puts it on the path)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("results", help="HDF5 results file written by `sirl run`")
+    ap.add_argument("--out", required=True, help="directory for the figures and the report")
+    a = ap.parse_args()
+    if not os.path.exists(a.results):
+        sys.exit(f"plot_figures: {a.results}: no such file")
+    os.makedirs(a.out, exist_ok=True)
+    try:
+        res, t = run_tables.load(a.results)
+    except sirl_bench.ResultsError as e:
+        sys.exit(f"plot_figures: {e}")
+    run_tables.load_envs(res)
+    figures.add_external_styles(t)
+    envs = [e for e in run_tables.ENV if any(not t[k].empty and (t[k].env == e).any()
+                                  for k in ("fpe", "tpa", "training"))] or list(run_tables.ENV)[:1]
+    notes = []
+    if not t["tpa"].empty and "best_mode" not in t["tpa"]:
+        # Which cells are a method's best mode is a column the engine writes (from 0.8.0 on);
+        # this file predates it, and the rule is not restated here.
+        msg = ("this file was written by an engine before 0.8.0: its tables carry no best_mode "
+               "column, so Fig. 5 and H2 are not drawn; `sirl merge NEW.h5 THIS.h5` rewrites its "
+               "tables with the current engine")
+        notes.append(msg)
+        print(f"plot_figures: {msg}", file=sys.stderr)
+    prov = res.provenance
+    if not prov.get("complete", 1):
+        notes.append(f"partial run: {prov.get('tasks_done')} of {prov.get('tasks_total')} "
+                     "tasks; missing cells are gaps, not zeros")
+    shard = prov.get("shard", "")
+    if shard:
+        notes.append(f"this file is shard {shard} of a run: missing cells are in the other shards "
+                     "(combine them with `sirl merge`)")
+    fig3_key = figures.plot_fig3(res, a.out, notes)
+    figures.plot_fig4(t["fpe"], envs, a.out, notes)
+    figures.plot_fig5(t["tpa"], envs, a.out, notes)
+    figures.plot_fig7(t["tpa"], envs, a.out, notes)
+    figures.plot_learning_curves(res, t, envs, a.out, notes)
+    beyond = {"active": plot_beyond.plot_active(t["fpe"], t["tpa"], a.out, notes, figures.DRAWN),
+              "robustness": plot_beyond.plot_robustness(t["fpe"], t["tpa"], t["robust_fpe"],
+                                                        t["robust_tpa"], a.out, notes, figures.DRAWN)}
+    beyond["hyper"] = plot_hyper.plot_hyper(t["all_points"]["fpe"], t["all_points"]["tpa"],
+                                            res.hyper_points, figures.STYLE, figures.ORDER,
+                                            figures.mean_ci, figures.save, a.out,
+                                            notes, figures.DRAWN)
+    report.report(res, t, envs, a.out, notes, fig3_key, beyond)
+    with open(os.path.join(a.out, "figures.json"), "w") as fh:
+        json.dump(figures.DRAWN, fh, indent=1)
+    print(f"plot_figures: wrote figures and report.md to {a.out}/")
+
+
+if __name__ == "__main__":
+    main()
