@@ -83,6 +83,12 @@ std::vector<EnvSpec> built_in() {
   jaco.description = "7-DoF Jaco arm with table, laptop and human; 4 features";
   jaco.sampled = true;
   jaco.data_table = "jaco";
+  jaco.data_keys = {"trajectories", "data_seed", "max_deformation"};
+  jaco.read_data = [](const DataTableReader& r, EnvConfig& c) {
+    c.jaco.trajectories = r.integer("trajectories", 10000, 100, 10'000'000);
+    c.jaco.seed = uint64_t(r.integer("data_seed", 0, 0, 1'000'000'000));
+    c.jaco.max_deformation = r.number("max_deformation", 0.5, 0, 3.14159);
+  };
   // The paper's JacoRobot values (its appendix), and the VAE rate the engine lowers to 0.001:
   // the stated 0.01 diverges on this 2037→1024→1024 VAE (docs/fidelity-evidence.md).
   jaco.hyper = {{"phi.hidden", std::vector<int>{1024, 1024}},

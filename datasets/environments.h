@@ -42,6 +42,15 @@ struct HyperDefault {
   HyperValue value;
 };
 
+// An environment's profile table (its data_table, e.g. [jaco]) as the profile reader hands it
+// over: each read takes the key's default when it is absent and refuses, naming the file and
+// line, a value of the wrong type or outside [lo, hi].
+struct DataTableReader {
+  virtual ~DataTableReader() = default;
+  virtual int64_t integer(const char* key, int64_t def, int64_t lo, int64_t hi) const = 0;
+  virtual double number(const char* key, double def, double lo, double hi) const = 0;
+};
+
 struct EnvSpec {
   std::string name;         // the profile's and the results file's name: "grid", "jaco2", …
   std::string title;        // for figures: "GridRobot", …
@@ -49,9 +58,12 @@ struct EnvSpec {
   // Ξ is sampled from EnvConfig::jaco (trajectories, seed) rather than enumerated. Sampled
   // environments keep their network weights out of the results file by default (3.1 M floats).
   bool sampled = false;
-  // The profile table whose `trajectories`, `data_seed` and `max_deformation` set Ξ (empty: Ξ is
-  // fixed). Both JacoRobot variants read [jaco].
+  // The profile table whose keys set Ξ (empty: Ξ is fixed). Both JacoRobot variants read [jaco].
   std::string data_table;
+  // The environment that owns that table (data_table == name) says which keys it holds beside a
+  // grid's axes (seeds, fpe_N, …) and reads them into an EnvConfig; null: its Ξ has no settings.
+  std::vector<std::string> data_keys;
+  void (*read_data)(const DataTableReader& table, EnvConfig& cfg) = nullptr;
   std::vector<HyperDefault> hyper;
   EnvView view = EnvView::plane;
   // Roles in the report and figures (stored as attributes of /datasets/<env>):

@@ -298,22 +298,32 @@ namespace {
 
 // Each environment's table takes the axis keys; the table named by an environment's data_table
 // ([jaco] for both JacoRobot variants) also sets Ξ.
+// A profile table through the Reader's checks, for an environment reading its own keys.
+struct TomlDataTable : DataTableReader {
+  TomlDataTable(const Reader& r, const toml::table& t) : r_(r), t_(t) {}
+  int64_t integer(const char* key, int64_t def, int64_t lo, int64_t hi) const override {
+    return r_.integer(t_, key, def, lo, hi);
+  }
+  double number(const char* key, double def, double lo, double hi) const override {
+    return r_.number(t_, key, def, lo, hi);
+  }
+  const Reader& r_;
+  const toml::table& t_;
+};
+
+// Each environment's table ([grid], [jaco], …): the grid's axes, and where the environment owns
+// a data table, the keys it reads itself (EnvSpec::read_data).
 void parse_data_tables(Reader& r, const toml::table& root, EnvConfig& data) {
   const std::set<std::string> axis_keys{"seeds",      "fpe_N",      "tpa_N",        "tpa_M",
                                         "ablation_N", "ablation_M", "store_weights"};
-  std::set<std::string> data_tables;
-  for (const auto& e : environments())
-    if (!e.data_table.empty()) data_tables.insert(e.data_table);
   for (const auto& e : environments()) {
     const auto* t = r.table(root, e.name.c_str(), false);
     if (!t) continue;
+    const bool owns_data = e.read_data && e.data_table == e.name;
     std::set<std::string> keys = axis_keys;
-    if (data_tables.count(e.name)) keys.insert({"trajectories", "data_seed", "max_deformation"});
+    if (owns_data) keys.insert(e.data_keys.begin(), e.data_keys.end());
     r.only_keys(*t, "[" + e.name + "]", keys);
-    if (!data_tables.count(e.name)) continue;
-    data.jaco.trajectories = r.integer(*t, "trajectories", 10000, 100, 10'000'000);
-    data.jaco.seed = uint64_t(r.integer(*t, "data_seed", 0, 0, 1'000'000'000));
-    data.jaco.max_deformation = r.number(*t, "max_deformation", 0.5, 0, 3.14159);
+    if (owns_data) e.read_data(TomlDataTable(r, *t), data);
   }
   data.jaco.threads = 1;  // generated inside one task; the data never depends on it
 }

@@ -15,7 +15,7 @@ namespace sirl {
 
 namespace {
 
-// Best GFLOP/s of five ~0.3 ms runs of a peak loop.
+// Best GFLOP/s of five short runs of a peak loop (each a fixed number of iterations).
 template <typename Loop>
 double best_of_probes(Loop&& loop, double flops) {
   double best = 0;

@@ -5,7 +5,7 @@
 
 namespace sirl {
 
-// Best of a few ~5 ms probes, measured once per process (thread-safe); ~20 ms the first time.
+// Best of a few short probes of the peak loop, measured once per process (thread-safe).
 double fp32_roof_gflops_per_core();
 
 // The peak of the unit bf16 products run on here (gemm_bf16.h's bf16_backend()): AMX tdpbf16ps
@@ -15,8 +15,8 @@ double bf16_roof_gflops_per_core();
 
 // This core's main-memory bandwidth in GB/s: a STREAM triad a[i] = b[i] + s·c[i] over three
 // 32 MiB arrays (beyond a core's share of the caches), counting 12 bytes per element; best of 3
-// passes after one that faults the pages in. Measured once per process (thread-safe), ~50 ms and
-// 96 MiB the first time. The memory roof of a task that streams its weights and Adam state:
+// passes after one that faults the pages in. Measured once per process (thread-safe), with 96 MiB
+// allocated while it runs. The memory roof of a task that streams its weights and Adam state:
 // its FLOPs per byte streamed times this (/tables/timings' memory_roof_gflops).
 double stream_gbs_per_core();
 
