@@ -289,11 +289,8 @@ class ActiveSelection {
                                              d_.inputs.data(), batch.data(), b, margin);
         },
         [&](int e) { ens.adam.step = step0 + e * batches; }, loop);
-    // The round's FLOPs, batch by batch in the order the steps ran.
-    for (int e = 0; e < cfg_.round_epochs; ++e)
-      for (int64_t i0 = 0; i0 < n; i0 += B)
-        out_.train_flops +=
-            cfg_.members * shape_.train_flops(3 * int(std::min<int64_t>(B, n - i0)));
+    for (int e = 0; e < cfg_.round_epochs; ++e)  // the round's FLOPs
+      out_.train_flops = epoch_train_flops(shape_, n, B, 3, cfg_.members, out_.train_flops);
     for (float v : ens_.trainer.params)
       if (!std::isfinite(v))
         throw std::runtime_error("active selection: an ensemble member diverged");

@@ -147,9 +147,11 @@ ModelCurves run_model_epochs(int64_t n, int epochs, int batch, std::vector<Rng>&
       epochs_detail::resume_models(opt.resume, epochs, out.curves, rngs, out.epochs_run, stopped);
   const int stretch =
       int(std::max<int64_t>(1, (std::max(1, opt.stretch_steps) + per_epoch - 1) / per_epoch));
-  for (int e0 = first; e0 < epochs; e0 += stretch) {
+  auto all_stopped = [&] {
+    return std::all_of(stopped.begin(), stopped.end(), [](char x) { return x != 0; });
+  };
+  for (int e0 = first; e0 < epochs && !all_stopped(); e0 += stretch) {
     const int e1 = std::min(epochs, e0 + stretch);
-    if (std::all_of(stopped.begin(), stopped.end(), [](char x) { return x != 0; })) break;
     // One model alone keeps every thread for its own steps (no parallel region around it).
     for_each_model(R, R > 1 ? opt.threads : 1, [&](int m) {
       if (stopped[m]) return;
@@ -181,7 +183,7 @@ ModelCurves run_model_epochs(int64_t n, int epochs, int batch, std::vector<Rng>&
     at_epoch(e1);
     // Nothing is left to resume once every model has stopped (a caller's record of why a model
     // stopped lives in its own closure, which a snapshot does not hold).
-    if (std::all_of(stopped.begin(), stopped.end(), [](char x) { return x != 0; })) break;
+    if (all_stopped()) break;
     if (epochs_detail::due(opt.resume, e1, epochs))
       epochs_detail::save_models(opt.resume, e1, out.curves, rngs, out.epochs_run, stopped);
   }

@@ -162,11 +162,11 @@ float triplet_train_step_of_model(BatchedTrainer& t, int m, const AdamStepScalar
   });
 }
 
-double epoch_train_flops(const MlpShape& s, int64_t n, int batch, int roles, int copies) {
-  double flops = 0;
+double epoch_train_flops(const MlpShape& s, int64_t n, int batch, int roles, int copies,
+                         double total) {
   for (int64_t i0 = 0; i0 < n; i0 += batch)
-    flops += copies * s.train_flops(roles * int(std::min<int64_t>(batch, n - i0)));
-  return flops;
+    total += copies * s.train_flops(roles * int(std::min<int64_t>(batch, n - i0)));
+  return total;
 }
 
 }  // namespace sirl

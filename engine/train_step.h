@@ -82,7 +82,9 @@ float triplet_train_step_of_model(BatchedTrainer& t, int m, const AdamStepScalar
 
 // FLOPs of one epoch over n examples in batches of `batch`, each example `roles` rows through s
 // (3 for triplets, 2 for pairs), for `copies` models: Σ over the epoch's batches of
-// copies · s.train_flops(roles · b), summed batch by batch as a step-by-step count would.
-double epoch_train_flops(const MlpShape& s, int64_t n, int batch, int roles, int copies = 1);
+// copies · s.train_flops(roles · b), added batch by batch onto `total` (a running count keeps
+// the bits of one that added each step as it ran).
+double epoch_train_flops(const MlpShape& s, int64_t n, int batch, int roles, int copies = 1,
+                         double total = 0);
 
 }  // namespace sirl
