@@ -73,6 +73,7 @@ TEST(HyperAxes, BadAxesAreRefusedWithTheirLine) {
   for (const auto& [line, want] : std::vector<std::pair<std::string, std::string>>{
            {"\"sirl.epochs\" = []", "needs at least one value"},
            {"\"sirl.epochs\" = [30, 30]", "listed twice"},
+           {"\"sirl.margin\" = [1, 1.0]", "listed twice"},  // one text, one point name
            {"\"sirl.epochs\" = [30, 30.5]", "sirl.epochs must be"},
            {"\"sirl.epochs\" = [30, -1]", "sirl.epochs must be >= 0"},
            {"\"tpa.stop\" = [\"fixed\", \"never\"]", "tpa.stop"}}) {
