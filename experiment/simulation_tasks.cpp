@@ -10,6 +10,7 @@
 #include "engine/fpe.h"
 #include "engine/methods.h"
 #include "engine/tpa.h"
+#include "experiment/calibration.h"
 #include "experiment/expected_epochs.h"
 #include "experiment/task_outputs.h"
 #include "experiment/task_settings.h"
@@ -546,6 +547,66 @@ bool complete_cell_fields(TaskRecord& r) {
   return true;
 }
 
+// The rate classes of the simulation's kinds (experiment/calibration.h): each one the kind's own
+// training on the calibration sample.
+const RateClass& sirl_training_rate() {
+  static const RateClass rate{
+      "rep_sirl", [](const CalibrationSample& s, int scale) {
+        return train_representation(
+                   *s.data, s.bundle,
+                   MethodConfig{Method::sirl, 200, false, calibration_lengths(s, scale)}, 1)
+            .train_flops;
+      }};
+  return rate;
+}
+
+namespace {
+const RateClass& preference_training_rate() {
+  static const RateClass rate{
+      "rep_pref", [](const CalibrationSample& s, int scale) {
+        return train_representation(
+                   *s.data, s.bundle,
+                   MethodConfig{Method::multipref10, 200, false, calibration_lengths(s, scale)}, 1)
+            .train_flops;
+      }};
+  return rate;
+}
+const RateClass& vae_training_rate() {
+  static const RateClass rate{
+      "vae", [](const CalibrationSample& s, int scale) {
+        return train_vae(*s.data, calibration_lengths(s, scale), 1).train_flops;
+      }};
+  return rate;
+}
+// FPE is φ over the probe's rows, once: no epochs.
+const RateClass& fpe_probe_rate() {
+  static const RateClass rate{
+      "fpe",
+      [](const CalibrationSample& s, int) {
+        evaluate_fpe(s.phi, *s.data, s.bundle.fpe);
+        return s.phi.shape.forward_flops(int(s.bundle.fpe.train.size() + s.bundle.fpe.test.size()));
+      },
+      true};
+  return rate;
+}
+// The heads of a cell at M = 100 pairs (or as many as the sample's splits hold).
+double calibrate_heads(const CalibrationSample& s, int scale, bool frozen) {
+  const int64_t M = std::min<int64_t>(100, s.bundle.tpa[0].train);
+  return evaluate_tpa(s.phi, *s.data, s.bundle.tpa,
+                      TpaConfig{M, frozen, calibration_lengths(s, scale)}, 1)
+      .train_flops;
+}
+}  // namespace
+
+const RateClass& tpa_training_rate(bool frozen) {
+  static const RateClass frozen_heads{
+      "tpa_frozen", [](const CalibrationSample& s, int k) { return calibrate_heads(s, k, true); }};
+  static const RateClass unfrozen_heads{"tpa_unfrozen", [](const CalibrationSample& s, int k) {
+                                          return calibrate_heads(s, k, false);
+                                        }};
+  return frozen ? frozen_heads : unfrozen_heads;
+}
+
 const TaskKindSpec& vae_kind() {
   static const TaskKindSpec kind{
       .name = "vae",
@@ -554,7 +615,7 @@ const TaskKindSpec& vae_kind() {
       .inputs = [](const Task&, const Profile&) { return std::vector<Task>{}; },
       .settings = vae_settings,
       .cost = vae_cost,
-      .rate = [](const Task&) { return "vae"; },
+      .rate = [](const Task&) -> const RateClass& { return vae_training_rate(); },
       .shard_group = by_representation,
       .bf16_products = env_precision_is_bf16,
       .stores_weights = true,
@@ -581,8 +642,9 @@ const TaskKindSpec& rep_kind() {
           },
       .settings = rep_settings,
       .cost = rep_cost,
-      .rate =
-          [](const Task& t) { return t.variant.method == Method::sirl ? "rep_sirl" : "rep_pref"; },
+      .rate = [](const Task& t) -> const RateClass& {
+        return t.variant.method == Method::sirl ? sirl_training_rate() : preference_training_rate();
+      },
       .shard_group = by_representation,
       .bf16_products = env_precision_is_bf16,
       .stores_weights = true,
@@ -603,7 +665,7 @@ const TaskKindSpec& fpe_kind() {
       .inputs = [](const Task& t, const Profile&) { return std::vector<Task>{rep_input(t)}; },
       .settings = fpe_settings,
       .cost = fpe_cost,
-      .rate = [](const Task&) { return "fpe"; },
+      .rate = [](const Task&) -> const RateClass& { return fpe_probe_rate(); },
       .shard_group = by_representation,
       .bf16_products = never_bf16,
       .stores_weights = true,
@@ -636,7 +698,7 @@ const TaskKindSpec& tpa_kind() {
       .inputs = [](const Task& t, const Profile&) { return std::vector<Task>{rep_input(t)}; },
       .settings = tpa_settings,
       .cost = tpa_cost,
-      .rate = [](const Task& t) { return t.frozen ? "tpa_frozen" : "tpa_unfrozen"; },
+      .rate = [](const Task& t) -> const RateClass& { return tpa_training_rate(t.frozen); },
       .shard_group = by_representation,
       .bf16_products = env_precision_is_bf16,
       .stores_weights = true,
@@ -713,7 +775,7 @@ const TaskKindSpec& active_kind() {
       .inputs = [](const Task&, const Profile&) { return std::vector<Task>{}; },
       .settings = active_settings,
       .cost = active_cost,
-      .rate = [](const Task&) { return "rep_sirl"; },
+      .rate = [](const Task&) -> const RateClass& { return sirl_training_rate(); },
       .shard_group = by_representation,
       .bf16_products = env_precision_is_bf16,
       .stores_weights = true,

@@ -27,6 +27,11 @@ const TaskKindSpec& robust_tpa_kind();
 // (engine/active_queries.h), [queries] similarity of them, in the order asked.
 const TaskKindSpec& active_kind();
 
+// The rate classes `sirl plan` times SIRL's training and a cell's reward heads with
+// (experiment/calibration.h); the user study's kinds spend their FLOPs in them too.
+const RateClass& sirl_training_rate();
+const RateClass& tpa_training_rate(bool frozen);
+
 // Adds the simulation grid's tasks to the plan: every cell of [fpe], [tpa], [ablation] and
 // [robustness] with the VAEs, representations and active selections they read
 // (experiment/simulation_plan.cpp).

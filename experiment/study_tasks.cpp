@@ -6,6 +6,7 @@
 
 #include "datasets/environments.h"
 #include "engine/tpa.h"
+#include "experiment/simulation_tasks.h"
 #include "experiment/task_outputs.h"
 #include "experiment/task_settings.h"
 
@@ -210,12 +211,12 @@ void run_study_simulated(const Task& t, RunContext& ctx, TaskRecord& r) {
 std::string the_study(const Task&) {
   return "study";
 }
-const char* sirl_rate(const Task&) {
-  return "rep_sirl";
+const RateClass& sirl_rate(const Task&) {
+  return sirl_training_rate();
 }
 // A study TPA task mixes frozen and unfrozen cells; the slower rate bounds its time.
-const char* unfrozen_tpa_rate(const Task&) {
-  return "tpa_unfrozen";
+const RateClass& unfrozen_tpa_rate(const Task&) {
+  return tpa_training_rate(false);
 }
 void describe_participant(const Task& t, TaskRecord& r) {
   describe_env_and_seed(t, r);

@@ -15,6 +15,8 @@
 
 namespace sirl {
 
+struct RateClass;  // experiment/calibration.h
+
 struct TaskKindSpec {
   const char* name;         // "vae", "rep", …: the record's kind, /tables/timings' kind column
   const char* description;  // one line for `sirl plan` and the docs
@@ -29,8 +31,9 @@ struct TaskKindSpec {
   std::string (*settings)(const Task& t, const Profile& p);
   // Sets t.flops and t.bytes (estimates for `sirl plan` and the scheduler's memory bound).
   void (*cost)(Task& t, const Profile& p);
-  // Which measured single-thread rate `sirl plan` times the task with (jobs/estimate.cpp).
-  const char* (*rate)(const Task& t);
+  // The rate class `sirl plan` times the task with (experiment/calibration.h), declared beside
+  // the kind: the training its FLOPs are spent in.
+  const RateClass& (*rate)(const Task& t);
   // The shard group: tasks of one group run in the same shard ("" = every shard that needs it).
   std::string (*shard_group)(const Task& t);
   // Whether its networks multiply in bf16 (which CPU class its bits belong to).

@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <functional>
+#include <map>
 
 #include "datasets/environments.h"
-#include "engine/fpe.h"
-#include "engine/methods.h"
-#include "engine/tpa.h"
+#include "experiment/calibration.h"
 #include "experiment/study_tasks.h"
 #include "experiment/task_kinds.h"
 #include "jobs/schedule_sim.h"
@@ -59,65 +58,45 @@ Dataset time_setup(const std::string& env, const Profile& p, PlanEstimate& e) {
   return d;
 }
 
-// The single-thread rate (e.gflops_per_s) and fixed cost per call (e.call_seconds) of each of
-// env's task kinds, from short runs of the real training code on d.
-void calibrate_rates(const std::string& env, const Dataset& d, const Profile& p, PlanEstimate& e) {
-  QueryBundleConfig qc = p.queries;
-  qc.similarity = qc.preference = 200;
-  qc.fpe_trajectories = std::min<int64_t>(qc.fpe_trajectories, d.count);
-  const QueryBundle b = make_query_bundle(d, qc, 1);
-  Hyper h = p.hyper.count(env) ? p.hyper.at(env) : study_config(p).hyper;
-  const bool big = env_spec(env).sampled;  // JacoRobot: a few steps suffice for GEMM-bound networks
-  // Each kind is timed at two lengths (k and 3k epochs) and its rate is the difference's: what a
-  // call costs once (allocation, the GEMM's JIT, embedding Ξ) would otherwise count as slow
-  // training, while the run's trainings are tens to thousands of epochs long.
-  auto lengths = [&](Hyper x, int scale) {
-    x.sirl.epochs = (big ? 1 : 10) * scale;
-    x.pref.epochs = (big ? 1 : 5) * scale;
-    x.vae.epochs = scale;
-    x.tpa.epochs = (big ? 1 : 5) * scale;
-    return x;
-  };
-  // Each length is timed several times and its fastest time kept: a calibration of a few
-  // milliseconds per call (GridRobot) otherwise reads one interruption as a rate off by 2x.
-  // At least 3 pairs (2 when a pair takes over a second), more while the kind has cost < 0.5 s.
-  auto rate = [&](const std::string& kind, const std::function<double(const Hyper&)>& f) {
+// The single-thread rate (e.gflops_per_s) and fixed cost per call (e.call_seconds) of each rate
+// class the plan's tasks in env name (experiment/calibration.h), from short runs of the real
+// training code on d.
+void calibrate_rates(const std::string& env, const Dataset& d, const Plan& plan, const Profile& p,
+                     PlanEstimate& e) {
+  std::map<std::string, const RateClass*> classes;  // by name: measured in a fixed order
+  for (const Task& t : plan.tasks)
+    if (t.env == env) {
+      const RateClass& c = t.kind.spec().rate(t);
+      classes.emplace(c.name, &c);
+    }
+  if (classes.empty()) return;
+  const Hyper h = p.hyper.count(env) ? p.hyper.at(env) : study_config(p).hyper;
+  const CalibrationSample sample = make_calibration_sample(d, p.queries, h, env_spec(env).sampled);
+  for (const auto& [name, c] : classes) {
+    const std::string key = env + "/" + name;
+    if (c->one_length) {
+      double f = 0;
+      const double s = seconds_of([&] { return c->train(sample, 1); }, &f);
+      e.gflops_per_s[key] = s > 0 ? f / s * 1e-9 : 1;
+      e.call_seconds[key] = 0;
+      continue;
+    }
+    // Each length is timed several times and its fastest time kept: a calibration of a few
+    // milliseconds per call (GridRobot) otherwise reads one interruption as a rate off by 2x.
+    // At least 3 pairs (2 when a pair takes over a second), more while the class has cost < 0.5 s.
     double f1 = 0, f3 = 0, s1 = 1e300, s3 = 1e300, spent = 0;
     for (int pair = 0; pair < 9; ++pair) {
-      const double a = seconds_of([&] { return f(lengths(h, 1)); }, &f1);
-      const double b = seconds_of([&] { return f(lengths(h, 3)); }, &f3);
+      const double a = seconds_of([&] { return c->train(sample, 1); }, &f1);
+      const double b = seconds_of([&] { return c->train(sample, 3); }, &f3);
       s1 = std::min(s1, a);
       s3 = std::min(s3, b);
       spent += a + b;
       if (pair + 1 >= (a + b > 1.0 ? 2 : 3) && spent > 0.5) break;
     }
     const double r = s3 > s1 && f3 > f1 ? (f3 - f1) / (s3 - s1) : (s3 > 0 ? f3 / s3 : 1e9);
-    e.gflops_per_s[env + "/" + kind] = r * 1e-9;
-    e.call_seconds[env + "/" + kind] = std::max(0.0, s1 - f1 / r);
-  };
-  Representation phi = train_representation(
-      d, b, MethodConfig{Method::sirl, 200, false, lengths(h, 1)}, 1);  // for the TPA cells
-  rate("rep_sirl", [&](const Hyper& x) {
-    return train_representation(d, b, MethodConfig{Method::sirl, 200, false, x}, 1).train_flops;
-  });
-  rate("rep_pref", [&](const Hyper& x) {
-    return train_representation(d, b, MethodConfig{Method::multipref10, 200, false, x}, 1)
-        .train_flops;
-  });
-  rate("vae", [&](const Hyper& x) { return train_vae(d, x, 1).train_flops; });
-  {  // FPE: φ over the probe's rows, once (no epochs); its fixed part is in the rate
-    const double s = seconds_of([&] { evaluate_fpe(phi, d, b.fpe); });
-    const double f = phi.shape.forward_flops(int(b.fpe.train.size() + b.fpe.test.size()));
-    e.gflops_per_s[env + "/fpe"] = s > 0 ? f / s * 1e-9 : 1;
-    e.call_seconds[env + "/fpe"] = 0;
+    e.gflops_per_s[key] = r * 1e-9;
+    e.call_seconds[key] = std::max(0.0, s1 - f1 / r);
   }
-  const int64_t M = std::min<int64_t>(100, b.tpa[0].train);
-  rate("tpa_frozen", [&](const Hyper& x) {
-    return evaluate_tpa(phi, d, b.tpa, TpaConfig{M, true, x}, 1).train_flops;
-  });
-  rate("tpa_unfrozen", [&](const Hyper& x) {
-    return evaluate_tpa(phi, d, b.tpa, TpaConfig{M, false, x}, 1).train_flops;
-  });
 }
 
 // Each task's time on one core from its kind's rate, the one-thread total, the scheduler's
@@ -128,7 +107,7 @@ void time_tasks(const Plan& plan, int threads, PlanEstimate& e) {
   std::vector<double> sizes;
   for (size_t i = 0; i < plan.tasks.size(); ++i) {
     const Task& t = plan.tasks[i];
-    const std::string kind = t.kind.spec().rate(t);
+    const std::string kind = t.kind.spec().rate(t).name;
     double r = 1e9, once = 0;
     if (auto it = e.gflops_per_s.find(t.env + "/" + kind); it != e.gflops_per_s.end())
       r = std::max(it->second, 1e-3) * 1e9;
@@ -156,7 +135,7 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
     envs.push_back(p.study.cohort.env);
   for (const auto& env : envs) {
     const Dataset d = time_setup(env, p, e);
-    calibrate_rates(env, d, p, e);
+    calibrate_rates(env, d, plan, p, e);
     e.data_bytes += 4.0 * double(d.inputs.size() + d.features.size() * 2);
   }
   e.peak_bytes += e.data_bytes;

@@ -1,5 +1,6 @@
 // `sirl plan`: what a profile will cost on this machine, without running it. Rates come from a
-// short calibration run of the real training code for each task kind (20-40 s: two lengths each).
+// short calibration run of the real training code for each rate class its tasks name
+// (experiment/calibration.h; 20-40 s: two lengths each).
 #pragma once
 #include <map>
 #include <string>
@@ -11,7 +12,7 @@
 namespace sirl {
 
 struct PlanEstimate {
-  std::map<std::string, double> gflops_per_s;  // measured rate per "env/kind" on one thread
+  std::map<std::string, double> gflops_per_s;  // measured rate per "env/class" on one thread
   std::map<std::string, double> call_seconds;  // what one call costs beyond its FLOPs, per kind
   std::vector<double> task_seconds;  // each task alone on one core: flops / rate + call cost
   double seconds_one_thread = 0;     // Σ task_seconds + commits
