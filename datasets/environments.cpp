@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "datasets/exact_text.h"
+
 namespace sirl {
 
 namespace {
@@ -21,6 +23,33 @@ TrajectoryView grid_draw(const Dataset& d, int64_t row) {
     v.points.push_back({x[2 * s] * cells, x[2 * s + 1] * cells, 0});
   v.end_angle_deg = x[2 * kGridStates] * 90;
   return v;
+}
+
+// A field added to one of these structs must be added to its describe_data below (and then the
+// size here updated): a setting the digest does not see would let a stale task be reused.
+static_assert(sizeof(GridConfig) == 28, "describe the new GridConfig field in grid_settings");
+static_assert(sizeof(JacoConfig) == 104, "describe the new JacoConfig field in jaco_settings");
+
+std::string grid_settings(const EnvConfig& c) {
+  const GridConfig& g = c.grid;
+  return "grid size=" + exact_number(g.size) + " obstacle1=" + exact_list(g.obstacle1) +
+         " obstacle2=" + exact_list(g.obstacle2) + " laptop=" + exact_list(g.laptop) + "\n";
+}
+// Every field but `threads` (Ξ never depends on it), after the grid's line: JacoRobot's text has
+// always carried it, and keeping it keeps every cached task's digest.
+std::string jaco_settings(const EnvConfig& c) {
+  const JacoConfig& j = c.jaco;
+  return grid_settings(c) + "jaco trajectories=" + exact_number(double(j.trajectories)) +
+         " waypoints=" + exact_number(j.waypoints) +
+         " max_deformations=" + exact_number(j.max_deformations) +
+         " max_deformation=" + exact_number(j.max_deformation) + " laptop=" + exact_list(j.laptop) +
+         " human=" + exact_list(j.human) + " table_z=" + exact_number(j.table_z) +
+         " with_human=" + exact_number(j.with_human) + " seed=" + exact_number(double(j.seed)) +
+         "\n";
+}
+void jaco_sample(EnvConfig& c, int64_t trajectories, uint64_t data_seed) {
+  c.jaco.trajectories = trajectories;
+  c.jaco.seed = data_seed;
 }
 
 Dataset jaco_with(const EnvConfig& c, bool human) {
@@ -64,6 +93,7 @@ std::vector<EnvSpec> built_in() {
   grid.make = [](const EnvConfig& c) { return make_grid_dataset(c.grid); };
   grid.trajectories = grid_count;
   grid.input_dim = grid_dim;
+  grid.describe_data = grid_settings;
   grid.draw = grid_draw;
 
   EnvSpec& grid2 = all[1];
@@ -107,6 +137,8 @@ std::vector<EnvSpec> built_in() {
   jaco.make = [](const EnvConfig& c) { return jaco_with(c, true); };
   jaco.trajectories = jaco_count;
   jaco.input_dim = jaco_dim;
+  jaco.describe_data = jaco_settings;
+  jaco.set_sample = jaco_sample;
   jaco.draw = jaco_draw;
 
   EnvSpec& jaco2 = all[3];
@@ -158,6 +190,9 @@ void register_environment(EnvSpec spec) {
   if (!spec.make || !spec.trajectories || !spec.input_dim || !spec.draw)
     throw std::invalid_argument("environment '" + spec.name +
                                 "' needs make, trajectories, input_dim and draw");
+  if (spec.sampled && !spec.set_sample)
+    throw std::invalid_argument("environment '" + spec.name +
+                                "' is sampled: it needs set_sample (its Ξ's size and seed)");
   registry().push_back(std::move(spec));
 }
 

@@ -55,8 +55,9 @@ struct EnvSpec {
   std::string name;         // the profile's and the results file's name: "grid", "jaco2", …
   std::string title;        // for figures: "GridRobot", …
   std::string description;  // one line for `--help` and the docs
-  // Ξ is sampled from EnvConfig::jaco (trajectories, seed) rather than enumerated. Sampled
-  // environments keep their network weights out of the results file by default (3.1 M floats).
+  // Ξ is sampled (set_sample says how many trajectories, from which seed) rather than enumerated.
+  // Sampled environments keep their network weights out of the results file by default (3.1 M
+  // floats).
   bool sampled = false;
   // The profile table whose keys set Ξ (empty: Ξ is fixed). Both JacoRobot variants read [jaco].
   std::string data_table;
@@ -75,6 +76,12 @@ struct EnvSpec {
   Dataset (*make)(const EnvConfig& cfg) = nullptr;
   int64_t (*trajectories)(const EnvConfig& cfg) = nullptr;  // |Ξ| without building it
   int (*input_dim)(const EnvConfig& cfg) = nullptr;         // floats per trajectory
+  // Ξ's settings as canonical text (datasets/exact_text.h): the data half of a task's digest, so
+  // every field Ξ depends on must be in it. Null: Ξ has no settings.
+  std::string (*describe_data)(const EnvConfig& cfg) = nullptr;
+  // A sampled Ξ's size and data seed set in cfg (the user study's Ξ, or the small Ξ `sirl plan`
+  // calibrates on); null for an enumerated Ξ.
+  void (*set_sample)(EnvConfig& cfg, int64_t trajectories, uint64_t data_seed) = nullptr;
   TrajectoryView (*draw)(const Dataset& d, int64_t row) = nullptr;
 };
 

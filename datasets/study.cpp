@@ -26,8 +26,7 @@ Dataset study_dataset(const Study& s) {
     throw std::invalid_argument("the study cannot run on environment '" + s.env + "' (" +
                                 study_env_names() + ")");
   EnvConfig c;
-  c.jaco.trajectories = s.trajectories;
-  c.jaco.seed = s.data_seed;
+  if (e.set_sample) e.set_sample(c, s.trajectories, s.data_seed);
   return e.make(c);
 }
 

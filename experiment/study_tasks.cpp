@@ -53,7 +53,7 @@ StudySizes study_sizes(const Profile& p, const StudyAnalysisConfig& c) {
   const CohortConfig& co = p.study.cohort;
   const EnvSpec& e = env_spec(co.env);
   EnvConfig ec;
-  ec.jaco.trajectories = co.trajectories;
+  if (e.set_sample) e.set_sample(ec, co.trajectories, 0);
   StudySizes s;
   s.phi = phi_shape(e.input_dim(ec), c.hyper);
   s.head_frozen = tpa_network(s.phi, c.hyper, true);

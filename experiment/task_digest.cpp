@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "datasets/exact_text.h"
 #include "experiment/task_kinds.h"
 #include "results/durable.h"
 #include "results/task_record.h"
@@ -19,13 +20,8 @@ std::string task_digest_text(const Task& t, const Profile& p,
   TaskRecord d;
   kind.describe(t, d);
   for (const auto& [k, v] : d.text) s += "field " + k + " = " + v + "\n";
-  char buf[64];
-  for (const auto& [k, v] : d.num) {
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    s += "field " + k + " = " + buf + "\n";
-  }
-  std::snprintf(buf, sizeof buf, "%.17g", t.stream_bytes);  // recorded beside its results
-  s += std::string("stream_bytes ") + buf + "\n";
+  for (const auto& [k, v] : d.num) s += "field " + k + " = " + exact_number(v) + "\n";
+  s += "stream_bytes " + exact_number(t.stream_bytes) + "\n";  // recorded beside its results
   s += kind.settings(t, p);
   for (size_t i = 0; i < input_digests.size(); ++i)
     s += "input " + input_keys[i] + " " + input_digests[i] + "\n";

@@ -38,15 +38,16 @@ namespace {
 // Times the making of env's Ξ (from a small one when it is sampled trajectory by trajectory) and
 // of one seed's query bundle into e; returns the small Ξ the rates are calibrated on.
 Dataset time_setup(const std::string& env, const Profile& p, PlanEstimate& e) {
+  // A sampled Ξ is timed on a small one (the profile's builds it on one thread, as a run does).
   EnvConfig small = p.data;
   constexpr int64_t kSmall = 300;  // enough to time the training code and Ξ's generation rate
-  small.jaco.trajectories = kSmall;
-  small.jaco.threads = 1;  // as a run builds Ξ: inside one task
   const EnvSpec& spec = env_spec(env);
+  if (spec.set_sample) spec.set_sample(small, kSmall, 0);
   Dataset d;
   const double made = seconds_of([&] { d = spec.make(small); });
   // A sampled Ξ costs per trajectory (each one sampled, solved and featurised on its own).
-  const double gen = spec.sampled ? made * double(p.data.jaco.trajectories) / double(kSmall) : made;
+  const double gen =
+      spec.set_sample ? made * double(spec.trajectories(p.data)) / double(kSmall) : made;
   QueryBundleConfig full = p.queries;
   full.fpe_trajectories = std::min<int64_t>(full.fpe_trajectories, d.count);
   const double bundle = seconds_of([&] { make_query_bundle(d, full, 1); });

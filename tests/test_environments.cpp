@@ -88,6 +88,27 @@ TEST(Environments, RefusesATakenNameAMalformedNameAndAMissingFunction) {
   bad.draw = nullptr;
   EXPECT_THROW(register_environment(bad), std::invalid_argument);
   EXPECT_THROW(env_spec("toy_nodraw"), std::invalid_argument);  // nothing half-registered
+  bad = toy_spec();
+  bad.name = "toy_sampled";
+  bad.sampled = true;  // a sampled Ξ must say how its size and seed are set
+  EXPECT_THROW(register_environment(bad), std::invalid_argument);
+}
+
+// A sampled environment's set_sample sets the Ξ it builds: that many trajectories, and the seed
+// decides which (two seeds give different trajectories, one seed the same ones).
+TEST(Environments, SetSampleSetsTheSizeAndSeedOfASampledXi) {
+  const EnvSpec& e = env_spec("jaco2");
+  ASSERT_TRUE(e.set_sample);
+  EnvConfig a, b, c;
+  e.set_sample(a, 12, 1);
+  e.set_sample(b, 12, 2);
+  e.set_sample(c, 12, 1);
+  EXPECT_EQ(e.trajectories(a), 12);
+  const Dataset da = e.make(a), db = e.make(b), dc = e.make(c);
+  EXPECT_EQ(da.count, 12);
+  EXPECT_NE(da.inputs, db.inputs);
+  EXPECT_EQ(da.inputs, dc.inputs);
+  EXPECT_FALSE(env_spec("grid").set_sample);  // enumerated
 }
 
 // GridRobot's drawing against the dataset's own features: |end angle| is the abs_angle feature
