@@ -243,6 +243,20 @@ TEST(TaskDigest, JoiningTheAblationChangesACellsRecordSoItsDigest) {
   EXPECT_FALSE(c.count("grid/s0/sirl/N300/rep"));
 }
 
+// Ξ's settings are the environment's own (EnvSpec::describe_data): a JacoRobot data setting
+// changes every JacoRobot task's digest and no GridRobot task's.
+TEST(TaskDigest, AnEnvironmentsDataSettingChangesItsTasksOnly) {
+  const std::string base =
+      "name = \"t\"\nenvs = [\"grid\", \"jaco\"]\nseeds = [0]\n"
+      "[fpe]\nmethods = [\"sirl\", \"random\"]\nN = [100]\n[jaco]\ntrajectories = 200\n";
+  for (const std::string& line : {"data_seed = 3", "max_deformation = 0.25"}) {
+    const std::set<std::string> c = digest_changes(base, base + line + "\n");
+    const auto all = plan_digests_by_key(parse_profile(base));
+    ASSERT_EQ(all.size(), 8u);  // per environment: SIRL's and Random's φ and their FPE
+    for (const auto& [k, d] : all) EXPECT_EQ(c.count(k), k.starts_with("jaco/") ? 1u : 0u) << k;
+  }
+}
+
 TEST(TaskDigest, AddingASeedChangesNoExistingTask) {
   std::string text = test::kSmallProfile;
   text.replace(text.find("seeds = [0, 1, 2]"), 17, "seeds = [0, 1, 2, 3]");
