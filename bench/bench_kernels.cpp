@@ -40,7 +40,8 @@ void sirl_step(benchmark::State& state, bool bf16) {
   std::vector<int32_t> trip(3 * B);
   for (auto& v : trip) v = int32_t(rng.uniform_int(T));
   for (auto _ : state)
-    benchmark::DoNotOptimize(triplet_train_step(t, X.data(), trip.data(), B, 1.f, threads));
+    benchmark::DoNotOptimize(triplet_train_step(t, 0, adam_begin_step(t.adam_cfg, t.adam), X.data(),
+                                                trip.data(), B, 1.f, threads));
   const double flops = 3 * s.forward_flops(3 * B);
   state.counters["GFLOP/s"] =
       benchmark::Counter(flops * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
@@ -67,12 +68,11 @@ BENCHMARK(BM_SirlStepBf16)->Apply(sirl_step_args);
 
 // One step of every model of t (Adam's next step for all), each model's step alone on its own
 // pairs [M, B, 2] and labels [M, B], the models split over `threads`. Returns model 0's loss.
-float step_every_model(BatchedTrainer& t, const float* X, const int32_t* pairs, const float* label,
-                       int B, float l2, int threads) {
+float step_every_model(Trainer& t, const float* X, const int32_t* pairs, const float* label, int B,
+                       float l2, int threads) {
   const AdamStepScalars sc = adam_begin_step(t.adam_cfg, t.adam);
   for_each_model(t.models, threads, [&](int m) {
-    preference_train_step_of_model(t, m, sc, X, pairs + size_t(m) * B * 2, label + size_t(m) * B, B,
-                                   l2);
+    preference_train_step(t, m, sc, X, pairs + size_t(m) * B * 2, label + size_t(m) * B, B, l2);
   });
   return t.losses[0];
 }
@@ -86,7 +86,7 @@ void tpa_heads_step(benchmark::State& state, bool bf16) {
   s.bf16_products = bf16;
   Rng rng(2);
   auto X = random_inputs(T, 6, rng);
-  BatchedTrainer t(s, M, AdamConfig{0.001, 1.0}, init_params(s, M, rng));
+  Trainer t(s, AdamConfig{0.001, 1.0}, init_params(s, M, rng), M);
   std::vector<int32_t> pairs(size_t(M) * B * 2);
   std::vector<float> label(size_t(M) * B);
   for (auto& v : pairs) v = int32_t(rng.uniform_int(T));
@@ -136,7 +136,8 @@ void BM_MultiPrefStep(benchmark::State& state) {
   for (auto& v : label) v = float(rng.uniform_int(2));
   for (auto _ : state)
     benchmark::DoNotOptimize(multihead_preference_train_step(
-        t, K, X.data(), pairs.data(), label.data(), human.data(), B, 10.f, threads));
+        t, 0, adam_begin_step(t.adam_cfg, t.adam), K, X.data(), pairs.data(), label.data(),
+        human.data(), B, 10.f, threads));
   state.counters["GFLOP/s"] = benchmark::Counter(3 * s.forward_flops(2 * B) * 1e-9,
                                                  benchmark::Counter::kIsIterationInvariantRate);
 }
@@ -161,7 +162,7 @@ void tpa_unfrozen_step(benchmark::State& state, bool bf16) {
   s.bf16_products = bf16;
   Rng rng(5);
   auto X = random_inputs(T, in, rng);
-  BatchedTrainer t(s, M, AdamConfig{0.001, 1.0}, init_params(s, M, rng));
+  Trainer t(s, AdamConfig{0.001, 1.0}, init_params(s, M, rng), M);
   std::vector<int32_t> pairs(size_t(M) * B * 2);
   std::vector<float> label(size_t(M) * B);
   for (auto& v : pairs) v = int32_t(rng.uniform_int(T));

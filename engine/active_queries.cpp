@@ -96,7 +96,7 @@ Triple draw_new(const Dataset& d, Rng& rng, const std::set<Triple>& seen,
 }
 
 struct Ensemble {
-  BatchedTrainer trainer;
+  Trainer trainer;
   std::vector<Rng> order;
 };
 
@@ -109,14 +109,12 @@ Ensemble make_ensemble(const MlpShape& shape, const ActiveConfig& cfg, uint64_t 
     mlp_init(shape, init.data() + size_t(k) * P, rng);
     order.emplace_back(seed_from_key("active/order/" + std::to_string(k), seed));
   }
-  return {BatchedTrainer(shape, cfg.members, cfg.hyper.sirl.adam, std::move(init)),
-          std::move(order)};
+  return {Trainer(shape, cfg.hyper.sirl.adam, std::move(init), cfg.members), std::move(order)};
 }
 
 // Scores [pool] of the candidate triplets under the members' embeddings.
-std::vector<double> score_pool(const Dataset& d, const std::vector<Triple>& pool,
-                               BatchedTrainer& ens, const ActiveConfig& cfg, int threads,
-                               double& flops) {
+std::vector<double> score_pool(const Dataset& d, const std::vector<Triple>& pool, Trainer& ens,
+                               const ActiveConfig& cfg, int threads, double& flops) {
   const MlpShape& shape = ens.shape;
   const int K = ens.models, dim = shape.out(), in = shape.in();
   // The distinct rows of the pool, embedded once per member.
@@ -272,7 +270,7 @@ class ActiveSelection {
     const int64_t n = out_.queries.count;
     const int B = cfg_.hyper.sirl.batch;
     const float margin = float(cfg_.hyper.triplet_margin);
-    BatchedTrainer& ens = ens_.trainer;
+    Trainer& ens = ens_.trainer;
     const int64_t step0 = ens.adam.step, batches = (n + B - 1) / B;
     member_batch_.resize(size_t(cfg_.members));
     EpochLoopOptions loop;
@@ -285,8 +283,8 @@ class ActiveSelection {
           batch.resize(size_t(b) * 3);
           for (int i = 0; i < b; ++i)
             std::copy_n(out_.queries.idx.begin() + 3 * order[i], 3, batch.begin() + size_t(i) * 3);
-          return triplet_train_step_of_model(ens, k, adam_step_scalars(ens.adam_cfg, step0 + step),
-                                             d_.inputs.data(), batch.data(), b, margin);
+          return triplet_train_step(ens, k, adam_step_scalars(ens.adam_cfg, step0 + step),
+                                    d_.inputs.data(), batch.data(), b, margin);
         },
         [&](int e) { ens.adam.step = step0 + e * batches; }, loop);
     for (int e = 0; e < cfg_.round_epochs; ++e)  // the round's FLOPs

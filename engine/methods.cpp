@@ -72,9 +72,10 @@ void train_sirl(const Dataset& d, const QueryBundle& bundle, const MethodConfig&
         for (int i = 0; i < b; ++i)
           std::copy_n(q.idx.begin() + 3 * rows[i], 3, batch.begin() + 3 * i);
         rep.train_flops += t.shape.train_flops(3 * b);
-        const float loss =
-            triplet_train_step(t, d.inputs.data(), batch.data(), b, margin, ex.threads);
-        if (idle) idle = triplet_max_hinge(t.tape.output(), b, t.shape.out(), margin) <= inside;
+        const float loss = triplet_train_step(t, 0, adam_begin_step(s.adam, t.adam),
+                                              d.inputs.data(), batch.data(), b, margin, ex.threads);
+        if (idle)
+          idle = triplet_max_hinge(t.work[0].tape.output(), b, t.shape.out(), margin) <= inside;
         return loss;
       },
       &resume,
@@ -133,9 +134,9 @@ void train_preference(const Dataset& d, const QueryBundle& bundle, const MethodC
           human[i] = q.human[j];
         }
         rep.train_flops += t.shape.train_flops(2 * b);
-        return multihead_preference_train_step(t, K, d.inputs.data(), pairs.data(), label.data(),
-                                               human.data(), b, float(cfg.hyper.pref_l2),
-                                               ex.threads);
+        return multihead_preference_train_step(
+            t, 0, adam_begin_step(s.adam, t.adam), K, d.inputs.data(), pairs.data(), label.data(),
+            human.data(), b, float(cfg.hyper.pref_l2), ex.threads);
       },
       &resume);
   rep.params.assign(t.params.begin(), t.params.begin() + P);  // φ; the heads on the side

@@ -149,7 +149,7 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   const CellRows rows = compact_rows(rep, d, sets, cfg, ex.threads);
   const Hyper& h = cfg.hyper;
   const MlpShape net = tpa_network(rep.shape, h, cfg.frozen);
-  BatchedTrainer t(net, R, h.tpa.adam, initial_heads(rep, cfg, size_t(R), net, seed));
+  Trainer t(net, h.tpa.adam, initial_heads(rep, cfg, size_t(R), net, seed), R);
 
   std::vector<Rng> order_rng;
   for (int r = 0; r < R; ++r)
@@ -184,9 +184,8 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
           pairs[r][size_t(i) * 2 + 1] = rows.train[r][2 * j + 1];
           label[r][i] = sets[r].pairs.label[j];
         }
-        return preference_train_step_of_model(t, r, adam_step_scalars(h.tpa.adam, step),
-                                              rows.X.data(), pairs[r].data(), label[r].data(), b,
-                                              float(h.tpa_l2));
+        return preference_train_step(t, r, adam_step_scalars(h.tpa.adam, step), rows.X.data(),
+                                     pairs[r].data(), label[r].data(), b, float(h.tpa_l2));
       },
       // Adam's step count is each head's own (the step function is handed it); the shared
       // counter is kept at the epoch every running head stands at, for checkpoints.

@@ -279,8 +279,9 @@ TEST(Methods, MultiheadPreferenceGradientMatchesFiniteDifferences) {
   std::vector<float> pf(p0.begin(), p0.end()), Xf(X.begin(), X.end()),
       lf(label.begin(), label.end());
   Trainer t(phi, AdamConfig{1e-9}, pf);
-  const float l = multihead_preference_train_step(t, K, Xf.data(), pairs.data(), lf.data(),
-                                                  human.data(), B, float(l2));
+  const float l =
+      multihead_preference_train_step(t, 0, adam_step_scalars(t.adam_cfg, 1), K, Xf.data(),
+                                      pairs.data(), lf.data(), human.data(), B, float(l2));
   EXPECT_NEAR(l, loss(p0), 1e-5);
   // The step stores no gradient (its Adam update is fused into the backward pass); after Adam's
   // first step the first moment is (1 − β1)·g, element by element.

@@ -96,7 +96,8 @@ void run_parity_case(const std::string& name, std::vector<int> widths, int T) {
   Trainer t(shape, cfg, init);
   std::vector<float> ours(steps);
   for (int s = 0; s < steps; ++s)
-    ours[s] = triplet_train_step(t, x.data(), trip.data() + size_t(s) * B * 3, B, margin);
+    ours[s] = triplet_train_step(t, 0, adam_step_scalars(cfg, s + 1), x.data(),
+                                 trip.data() + size_t(s) * B * 3, B, margin);
 
   const std::string cmd =
       "/usr/bin/python3 " SIRL_SOURCE_DIR "/tests/torch_parity.py " + dir.string();
@@ -128,8 +129,8 @@ void run_parity_case(const std::string& name, std::vector<int> widths, int T) {
     Trainer r(shape, cfg, std::vector<float>(pre.begin(), pre.begin() + P));
     r.adam.m.assign(pre.begin() + P, pre.begin() + 2 * P);
     r.adam.v.assign(pre.begin() + 2 * P, pre.end());
-    r.adam.step = s;
-    const float loss = triplet_train_step(r, x.data(), trip.data() + size_t(s) * B * 3, B, margin);
+    const float loss = triplet_train_step(r, 0, adam_step_scalars(cfg, s + 1), x.data(),
+                                          trip.data() + size_t(s) * B * 3, B, margin);
     const double l_err =
         std::abs(double(loss) - torch_losses[s]) / std::abs(double(torch_losses[s]));
     std::vector<float> m_post(post.begin() + P, post.begin() + 2 * P),

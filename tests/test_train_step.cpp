@@ -5,21 +5,46 @@
 
 #include "engine/for_each_model.h"
 #include "engine/train_step.h"
+#include "kernels/bradley_terry_loss.h"
 #include "kernels/rng.h"
+#include "kernels/triplet_loss.h"
 
 namespace sirl {
 namespace {
 
-// The per-model steps of a BatchedTrainer (M models side by side: a TPA cell's heads, an ensemble
-// of φ) against each model trained alone by the single-model step (a Trainer of its own, whose
-// step runs its own code path) on its own rows: the parameters and both Adam moments must agree
-// to the bit, and each model's loss too. The models take their steps two ways: all models' step k
-// before any model's k + 1 (over 1 and 2 threads), and model after model, in reverse, each its
-// steps in a row (as the epoch loop's stretches do). Three steps with a decaying rate, so the
-// moments carry over and a wrong step number shows.
-template <typename OfModel, typename Alone>
-void expect_each_model_equals_it_alone(const MlpShape& s, int roles, OfModel&& of_model,
-                                       Alone&& alone) {
+// A model's step the plain way, as a reference: gather its rows, forward pass, loss, the whole
+// gradient into a zeroed buffer (mlp_backward), then one Adam step over it (adam_step, counting
+// its own step number). loss(out, d_out) returns the loss and writes ∂L/∂output.
+struct PlainModel {
+  std::vector<float> params, grad;
+  AdamState adam;
+  MlpTape<float> tape;
+  template <typename Loss>
+  float step(const MlpShape& s, const AdamConfig& cfg, const float* X, const int32_t* idx, int B,
+             int roles, Loss&& loss) {
+    const int rows = roles * B;
+    std::vector<float> x(size_t(rows) * s.in()), d_out(size_t(rows) * s.out());
+    gather_by_role(X, s.in(), idx, B, roles, x.data());
+    mlp_forward(s, params.data(), x.data(), rows, tape);
+    const float l = loss(tape.output(), d_out.data());
+    grad.assign(params.size(), 0.f);
+    mlp_backward(s, params.data(), tape, d_out.data(), grad.data(), nullptr);
+    adam_step(cfg, adam, params.data(), grad.data(), params.size());
+    return l;
+  }
+};
+
+// A Trainer of M models (a TPA cell's heads, an ensemble of φ) against each model trained alone
+// the plain way on its own rows: the parameters and both Adam moments must agree to the bit, and
+// each model's loss too. The Trainer's models take their steps three ways: all models' step k
+// before any model's k + 1 (over 1 and 2 threads), model after model in reverse, each its steps in
+// a row (as the epoch loop's stretches do), and each model's products on 2 threads. Three steps
+// with a decaying rate, so the moments carry over and a wrong step number shows.
+// step(t, m, scalars, X, rows, labels, B, threads) is the Trainer's step;
+// loss(out, labels, B, d_out) the same objective for the plain reference.
+template <typename Step, typename Loss>
+void expect_each_model_equals_it_trained_plainly(const MlpShape& s, int roles, Step&& step,
+                                                 Loss&& loss) {
   const int M = 3, B = 7, T = 40, steps = 3;
   const size_t P = s.param_count();
   Rng rng(21);
@@ -34,65 +59,106 @@ void expect_each_model_equals_it_alone(const MlpShape& s, int roles, OfModel&& o
   auto rows_of = [&](int k, int m) { return idx.data() + (size_t(k) * M + m) * B * roles; };
   auto labels_of = [&](int k, int m) { return label.data() + (size_t(k) * M + m) * B; };
 
-  std::vector<Trainer> one;
-  std::vector<std::vector<float>> loss_one(M);
+  std::vector<PlainModel> plain(M);
+  std::vector<std::vector<float>> loss_plain(M);
   for (int m = 0; m < M; ++m) {
-    one.emplace_back(s, cfg, std::vector<float>(p0.begin() + m * P, p0.begin() + (m + 1) * P));
+    plain[m].params.assign(p0.begin() + m * P, p0.begin() + (m + 1) * P);
+    plain[m].adam = AdamState(P);
     for (int k = 0; k < steps; ++k)
-      loss_one[m].push_back(alone(one[m], X.data(), rows_of(k, m), labels_of(k, m), B));
+      loss_plain[m].push_back(plain[m].step(
+          s, cfg, X.data(), rows_of(k, m), B, roles,
+          [&](const float* out, float* d_out) { return loss(out, labels_of(k, m), B, d_out); }));
   }
-  auto expect_equal = [&](const BatchedTrainer& t, const std::string& how) {
+  auto expect_equal = [&](const Trainer& t, const std::string& how) {
     for (int m = 0; m < M; ++m)
       for (size_t i = 0; i < P; ++i) {
-        ASSERT_EQ(t.params[m * P + i], one[m].params[i]) << m << " " << i << ", " << how;
-        ASSERT_EQ(t.adam.m[m * P + i], one[m].adam.m[i]) << m << " " << i << ", " << how;
-        ASSERT_EQ(t.adam.v[m * P + i], one[m].adam.v[i]) << m << " " << i << ", " << how;
+        ASSERT_EQ(t.params[m * P + i], plain[m].params[i]) << m << " " << i << ", " << how;
+        ASSERT_EQ(t.adam.m[m * P + i], plain[m].adam.m[i]) << m << " " << i << ", " << how;
+        ASSERT_EQ(t.adam.v[m * P + i], plain[m].adam.v[i]) << m << " " << i << ", " << how;
       }
     EXPECT_NE(t.params, p0);
   };
   for (int threads : {1, 2}) {
-    BatchedTrainer t(s, M, cfg, p0);
+    Trainer t(s, cfg, p0, M);
     for (int k = 0; k < steps; ++k) {
       const AdamStepScalars sc = adam_step_scalars(cfg, k + 1);
       for_each_model(M, threads, [&](int m) {
-        of_model(t, m, sc, X.data(), rows_of(k, m), labels_of(k, m), B);
+        step(t, m, sc, X.data(), rows_of(k, m), labels_of(k, m), B, 1);
       });
       for (int m = 0; m < M; ++m)
-        EXPECT_EQ(t.losses[m], loss_one[m][k]) << "model " << m << ", step " << k;
+        EXPECT_EQ(t.losses[m], loss_plain[m][k]) << "model " << m << ", step " << k;
     }
     expect_equal(t, "lockstep on " + std::to_string(threads) + " threads");
   }
-  BatchedTrainer each(s, M, cfg, p0);
-  for (int m = M - 1; m >= 0; --m)
-    for (int k = 0; k < steps; ++k) {
-      const float loss = of_model(each, m, adam_step_scalars(cfg, k + 1), X.data(), rows_of(k, m),
-                                  labels_of(k, m), B);
-      EXPECT_EQ(loss, loss_one[m][k]) << "model " << m << ", step " << k;
-    }
-  expect_equal(each, "model by model");
+  for (int product_threads : {1, 2}) {
+    Trainer each(s, cfg, p0, M);
+    for (int m = M - 1; m >= 0; --m)
+      for (int k = 0; k < steps; ++k) {
+        const float l = step(each, m, adam_step_scalars(cfg, k + 1), X.data(), rows_of(k, m),
+                             labels_of(k, m), B, product_threads);
+        EXPECT_EQ(l, loss_plain[m][k]) << "model " << m << ", step " << k;
+      }
+    expect_equal(each, "model by model, products on " + std::to_string(product_threads));
+  }
 }
 
-TEST(TrainStep, EachModelsStepEqualsTheModelTrainedAloneInAnyOrderAndThreadCount) {
+TEST(TrainStep, EachModelsStepEqualsThePlainStepInAnyOrderAndThreadCount) {
   // Preference heads (Bradley–Terry; a 6→70→1 head, and φ + head with φ's linear output).
   const float l2 = 0.5f;
-  auto pref = [&](BatchedTrainer& t, int m, const AdamStepScalars& sc, const float* X,
-                  const int32_t* pairs, const float* label, int B) {
-    return preference_train_step_of_model(t, m, sc, X, pairs, label, B, l2);
+  auto pref = [&](Trainer& t, int m, const AdamStepScalars& sc, const float* X,
+                  const int32_t* pairs, const float* label, int B, int threads) {
+    return preference_train_step(t, m, sc, X, pairs, label, B, l2, threads);
   };
-  auto pref_alone = [&](Trainer& t, const float* X, const int32_t* pairs, const float* label,
-                        int B) { return preference_train_step(t, X, pairs, label, B, l2); };
-  expect_each_model_equals_it_alone(MlpShape{{6, 70, 1}}, 2, pref, pref_alone);
+  auto pref_loss = [&](const float* r, const float* label, int B, float* dr) {
+    return bradley_terry_loss(r, label, B, l2, dr);
+  };
+  expect_each_model_equals_it_trained_plainly(MlpShape{{6, 70, 1}}, 2, pref, pref_loss);
   MlpShape unfrozen{{19, 40, 6, 40, 1}};
   unfrozen.linear_layers = {1};
-  expect_each_model_equals_it_alone(unfrozen, 2, pref, pref_alone);
+  expect_each_model_equals_it_trained_plainly(unfrozen, 2, pref, pref_loss);
   // Triplets (an ensemble of φ): the label is unused.
-  auto trip = [](BatchedTrainer& t, int m, const AdamStepScalars& sc, const float* X,
-                 const int32_t* trip, const float*,
-                 int B) { return triplet_train_step_of_model(t, m, sc, X, trip, B, 1.f); };
-  auto trip_alone = [](Trainer& t, const float* X, const int32_t* trip, const float*, int B) {
-    return triplet_train_step(t, X, trip, B, 1.f);
+  auto trip = [](Trainer& t, int m, const AdamStepScalars& sc, const float* X, const int32_t* trip,
+                 const float*, int B,
+                 int threads) { return triplet_train_step(t, m, sc, X, trip, B, 1.f, threads); };
+  auto trip_loss = [](const float* emb, const float*, int B, float* demb) {
+    return symmetric_triplet_loss(emb, B, 6, 1.f, demb);
   };
-  expect_each_model_equals_it_alone(MlpShape{{19, 64, 64, 6}}, 3, trip, trip_alone);
+  expect_each_model_equals_it_trained_plainly(MlpShape{{19, 64, 64, 6}}, 3, trip, trip_loss);
+}
+
+// A model's parameters past the network's, which a one-network step does not use, get the
+// update of a zero gradient (their moments decay; a moment of 0 leaves them where they are).
+TEST(TrainStep, TrailingParametersAStepDoesNotUseGetAZeroGradientsUpdate) {
+  const MlpShape s{{4, 8, 1}};
+  const size_t P = s.param_count();
+  Rng rng(3);
+  std::vector<float> p(P + 2), X(10 * 4);
+  mlp_init(s, p.data(), rng);
+  p[P] = 0.5f, p[P + 1] = -0.25f;
+  for (auto& v : X) v = float(rng.normal());
+  Trainer t(s, AdamConfig{0.01, 1.0}, p);
+  t.adam.m[P] = 0.1f;  // a moment left from earlier steps moves its parameter
+  t.adam.v[P] = 0.04f;
+  const int32_t pairs[4] = {0, 1, 2, 3};
+  const float label[2] = {1, 0};
+  preference_train_step(t, 0, adam_step_scalars(t.adam_cfg, 1), X.data(), pairs, label, 2, 0.f);
+  std::vector<float> g(2, 0.f), pp{0.5f, -0.25f};
+  AdamState ref(2);
+  ref.m[0] = 0.1f, ref.v[0] = 0.04f;
+  adam_step(t.adam_cfg, ref, pp.data(), g.data(), 2);
+  EXPECT_EQ(t.params[P], pp[0]);
+  EXPECT_NE(t.params[P], 0.5f);
+  EXPECT_EQ(t.params[P + 1], -0.25f);
+  EXPECT_EQ(t.adam.m[P], ref.m[0]);
+}
+
+TEST(TrainStep, RefusesParametersThatAreNotModelsTimesAModel) {
+  const MlpShape s{{4, 8, 1}};
+  const size_t P = s.param_count();
+  EXPECT_THROW(Trainer(s, AdamConfig{}, std::vector<float>(P - 1)), std::invalid_argument);
+  EXPECT_THROW(Trainer(s, AdamConfig{}, std::vector<float>(3 * P + 1), 3), std::invalid_argument);
+  EXPECT_THROW(Trainer(s, AdamConfig{}, std::vector<float>(P), 0), std::invalid_argument);
+  EXPECT_EQ(Trainer(s, AdamConfig{}, std::vector<float>(2 * P + 4), 2).stride, P + 2);
 }
 
 }  // namespace

@@ -83,7 +83,7 @@ MUTANTS = [
      "held-out accuracy includes the training pairs"),
     ("engine/tpa.cpp", "    if (!phi.relu_on_output) s.linear_layers = {phi.layers() - 1};",
      "", "Tpa.*", "unfrozen network puts a ReLU on the embedding"),
-    ('engine/tpa.cpp', '                                              rows.X.data(), pairs[r].data(), label[r].data(), b,\n                                              float(h.tpa_l2));', '                                              rows.X.data(), pairs[r].data(), label[r].data(), b,\n                                              0.f);',
+    ('engine/tpa.cpp', '                                     pairs[r].data(), label[r].data(), b, float(h.tpa_l2));', '                                     pairs[r].data(), label[r].data(), b, 0.f);',
      'Tpa.*:TorchParity*', 'TPA L2 ignored'),
     ("engine/epochs.h", "          const int b = int(n - i0 < batch ? n - i0 : batch);\n          const int64_t t",
      "          const int b = batch;\n          const int64_t t", "Epochs.*", "last batch not shortened"),
@@ -236,7 +236,7 @@ MUTANTS = [
     # the task cache, task digests and hyper-parameter axes (0.10.0)
     ("experiment/simulation_tasks.cpp", '    s += hyper_lines(h, {"sirl."});', "",
      "ctest:incremental_runs", "a SIRL φ's digest blind to sirl.* (a stale φ reused)"),
-    ("experiment/task_settings.cpp", '  return "queries similarity=" + num(double(q.similarity)) +',
+    ("experiment/task_settings.cpp", '  return "queries similarity=" + exact_number(double(q.similarity)) +',
      '  return std::string("queries") +', "TaskDigest.*",
      "the similarity budget left out of the digests"),
     ("experiment/task_kinds.cpp", "    if (kind.settings(t, p) == kind.settings(base, p)) t.hyper.clear();",
