@@ -7,9 +7,7 @@
 #include "app/commands.h"
 #include "experiment/install_paths.h"
 #include "experiment/profile.h"
-#include "experiment/study_tasks.h"
 #include "jobs/mpi_run.h"
-#include "results/results_file.h"
 #include "results/study_store.h"
 
 namespace sirl::app {
@@ -57,15 +55,15 @@ void register_reproduce(CLI::App& app, Runner& run) {
     const Profile p = load_profile(profile, profile_settings());
     std::string study_line;
     if (p.study.enabled && !no_study) {
-      // The study ran as tasks of the plan (committed and resumable like the rest); here its
-      // records become the analysis, the cohort's study file, Fig. 6 and study_report.md.
+      // The study ran as tasks of the plan, its analysis too (/tables/study): here Fig. 6 and
+      // study_report.md are drawn from the results file, beside the cohort's answers as a study
+      // file (what `sirl study analyze` or the study server read).
       const std::string dir = figures + "/study", file = dir + "/simulated_study.h5";
       std::filesystem::create_directories(dir);
       std::fprintf(stderr, "sirl reproduce: user study (%d simulated users, %s)\n",
                    p.study.cohort.users, p.study.cohort.env.c_str());
       write_study(file, simulate_cohort(p.study.cohort));
-      write_study_analysis(file, p.study.cohort.env, assemble_study(p, read_results_records(out)),
-                           study_config(p), dir);
+      plot_study(out, dir, file);
       study_line = "study:   " + dir + "/study_report.md (Fig. 6: " + dir + "/fig6_study.png)\n";
     }
     std::printf("results: %s\nfigures: %s/\nreport:  %s/report.md\n%s", out.c_str(),

@@ -137,9 +137,16 @@ void write_study_analysis(const std::string& study_file, const std::string& env,
     throw;
   }
   std::filesystem::rename(h5 + ".partial", h5);
+  plot_study(h5, out);
+}
+
+void plot_study(const std::string& analysis, const std::string& out,
+                const std::string& study_file) {
+  std::filesystem::create_directories(out);
   const std::string cmd = sh_quote(python_interpreter()) + " " +
                           sh_quote((data_dir() / "report" / "plot_study.py").string()) + " " +
-                          sh_quote(h5) + " --out " + sh_quote(out);
+                          sh_quote(analysis) + " --out " + sh_quote(out) +
+                          (study_file.empty() ? "" : " --study-file " + sh_quote(study_file));
   if (std::system(cmd.c_str()) != 0) throw std::runtime_error("plotting failed: " + cmd);
 }
 

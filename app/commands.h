@@ -81,11 +81,15 @@ int study_simulate(const std::string& env, int64_t trajectories, int users, int6
                    const std::string& out, bool force = false);
 int study_analyze(const std::string& file, const std::string& out, int seeds, int splits,
                   int epochs, int tpa_epochs, int threads, bool random_frozen = false);
-// The analysis file (OUT/study_analysis.h5) and, through report/plot_study.py, Fig. 6 and
-// study_report.md. Shared by `sirl study analyze` and `sirl reproduce` (whose study ran as tasks).
+// The analysis file (OUT/study_analysis.h5), then Fig. 6 and study_report.md from it.
 void write_study_analysis(const std::string& study_file, const std::string& env,
                           const StudyAnalysis& a, const StudyAnalysisConfig& c,
                           const std::string& out);
+// Fig. 6 and OUT/study_report.md (report/plot_study.py) from a study analysis: the file
+// `sirl study analyze` writes, or a results file whose profile ran the study (/tables/study;
+// study_file names where its answers were written).
+void plot_study(const std::string& analysis, const std::string& out,
+                const std::string& study_file = "");
 
 // --cache DIR and --any-cpu-class (jobs/run.h's RunOptions), shared by the commands that run
 // or plan a profile.

@@ -12,6 +12,8 @@
 
 namespace sirl {
 
+using C = H5Table::Column;
+
 namespace {
 
 std::string study_rep_key(int64_t k, Method m) {
@@ -24,6 +26,7 @@ std::string tpa_key(const std::string& id) {
   return "study/tpa/" + id;
 }
 const char* kSimulatedKey = "study/simulated";
+const char* kAnalysisKey = "study/analysis";
 
 // A study task of `kind` on the cohort's environment, fields set (add_task keys it).
 Task study_task(TaskKind kind, const Profile& p) {
@@ -97,6 +100,7 @@ void add_study_tasks(Plan& plan, const Profile& p) {
     add_task(plan, p, std::move(t));
   }
   add_task(plan, p, study_task(study_simulated_kind(), p));
+  add_task(plan, p, study_task(study_analysis_kind(), p));
 }
 
 namespace {
@@ -204,6 +208,77 @@ void run_study_simulated(const Task& t, RunContext& ctx, TaskRecord& r) {
   put("random", a.random);
   put("random_other", a.random_other);
   r.num["flops"] = t.flops;
+}
+
+// Every study task whose record the analysis reads: each training seed's SIRL and Random, each
+// participant's TPA, the simulated preferences' TPA.
+std::vector<Task> analysis_inputs(const Task&, const Profile& p) {
+  std::vector<Task> in;
+  for (int64_t k = 0; k < p.study.seeds; ++k)
+    for (Method m : {Method::sirl, Method::random}) in.push_back(study_rep_task(p, k, m));
+  for (int u = 0; u < p.study.cohort.users; ++u) {
+    Task t = study_task(study_tpa_kind(), p);
+    t.participant = simulated_participant_id(u);
+    in.push_back(std::move(t));
+  }
+  in.push_back(study_task(study_simulated_kind(), p));
+  return in;
+}
+
+// The analysis as the rows of /tables/study (a long table, one value per row): "fpe" per training
+// seed, "real" and "heldout" per participant, "simulated" per reward; SIRL, Random in the mode
+// the study evaluates it in, and Random in the other mode ("random_other").
+void put_analysis_rows(const StudyAnalysis& a, TaskRecord& r) {
+  int64_t n = 0;
+  auto row = [&](const char* measure, const char* method, const std::string& unit, bool both,
+                 double value) {
+    const std::string i = "/" + std::to_string(n++);
+    r.text["measure" + i] = measure;
+    r.text["method" + i] = method;
+    r.text["unit" + i] = unit;
+    r.num["both_features" + i] = both;
+    r.num["value" + i] = value;
+  };
+  for (size_t k = 0; k < a.fpe_sirl.size(); ++k) {
+    row("fpe", "sirl", std::to_string(k), false, a.fpe_sirl[k]);
+    row("fpe", "random", std::to_string(k), false, a.fpe_random[k]);
+  }
+  for (size_t j = 0; j < a.participants.size(); ++j) {
+    const std::string& id = a.participants[j];
+    const bool both = a.both_features[j] != 0;
+    row("real", "sirl", id, both, a.real_sirl[j]);
+    row("real", "random", id, both, a.real_random[j]);
+    row("real", "random_other", id, both, a.real_random_other[j]);
+    row("heldout", "sirl", id, both, a.heldout_sirl[j]);
+    row("heldout", "random", id, both, a.heldout_random[j]);
+    row("heldout", "random_other", id, both, a.heldout_random_other[j]);
+  }
+  for (size_t i = 0; i < a.simulated_sirl.size(); ++i) {
+    row("simulated", "sirl", std::to_string(i), false, a.simulated_sirl[i]);
+    row("simulated", "random", std::to_string(i), false, a.simulated_random[i]);
+    row("simulated", "random_other", std::to_string(i), false, a.simulated_random_other[i]);
+  }
+  r.num["rows"] = double(n);
+}
+
+void run_study_analysis(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const Profile& p = ctx.profile();
+  std::vector<TaskRecord> in;
+  for (const Task& i : analysis_inputs(t, p)) in.push_back(ctx.record(i.kind.spec().key(i)));
+  const StudyAnalysis a = assemble_study(p, in);
+  const StudyAnalysisConfig c = study_config(p);
+  put_analysis_rows(a, r);
+  r.num["triplets"] = double(a.triplets);
+  r.text["random_mode"] = c.random_frozen ? "frozen" : "unfrozen";
+  r.num["seeds"] = c.seeds;
+  r.num["cv_splits"] = c.cv_splits;
+  r.num["sirl_epochs"] = c.hyper.sirl.epochs;
+  r.num["tpa_epochs"] = c.hyper.tpa.epochs;
+  r.num["flops"] = 0;  // it trains nothing
+}
+
+void study_analysis_cost(Task& t, const Profile&) {
+  t.flops = 0;
 }
 
 // Every study task runs with the study; none keeps weights in the results file (the networks are
@@ -317,10 +392,44 @@ const TaskKindSpec& study_simulated_kind() {
   return kind;
 }
 
+const TaskKindSpec& study_analysis_kind() {
+  static const TaskKindSpec kind{
+      .name = "study_analysis",
+      .description = "user study: the analysis from the study's tasks, as /tables/study",
+      .key = [](const Task&) { return std::string(kAnalysisKey); },
+      .inputs = analysis_inputs,
+      .settings = study_settings,
+      .cost = study_analysis_cost,
+      .rate = sirl_rate,  // no FLOPs: what a call costs
+      .shard_group = the_study,
+      .bf16_products = top_precision_is_bf16,
+      .stores_weights = false,
+      .describe = describe_env_and_seed,
+      .run = run_study_analysis,
+      .table = {"study",
+                "study_analysis",
+                {{"env", C::String, "env"},
+                 {"measure", C::String, "measure"},
+                 {"method", C::String, "method"},
+                 {"unit", C::String, "unit"},
+                 {"both_features", C::Int, "both_features"},
+                 {"value", C::Double, "value"},
+                 {"random_mode", C::String, "random_mode"},
+                 {"triplets", C::Int, "triplets"},
+                 {"seeds", C::Int, "seeds"},
+                 {"cv_splits", C::Int, "cv_splits"},
+                 {"sirl_epochs", C::Int, "sirl_epochs"},
+                 {"tpa_epochs", C::Int, "tpa_epochs"}},
+                "rows"},
+  };
+  return kind;
+}
+
 namespace {
 [[maybe_unused]] const TaskKindRegistration registered_study_kinds[]{
     TaskKindRegistration(study_rep_kind()), TaskKindRegistration(study_heldout_kind()),
-    TaskKindRegistration(study_tpa_kind()), TaskKindRegistration(study_simulated_kind())};
+    TaskKindRegistration(study_tpa_kind()), TaskKindRegistration(study_simulated_kind()),
+    TaskKindRegistration(study_analysis_kind())};
 }  // namespace
 
 StudyAnalysis assemble_study(const Profile& p, const std::vector<TaskRecord>& records) {

@@ -5,8 +5,10 @@
 //   study/heldout/<id>/rep        SIRL without participant <id>'s triplets
 //   study/tpa/<id>                Real and Held-out TPA on <id>'s own preferences
 //   study/simulated               TPA on simulated perfect preferences
+//   study/analysis                the analysis from all of these, as the long table /tables/study
 // assemble_study puts the committed records back together into the analysis `sirl study
-// analyze` computes in one call (the same numbers: tests/test_study_tasks.cpp).
+// analyze` computes in one call (the same numbers: tests/test_study_tasks.cpp); the analysis
+// task writes it as rows, so `sirl reproduce` only draws Fig. 6 from the results file.
 #pragma once
 #include <vector>
 
@@ -29,6 +31,7 @@ const TaskKindSpec& study_rep_kind();
 const TaskKindSpec& study_heldout_kind();
 const TaskKindSpec& study_tpa_kind();
 const TaskKindSpec& study_simulated_kind();
+const TaskKindSpec& study_analysis_kind();
 
 // The analysis from the study tasks' records. Throws std::runtime_error naming a missing task.
 StudyAnalysis assemble_study(const Profile& p, const std::vector<TaskRecord>& records);

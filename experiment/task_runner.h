@@ -39,6 +39,9 @@ class RunContext {
   // The triplets an `active` task chose, in the order asked.
   std::shared_ptr<const TripletSet> triplets(const std::string& key);
   void keep(const std::string& key, std::shared_ptr<const TripletSet> q);
+  // The committed record of a task this one reads (every input is committed before its readers
+  // run, in this process, another rank or an earlier run). Throws std::runtime_error if absent.
+  TaskRecord record(const std::string& key) { return load_(key); }
   // Drops a cached output once no pending task needs it (bounded memory on long runs).
   void release(const std::string& key);
   // Where a task's training saves and resumes its state (jobs/task_checkpoints.h); without a

@@ -1,6 +1,6 @@
 // `sirl plan`: what a profile will cost on this machine, without running it. Rates come from a
 // short calibration run of the real training code for each rate class its tasks name
-// (experiment/calibration.h; 20-40 s: two lengths each).
+// (experiment/calibration.h), each timed at two lengths.
 #pragma once
 #include <map>
 #include <string>
@@ -27,7 +27,7 @@ struct PlanEstimate {
   double setup_seconds = 0;  // Σ over environments of Ξ + its seeds' bundles, one core
 };
 
-// Calibrates the rates (20-40 s of real training) and simulates the thread scheduler
+// Calibrates the rates (short runs of real training) and simulates the thread scheduler
 // on `threads` cores (a big task takes several cores when nothing else is ready or its chain is
 // critical, as `sirl run` does).
 PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads);

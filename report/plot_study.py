@@ -1,7 +1,9 @@
 #!/usr/bin/python3
-"""Fig. 6 and the report lines for H3/H4 from `sirl study analyze`'s study_analysis.h5.
+"""Fig. 6 and the report lines for H3/H4 from a study analysis: `sirl study analyze`'s
+study_analysis.h5, or a results file whose profile ran the study (its /tables/study).
 
     /usr/bin/python3 report/plot_study.py DIR/study_analysis.h5 --out DIR
+    /usr/bin/python3 report/plot_study.py out/quick.h5 --out out/quick-figures/study
 
 FPE: SIRL vs Random over training seeds, two-sided t-test (H3). TPA: Real, Held-out and
 Simulated, each with a one-way ANOVA with method as the factor (H4), also restricted to the
@@ -27,6 +29,8 @@ import sirl_bench  # noqa: E402
 ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 ap.add_argument("analysis")
 ap.add_argument("--out", required=True)
+ap.add_argument("--study-file", help="the study file the answers are in, when the analysis is a "
+                "results file's (sirl reproduce writes the simulated cohort's beside the figure)")
 a = ap.parse_args()
 try:
     g = sirl_bench.study_analysis(a.analysis)
@@ -38,6 +42,8 @@ v = {k: g[k] for k in ("fpe_sirl", "fpe_random", "real_sirl", "real_random", "he
      if k in g}
 both = g["both_features"].astype(bool)
 attrs = g["attrs"]
+if a.study_file:
+    attrs["study_file"] = a.study_file
 MODE = attrs.get("random_mode", "frozen")  # files of older engines evaluated Random frozen
 OTHER = "frozen" if MODE == "unfrozen" else "unfrozen"
 

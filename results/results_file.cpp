@@ -44,23 +44,30 @@ H5Table cell_table(const std::vector<TaskRecord>& records, const CellTableSpec& 
   for (const auto& c : spec.columns) t.add(c.name, c.type);
   for (const auto& r : records) {
     if (r.kind != spec.kind) continue;
-    for (size_t k = 0; k < spec.columns.size(); ++k) {
-      const TableColumn& c = spec.columns[k];
-      if (c.optional && !r.text.count(c.key) && !r.num.count(c.key)) {
-        if (c.type == C::String)
-          t.columns[k].strings.push_back("");
-        else if (c.type == C::Int)
-          t.columns[k].ints.push_back(0);
-        else
-          t.columns[k].doubles.push_back(0);
-      } else if (c.type == C::String) {
-        t.columns[k].strings.push_back(need_text(r, c.key));
-      } else if (c.type == C::Int) {
-        t.columns[k].ints.push_back(int64_t(need_num(r, c.key)));
-      } else {
-        t.columns[k].doubles.push_back(need_num(r, c.key));
+    const int64_t rows = spec.rows_key ? int64_t(need_num(r, spec.rows_key)) : 1;
+    for (int64_t i = 0; i < rows; ++i)
+      for (size_t k = 0; k < spec.columns.size(); ++k) {
+        const TableColumn& c = spec.columns[k];
+        std::string key = c.key;
+        if (spec.rows_key)
+          if (std::string own = key + "/" + std::to_string(i);
+              r.text.count(own) || r.num.count(own))
+            key = std::move(own);
+        if (c.optional && !r.text.count(key) && !r.num.count(key)) {
+          if (c.type == C::String)
+            t.columns[k].strings.push_back("");
+          else if (c.type == C::Int)
+            t.columns[k].ints.push_back(0);
+          else
+            t.columns[k].doubles.push_back(0);
+        } else if (c.type == C::String) {
+          t.columns[k].strings.push_back(need_text(r, key.c_str()));
+        } else if (c.type == C::Int) {
+          t.columns[k].ints.push_back(int64_t(need_num(r, key.c_str())));
+        } else {
+          t.columns[k].doubles.push_back(need_num(r, key.c_str()));
+        }
       }
-    }
   }
   return t;
 }

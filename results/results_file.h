@@ -81,6 +81,10 @@ struct CellTableSpec {
   std::string name;  // the table: /tables/<name>, <name>.csv
   std::string kind;  // the records it reads: those of this kind
   std::vector<TableColumn> columns;
+  // Several rows per record (a long table): with rows_key set, a record gives num[rows_key] rows,
+  // and row i's column reads the field "<key>/<i>" where the record has one, else the record's own
+  // "<key>" (the same in each of its rows).
+  const char* rows_key = nullptr;
 };
 
 struct NamedTable {

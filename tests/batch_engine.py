@@ -29,6 +29,9 @@ import pandas as pd
 
 SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
+sys.path.insert(0, os.path.join(SRC, "python"))
+import sirl_bench  # noqa: E402
+
 REAL_SMOKE = os.path.join(SRC, "configs", "smoke.toml")
 SMOKE = os.path.join(SRC, "tests", "data", "engine-test.toml")
 
@@ -153,9 +156,10 @@ with tempfile.TemporaryDirectory() as tmp:
         keys = [k.decode() for k in f["runs_index"][:]]
         reps = [k for k in keys if k.endswith("/rep") and not k.startswith("study/")]
         # The user study ran as tasks of the plan: 2 seeds × (SIRL, Random), 4 users × (Held-out
-        # φ, TPA), one simulated-TPA task; its networks are never kept in the results file.
+        # φ, TPA), one simulated-TPA task, the analysis; its networks are never kept in the
+        # results file.
         study = [k for k in keys if k.startswith("study/")]
-        assert len(study) == 2 * 2 + 4 * 2 + 1, study
+        assert len(study) == 2 * 2 + 4 * 2 + 1 + 1, study
         assert not any(k in p1 for k in study), "study weights in the results file"
         seeded = [k for k in study if re.match(r"study/s\d+/(sirl|random)/rep$", k)]
         assert len(seeded) == 4 and all(0 < f[f"runs/{k}"].attrs["fpe"] < 1 for k in seeded), \
@@ -278,8 +282,8 @@ with tempfile.TemporaryDirectory() as tmp:
                 before[key] = {a: f["r"].attrs[a] for a in f["r"].attrs
                                if a not in ("seconds", "threads", "record_arrays", "record_checksum")}
     assert len(seen) == 200, len(seen)
-    assert 0 < len(before) < 13, f"the crash point is not inside the study part: {len(before)} " \
-        "of 13 study tasks committed (the smoke plan changed: choose another count)"
+    assert 0 < len(before) < 14, f"the crash point is not inside the study part: {len(before)} " \
+        "of 14 study tasks committed (the smoke plan changed: choose another count)"
     p = run("reproduce", "--profile", SMOKE, "--out", study_out, "--figures", figs,
             "--threads", "2")
     out = p.stdout + p.stderr
@@ -291,6 +295,27 @@ with tempfile.TemporaryDirectory() as tmp:
             for a, v in attrs.items():
                 assert np.array_equal(np.asarray(after[a]), np.asarray(v)), (key, a)
     assert os.path.exists(os.path.join(figs, "study", "study_report.md"))
+    # Fig. 6 was drawn from the results file's /tables/study (the analysis task's rows): the
+    # reader rebuilds from it exactly the arrays `sirl study analyze` computes in one call on the
+    # cohort reproduce wrote, with the profile's [study] settings.
+    analyzed = os.path.join(tmp, "study-one-call")
+    run("study", "analyze", os.path.join(figs, "study", "simulated_study.h5"), "--out", analyzed,
+        "--seeds", "2", "--splits", "3", "--epochs", "5", "--tpa-epochs", "5")
+    from_table, from_file = sirl_bench.study_analysis(study_out), sirl_bench.study_analysis(
+        os.path.join(analyzed, "study_analysis.h5"))
+    arrays = [k for k in from_file if k != "attrs"]
+    assert sorted(arrays) == sorted(k for k in from_table if k != "attrs"), \
+        (arrays, list(from_table))
+    text = [x.decode() if isinstance(x, bytes) else x for x in from_file["participants"]]
+    assert list(from_table["participants"]) == text, (list(from_table["participants"]), text)
+    for k in arrays:
+        if k != "participants":
+            assert np.array_equal(np.asarray(from_table[k]), np.asarray(from_file[k]),
+                                  equal_nan=True), k
+    for k in ("env", "triplets", "seeds", "cv_splits", "sirl_epochs", "tpa_epochs", "random_mode"):
+        assert from_table["attrs"][k] == from_file["attrs"][k], \
+            (k, from_table["attrs"][k], from_file["attrs"][k])
+    assert len(from_table["real_sirl"]) == 4 and len(from_table["fpe_sirl"]) == 2, from_table
     print(f"ok: killed during the study part ({len(before)} study tasks committed), rerun reused "
           f"{reused} tasks and kept the committed study results; the study report is written")
 

@@ -314,5 +314,46 @@ TEST(ResultsFile, ARecordMissingAColumnsKeyIsAnErrorNotAZero) {
   }
 }
 
+// A long table (CellTableSpec::rows_key): a record gives num[rows_key] rows; row i reads
+// "<key>/<i>" where the record has it and the record's own "<key>" otherwise; a missing row
+// field is an error naming the task and the field.
+TEST(ResultsFile, ALongTableGivesEachRecordItsRowsAndRepeatsItsOwnFields) {
+  using C = H5Table::Column;
+  const CellTableSpec spec{"long",
+                           "thing",
+                           {{"env", C::String, "env"},
+                            {"unit", C::String, "unit"},
+                            {"value", C::Double, "value"},
+                            {"n", C::Int, "n"}},
+                           "rows"};
+  TaskRecord a;
+  a.key = "t/a";
+  a.kind = "thing";
+  a.text = {{"env", "grid"}, {"unit/0", "p1"}, {"unit/1", "p2"}};
+  a.num = {{"rows", 2}, {"value/0", 0.5}, {"value/1", 0.25}, {"n", 7}};
+  TaskRecord b = a;  // one row, its own env; an empty record gives none
+  b.key = "t/b";
+  b.text = {{"env", "jaco"}, {"unit/0", "p9"}};
+  b.num = {{"rows", 1}, {"value/0", 1.5}, {"n", 3}};
+  TaskRecord none = a;
+  none.key = "t/none";
+  none.num["rows"] = 0;
+  const ResultTables t = build_tables({a, none, b}, {spec});
+  const H5Table& l = t.at("long");
+  ASSERT_EQ(l.rows(), 3u);
+  EXPECT_EQ(column(l, "env").strings, (std::vector<std::string>{"grid", "grid", "jaco"}));
+  EXPECT_EQ(column(l, "unit").strings, (std::vector<std::string>{"p1", "p2", "p9"}));
+  EXPECT_EQ(column(l, "value").doubles, (std::vector<double>{0.5, 0.25, 1.5}));
+  EXPECT_EQ(column(l, "n").ints, (std::vector<int64_t>{7, 7, 3}));
+  b.num.erase("value/0");
+  try {
+    build_tables({b}, {spec});
+    ADD_FAILURE() << "a row without its value made a table";
+  } catch (const H5Error& e) {
+    EXPECT_NE(std::string(e.what()).find("t/b"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("value"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace sirl

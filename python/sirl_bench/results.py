@@ -386,11 +386,42 @@ def write_embeddings(path, embeddings, method=None) -> None:
 
 
 def study_analysis(path) -> dict:
-    """The user-study analysis (`sirl study analyze --out`): its arrays by name and "attrs"."""
+    """The user-study analysis, its arrays by name and "attrs": from `sirl study analyze --out`'s
+    study_analysis.h5, or from a results file whose profile ran the study (its /tables/study, one
+    row per value, rebuilt into the same arrays)."""
     with _open_h5(path) as f:
-        if "study_analysis" not in f:
-            raise ResultsError(f"{path}: not a study analysis file (no /study_analysis)")
-        return _group_dict(f["study_analysis"])
+        if "study_analysis" in f:
+            return _group_dict(f["study_analysis"])
+        if "tables" in f and "study" in f["tables"]:
+            return _study_from_table(typed(pd.DataFrame(f["tables/study"][:])), str(path),
+                                     _attr(f.attrs.get("profile_name", "")))
+    raise ResultsError(f"{path}: not a study analysis (no /study_analysis), nor a results file "
+                       f"whose profile ran the study (no /tables/study; an engine before 0.14.0 "
+                       f"wrote none: rerunning `sirl run` on its profile adds it, reusing the rest)")
+
+
+def _study_from_table(t: pd.DataFrame, path: str, profile: str) -> dict:
+    """The arrays of a study_analysis.h5 from /tables/study's rows (each (measure, method) in row
+    order: seeds, participants, rewards)."""
+    if len(t) == 0:
+        raise ResultsError(f"{path}: /tables/study is empty (the profile has no [study], or its "
+                           f"analysis task has not run)")
+    d = {}
+    for measure in ("fpe", "real", "heldout", "simulated"):
+        for method in ("sirl", "random", "random_other"):
+            rows = t[(t["measure"] == measure) & (t["method"] == method)]
+            if measure == "fpe" and method == "random_other":
+                continue
+            d[f"{measure}_{method}"] = rows["value"].to_numpy(dtype=float)
+    real = t[(t["measure"] == "real") & (t["method"] == "sirl")]
+    d["participants"] = np.array(real["unit"].tolist(), dtype=object)
+    d["both_features"] = real["both_features"].to_numpy(dtype=np.int32)
+    first = t.iloc[0]
+    d["attrs"] = {"env": first["env"], "random_mode": first["random_mode"],
+                  "study_file": f"{path} (profile {profile}'s simulated cohort)"}
+    for k in ("triplets", "seeds", "cv_splits", "sirl_epochs", "tpa_epochs"):
+        d["attrs"][k] = int(first[k])
+    return d
 
 
 def open(path) -> Results:  # noqa: A001 (the package's entry point: sirl_bench.open)
