@@ -73,8 +73,9 @@ void calibrate_rates(const std::string& env, const Dataset& d, const Plan& plan,
   if (classes.empty()) return;
   const Hyper h = p.hyper.count(env) ? p.hyper.at(env) : study_config(p).hyper;
   const CalibrationSample sample = make_calibration_sample(d, p.queries, h, env_spec(env).sampled);
-  for (const auto& [name, c] : classes) {
-    const std::string key = env + "/" + name;
+  for (const auto& named : classes) {
+    const RateClass* c = named.second;  // not a structured binding: the lambdas below capture it
+    const std::string key = env + "/" + named.first;
     if (c->one_length) {
       double f = 0;
       const double s = seconds_of([&] { return c->train(sample, 1); }, &f);
