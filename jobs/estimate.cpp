@@ -38,7 +38,7 @@ namespace {
 // Times the making of env's Ξ (from a small one when it is sampled trajectory by trajectory) and
 // of one seed's query bundle into e; returns the small Ξ the rates are calibrated on.
 Dataset time_setup(const std::string& env, const Profile& p, PlanEstimate& e) {
-  // A sampled Ξ is timed on a small one (the profile's builds it on one thread, as a run does).
+  // A sampled Ξ is timed on a small one, on one thread as a run builds it (the profile sets it).
   EnvConfig small = p.data;
   constexpr int64_t kSmall = 300;  // enough to time the training code and Ξ's generation rate
   const EnvSpec& spec = env_spec(env);
