@@ -49,6 +49,7 @@ void for_each_field(H& h, F&& f) {
   f("tpa.stop", h.tpa_stop);
   f("tpa.stop_min_epochs", h.tpa_stop_min_epochs);
   f("tpa.stop_rel_tol", h.tpa_stop_rel_tol);
+  f("tpa.stop_frozen_rel_tol", h.tpa_stop_frozen_rel_tol);
   f("precision", h.precision);
 }
 
@@ -222,7 +223,7 @@ StopRule tpa_stop_rule(const Hyper& h, bool frozen) {
   StopRule r;
   r.converged = h.tpa_stop == "converged" || (h.tpa_stop == "converged-unfrozen" && !frozen);
   r.min_epochs = h.tpa_stop_min_epochs;
-  r.rel_tol = h.tpa_stop_rel_tol;
+  r.rel_tol = frozen ? h.tpa_stop_frozen_rel_tol : h.tpa_stop_rel_tol;
   return r;
 }
 
@@ -272,6 +273,8 @@ void validate(const Hyper& h) {
   if (h.tpa_stop_min_epochs < 2) fail("tpa.stop_min_epochs must be >= 2");
   if (!(h.tpa_stop_rel_tol > 0 && h.tpa_stop_rel_tol < 1))
     fail("tpa.stop_rel_tol must be in (0, 1)");
+  if (!(h.tpa_stop_frozen_rel_tol > 0 && h.tpa_stop_frozen_rel_tol < 1))
+    fail("tpa.stop_frozen_rel_tol must be in (0, 1)");
   try {
     validate_precision(h.precision);
   } catch (const std::invalid_argument& e) {

@@ -89,6 +89,36 @@ TEST(Hyper, BadKeysAndValuesAreRejectedWithTheirName) {
   bad = Hyper{};
   bad.tpa.batch = 0;
   EXPECT_THROW(validate(bad), std::invalid_argument);
+  for (double tol : {0.0, 1.0, -0.01}) {
+    bad = Hyper{};
+    bad.tpa_stop_frozen_rel_tol = tol;
+    try {
+      validate(bad);
+      ADD_FAILURE() << "tpa.stop_frozen_rel_tol = " << tol << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("tpa.stop_frozen_rel_tol must be in (0, 1)"),
+                std::string::npos);
+    }
+  }
+}
+
+// Each cell's heads stop at their own mode's tolerance: tpa.stop_rel_tol for unfrozen cells,
+// tpa.stop_frozen_rel_tol for frozen ones; the minimum and the mode word apply to both.
+TEST(Hyper, TheStopRuleTakesTheTolerancesOfItsCellsMode) {
+  Hyper h;
+  set_hyper(h, "tpa.stop", std::string("converged"));
+  set_hyper(h, "tpa.stop_rel_tol", 0.02);
+  set_hyper(h, "tpa.stop_frozen_rel_tol", 0.001);
+  set_hyper(h, "tpa.stop_min_epochs", int64_t{40});
+  const StopRule f = tpa_stop_rule(h, true), u = tpa_stop_rule(h, false);
+  EXPECT_TRUE(f.converged && u.converged);
+  EXPECT_EQ(f.rel_tol, 0.001);
+  EXPECT_EQ(u.rel_tol, 0.02);
+  EXPECT_EQ(f.min_epochs, 40);
+  EXPECT_EQ(u.min_epochs, 40);
+  set_hyper(h, "tpa.stop", std::string("converged-unfrozen"));
+  EXPECT_FALSE(tpa_stop_rule(h, true).converged);
+  EXPECT_TRUE(tpa_stop_rule(h, false).converged);
 }
 
 }  // namespace

@@ -1,10 +1,12 @@
 // Plan expansion: task counts, frozen modes, shards, the cells of each figure.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <set>
 #include <string>
 #include <vector>
 
+#include "experiment/expected_epochs.h"
 #include "experiment/plan.h"
 #include "experiment/profile.h"
 #include "experiment/simulation_tasks.h"
@@ -13,6 +15,33 @@
 
 namespace sirl {
 namespace {
+
+// The cost model's expected head epochs: a measured table per environment, mode and tolerance,
+// interpolated in log M between measured points and clamped to [minimum, cap]; the schedule's
+// epochs wherever nothing was measured.
+TEST(Plan, ExpectedHeadEpochsFollowTheMeasuredTableOfTheCellsTolerance) {
+  Hyper h = paper_hyper("jaco");
+  EXPECT_EQ(expected_head_epochs("jaco", true, 190, h), 1000);  // fixed: every epoch
+  h.tpa_stop = "converged";
+  EXPECT_NEAR(expected_head_epochs("jaco", false, 190, h), 100, 1e-12);
+  EXPECT_NEAR(expected_head_epochs("jaco", true, 10, h), 101.6, 1e-12);  // tolerance 0.01
+  h.tpa_stop_frozen_rel_tol = 0.001;
+  EXPECT_NEAR(expected_head_epochs("jaco", true, 10, h), 367.9, 1e-12);
+  EXPECT_NEAR(expected_head_epochs("jaco", true, 190, h), 533.5, 1e-12);
+  EXPECT_NEAR(expected_head_epochs("jaco", true, 400, h), 533.5, 1e-12);  // beyond: nearest
+  // M = 20 lies log(20/10) / log(50/10) of the way from M = 10 to M = 50 in log M:
+  const double w = std::log(2.0) / std::log(5.0);
+  EXPECT_NEAR(expected_head_epochs("jaco", true, 20, h), 367.9 + w * (742.6 - 367.9), 1e-9);
+  EXPECT_NEAR(expected_head_epochs("jaco", false, 190, h), 100, 1e-12);  // unfrozen: its own
+  // The schedule caps the expectation:
+  h.tpa.epochs = 300;
+  EXPECT_NEAR(expected_head_epochs("jaco", true, 50, h), 300, 1e-12);
+  h.tpa.epochs = 1000;
+  h.tpa_stop_frozen_rel_tol = 0.005;  // never measured: every epoch
+  EXPECT_EQ(expected_head_epochs("jaco", true, 50, h), 1000);
+  h.tpa_stop_min_epochs = 50;  // another minimum: never measured
+  EXPECT_EQ(expected_head_epochs("jaco", false, 50, h), 1000);
+}
 
 TEST(Plan, TaskCountsMatchTheGrid) {
   const Profile p = parse_profile(test::kSmallProfile, "t.toml");

@@ -241,6 +241,33 @@ TEST(Tpa, ConvergedUnfrozenStopsOnlyUnfrozenCellsHeads) {
   EXPECT_LT(*std::min_element(u.head_epochs.begin(), u.head_epochs.end()), 200);
 }
 
+// tpa.stop_frozen_rel_tol decides frozen cells' heads and only theirs: a tighter frozen tolerance
+// stops frozen heads where the rule at that tolerance says (checked with an explicit rule, not
+// the one the engine derives) and leaves unfrozen cells exactly as they were.
+TEST(Tpa, FrozenHeadsStopAtTheFrozenTolerance) {
+  const World& w = world();
+  const Hyper both = stopping_hyper(300, "converged");  // 0.01 for either mode
+  Hyper tight = both;
+  tight.tpa_stop_frozen_rel_tol = 0.001;
+  const TpaResult f01 = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, {20, true, both}, 5);
+  const TpaResult f001 = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, {20, true, tight}, 5);
+  const StopRule rule{true, 30, 0.001};
+  for (int r = 0; r < 20; ++r) {
+    const int k = f001.head_epochs[r];
+    const float* curve = f001.loss_curves.data() + size_t(r) * 300;
+    for (int e = 30; e < k; ++e) EXPECT_FALSE(stops_after(rule, curve, e)) << "head " << r;
+    if (k < 300) {
+      EXPECT_TRUE(stops_after(rule, curve, k)) << "head " << r;
+    }
+    EXPECT_GE(k, f01.head_epochs[r]) << "a tighter tolerance stopped head " << r << " sooner";
+  }
+  EXPECT_NE(f001.head_epochs, f01.head_epochs) << "the tolerance changed no stop: a weak test";
+  const TpaResult u01 = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, {20, false, both}, 5);
+  const TpaResult u001 = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, {20, false, tight}, 5);
+  EXPECT_EQ(u001.head_epochs, u01.head_epochs);
+  EXPECT_EQ(u001.accuracy, u01.accuracy);
+}
+
 TEST(Tpa, FixedRunsEveryEpochOfEveryHead) {
   const World& w = world();
   Hyper h = fast_hyper();
