@@ -76,7 +76,8 @@ def main():
              "sirl.lr": (['"0.5"', "nan", "inf", "[1, nan]"], "0.5"),
              "vae.standardize": (["1", '"true"', "[true, 1]"], "false"),
              "phi.hidden": (['"64,64"', "[64.0]", "[[64], [64.5]]"], "[64, 64]"),
-             "tpa.stop": (["1", '["fixed", 1]'], '"converged"')}
+             "tpa.stop": (["1", '["fixed", 1]'], '"converged"'),
+             "tpa.stop_frozen_rel_tol": (['"0.001"', "true", "[0.001, nan]"], "0.001")}
     with tempfile.TemporaryDirectory() as tmp:
         prof = os.path.join(tmp, "p.toml")
         for key, (bad, good) in cases.items():
@@ -92,6 +93,18 @@ def main():
                 elif p.returncode == 0 or key not in err or "p.toml:8" not in err:
                     failures.append(f"profile {key} = {v}: rc {p.returncode}, {err[:200]!r}")
                 checked += 1
+        # Of the right type but out of range: refused with the key, its range and the file (the
+        # line cited is the [hyper.<env>] section's, where the whole set is validated).
+        for key, v in (("tpa.stop_frozen_rel_tol", "0"), ("tpa.stop_frozen_rel_tol", "1.5"),
+                       ("tpa.stop_rel_tol", "-0.1")):
+            open(prof, "w").write('name = "t"\nenvs = ["grid"]\nseeds = [0]\n[fpe]\n'
+                                  'methods = ["sirl"]\nN = [10]\n[hyper.grid]\n'
+                                  f'"{key}" = {v}\n')
+            p = sirl("plan", prof, "--tasks")
+            err = p.stderr.strip()
+            if p.returncode == 0 or f"{key} must be in (0, 1)" not in err or "p.toml:" not in err:
+                failures.append(f"profile {key} = {v}: rc {p.returncode}, {err[:200]!r}")
+            checked += 1
     if failures:
         print("cli_numbers: FAIL\n  " + "\n  ".join(failures))
         sys.exit(1)
