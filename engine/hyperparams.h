@@ -47,8 +47,9 @@ struct Hyper {
   // after tpa.stop_min_epochs, by check_convergence at tpa.stop_rel_tol (unfrozen cells) or
   // tpa.stop_frozen_rel_tol (frozen cells); tpa.epochs is the cap. "converged-unfrozen": the rule
   // for unfrozen cells only, frozen cells' heads run every epoch. Two tolerances because on
-  // JacoRobot the frozen heads' loss still falls slowly where the unfrozen heads' has flattened:
-  // 0.01 changed frozen cells' TPA and 0.001 did not (docs/stopping-rule.md).
+  // JacoRobot the frozen heads' loss still falls slowly where the unfrozen heads' has flattened,
+  // so a rule for frozen heads needs a tighter one; no tolerance tried kept SIRL's frozen TPA at
+  // the paper's over M = 10-190 (docs/stopping-rule.md).
   std::string tpa_stop = "fixed";
   int tpa_stop_min_epochs = 100;
   double tpa_stop_rel_tol = 0.01;
