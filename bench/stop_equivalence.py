@@ -87,8 +87,8 @@ def check_stops(fixed_path, conv_path):
     for r in recs[recs.arrays.str.split(",").map(lambda a: "head_epochs" in a)].itertuples():
         hy = prof.get("hyper", {}).get(r.env, {})
         min_epochs = int(hy.get("tpa.stop_min_epochs", 100))
-        frozen = r.key.endswith("/frozen")  # each mode has its own tolerance
-        rel_tol = float(hy.get("tpa.stop_frozen_rel_tol" if frozen else "tpa.stop_rel_tol", 0.01))
+        # each mode has its own tolerance
+        rel_tol = float(hy.get("tpa.stop_frozen_rel_tol" if r.frozen else "tpa.stop_rel_tol", 0.01))
         curves = fixed.array(r.key, "loss_curves")
         got = conv.array(r.key, "head_epochs")
         for h, c in enumerate(curves):
