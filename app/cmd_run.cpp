@@ -253,7 +253,9 @@ void print_plan_summary(const Profile& p, const Plan& plan, const std::string& c
                 "protocol", "", protocol * 1e-9);
     std::printf(" SIRL's exact skip%s (measured medians: experiment/expected_epochs.cpp)\n",
                 std::any_of(p.hyper.begin(), p.hyper.end(),
-                            [](const auto& kv) { return kv.second.tpa_stop != "fixed"; })
+                            [](const auto& kv) { return kv.second.tpa_stop != "fixed"; }) ||
+                        std::any_of(p.tpa_stop_by_method.begin(), p.tpa_stop_by_method.end(),
+                                    [](const auto& kv) { return kv.second != "fixed"; })
                     ? " and converged reward heads"
                     : "");
   }

@@ -272,7 +272,10 @@ HyperValue hyper_value(const Reader& r, const toml::node& n, const std::string& 
 // [tpa]: methods, N, M and which of frozen/unfrozen to run.
 void parse_tpa(const Reader& r, const toml::table& tpa, TpaGrid& g,
                const std::string& table = "[tpa]") {
-  r.only_keys(tpa, table, {"methods", "N", "M", "frozen"});
+  if (table == "[tpa]")
+    r.only_keys(tpa, table, {"methods", "N", "M", "frozen", "stop"});
+  else
+    r.only_keys(tpa, table, {"methods", "N", "M", "frozen"});
   g.methods = r.variants(tpa, "methods");
   g.N = r.int_list(tpa, "N", 1, 10'000'000, true);
   g.M = r.int_list(tpa, "M", 1, 10'000'000, true);
@@ -289,6 +292,33 @@ void parse_tpa(const Reader& r, const toml::table& tpa, TpaGrid& g,
     } else {
       r.fail(f, "frozen must be \"best\" or an array of booleans");
     }
+  }
+}
+
+// [tpa] stop = { sirl = "fixed" }: a stop rule per variant listed in [tpa] methods.
+void parse_tpa_stop(const Reader& r, const toml::table& tpa, Profile& p) {
+  const toml::node* n = tpa.get("stop");
+  if (!n) return;
+  const toml::table* t = n->as_table();
+  if (!t)
+    r.fail(n, "[tpa] stop must be a table of method = rule, e.g. stop = { sirl = \"fixed\" }");
+  for (auto&& [key, value] : *t) {
+    const std::string name(key.str());
+    const bool listed = std::any_of(p.tpa.methods.begin(), p.tpa.methods.end(),
+                                    [&](const Variant& v) { return v.name() == name; });
+    if (!listed) r.fail(&value, "[tpa] stop: '" + name + "' is not one of [tpa] methods");
+    const std::optional<std::string> rule = value.value<std::string>();
+    if (!rule || !value.is_string())
+      r.fail(&value, "[tpa] stop." + name + " must be a string (\"fixed\", \"converged\" or "
+                     "\"converged-unfrozen\")");
+    Hyper check;
+    check.tpa_stop = *rule;
+    try {
+      validate(check);
+    } catch (const std::invalid_argument& e) {
+      r.fail(&value, "[tpa] stop." + name + ": " + e.what());
+    }
+    p.tpa_stop_by_method[name] = *rule;
   }
 }
 
@@ -465,7 +495,10 @@ void parse_cells(Reader& r, const toml::table& root, Profile& p) {
     p.fpe_methods = r.variants(*fpe, "methods");
     p.fpe_N = r.int_list(*fpe, "N", 1, 10'000'000, true);
   }
-  if (tpa) parse_tpa(r, *tpa, p.tpa);
+  if (tpa) {
+    parse_tpa(r, *tpa, p.tpa);
+    parse_tpa_stop(r, *tpa, p);
+  }
 
   if (const auto* ab = r.table(root, "ablation", false)) {
     r.only_keys(*ab, "[ablation]", {"methods", "N", "M"});
@@ -856,6 +889,14 @@ const Hyper& hyper_at(const Profile& p, const std::string& env, const std::strin
     for (const HyperPoint& hp : it->second)
       if (hp.tag == tag) return hp.hyper;
   throw std::invalid_argument("no hyper-parameter point '" + tag + "' in environment " + env);
+}
+
+Hyper tpa_cell_hyper(const Profile& p, const std::string& env, const std::string& tag,
+                     const Variant& v) {
+  Hyper h = hyper_at(p, env, tag);
+  if (auto it = p.tpa_stop_by_method.find(v.name()); it != p.tpa_stop_by_method.end())
+    h.tpa_stop = it->second;
+  return h;
 }
 
 bool runs_bf16(const Profile& p) {

@@ -110,6 +110,12 @@ struct Profile {
   std::vector<Variant> fpe_methods;
   std::vector<int64_t> fpe_N;
   TpaGrid tpa;
+  // [tpa] stop = { <variant> = "<rule>" }: the tpa.stop rule ("fixed", "converged",
+  // "converged-unfrozen") of every TPA cell of that variant — [tpa]'s, [ablation]'s and
+  // [robustness]'s — over [hyper]'s, e.g. the paper's epochs for the one method where a stopping
+  // rule was not equivalent (configs/jaco-fig5.toml). A rule is a property of the method, not of
+  // the grid a cell is listed in, so a cell two grids share is one task.
+  std::map<std::string, std::string> tpa_stop_by_method;
   // Fig. 7: every listed method × {frozen, unfrozen} × {no VAE, VAE} (where VAE applies).
   std::vector<Method> ablation_methods;
   std::vector<int64_t> ablation_N, ablation_M;
@@ -138,6 +144,10 @@ std::string hyper_points_text(const Profile& p);
 // The values of point `tag` of environment `env` ("" = the base point, Profile::hyper). Throws
 // std::invalid_argument for an unknown tag.
 const Hyper& hyper_at(const Profile& p, const std::string& env, const std::string& tag);
+// What a TPA cell of variant v trains its heads with: hyper_at's values with the variant's
+// [tpa] stop rule, if the profile gives it one.
+Hyper tpa_cell_hyper(const Profile& p, const std::string& env, const std::string& tag,
+                     const Variant& v);
 
 // Whether variant v has cells in environment env: every method has, but an external method only
 // in the environments its [external.<name>] lists.

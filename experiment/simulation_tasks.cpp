@@ -362,15 +362,16 @@ void run_robust_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
 
 void tpa_cost(Task& t, const Profile& p) {
   const EnvSizes z = env_sizes(t, p);
-  const MlpShape net = tpa_network(z.phi, z.h, t.frozen);
-  t.protocol_flops = kTestRewards * net.train_flops(2 * t.M, z.h.tpa.epochs);
+  const Hyper h = tpa_cell_hyper(p, t.env, t.hyper, t.variant);
+  const MlpShape net = tpa_network(z.phi, h, t.frozen);
+  t.protocol_flops = kTestRewards * net.train_flops(2 * t.M, h.tpa.epochs);
   // Under tpa.stop = "converged" the heads stop early: what they are expected to run.
   t.flops = t.protocol_flops;
-  if (const double e = expected_head_epochs(t.env, t.frozen, t.M, z.h); e < z.h.tpa.epochs)
-    t.flops *= e / z.h.tpa.epochs;
-  t.bytes = kTestRewards * working_set(net, 2 * z.h.tpa.batch);
+  if (const double e = expected_head_epochs(t.env, t.frozen, t.M, h); e < h.tpa.epochs)
+    t.flops *= e / h.tpa.epochs;
+  t.bytes = kTestRewards * working_set(net, 2 * h.tpa.batch);
   // The heads train one after another (engine/tpa.h): what must fit the cache is one head's.
-  t.stream_bytes = kTestRewards * stream_bytes(net, 2 * t.M, 2 * z.h.tpa.batch, z.h.tpa.epochs);
+  t.stream_bytes = kTestRewards * stream_bytes(net, 2 * t.M, 2 * h.tpa.batch, h.tpa.epochs);
   if (t.flops < t.protocol_flops) t.stream_bytes *= t.flops / t.protocol_flops;
 }
 
@@ -394,11 +395,11 @@ void record_heads_convergence(const TpaResult& res, TaskRecord& r) {
 
 void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   const auto checkpoint = ctx.checkpointer(t.key);
-  const TpaResult res =
-      evaluate_tpa(*ctx.representation(t.input(rep_kind())), ctx.dataset(t.env),
-                   ctx.bundle(t.env, t.seed, t.teacher).tpa,
-                   TpaConfig{t.M, t.frozen, hyper_at(ctx.profile(), t.env, t.hyper)},
-                   task_seed(t.env, t.seed, "tpa"), {t.threads, checkpoint.get()});
+  const Hyper h = tpa_cell_hyper(ctx.profile(), t.env, t.hyper, t.variant);
+  const TpaResult res = evaluate_tpa(*ctx.representation(t.input(rep_kind())), ctx.dataset(t.env),
+                                     ctx.bundle(t.env, t.seed, t.teacher).tpa,
+                                     TpaConfig{t.M, t.frozen, h}, task_seed(t.env, t.seed, "tpa"),
+                                     {t.threads, checkpoint.get()});
   r.num["tpa"] = res.mean;
   r.num["tpa_std"] = res.stddev;
   r.num["flops"] = res.train_flops;
@@ -416,9 +417,7 @@ void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   // Each head's epochs trained; a head below the cap stopped by tpa.stop = "converged".
   r.arrays["head_epochs"] =
       TaskRecord::Array::of(std::vector<float>(res.head_epochs.begin(), res.head_epochs.end()));
-  r.text["stop"] =  // the rule this cell's heads ran under
-      tpa_stop_rule(hyper_at(ctx.profile(), t.env, t.hyper), t.frozen).converged ? "converged"
-                                                                                 : "fixed";
+  r.text["stop"] = tpa_stop_rule(h, t.frozen).converged ? "converged" : "fixed";  // its heads'
   record_heads_convergence(res, r);
   if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
 }
@@ -506,7 +505,7 @@ std::string fpe_settings(const Task& t, const Profile& p) {
 
 std::string tpa_settings(const Task& t, const Profile& p) {
   return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
-         hyper_lines(hyper_at(p, t.env, t.hyper), {"phi.", "tpa.", "precision"});
+         hyper_lines(tpa_cell_hyper(p, t.env, t.hyper, t.variant), {"phi.", "tpa.", "precision"});
 }
 
 std::string active_settings(const Task& t, const Profile& p) {

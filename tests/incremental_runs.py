@@ -252,6 +252,32 @@ def main():
         print(f"incremental_runs: an axis of both values: {len(changed)} computed, {point} rows "
               "equal the changed run's; figures from the base point, the axis figure from both")
 
+        # 3c. One method's own stop rule ([tpa] stop): exactly that method's TPA cells (every
+        # environment's, [tpa]'s and [ablation]'s, frozen and unfrozen) are computed again, their
+        # records name the rule, and their values are the base run's: smoke's 20 head epochs are
+        # below the rule's 100-epoch minimum, so no head stops sooner.
+        rule = ["--set", 'tpa.stop.sirl="converged"']
+        ruled = {k for k, r in records.items()
+                 if r.get("task_kind") == "tpa" and r.get("variant") == "sirl"}
+        before = cache_keys(cache)
+        out = os.path.join(tmp, "rule.h5")
+        p = run("run", SMOKE, *rule, "--out", out, "--cache", cache)
+        new = {k for f, k in cache_keys(cache).items() if f not in before}
+        if not ruled or new != ruled or computed(p)[1] != len(ruled):
+            fail(f"a stop rule for sirl computed {computed(p)}: {sorted(new ^ ruled)[:5]} differ "
+                 f"from SIRL's {len(ruled)} TPA cells")
+        with h5py.File(out, "r") as f, h5py.File(base, "r") as b:
+            for k, r in records.items():
+                if r.get("task_kind") != "tpa":
+                    continue
+                got, want = f["runs/" + k].attrs, b["runs/" + k].attrs
+                if got["stop"] != ("converged" if k in ruled else "fixed") or want["stop"] != "fixed":
+                    fail(f"{k}: stop {got['stop']!r} (base {want['stop']!r})")
+                if not same(got["tpa"], want["tpa"]):
+                    fail(f"{k}: TPA {got['tpa']} under the rule, {want['tpa']} without")
+        print(f"incremental_runs: a stop rule for sirl: its {len(ruled)} TPA cells computed, "
+              "their records name it, their values unchanged")
+
         # 4. Two profiles at once on one fresh cache.
         shared = os.path.join(tmp, "shared")
         outs = [os.path.join(tmp, "one.h5"), os.path.join(tmp, "two.h5")]

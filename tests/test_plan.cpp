@@ -43,6 +43,43 @@ TEST(Plan, ExpectedHeadEpochsFollowTheMeasuredTableOfTheCellsTolerance) {
   EXPECT_EQ(expected_head_epochs("jaco", false, 50, h), 1000);
 }
 
+// [tpa] stop = { sirl = "fixed" }: every TPA cell of SIRL (its [tpa] and [ablation] cells, frozen
+// and unfrozen) runs the paper's epochs while every other method's heads stop by [hyper]'s rule.
+// What a cell reads (its settings, so its digest) and what the plan expects it to cost say so.
+TEST(Plan, AMethodsStopRuleOverridesHyperForEveryTpaCellOfThatMethod) {
+  std::string text = test::kSmallProfile;
+  const std::string M_line = "M = [10, 80]\n";
+  text.replace(text.find(M_line), M_line.size(), M_line + "stop = { sirl = \"fixed\" }\n");
+  text += "\"tpa.stop\" = \"converged\"\n";
+  const Profile p = parse_profile(text, "t.toml");
+  ASSERT_EQ(p.tpa_stop_by_method.size(), 1u);
+  EXPECT_EQ(p.tpa_stop_by_method.at("sirl"), "fixed");
+  const Plan plan = make_plan(p);
+  int sirl_cells = 0, other_cells = 0;
+  for (const Task& t : plan.tasks) {
+    if (!(t.kind == tpa_kind())) continue;
+    const std::string settings = tpa_kind().settings(t, p);
+    const bool sirl = t.variant.name() == "sirl";
+    (sirl ? sirl_cells : other_cells) += 1;
+    EXPECT_NE(settings.find(sirl ? "tpa.stop = fixed" : "tpa.stop = converged"),
+              std::string::npos)
+        << t.key << "\n"
+        << settings;
+    // GridRobot's heads are expected to stop at 100 of the cap's 500 epochs under the rule.
+    EXPECT_NEAR(t.flops / t.protocol_flops, sirl ? 1.0 : 0.2, 1e-12) << t.key;
+    EXPECT_EQ(tpa_cell_hyper(p, t.env, t.hyper, t.variant).tpa_stop, sirl ? "fixed" : "converged");
+  }
+  EXPECT_GT(sirl_cells, 0);
+  EXPECT_GT(other_cells, 0);
+  // Without the override every cell reads "converged": the rule is what changed SIRL's.
+  std::string plain = text;
+  plain.erase(plain.find("stop = {"), std::string("stop = { sirl = \"fixed\" }\n").size());
+  const Profile q = parse_profile(plain, "t.toml");
+  for (const Task& t : make_plan(q).tasks)
+    if (t.kind == tpa_kind())
+      EXPECT_NE(tpa_kind().settings(t, q).find("tpa.stop = converged"), std::string::npos);
+}
+
 TEST(Plan, TaskCountsMatchTheGrid) {
   const Profile p = parse_profile(test::kSmallProfile, "t.toml");
   const Plan plan = make_plan(p);

@@ -94,6 +94,22 @@ TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
   EXPECT_EQ(test::profile_error_of(base + grid +
                                    "[hyper.grid]\n\"phi.hidden\" = [100000000, 100000000]\n"),
             "no error");
+  // [tpa] stop: a table of listed methods and known rules.
+  EXPECT_EQ(test::profile_error_of(base + grid + "stop = { sirl = \"fixed\" }\n"), "no error");
+  m = test::profile_error_of(base + grid + "stop = \"fixed\"\n");
+  EXPECT_NE(m.find("bad.toml:11: [tpa] stop must be a table of method = rule"), std::string::npos)
+      << m;
+  m = test::profile_error_of(base + grid + "stop = { random = \"fixed\" }\n");
+  EXPECT_NE(m.find("[tpa] stop: 'random' is not one of [tpa] methods"), std::string::npos) << m;
+  m = test::profile_error_of(base + grid + "stop = { sirl = \"early\" }\n");
+  EXPECT_NE(m.find("[tpa] stop.sirl: hyper-parameter tpa.stop must be"), std::string::npos) << m;
+  m = test::profile_error_of(base + grid + "stop = { sirl = 1 }\n");
+  EXPECT_NE(m.find("[tpa] stop.sirl must be a string"), std::string::npos) << m;
+  // A rule belongs to the method, wherever its cells are listed: [robustness] takes none.
+  m = test::profile_error_of(base + grid +
+                             "[teacher]\nbeta = [\"inf\", 1]\n[robustness]\nmethods = [\"sirl\"]\n"
+                             "N = [100]\nM = [10]\nstop = { sirl = \"fixed\" }\n");
+  EXPECT_NE(m.find("unknown key 'stop'"), std::string::npos) << m;
   // A float in an integer list: one file:line prefix, not two.
   m = test::profile_error_of(base + grid + "[hyper.grid]\n\"phi.hidden\" = [1e8, 1e8]\n");
   EXPECT_EQ(m.find("bad.toml", 1), std::string::npos) << m;
