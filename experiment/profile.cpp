@@ -309,8 +309,9 @@ void parse_tpa_stop(const Reader& r, const toml::table& tpa, Profile& p) {
     if (!listed) r.fail(&value, "[tpa] stop: '" + name + "' is not one of [tpa] methods");
     const std::optional<std::string> rule = value.value<std::string>();
     if (!rule || !value.is_string())
-      r.fail(&value, "[tpa] stop." + name + " must be a string (\"fixed\", \"converged\" or "
-                     "\"converged-unfrozen\")");
+      r.fail(&value, "[tpa] stop." + name +
+                         " must be a string (\"fixed\", \"converged\" or "
+                         "\"converged-unfrozen\")");
     Hyper check;
     check.tpa_stop = *rule;
     try {

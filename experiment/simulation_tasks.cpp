@@ -396,10 +396,10 @@ void record_heads_convergence(const TpaResult& res, TaskRecord& r) {
 void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   const auto checkpoint = ctx.checkpointer(t.key);
   const Hyper h = tpa_cell_hyper(ctx.profile(), t.env, t.hyper, t.variant);
-  const TpaResult res = evaluate_tpa(*ctx.representation(t.input(rep_kind())), ctx.dataset(t.env),
-                                     ctx.bundle(t.env, t.seed, t.teacher).tpa,
-                                     TpaConfig{t.M, t.frozen, h}, task_seed(t.env, t.seed, "tpa"),
-                                     {t.threads, checkpoint.get()});
+  const TpaResult res =
+      evaluate_tpa(*ctx.representation(t.input(rep_kind())), ctx.dataset(t.env),
+                   ctx.bundle(t.env, t.seed, t.teacher).tpa, TpaConfig{t.M, t.frozen, h},
+                   task_seed(t.env, t.seed, "tpa"), {t.threads, checkpoint.get()});
   r.num["tpa"] = res.mean;
   r.num["tpa_std"] = res.stddev;
   r.num["flops"] = res.train_flops;

@@ -61,8 +61,7 @@ TEST(Plan, AMethodsStopRuleOverridesHyperForEveryTpaCellOfThatMethod) {
     const std::string settings = tpa_kind().settings(t, p);
     const bool sirl = t.variant.name() == "sirl";
     (sirl ? sirl_cells : other_cells) += 1;
-    EXPECT_NE(settings.find(sirl ? "tpa.stop = fixed" : "tpa.stop = converged"),
-              std::string::npos)
+    EXPECT_NE(settings.find(sirl ? "tpa.stop = fixed" : "tpa.stop = converged"), std::string::npos)
         << t.key << "\n"
         << settings;
     // GridRobot's heads are expected to stop at 100 of the cap's 500 epochs under the rule.
