@@ -269,13 +269,9 @@ HyperValue hyper_value(const Reader& r, const toml::node& n, const std::string& 
   return widths;
 }
 
-// [tpa]: methods, N, M and which of frozen/unfrozen to run.
-void parse_tpa(const Reader& r, const toml::table& tpa, TpaGrid& g,
-               const std::string& table = "[tpa]") {
-  if (table == "[tpa]")
-    r.only_keys(tpa, table, {"methods", "N", "M", "frozen", "stop"});
-  else
-    r.only_keys(tpa, table, {"methods", "N", "M", "frozen"});
+// [tpa] or [robustness] (the caller checks the table's keys): methods, N, M and which of
+// frozen/unfrozen to run.
+void parse_tpa(const Reader& r, const toml::table& tpa, TpaGrid& g) {
   g.methods = r.variants(tpa, "methods");
   g.N = r.int_list(tpa, "N", 1, 10'000'000, true);
   g.M = r.int_list(tpa, "M", 1, 10'000'000, true);
@@ -477,7 +473,7 @@ void parse_robustness(Reader& r, const toml::table& root, Profile& p) {
            "[robustness] needs noisy teachers: give a list for beta, mistake or attend in "
            "[teacher] (e.g. beta = [10, 1, 0])");
   r.only_keys(*rb, "[robustness]", {"methods", "N", "M", "frozen"});
-  parse_tpa(r, *rb, p.robustness, "[robustness]");  // its cells, as a [tpa] table's
+  parse_tpa(r, *rb, p.robustness);  // its cells, as a [tpa] table's
 }
 
 // [fpe], [tpa], [ablation]: which cells run.
@@ -497,6 +493,7 @@ void parse_cells(Reader& r, const toml::table& root, Profile& p) {
     p.fpe_N = r.int_list(*fpe, "N", 1, 10'000'000, true);
   }
   if (tpa) {
+    r.only_keys(*tpa, "[tpa]", {"methods", "N", "M", "frozen", "stop"});
     parse_tpa(r, *tpa, p.tpa);
     parse_tpa_stop(r, *tpa, p);
   }
