@@ -303,19 +303,16 @@ void parse_tpa_stop(const Reader& r, const toml::table& tpa, Profile& p) {
     const bool listed = std::any_of(p.tpa.methods.begin(), p.tpa.methods.end(),
                                     [&](const Variant& v) { return v.name() == name; });
     if (!listed) r.fail(&value, "[tpa] stop: '" + name + "' is not one of [tpa] methods");
-    const std::optional<std::string> rule = value.value<std::string>();
-    if (!rule || !value.is_string())
-      r.fail(&value, "[tpa] stop." + name +
-                         " must be a string (\"fixed\", \"converged\" or "
-                         "\"converged-unfrozen\")");
-    Hyper check;
-    check.tpa_stop = *rule;
+    if (!value.is_string())
+      r.fail(&value, "[tpa] stop." + name + " must be a string: a tpa.stop rule");
+    Hyper check;  // validate() names the rules
+    check.tpa_stop = *value.value<std::string>();
     try {
       validate(check);
     } catch (const std::invalid_argument& e) {
       r.fail(&value, "[tpa] stop." + name + ": " + e.what());
     }
-    p.tpa_stop_by_method[name] = *rule;
+    p.tpa_stop_by_method[name] = check.tpa_stop;
   }
 }
 
