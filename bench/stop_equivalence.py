@@ -52,8 +52,13 @@ def converged_settings(resolved):
 
 
 def tables(path):
+    """The run's tables, /tables/tpa cut to the paper's protocol and the methods (the stopping
+    rule is about the paper's heads; linear evaluation and the references have no epochs)."""
     res = sirl_bench.open(path)
-    return {k: res.tables[k] for k in ("tpa", "timings", "tpa_heads")}
+    t = {k: res.tables[k] for k in ("tpa", "timings", "tpa_heads")}
+    tpa = t["tpa"]
+    t["tpa"] = tpa[(tpa.protocol == "paper") & ~tpa.reference.astype(bool)]
+    return t
 
 
 CELL = ["env", "variant", "N", "M", "frozen", "seed"]

@@ -27,6 +27,10 @@ const char* method_name(Method m) {
       return "random";
     case Method::external:
       return "external";
+    case Method::truth:
+      return "truth";
+    case Method::raw:
+      return "raw";
   }
   return "?";
 }
@@ -34,17 +38,30 @@ const char* method_name(Method m) {
 Method parse_method(const std::string& name) {
   for (Method m : kAll)
     if (name == method_name(m)) return m;
-  if (name == method_name(Method::external)) return Method::external;
+  for (Method m : {Method::external, Method::truth, Method::raw})
+    if (name == method_name(m)) return m;
   std::string known;
   for (Method m : kAll) known += (known.empty() ? "" : ", ") + std::string(method_name(m));
   throw std::invalid_argument("unknown method '" + name + "' (expected one of " + known + ")");
 }
 
 bool uses_queries(Method m) {
-  return m != Method::vae && m != Method::random;
+  return m != Method::vae && m != Method::random && !is_reference(m);
 }
 bool accepts_vae_pretrain(Method m) {
   return uses_queries(m) && m != Method::external;
+}
+bool is_reference(Method m) {
+  return m == Method::truth || m == Method::raw;
+}
+
+Representation reference_representation(Method m, const Dataset& d) {
+  if (!is_reference(m))
+    throw std::invalid_argument(std::string("'") + method_name(m) + "' is not a reference");
+  Representation r;
+  r.method = m;
+  r.shape.widths = {d.input_dim, m == Method::truth ? d.feature_count() : d.input_dim};
+  return r;
 }
 
 Representation table_representation(std::vector<float> table, int64_t T, int d, int input_dim) {
@@ -95,6 +112,17 @@ std::vector<float> embed_rows(const Representation& rep, const Dataset& d,
                               const std::vector<int32_t>& rows, int threads) {
   const int dim = rep.dim();
   std::vector<float> out(rows.size() * size_t(dim));
+  if (is_reference(rep.method)) {
+    const float* src = rep.method == Method::truth ? d.features.data() : d.inputs.data();
+    const int w = rep.method == Method::truth ? d.feature_count() : d.input_dim;
+    if (w != dim)
+      throw std::invalid_argument(std::string("the ") + method_name(rep.method) + " reference is " +
+                                  std::to_string(dim) + " wide, the dataset's " +
+                                  std::to_string(w));
+    for (size_t i = 0; i < rows.size(); ++i)
+      std::copy_n(src + ptrdiff_t(rows[i]) * dim, dim, out.begin() + i * dim);
+    return out;
+  }
   if (!rep.table.empty()) {
     if (rep.table.size() != size_t(d.count) * size_t(dim))
       throw std::invalid_argument("φ(Ξ) holds " + std::to_string(rep.table.size() / size_t(dim)) +

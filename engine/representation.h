@@ -12,7 +12,11 @@ namespace sirl {
 
 // `external`: a representation learned outside the engine and handed in as its embedding of Ξ
 // (a profile's [external.<name>], `sirl evaluate`); it has no weights, so its TPA cells are frozen.
-enum class Method { sirl, vae, multipref10, multipref50, singlepref, random, external };
+// `truth` and `raw`: the references every profile scores beside the methods (never a baseline of
+// the paper's claims): φ*(ξ) itself, the normalised true features (the ceiling), and the
+// trajectory's network input itself (the floor a learned representation must beat). Both are
+// functions of Ξ alone: no training, no weights, frozen cells only.
+enum class Method { sirl, vae, multipref10, multipref50, singlepref, random, external, truth, raw };
 
 // "sirl", "vae", "multipref10", "multipref50", "singlepref", "random", "external".
 const char* method_name(Method m);
@@ -24,6 +28,8 @@ Method parse_method(const std::string& name);
 bool uses_queries(Method m);
 // Methods that accept VAE pre-training as a switch (SIRL+VAE, MultiPref+VAE, SinglePref+VAE).
 bool accepts_vae_pretrain(Method m);
+// truth and raw: the reference representations (see Method).
+bool is_reference(Method m);
 
 struct Representation {
   MlpShape shape;             // input → hidden… → d
@@ -46,8 +52,14 @@ struct Representation {
   // the same code as a built-in one's.
   std::vector<float> table;
   int dim() const { return shape.out(); }
-  bool is_table() const { return method == Method::external; }
+  // No weights: φ(Ξ) is given (external: `table`; truth, raw: the dataset's features or inputs).
+  bool is_table() const { return method == Method::external || is_reference(method); }
 };
+
+// A reference representation of dataset d (m = truth: φ(ξ) = d's normalised features [F];
+// m = raw: φ(ξ) = d's input [input_dim]). It holds no copy: embed_rows reads d. Throws
+// std::invalid_argument for a method that is not a reference.
+Representation reference_representation(Method m, const Dataset& d);
 
 // An external representation: φ(Ξ) given as the rows [T, d] of `table` for a dataset whose inputs
 // are `input_dim` wide. Throws std::invalid_argument if table is not T·d floats, d < 1, or a value
@@ -71,10 +83,10 @@ struct EmbeddingPass {
 };
 EmbeddingPass embed_all(const Representation& rep, const float* X, int64_t n, int threads = 1);
 
-// φ(ξ) for the rows `rows` of Ξ = d, [rows, dim]: the rows of rep.table when it holds φ(Ξ), else
-// d's inputs of those rows embedded (in chunks, as embed). The two can differ in the last bits:
-// the GEMM kernels pick their blocking by row count, so a row computed among 200 others need not
-// equal the same row computed in embed_all's chunks of 1024.
+// φ(ξ) for the rows `rows` of Ξ = d, [rows, dim]: a reference's rows of d, the rows of rep.table
+// when it holds φ(Ξ), else d's inputs of those rows embedded (in chunks, as embed). The two can
+// differ in the last bits: the GEMM kernels pick their blocking by row count, so a row computed
+// among 200 others need not equal the same row computed in embed_all's chunks of 1024.
 std::vector<float> embed_rows(const Representation& rep, const Dataset& d,
                               const std::vector<int32_t>& rows, int threads = 1);
 

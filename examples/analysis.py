@@ -28,7 +28,9 @@ def fig5_cells(path):
     if "best_mode" not in tpa:
         raise sirl_bench.ResultsError(f"{path}: written by an engine before 0.8.0 (its tables "
                                       "carry no best_mode column); re-run it")
-    main = tpa[tpa.in_main & tpa.best_mode]
+    # The paper's protocol, the methods only (linear evaluation and the references truth and raw
+    # are rows of the same table: docs/linear-evaluation.md).
+    main = tpa[tpa.in_main & tpa.best_mode & (tpa.protocol == "paper") & ~tpa.reference]
     largest = main.groupby("env").N.transform("max")
     return main[(main.N == largest) | main.N.isna()]
 

@@ -45,6 +45,10 @@ Variant parse_variant(const std::string& name) {
     throw std::invalid_argument(
         "'external' is not a method name: declare a representation "
         "trained elsewhere as [external.<name>] (or use `sirl evaluate`)");
+  if (is_reference(v.method))
+    throw std::invalid_argument("'" + name +
+                                "' is a reference every profile scores beside the methods (truth, "
+                                "raw): it is not listed among them");
   if (v.vae && !accepts_vae_pretrain(v.method))
     throw std::invalid_argument("'" + name +
                                 "': VAE pre-training applies only to sirl, multipref10, "
@@ -53,13 +57,14 @@ Variant parse_variant(const std::string& name) {
 }
 
 std::vector<bool> frozen_settings(const TpaGrid& grid, const Variant& v) {
-  if (v.method == Method::external) return {true};  // no weights to fine-tune
+  if (v.method == Method::external || is_reference(v.method)) return {true};  // no weights
   if (!grid.frozen.empty()) return grid.frozen;
   return {is_best_mode(v, true)};
 }
 
 bool is_best_mode(const Variant& v, bool frozen) {
-  return frozen == (v.method == Method::sirl || v.method == Method::external);
+  return frozen ==
+         (v.method == Method::sirl || v.method == Method::external || is_reference(v.method));
 }
 
 std::string external_name_problem(const std::string& name) {
@@ -74,6 +79,10 @@ std::string external_name_problem(const std::string& name) {
   } catch (const std::invalid_argument&) {
   }
   return "";
+}
+
+bool Profile::runs_protocol(const std::string& protocol) const {
+  return std::find(tpa_protocols.begin(), tpa_protocols.end(), protocol) != tpa_protocols.end();
 }
 
 bool runs_in(const Profile& p, const Variant& v, const std::string& env) {
@@ -316,6 +325,24 @@ void parse_tpa_stop(const Reader& r, const toml::table& tpa, Profile& p) {
   }
 }
 
+// [tpa] protocols = ["paper", "linear"]: one or both, each once.
+void parse_tpa_protocols(const Reader& r, const toml::table& tpa, Profile& p) {
+  const toml::node* n = tpa.get("protocols");
+  if (!n) return;
+  const char* expect =
+      "[tpa] protocols must be a non-empty array of \"paper\" (the paper's reward head) and "
+      "\"linear\" (linear evaluation), each at most once";
+  const toml::array* a = n->as_array();
+  if (!a || a->empty()) r.fail(n, expect);
+  p.tpa_protocols.clear();
+  for (auto&& e : *a) {
+    const std::optional<std::string> s = e.value<std::string>();
+    if (!e.is_string() || (*s != "paper" && *s != "linear") || p.runs_protocol(*s))
+      r.fail(&e, expect);
+    p.tpa_protocols.push_back(*s);
+  }
+}
+
 }  // namespace
 
 namespace {
@@ -490,9 +517,10 @@ void parse_cells(Reader& r, const toml::table& root, Profile& p) {
     p.fpe_N = r.int_list(*fpe, "N", 1, 10'000'000, true);
   }
   if (tpa) {
-    r.only_keys(*tpa, "[tpa]", {"methods", "N", "M", "frozen", "stop"});
+    r.only_keys(*tpa, "[tpa]", {"methods", "N", "M", "frozen", "stop", "protocols"});
     parse_tpa(r, *tpa, p.tpa);
     parse_tpa_stop(r, *tpa, p);
+    parse_tpa_protocols(r, *tpa, p);
   }
 
   if (const auto* ab = r.table(root, "ablation", false)) {

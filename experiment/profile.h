@@ -116,6 +116,11 @@ struct Profile {
   // rule was not equivalent (configs/jaco-fig5.toml). A rule is a property of the method, not of
   // the grid a cell is listed in, so a cell two grids share is one task.
   std::map<std::string, std::string> tpa_stop_by_method;
+  // [tpa] protocols: how [tpa]'s cells score a representation: "paper" (the paper's reward head,
+  // engine/tpa.h) and "linear" (linear evaluation: a Bradley–Terry linear head fit to convergence,
+  // engine/linear_tpa.h). Default: both. [ablation] and [robustness] cells are the paper's.
+  std::vector<std::string> tpa_protocols{"paper", "linear"};
+  bool runs_protocol(const std::string& protocol) const;
   // Fig. 7: every listed method × {frozen, unfrozen} × {no VAE, VAE} (where VAE applies).
   std::vector<Method> ablation_methods;
   std::vector<int64_t> ablation_N, ablation_M;

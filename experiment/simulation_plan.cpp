@@ -25,6 +25,40 @@ void add_tpa_cell(Plan& plan, const Profile& p, const std::string& env, int64_t 
   (ablation ? added.in_ablation : added.in_main) = true;
 }
 
+// A linear-evaluation cell of [tpa] (engine/linear_tpa.h): φ frozen, so one per (variant, N, M).
+void add_linear_cell(Plan& plan, const Profile& p, const std::string& env, int64_t seed,
+                     const std::string& point, const Variant& v, int64_t N, int64_t M) {
+  Task t = experiment_cell(linear_tpa_kind(), env, seed, v, N);
+  t.hyper = point;
+  t.M = M;
+  t.frozen = true;
+  t.in_main = true;
+  add_task(plan, p, std::move(t));
+}
+
+// The references (truth, raw) beside every method: their FPE where the environment has FPE
+// cells; where it has [tpa] cells, truth under the paper's head and both under linear evaluation.
+void add_reference_cells(Plan& plan, const Profile& p, const std::string& env, int64_t seed,
+                         const std::string& point) {
+  const EnvAxes& axes = p.axes.at(env);
+  for (Method m : {Method::truth, Method::raw}) {
+    const Variant v{m};
+    if (!p.fpe_methods.empty() && !axes.fpe_N.empty()) {
+      Task t = experiment_cell(fpe_kind(), env, seed, v, 0);
+      t.hyper = point;
+      add_task(plan, p, std::move(t));
+    }
+    if (p.tpa.methods.empty() || axes.tpa_N.empty()) continue;
+    for (int64_t M : axes.tpa_M) {
+      // raw is a floor for linear evaluation only: the paper's 1024-wide head on the raw input
+      // is a model of its own, not a reference for a representation.
+      if (m == Method::truth && p.runs_protocol("paper"))
+        add_tpa_cell(plan, p, env, seed, point, v, 0, M, true, false);
+      if (p.runs_protocol("linear")) add_linear_cell(plan, p, env, seed, point, v, 0, M);
+    }
+  }
+}
+
 // [robustness]: every noisy teacher's cells, and the main teacher's cells of the same sizes
 // (each axis's reference point; a cell the main grid has already is that task).
 void add_robustness_cells(Plan& plan, const Profile& p, const std::string& env, int64_t seed,
@@ -78,9 +112,12 @@ void add_simulation_tasks(Plan& plan, const Profile& p) {
             }
         for (const auto& v : p.tpa.methods)
           for (int64_t N : runs_in(p, v, env) ? axes.tpa_N : std::vector<int64_t>{})
-            for (int64_t M : axes.tpa_M)
-              for (bool fr : frozen_settings(p.tpa, v))
-                add_tpa_cell(plan, p, env, seed, point, v, N, M, fr, false);
+            for (int64_t M : axes.tpa_M) {
+              if (p.runs_protocol("paper"))
+                for (bool fr : frozen_settings(p.tpa, v))
+                  add_tpa_cell(plan, p, env, seed, point, v, N, M, fr, false);
+              if (p.runs_protocol("linear")) add_linear_cell(plan, p, env, seed, point, v, N, M);
+            }
         for (Method m : p.ablation_methods)
           for (bool with_vae : {false, true}) {
             if (with_vae && !accepts_vae_pretrain(m)) continue;
@@ -91,6 +128,7 @@ void add_simulation_tasks(Plan& plan, const Profile& p) {
                   add_tpa_cell(plan, p, env, seed, point, v, N, M, fr, true);
           }
         add_robustness_cells(plan, p, env, seed, point);
+        add_reference_cells(plan, p, env, seed, point);
       }
   }
 }

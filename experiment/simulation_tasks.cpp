@@ -5,9 +5,11 @@
 #include <string_view>
 
 #include "datasets/environments.h"
+#include "datasets/exact_text.h"
 #include "datasets/queries.h"
 #include "engine/convergence.h"
 #include "engine/fpe.h"
+#include "engine/linear_tpa.h"
 #include "engine/methods.h"
 #include "engine/tpa.h"
 #include "experiment/calibration.h"
@@ -152,6 +154,18 @@ Task rep_input(const Task& t) {
   r.hyper = t.hyper;
   return r;
 }
+// What a cell of φ reads: its rep task, or nothing for a reference (φ is a function of Ξ).
+std::vector<Task> cell_inputs(const Task& t, const Profile&) {
+  if (is_reference(t.variant.method)) return {};
+  return {rep_input(t)};
+}
+// The φ a cell scores.
+std::shared_ptr<const Representation> cell_representation(const Task& t, RunContext& ctx) {
+  if (is_reference(t.variant.method))
+    return std::make_shared<const Representation>(
+        reference_representation(t.variant.method, ctx.dataset(t.env)));
+  return ctx.representation(t.input(rep_kind()));
+}
 std::string input_rep_key(const Task& t) {
   return rep_key(t.env, t.seed, t.variant, t.N, t.teacher);
 }
@@ -171,6 +185,7 @@ void describe_variant(const Task& t, TaskRecord& r) {
   r.text["teacher"] = t.teacher;  // "" = the profile's main teacher
   r.num["vae"] = t.variant.vae;
   r.num["N"] = double(t.N);
+  if (is_reference(t.variant.method)) r.num["reference"] = 1;  // a ceiling or floor, not a method
 }
 // A robustness cell also names its teacher, the noise axis and level, and how far the answers
 // it learned from are from the perfect oracle's (AnswerError).
@@ -336,16 +351,24 @@ double probe_flops(int64_t rows, int d) {
   return 2.0 * double(rows) * (d + 1) * (d + 1 + 2 * kFeatures);
 }
 
+// The width of φ(ξ) a cell's probe or head reads: the embedding's; the raw reference's is the
+// input's, truth's the features' (at most 8 in every environment: an estimate).
+int probed_width(const Task& t, const EnvSizes& z) {
+  if (t.variant.method == Method::raw) return z.input_dim;
+  return t.variant.method == Method::truth ? 8 : z.h.embedding_dim;
+}
+
 void fpe_cost(Task& t, const Profile& p) {
   const EnvSizes z = env_sizes(t, p);
-  t.flops = probe_flops(p.queries.fpe_trajectories, z.h.embedding_dim);
-  t.bytes = 4.0 * double(p.queries.fpe_trajectories) * (z.h.embedding_dim + 16);
+  const int w = probed_width(t, z);
+  t.flops = probe_flops(p.queries.fpe_trajectories, w);
+  t.bytes = 4.0 * double(p.queries.fpe_trajectories) * (w + 16);
 }
 
 // FPE's labelled trajectories are the true features whoever the teacher (its split is drawn
 // from a stream no teacher touches, so every teacher's φ is probed on the same rows).
 void run_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const auto rep = ctx.representation(t.input(rep_kind()));
+  const auto rep = cell_representation(t, ctx);
   const FpeSplit& split = ctx.bundle(t.env, t.seed).fpe;
   const FpeResult f = evaluate_fpe(*rep, ctx.dataset(t.env), split);
   r.num["fpe"] = f.fpe;
@@ -396,10 +419,9 @@ void record_heads_convergence(const TpaResult& res, TaskRecord& r) {
 void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   const auto checkpoint = ctx.checkpointer(t.key);
   const Hyper h = tpa_cell_hyper(ctx.profile(), t.env, t.hyper, t.variant);
-  const TpaResult res =
-      evaluate_tpa(*ctx.representation(t.input(rep_kind())), ctx.dataset(t.env),
-                   ctx.bundle(t.env, t.seed, t.teacher).tpa, TpaConfig{t.M, t.frozen, h},
-                   task_seed(t.env, t.seed, "tpa"), {t.threads, checkpoint.get()});
+  const TpaResult res = evaluate_tpa(
+      *cell_representation(t, ctx), ctx.dataset(t.env), ctx.bundle(t.env, t.seed, t.teacher).tpa,
+      TpaConfig{t.M, t.frozen, h}, task_seed(t.env, t.seed, "tpa"), {t.threads, checkpoint.get()});
   r.num["tpa"] = res.mean;
   r.num["tpa_std"] = res.stddev;
   r.num["flops"] = res.train_flops;
@@ -424,6 +446,65 @@ void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
 void run_robust_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   run_tpa(t, ctx, r);
   record_teacher(t, ctx, r);
+}
+
+// ---- linear evaluation ----
+
+// The Newton fit's stopping rule and rank cut are the protocol's (docs/linear-evaluation.md);
+// λ is the paper's tpa.l2.
+LinearBtOptions linear_options(const Hyper& h) {
+  LinearBtOptions o;
+  o.l2 = h.tpa_l2;
+  return o;
+}
+
+void linear_tpa_cost(Task& t, const Profile& p) {
+  const EnvSizes z = env_sizes(t, p);
+  // Per reward: the Gram matrix of the smaller side of the 2M training rows × (w + 1) features
+  // and its eigensolver, about 10 Newton steps in its span, the rewards of its held-out rows.
+  const double w = probed_width(t, z) + 1, n = 2.0 * double(t.M), g = std::min(w, n);
+  const double held = 2.0 * double(queries_for(p, t.teacher).tpa_pairs);
+  t.flops = kTestRewards * (2 * n * w * g + 9 * g * g * g + 10 * 4 * n * g * g + 2 * held * w);
+  t.protocol_flops = t.flops;
+  t.bytes = 8.0 * ((n + held) * w + 2 * g * g + n * w);
+}
+
+void describe_linear_tpa(const Task& t, TaskRecord& r) {
+  describe_tpa(t, r);
+  r.text["protocol"] = "linear";
+  r.num["best_mode"] = 1;  // φ is frozen under linear evaluation: every method's only mode
+}
+
+std::string linear_tpa_settings(const Task& t, const Profile& p) {
+  const LinearBtOptions o = linear_options(hyper_at(p, t.env, t.hyper));
+  return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
+         hyper_lines(hyper_at(p, t.env, t.hyper), {"tpa.l2"}) + "linear tolerance " +
+         exact_number(o.tolerance) + " floor " + exact_number(o.floor) + " max_iterations " +
+         std::to_string(o.max_iterations) + " rank_tolerance " + exact_number(o.rank_tolerance) +
+         "\n";
+}
+
+void run_linear_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
+  const Hyper& h = hyper_at(ctx.profile(), t.env, t.hyper);
+  const LinearTpaResult res = evaluate_linear_tpa(*cell_representation(t, ctx), ctx.dataset(t.env),
+                                                  ctx.bundle(t.env, t.seed, t.teacher).tpa, t.M,
+                                                  linear_options(h), t.threads);
+  r.num["tpa"] = res.mean;
+  r.num["tpa_std"] = res.stddev;
+  r.num["flops"] = res.flops;
+  r.num["protocol_flops"] = res.flops;
+  const auto floats = [](const auto& v) { return std::vector<float>(v.begin(), v.end()); };
+  r.arrays["accuracy"] = TaskRecord::Array::of(floats(res.accuracy));
+  r.arrays["train_accuracy"] = TaskRecord::Array::of(floats(res.train_accuracy));
+  r.arrays["newton_iterations"] = TaskRecord::Array::of(floats(res.iterations));
+  r.arrays["span_rank"] = TaskRecord::Array::of(floats(res.rank));
+  double train_mean = 0;
+  for (double a : res.train_accuracy) train_mean += a / double(res.train_accuracy.size());
+  r.num["tpa_train"] = train_mean;
+  r.num["newton_iterations"] = *std::max_element(res.iterations.begin(), res.iterations.end());
+  // Not "converged": that names a training's loss curve (/tables/training).
+  r.num["newton_converged"] = res.converged;
+  if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
 }
 
 // ---- active ----
@@ -661,7 +742,7 @@ const TaskKindSpec& fpe_kind() {
       .name = "fpe",
       .description = "FPE of one φ: a linear probe's held-out error",
       .key = [](const Task& t) { return cell_prefix(t) + "fpe"; },
-      .inputs = [](const Task& t, const Profile&) { return std::vector<Task>{rep_input(t)}; },
+      .inputs = cell_inputs,
       .settings = fpe_settings,
       .cost = fpe_cost,
       .rate = [](const Task&) -> const RateClass& { return fpe_probe_rate(); },
@@ -682,7 +763,8 @@ const TaskKindSpec& fpe_kind() {
                  {"train_mse", C::Double, "train_mse"},
                  {"selection", C::String, "selection"},
                  {"teacher", C::String, "teacher"},
-                 {"hyper_point", C::String, "hyper_point", true}}},
+                 {"hyper_point", C::String, "hyper_point", true},
+                 {"reference", C::Int, "reference", true}}},
       .lacks_fields = lacks_cell_fields,
       .complete_fields = complete_cell_fields,
   };
@@ -694,7 +776,7 @@ const TaskKindSpec& tpa_kind() {
       .name = "tpa",
       .description = "TPA of one φ at M pairs, frozen or unfrozen: 20 reward heads",
       .key = tpa_cell_key,
-      .inputs = [](const Task& t, const Profile&) { return std::vector<Task>{rep_input(t)}; },
+      .inputs = cell_inputs,
       .settings = tpa_settings,
       .cost = tpa_cost,
       .rate = [](const Task& t) -> const RateClass& { return tpa_training_rate(t.frozen); },
@@ -721,9 +803,36 @@ const TaskKindSpec& tpa_kind() {
                  {"selection", C::String, "selection"},
                  {"teacher", C::String, "teacher"},
                  {"best_mode", C::Int, "best_mode"},
-                 {"hyper_point", C::String, "hyper_point", true}}},
+                 {"hyper_point", C::String, "hyper_point", true},
+                 // the paper's reward head, or linear evaluation (records of tpa_linear)
+                 {"protocol", C::String, "protocol", true, "paper"},
+                 {"reference", C::Int, "reference", true}},
+                nullptr,
+                {"tpa_linear"}},
       .lacks_fields = lacks_cell_fields,
       .complete_fields = complete_cell_fields,
+  };
+  return kind;
+}
+
+// Linear evaluation's cells: rows of /tables/tpa (protocol "linear"), so no table of their own.
+const TaskKindSpec& linear_tpa_kind() {
+  static const TaskKindSpec kind{
+      .name = "tpa_linear",
+      .description = "TPA of one φ at M pairs under linear evaluation: 20 linear heads, Newton",
+      .key =
+          [](const Task& t) { return cell_prefix(t) + "tpa/M" + std::to_string(t.M) + "/linear"; },
+      .inputs = cell_inputs,
+      .settings = linear_tpa_settings,
+      .cost = linear_tpa_cost,
+      // Dense linear algebra in double on a stored embedding, as the FPE probe's.
+      .rate = [](const Task&) -> const RateClass& { return fpe_probe_rate(); },
+      .shard_group = by_representation,
+      .bf16_products = never_bf16,
+      .stores_weights = true,
+      .describe = describe_linear_tpa,
+      .run = run_linear_tpa,
+      .table = {},
   };
   return kind;
 }
@@ -742,6 +851,7 @@ TaskKindSpec robustness_twin(const TaskKindSpec& main, const char* name, const c
   k.run = run;
   k.table.kind = name;
   k.table.name = name;
+  k.table.more_kinds.clear();  // a noisy teacher's cells are the paper's protocol only
   drop_columns(k.table, dropped);
   k.table.columns.insert(k.table.columns.begin() + 4, kTeacherColumns.begin(),
                          kTeacherColumns.end());
@@ -789,8 +899,8 @@ namespace {
 [[maybe_unused]] const TaskKindRegistration registered_simulation_kinds[]{
     TaskKindRegistration(vae_kind()),        TaskKindRegistration(rep_kind()),
     TaskKindRegistration(fpe_kind()),        TaskKindRegistration(tpa_kind()),
-    TaskKindRegistration(robust_fpe_kind()), TaskKindRegistration(robust_tpa_kind()),
-    TaskKindRegistration(active_kind())};
+    TaskKindRegistration(linear_tpa_kind()), TaskKindRegistration(robust_fpe_kind()),
+    TaskKindRegistration(robust_tpa_kind()), TaskKindRegistration(active_kind())};
 }  // namespace
 
 }  // namespace sirl

@@ -3,6 +3,8 @@
 //   <env>/s<seed>/<variant>[/N<N>]/rep        a representation φ (N only for query methods)
 //   <env>/s<seed>/<variant>[/N<N>]/fpe        FPE of that φ
 //   <env>/s<seed>/<variant>[/N<N>]/tpa/M<M>/{frozen,unfrozen}   TPA of that φ at M pairs
+//   <env>/s<seed>/<variant>[/N<N>]/tpa/M<M>/linear   the same under linear evaluation
+// <variant> is a method's, or a reference's (truth, raw: no rep task, φ is a function of Ξ).
 // and the robustness cells of a noisy teacher (robust_fpe, robust_tpa; its φ is a rep task):
 //   <env>/s<seed>/<teacher>/<variant>[/N<N>]/{rep,fpe,tpa/...}      <teacher> = "beta=1", …
 // (a method that learns from no answers — VAE, Random — has one φ for every teacher, but its
@@ -21,6 +23,9 @@ const TaskKindSpec& vae_kind();
 const TaskKindSpec& rep_kind();
 const TaskKindSpec& fpe_kind();
 const TaskKindSpec& tpa_kind();
+// <env>/s<seed>/<variant>[/N<N>]/tpa/M<M>/linear: TPA of that φ under linear evaluation
+// (engine/linear_tpa.h), rows of /tables/tpa with protocol "linear".
+const TaskKindSpec& linear_tpa_kind();
 const TaskKindSpec& robust_fpe_kind();
 const TaskKindSpec& robust_tpa_kind();
 // <env>/s<seed>[/<teacher>]/active/<rule>: the triplets an active variant of SIRL learns from

@@ -14,7 +14,8 @@ LinearProbe fit_linear_probe(const float* X, const float* Y, int n, int in, int 
   A.leftCols(in) = Eigen::Map<const RowMatF>(X, n, in).cast<double>();
   A.col(in).setOnes();
   const RowMatD b = Eigen::Map<const RowMatF>(Y, n, out).cast<double>();
-  const RowMatD beta = A.colPivHouseholderQr().solve(b);  // [in+1, out]
+  const RowMatD beta = n > in ? RowMatD(A.colPivHouseholderQr().solve(b))  // [in+1, out]
+                              : RowMatD(A.completeOrthogonalDecomposition().solve(b));
   LinearProbe p;
   p.in = in;
   p.out = out;

@@ -10,7 +10,10 @@ struct LinearProbe {
 };
 
 // X [n, in], Y [n, out] row-major. Column-pivoting QR, so rank-deficient X (dead or constant
-// embedding units) still gives the minimum-residual fit. Throws std::invalid_argument if n < 1.
+// embedding units) still gives the minimum-residual fit. With fewer rows than unknowns (n ≤ in:
+// a wide input such as the raw reference's) the residual is zero for many β, and the one of least
+// norm is taken (complete orthogonal decomposition; the limit of ridge as its weight goes to 0).
+// Throws std::invalid_argument if n < 1.
 LinearProbe fit_linear_probe(const float* X, const float* Y, int n, int in, int out);
 
 // Mean over the n·out entries of (prediction − Y)².

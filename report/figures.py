@@ -10,7 +10,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
-from run_tables import ENV, env_title, main_tpa  # noqa: E402
+from run_tables import (ENV, PAPER, PROTOCOL_TEXT, env_title, main_tpa, methods,  # noqa: E402
+                        of_protocol, reference_tpa, references)
 
 # One colour and one label per method variant, shared by every figure.
 STYLE = {
@@ -25,6 +26,24 @@ STYLE = {
 
 
 ORDER = list(STYLE)
+
+# The reference representations every profile scores beside the methods (the tables' `reference`
+# rows): drawn as reference lines, never as methods (not in STYLE or ORDER). Colour, label and
+# line style. A reference the table holds but this dict does not name gets a grey dash-dot line.
+REFERENCE_STYLE = {
+    "truth": ("#000000", "truth φ* (ceiling)", (0, (6, 3))),
+    "raw": ("#555555", "raw input (floor)", (0, (1, 1.5))),
+}
+
+
+def reference_style(v):
+    return REFERENCE_STYLE.get(v, ("#999999", f"{v} (reference)", "-."))
+
+
+def fig_name(base, protocol):
+    """A figure's file and figures.json name under a TPA protocol: the paper's keeps the plain
+    name (fig5_tpa, fig5), another gets its own suffix (fig5_tpa_linear, fig5_linear)."""
+    return base if protocol == PAPER else f"{base}_{protocol}"
 
 
 # Methods evaluated from outside the engine (`sirl evaluate`: method "external", the variant is
@@ -46,7 +65,11 @@ def add_external_styles(t):
     return sorted(names)
 
 
-# What each figure drew, written to figures.json beside them (tests and users check it).
+# What each figure drew, written to figures.json beside them (tests and users check it):
+# fig4 {env: {method: {N: mean}}} and fig4_references {env: {truth|raw: {"0": mean}}}; per TPA
+# protocol fig5 (the paper's) or fig5_<protocol> {env: {panel N: {method: {M: mean}}}} and
+# fig5[_<protocol>]_references (the same, the references'); fig5_protocols {protocol: the file
+# drawn, or "not run"}; fig7 {env: {N, M, bars, missing}}; fig3.
 DRAWN = {}
 
 
@@ -67,9 +90,38 @@ def save(fig, out, name):
     plt.close(fig)
 
 
-def fpe_dots(ax, d, env, Ns):
+def reference_rows(refs, env):
+    """(reference, its rows of env) for every reference `refs` holds there, in
+    REFERENCE_STYLE's order."""
+    if refs.empty:
+        return []
+    d = refs[refs.env == env]
+    names = [v for v in REFERENCE_STYLE if (d.variant == v).any()]
+    names += sorted(set(d.variant) - set(names))
+    return [(v, d[d.variant == v]) for v in names]
+
+
+def reference_line(ax, v, values):
+    """A reference's mean over seeds across the panel (no band: a reference line, not a
+    method's estimate); returns the mean."""
+    colour, label, ls = reference_style(v)
+    m, _ = mean_ci(values)
+    ax.axhline(m, color=colour, ls=ls, lw=1.6, label=label, zorder=1)
+    return m
+
+
+def mse_floor(ax, drew_reference):
+    """An MSE axis from 0 (CI bands of few seeds may dip below it), a little below 0 when a
+    reference is drawn: truth φ*'s FPE is about 0 and would hide in the x-axis."""
+    ax.set_ylim(bottom=0)
+    if drew_reference:
+        ax.set_ylim(bottom=-0.02 * ax.get_ylim()[1])
+
+
+def fpe_dots(ax, d, env, Ns, refs):
     """Fig. 4's panel for an environment run at one N: each method's mean FPE as a dot with its
-    95 % CI, methods along the x-axis (an N axis with one point would read as a curve)."""
+    95 % CI, methods along the x-axis (an N axis with one point would read as a curve); the
+    references as horizontal lines."""
     variants = [v for v in ORDER if (d.variant == v).any()]
     for i, v in enumerate(variants):
         colour, label = STYLE[v]
@@ -78,27 +130,36 @@ def fpe_dots(ax, d, env, Ns):
             str(Ns[0]) if Ns and d[d.variant == v].N.notna().all() else "0": float(m)}
         ax.errorbar([i], [m], yerr=[ci if np.isfinite(ci) else 0], fmt="o", color=colour,
                     capsize=3, ms=6, label=label)
+    lines = reference_rows(refs, env)
+    for v, dv in lines:
+        m = reference_line(ax, v, dv.fpe)
+        DRAWN.setdefault("fig4_references", {}).setdefault(env, {})[v] = {"0": float(m)}
     ax.set_xticks(range(len(variants)))
     ax.set_xticklabels([STYLE[v][1] for v in variants], rotation=35, ha="right", fontsize=8)
     ax.set_xlim(-0.6, len(variants) - 0.4)
     ax.set_title(f"{env_title(env)}" + (f", N = {Ns[0]}" if Ns else ""))
-    ax.set_ylim(bottom=0)
+    mse_floor(ax, bool(lines))
     ax.set_ylabel("FPE (test MSE, normalised features)")
     ax.grid(alpha=0.3, axis="y")
 
 
 def plot_fig4(fpe, envs, out, notes):
+    """Fig. 4: each method's FPE against N; the references (truth φ*, raw input: no queries) as
+    horizontal lines, recorded under figures.json's fig4_references."""
+    refs = references(fpe)
+    fpe = methods(fpe)
     envs = [e for e in envs if not fpe.empty and (fpe.env == e).any()]
     if not envs:
         notes.append("Fig. 4: no FPE cells in this file")
         return
+    note_references(notes, "Fig. 4", refs)
     fig, axes = plt.subplots(1, len(envs), figsize=(5.2 * len(envs), 3.8), squeeze=False,
                              constrained_layout=True)
     for ax, env in zip(axes[0], envs):
         d = fpe[fpe.env == env]
         Ns = sorted(int(n) for n in d.N.dropna().unique())
         if len(Ns) <= 1:  # one N (the simplified GridRobot): a dot per method, not a curve
-            fpe_dots(ax, d, env, Ns)
+            fpe_dots(ax, d, env, Ns, refs)
             continue
         for v in ORDER:
             dv = d[d.variant == v]
@@ -127,22 +188,50 @@ def plot_fig4(fpe, envs, out, notes):
             ax.plot(xs, ms, "o-", color=colour, label=label, ms=4)
             ok = np.isfinite(cis)
             ax.fill_between(np.array(xs)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour, alpha=0.15)
+        lines = reference_rows(refs, env)
+        for v, dv in lines:
+            m = reference_line(ax, v, dv.fpe)
+            DRAWN.setdefault("fig4_references", {}).setdefault(env, {})[v] = {"0": float(m)}
         ax.set_title(env_title(env))
-        ax.set_ylim(bottom=0)  # an MSE: CI bands of few seeds may dip below 0
+        mse_floor(ax, bool(lines))
         ax.set_xlabel("representation queries N")
         ax.set_ylabel("FPE (test MSE, normalised features)")
         ax.grid(alpha=0.3)
     axes[0][-1].legend(fontsize=8, loc="upper right")
-    fig.suptitle("Fig. 4: feature prediction error (mean ± 95 % CI over seeds)", fontsize=11)
+    fig.suptitle("Fig. 4: feature prediction error (mean ± 95 % CI over seeds"
+                 + ("; lines: references" if not refs.empty else "") + ")", fontsize=11)
     save(fig, out, "fig4_fpe")
 
 
-def plot_fig5(tpa, envs, out, notes):
-    t = main_tpa(tpa)
+def note_references(notes, fig, refs):
+    """A note when a figure has no reference to draw (a file of an older engine). Which references
+    a protocol scores is the engine's (the paper's protocol has no raw-input cells): a figure
+    draws those its rows hold, listed in figures.json."""
+    if refs.empty:
+        notes.append(f"{fig}: the references ({', '.join(s[1] for s in REFERENCE_STYLE.values())})"
+                     " not run (no reference rows in this file)")
+
+
+def plot_fig5(tpa, envs, out, notes, protocol=PAPER):
+    """Fig. 5 under one TPA protocol: each method's TPA against M, one panel per (environment, N),
+    in its best mode for that protocol; the references (truth φ*, raw input: no queries) as
+    reference lines in every panel of their environment. The paper's protocol draws fig5_tpa
+    (figures.json: fig5, fig5_references), another fig5_tpa_<protocol> (fig5_<protocol>, ...).
+    Returns whether it drew."""
+    key = fig_name("fig5", protocol)
+    title = "Fig. 5" if protocol == PAPER else f"Fig. 5 ({protocol} protocol)"
+    t = main_tpa(tpa, protocol)
+    refs = reference_tpa(tpa, protocol)
     envs = [e for e in envs if (t.env == e).any()] if not t.empty else []
     if not envs:
-        notes.append("Fig. 5: no TPA cells of the main grid in this file")
-        return
+        if not tpa.empty and of_protocol(tpa, protocol).empty:
+            notes.append(f"{title}: not run (this file has no TPA cells of the {protocol} "
+                         "protocol)")
+        else:
+            notes.append(f"{title}: no TPA cells of the main grid in this file")
+        DRAWN.setdefault("fig5_protocols", {})[protocol] = "not run"
+        return False
+    note_references(notes, title, refs)
     Ns = sorted(int(n) for n in t.N.dropna().unique())
     if not Ns:
         Ns = [0]
@@ -161,15 +250,22 @@ def plot_fig5(tpa, envs, out, notes):
                 stats_ = [mean_ci(dv[dv.M == m].tpa) for m in Ms]
                 ms = np.array([s[0] for s in stats_])
                 cis = np.array([s[1] for s in stats_])
-                DRAWN.setdefault("fig5", {}).setdefault(env, {}).setdefault(str(n), {})[v] = {
+                DRAWN.setdefault(key, {}).setdefault(env, {}).setdefault(str(n), {})[v] = {
                     str(m): float(x) for m, x in zip(Ms, ms) if np.isfinite(x)}
                 if np.isnan(ms).any():
-                    notes.append(f"Fig. 5 {env_title(env)} N={n}: {label} missing at M = "
+                    notes.append(f"{title} {env_title(env)} N={n}: {label} missing at M = "
                                  f"{[m for m, x in zip(Ms, ms) if np.isnan(x)]} (gaps)")
                 ax.plot(Ms, ms, "o-", color=colour, label=label, ms=4)
                 ok = np.isfinite(cis)
                 ax.fill_between(np.array(Ms)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour,
                                 alpha=0.15)
+            for v, dv in reference_rows(refs, env):  # N-free: the same line in every panel
+                rMs = sorted(int(m) for m in dv.M.dropna().unique())
+                ms = np.array([mean_ci(dv[dv.M == m].tpa)[0] for m in rMs])
+                colour, label, ls = reference_style(v)
+                DRAWN.setdefault(key + "_references", {}).setdefault(env, {}).setdefault(
+                    str(n), {})[v] = {str(m): float(x) for m, x in zip(rMs, ms) if np.isfinite(x)}
+                ax.plot(rMs, ms, color=colour, ls=ls, lw=1.6, label=label, zorder=1)
             ax.set_title(f"{env_title(env)}, N = {n}")
             ax.set_ylim(0.35, 1.0)
             ax.set_xlabel("preference queries per test reward M")
@@ -177,15 +273,24 @@ def plot_fig5(tpa, envs, out, notes):
                 ax.set_ylabel("TPA (held-out accuracy)")
             ax.grid(alpha=0.3)
     axes[0][-1].legend(fontsize=8, loc="lower right")
-    frozen = "SIRL" + (" and external methods" if (t.method == "external").any() else "")
-    fig.suptitle(f"Fig. 5: test preference accuracy ({frozen} frozen, others unfrozen; "
-                 "mean ± 95 % CI)",
-                 fontsize=11)
-    save(fig, out, "fig5_tpa")
+    if protocol == PAPER:
+        frozen = "SIRL" + (" and external methods" if (t.method == "external").any() else "")
+        fig.suptitle(f"Fig. 5: test preference accuracy ({frozen} frozen, others unfrozen; "
+                     "mean ± 95 % CI)",
+                     fontsize=11)
+    else:
+        fig.suptitle(f"{title}: test preference accuracy, {PROTOCOL_TEXT.get(protocol, protocol)}"
+                     " (mean ± 95 % CI)", fontsize=10)
+    save(fig, out, fig_name("fig5_tpa", protocol))
+    DRAWN.setdefault("fig5_protocols", {})[protocol] = fig_name("fig5_tpa", protocol)
+    return True
 
 
 def plot_fig7(tpa, envs, out, notes):
-    """Fig. 7 from the cells the file marks as the ablation's (in_ablation), per environment."""
+    """Fig. 7 from the cells the file marks as the ablation's (in_ablation), per environment: the
+    paper's protocol only (the linear protocol fits heads on a frozen φ, so it has no ablation;
+    the references are not methods)."""
+    tpa = methods(of_protocol(tpa, PAPER))
     ab = tpa[tpa["in_ablation"]] if not tpa.empty and "in_ablation" in tpa else tpa.iloc[0:0]
     envs = [e for e in envs if (ab.env == e).any()]
     if not envs:

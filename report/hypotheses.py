@@ -4,7 +4,8 @@ import math
 
 import claims as claims_stats
 from figures import STYLE
-from run_tables import ENV, env_title, main_tpa
+from run_tables import (ENV, PAPER, PROTOCOL_TEXT, PROTOCOLS, env_title, main_tpa, methods,
+                        of_protocol)
 
 ALPHA = claims_stats.ALPHA
 
@@ -23,12 +24,17 @@ def comparison_text(c):
             f"(n = {c['n']})")
 
 
-def claim(claims, env, name, comparisons, better, main=False, trainings=None):
+def claim(claims, env, name, comparisons, better, main=False, trainings=None, protocol=None,
+          verdict=None):
     """Decides one hypothesis (claims.decide) and keeps it for the summary and the details;
-    `trainings`: the /tables/training rows its numbers rest on (for the converged count)."""
+    `trainings`: the /tables/training rows its numbers rest on (for the converged count);
+    `protocol`: the TPA protocol a TPA claim is decided under (None: an FPE claim); `verdict`:
+    a verdict given without a decision ("not run": the file has no rows of that protocol)."""
     v, deciding = claims_stats.decide(comparisons, better)
-    h = {"env": env, "claim": name, "better": better, "comparisons": comparisons, "verdict": v,
-         "deciding": deciding, "main": main}
+    if verdict is not None:
+        v, deciding = verdict, None
+    h = {"env": env, "claim": name, "protocol": protocol, "better": better,
+         "comparisons": comparisons, "verdict": v, "deciding": deciding, "main": main}
     if trainings is not None and not trainings.empty:
         h["converged"] = (int(trainings.converged.sum()), len(trainings))
     if comparisons:
@@ -37,26 +43,79 @@ def claim(claims, env, name, comparisons, better, main=False, trainings=None):
     claims.append(h)
 
 
-def rested_on(tr, env, N, variants, tpa_cells):
+def rested_on(tr, env, N, variants, tpa_cells, protocol=PAPER):
     """The trainings behind a main claim at N: the compared methods' φ at N and the VAE, and for
-    a TPA claim their TPA cells of the main grid (SIRL frozen, the others unfrozen)."""
+    a TPA claim their TPA cells of the main grid under `protocol` (the paper's: SIRL frozen, the
+    others unfrozen)."""
     if tr is None or tr.empty:
         return None
     t = tr[(tr.env == env) & (tr.teacher == "")] if "teacher" in tr else tr[tr.env == env]
     use = ((t.kind == "rep") & (t.N == N) & t.variant.isin(variants)) | (t.kind == "vae")
     if tpa_cells:
-        use |= ((t.kind == "tpa") & ((t.N == N) | t.N.isna()) & t.variant.isin(variants)
-                & t.best_mode).fillna(False)
+        cells = (t.kind == "tpa") & ((t.N == N) | t.N.isna()) & t.variant.isin(variants) & t.best_mode
+        if "protocol" in t:
+            cells &= t.protocol.fillna(PAPER).replace("", PAPER) == protocol
+        elif protocol != PAPER:  # a table without the column holds the paper's cells only
+            cells &= False
+        use |= cells.fillna(False)
     return t[use]
 
 
+BASELINES = ["vae", "multipref10", "multipref50", "singlepref", "random"]
+
+
+def tpa_claims(H, tpa, env, protocol, training):
+    """The TPA claims of one environment under one protocol (H2, and Random against preference
+    pre-training), from the main grid's method rows (never the references)."""
+    t = tpa[tpa.env == env]
+    m = main_tpa(t, protocol)
+    if m.empty:
+        # "not run": the environment has TPA cells, none of this protocol (a profile's [tpa]
+        # protocols, or a file of an engine before the linear protocol). Cells of the protocol
+        # but none of the main grid (a file before best_mode): no claim, as before.
+        if not t.empty and of_protocol(t, protocol).empty:
+            h2 = ("H2 — SIRL's TPA (frozen, mean over M) is higher than every baseline's "
+                  "(unfrozen)" if protocol == PAPER else
+                  "H2 — SIRL's TPA (mean over M) is higher than every baseline's (every φ frozen)")
+            claim(H, env, h2, [], ">", main=True, protocol=protocol, verdict="not run")
+            claim(H, env, "Secondary — Random beats preference pre-training (TPA)", [], ">",
+                  protocol=protocol, verdict="not run")
+        return
+    nmax = m.N.max()
+
+    def tpa_at(v):
+        x = m[(m.variant == v) & ((m.N == nmax) | m.N.isna())]
+        return x.groupby("seed").tpa.mean()
+
+    compared = ["sirl"] + BASELINES
+    if protocol == PAPER:
+        h2 = (f"H2 — SIRL's TPA (frozen, mean over M) is higher than every baseline's "
+              f"(unfrozen) at N = {nmax}")
+    else:
+        h2 = (f"H2 — SIRL's TPA (mean over M) is higher than every baseline's at N = {nmax} "
+              f"(every φ frozen)")
+    claim(H, env, h2,
+          [claims_stats.paired(v, tpa_at("sirl"), tpa_at(v)) for v in BASELINES
+           if (m.variant == v).any()], ">", main=True,
+          trainings=rested_on(training, env, nmax, compared, True, protocol), protocol=protocol)
+    claim(H, env, "Secondary — Random beats preference pre-training (TPA)",
+          [claims_stats.paired(v, tpa_at("random"), tpa_at(v))
+           for v in ["multipref10", "multipref50", "singlepref"] if (m.variant == v).any()],
+          ">", protocol=protocol)
+
+
 def hypotheses(fpe, tpa, envs, training=None):
-    """Every claim the report checks, per environment, decided."""
+    """Every claim the report checks, per environment, decided: the FPE claims and the paper's
+    protocol's TPA claims first (environment by environment, as before the protocols), then the
+    TPA claims of every other protocol. The references (truth φ*, raw input) are never a
+    baseline: every table is restricted to the methods' rows."""
     H = []
-    baselines = ["vae", "multipref10", "multipref50", "singlepref", "random"]
+    fpe, tpa = methods(fpe), methods(tpa)
+    has_tpa = "env" in tpa and not tpa.empty
+    baselines = BASELINES
     compared = ["sirl"] + baselines
     for env in envs:
-        d = fpe[fpe.env == env]
+        d = fpe[fpe.env == env] if not fpe.empty else fpe
         if not d.empty:
             nmax = d.N.max()
 
@@ -68,28 +127,16 @@ def hypotheses(fpe, tpa, envs, training=None):
                   [claims_stats.paired(v, fpe_at("sirl"), fpe_at(v)) for v in baselines
                    if (d.variant == v).any()], "<", main=True,
                   trainings=rested_on(training, env, nmax, compared, False))
-        m = main_tpa(tpa[tpa.env == env])
-        if not m.empty:
-            nmax = m.N.max()
-
-            def tpa_at(v):
-                x = m[(m.variant == v) & ((m.N == nmax) | m.N.isna())]
-                return x.groupby("seed").tpa.mean()
-
-            claim(H, env, f"H2 — SIRL's TPA (frozen, mean over M) is higher than every baseline's "
-                          f"(unfrozen) at N = {nmax}",
-                  [claims_stats.paired(v, tpa_at("sirl"), tpa_at(v)) for v in baselines
-                   if (m.variant == v).any()], ">", main=True,
-                  trainings=rested_on(training, env, nmax, compared, True))
-            claim(H, env, "Secondary — Random beats preference pre-training (TPA)",
-                  [claims_stats.paired(v, tpa_at("random"), tpa_at(v))
-                   for v in ["multipref10", "multipref50", "singlepref"] if (m.variant == v).any()],
-                  ">")
-        ab = tpa[(tpa.env == env) & (tpa.vae == 0)]
+        if has_tpa:
+            tpa_claims(H, tpa, env, PAPER, training)
+        paper = of_protocol(tpa, PAPER) if has_tpa else tpa
+        ab = paper[(paper.env == env) & (paper.vae == 0)] if has_tpa else paper
         for meth, text in [("sirl", "SIRL is better frozen"),
                            ("multipref10", "MultiPref-10 is better unfrozen"),
                            ("multipref50", "MultiPref-50 is better unfrozen"),
                            ("singlepref", "SinglePref is better unfrozen")]:
+            if ab.empty:
+                break
             x = ab[ab.method == meth]
             if x.frozen.nunique() < 2:
                 continue
@@ -100,28 +147,42 @@ def hypotheses(fpe, tpa, envs, training=None):
             fr = x[x.frozen == 1].groupby("seed").tpa.mean()
             un = x[x.frozen == 0].groupby("seed").tpa.mean()
             claim(H, env, f"Secondary — {text} (ablation cells, mean over N, M)",
-                  [claims_stats.paired("frozen − unfrozen", fr, un)], ">" if meth == "sirl" else "<")
+                  [claims_stats.paired("frozen − unfrozen", fr, un)], ">" if meth == "sirl" else "<",
+                  protocol=PAPER)
         if ENV.get(env, {}).get("vae_weak_claim"):
-            x = fpe[(fpe.env == env)]
+            x = fpe[(fpe.env == env)] if not fpe.empty else fpe
             if not x.empty and (x.variant == "vae").any():  # a profile may run no VAE FPE
                 nmax = x.N.max()
                 v = x[(x.variant == "vae")].set_index("seed").fpe
                 s = x[(x.variant == "sirl") & (x.N == nmax)].set_index("seed").fpe
                 claim(H, env, f"Secondary — VAE is weak on {env_title(env)} (FPE above SIRL's)",
                       [claims_stats.paired("vae", v, s)], ">")
+    if has_tpa:
+        for protocol in [p for p in PROTOCOLS if p != PAPER]:
+            for env in envs:
+                tpa_claims(H, tpa, env, protocol, training)
     return H
 
 
+def protocol_cell(h):
+    """The summary's protocol column: a TPA claim's protocol, "—" for an FPE claim."""
+    return h.get("protocol") or "—"
+
+
 def summary_lines(H, missing=None):
-    """The report's first table: one row per claim × environment. `missing`: environment → the
+    """The report's first table: one row per claim × environment × TPA protocol (an FPE claim has
+    one, protocol "—"), in H's order (the paper's protocol first). `missing`: environment → the
     number of its tasks a partial merge lacks; those environments' verdicts are marked ⧗."""
     missing = missing or {}
-    L = ["| claim | environment | verdict | deciding comparison: Δ [95 % CI] | Holm p | seeds | "
-         "power | seeds for 80 % | trainings converged |", "|---|---|---|---|---:|---:|---:|---:|---:|"]
+    L = ["| claim | environment | protocol | verdict | deciding comparison: Δ [95 % CI] | Holm p | "
+         "seeds | power | seeds for 80 % | trainings converged |",
+         "|---|---|---|---|---|---:|---:|---:|---:|---:|"]
     for h in H:
         c = h["deciding"]
         if c is None:
-            L.append(f"| {h['claim']} | {env_title(h['env'])} | not evaluated (no data) | — | — | — | — | — | — |")
+            verdict = h["verdict"] if h["verdict"] == "not run" else "not evaluated (no data)"
+            L.append(f"| {h['claim']} | {env_title(h['env'])} | {protocol_cell(h)} | {verdict} | "
+                     f"— | — | — | — | — | — |")
             continue
         conv = h.get("converged")
         conv_text = (f"{conv[0]} of {conv[1]}" + (" ⚠" if conv[0] < conv[1] else "")) if conv else "—"
@@ -130,7 +191,8 @@ def summary_lines(H, missing=None):
         pw = h.get("power", math.nan)
         claim_text = f"**{h['claim']}**" if h["main"] else h["claim"]
         partial = " ⧗" if missing.get(h["env"]) else ""
-        L.append(f"| {claim_text} | {env_title(h['env'])} | **{h['verdict']}**{partial} | {label}: "
+        L.append(f"| {claim_text} | {env_title(h['env'])} | {protocol_cell(h)} | "
+                 f"**{h['verdict']}**{partial} | {label}: "
                  f"{fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, {fmt(c['hi'], '+.4f')}] | "
                  f"{fmt(c.get('p_holm'), '.3g')} | {c['n']} | {fmt(100 * pw, '.0f') + ' %' if pw == pw else '—'} | "
                  f"{s80 if s80 else f'> {claims_stats.MAX_SEEDS}' if pw == pw else '—'} | "
@@ -144,9 +206,20 @@ def summary_lines(H, missing=None):
           f"80 %* = the fewest seeds with power ≥ 80 %. Both are planning numbers computed from this "
           f"run's effect sizes, which few seeds estimate poorly: they are not evidence. "
           f"*Trainings converged* (main claims): of the trainings the claim's numbers rest on (the "
-          f"compared methods' φ at that N and the VAEs, and for TPA their cells of Fig. 5), how "
+          f"compared methods' φ at that N and the VAEs, and for TPA their cells of Fig. 5: the "
+          f"paper protocol's head trainings, the linear protocol's Newton fits), how "
           f"many met the convergence criterion of the table below; ⚠ marks a verdict resting on "
-          f"trainings that were still learning."]
+          f"trainings that were still learning.",
+          "", "*Protocol*: how a TPA claim's reward heads were fit; each TPA claim is decided "
+          "separately under each. " + " ".join(
+              f"*{p}* = {PROTOCOL_TEXT[p]}" + (" (SIRL frozen, the others unfrozen, as the paper)."
+                                               if p == PAPER else
+                                               " (every method's φ frozen: the standard "
+                                               "linear-evaluation protocol; it has no ablation).")
+              for p in PROTOCOLS)
+          + " *—* = an FPE claim (the linear probe of the true features). *not run* = the file "
+          "has no cells of that protocol. The references (truth φ\*, the ceiling; the raw "
+          "input, the floor) are drawn in Figs. 4 and 5 and never counted as baselines."]
     if missing:
         L += ["", "⧗ **Partial merge**: the results lack "
               + ", ".join(f"{n} {env_title(e)} task(s)" for e, n in sorted(missing.items()))
@@ -164,10 +237,12 @@ def detail_lines(H, envs):
             continue
         L.append(f"### {env_title(env)}")
         for h in rows:
+            under = f" [{h['protocol']} protocol]" if h.get("protocol") else ""
             if h["deciding"] is None:
-                L.append(f"- **{h['claim']}**: not evaluated (no data)")
+                L.append(f"- **{h['claim']}**{under}: "
+                         + ("not run" if h["verdict"] == "not run" else "not evaluated (no data)"))
                 continue
-            L.append(f"- **{h['claim']}: {h['verdict']}** (paired t-test over seeds, α = {ALPHA}, "
+            L.append(f"- **{h['claim']}: {h['verdict']}**{under} (paired t-test over seeds, α = {ALPHA}, "
                      f"Holm within the claim; Δ with its 95 % CI). "
                      + "; ".join(comparison_text(c) for c in h["comparisons"]))
         L.append("")

@@ -18,6 +18,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 from scipy import stats
 
+from run_tables import PAPER, methods, of_protocol
+
 # The selection rules: colour and label (uniform = the paper's SIRL).
 SELECTION = {"sirl": ("#d62728", "uniform (the paper)"),
              "sirl@vote": ("#1f77b4", "active: vote entropy"),
@@ -107,6 +109,7 @@ def n_star_estimate(d, variant, seed=0):
 
 
 def plot_active(fpe, tpa, out, notes, drawn):
+    fpe, tpa = methods(fpe), methods(of_protocol(tpa, PAPER))  # the paper's TPA heads
     envs = active_envs(fpe)
     if not envs:
         return []
@@ -237,6 +240,10 @@ def robustness_frames(fpe, tpa, rfpe, rtpa):
     """Long frames of (env, variant, seed, axis, level, value, error) per metric, the perfect
     teacher's rows added to every axis at level 'perfect'."""
     out = {}
+    # The main teacher's cells as the axes' reference: methods only, and the paper's TPA protocol
+    # (the robustness cells' heads are the paper's).
+    fpe, tpa = methods(fpe), methods(of_protocol(tpa, PAPER))
+    rfpe, rtpa = methods(rfpe), methods(of_protocol(rtpa, PAPER))
     for metric, main, rob in (("fpe", fpe, rfpe), ("tpa", tpa, rtpa)):
         if rob.empty:
             continue

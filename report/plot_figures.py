@@ -3,11 +3,14 @@
 
     /usr/bin/python3 report/plot_figures.py RESULTS.h5 --out FIGURE_DIR
 
-Writes fig3_grid_similar.{png,pdf}, fig4_fpe.{png,pdf}, fig5_tpa.{png,pdf},
+Writes fig3_grid_similar.{png,pdf}, fig4_fpe.{png,pdf}, fig5_tpa.{png,pdf} (the paper's TPA
+protocol), fig5_tpa_linear.{png,pdf} (the linear protocol, when the file has it),
 fig7_ablation.{png,pdf}, fig_learning_curves.{png,pdf} and report.md (+ report.html). Reads only
 the file: /tables/*, /runs/... and /datasets/... . Every figure plots what the file holds (which
-cells belong to Fig. 5 or Fig. 7 is a column of /tables/tpa), never a re-reading of the profile.
-A partial file (an interrupted run) plots with gaps and notes, never zeros.
+cells belong to Fig. 5 or Fig. 7, which protocol fit them and which rows are references are
+columns of /tables/tpa), never a re-reading of the profile. A partial file (an interrupted run)
+plots with gaps and notes, never zeros; a protocol or reference the file lacks is noted as not
+run.
 
 The work is in four modules beside it: run_tables.py (the file's tables and environments),
 figures.py (the figures), hypotheses.py (the claims decided) and report.py (the report).
@@ -62,7 +65,8 @@ def main():
                      "(combine them with `sirl merge`)")
     fig3_key = figures.plot_fig3(res, a.out, notes)
     figures.plot_fig4(t["fpe"], envs, a.out, notes)
-    figures.plot_fig5(t["tpa"], envs, a.out, notes)
+    for protocol in run_tables.PROTOCOLS:  # fig5_tpa (the paper's), fig5_tpa_linear
+        figures.plot_fig5(t["tpa"], envs, a.out, notes, protocol)
     figures.plot_fig7(t["tpa"], envs, a.out, notes)
     figures.plot_learning_curves(res, t, envs, a.out, notes)
     beyond = {"active": plot_beyond.plot_active(t["fpe"], t["tpa"], a.out, notes, figures.DRAWN),

@@ -8,7 +8,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-CELL = ["variant", "N", "M", "frozen", "seed", "teacher"]
+from run_tables import PAPER, methods, of_protocol
+
+CELL = ["variant", "N", "M", "frozen", "seed", "teacher", "protocol"]
 
 
 def at_point(d, point, base):
@@ -26,6 +28,9 @@ def at_point(d, point, base):
 def metric_rows(fpe, tpa, env):
     """(label, table, value column) of the two metrics drawn for an environment."""
     out = []
+    # Methods only (the references, truth φ* and raw input, are no point of an axis), and the
+    # paper's TPA protocol (the linear protocol's cells are not the figures' best mode).
+    fpe, tpa = methods(fpe), methods(of_protocol(tpa, PAPER))
     f = fpe[fpe.env == env] if not fpe.empty else fpe
     if not f.empty:
         nmax = f.N.max()

@@ -12,13 +12,13 @@ import pandas as pd
 import claims as claims_stats
 import plot_beyond
 from hypotheses import detail_lines, fmt, hypotheses, summary_lines
-from run_tables import ENV, env_title, main_tpa
+from run_tables import ENV, PAPER, claim_trainings, env_title, main_tpa, methods, protocols_run
 
 
 def convergence_lines(t):
     """One line per (environment, kind, variant): how many of its trainings converged."""
     tr = t["training"]
-    if tr.empty:
+    if tr.empty and (t.get("linear_fits") is None or t["linear_fits"].empty):
         return []
     L = ["", "## Did every training converge?", "",
          "Converged: the mean loss over the last 10 % of the epochs differs from the 10 % before "
@@ -28,9 +28,19 @@ def convergence_lines(t):
          "|---|---|---|---:|---:|---:|"]
     if "teacher" in tr:  # the [robustness] cells' trainings, one line per method
         tr = tr.assign(variant=tr.variant.where(tr.teacher == "", tr.variant + " (noisy teachers)"))
-    for (env, kind, v), d in tr.groupby(["env", "kind", "variant"]):
+    for (env, kind, v), d in (tr.groupby(["env", "kind", "variant"]) if not tr.empty else []):
         L.append(f"| {env} | {kind} | {v} | {int(d.epochs.median())} | {int(d.converged.sum())} of "
                  f"{len(d)} | {100 * d.loss_relative_change.median():+.2f} % |")
+    fits = t.get("linear_fits")
+    if fits is not None and not fits.empty:
+        L += ["", "The linear protocol's heads are fit by Newton's method, not by epochs: a cell "
+              "converged when every one of its heads did; *iterations* is the most any head "
+              "took.", "",
+              "| env | fit | variant | iterations (max) | converged |", "|---|---|---|---:|---:|"]
+        for (env, v), d in fits.groupby(["env", "variant"]):
+            it = d.newton_iterations.max() if "newton_iterations" in d else None
+            L.append(f"| {env} | tpa (linear) | {v} | {'—' if it is None or pd.isna(it) else int(it)} | "
+                     f"{int(d.converged.fillna(False).sum())} of {len(d)} |")
     return L
 
 
@@ -134,7 +144,7 @@ def compute_lines(res, tim):
 
 
 FIGURES = [("fig3_grid_similar", "Fig. 3"), ("fig4_fpe", "Fig. 4"), ("fig5_tpa", "Fig. 5"),
-           ("fig7_ablation", "Fig. 7")]
+           ("fig5_tpa_linear", "Fig. 5, linear protocol"), ("fig7_ablation", "Fig. 7")]
 
 
 def report(res, t, envs, out, notes, fig3_key, beyond=None):
@@ -145,11 +155,13 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
     beyond = beyond or {}
     envs = [e for e in envs if ENV.get(e, {}).get("in_claims", 1)]  # e.g. Fig. 3's own env
     a = res.provenance
-    H = hypotheses(fpe, tpa, envs, t.get("training"))
+    H = hypotheses(fpe, tpa, envs, claim_trainings(t))
     title = f"sirl-bench report: profile `{a.get('profile_name')}`"
     missing = {}
-    for key in str(a.get("missing_tasks", "") or "").split():
-        env = key.partition("/")[0]  # a task key starts with its environment
+    for key in res.missing_tasks:
+        # A missing task has no row to read its environment from: the environment whose
+        # registration names the key's prefix (the key itself is never taken apart).
+        env = next((e for e in ENV if key.startswith(e + "/")), "other")
         missing[env] = missing.get(env, 0) + 1
     L = [f"# {title}", ""] + summary_lines(H, missing)
     L += ["", f"Engine {a.get('engine_version')} (commit {a.get('git_commit')}), host "
@@ -194,9 +206,10 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
 
 
 def external_lines(fpe, tpa, envs):
-    """Each external method next to SIRL, per environment: FPE at the largest N and TPA (Fig. 5's
-    cells, mean over M) at the largest N, paired over seeds. Reported, not decided: these are not
-    claims of the paper."""
+    """Each external method next to SIRL, per environment: FPE at the largest N and, under each
+    TPA protocol the file ran, TPA (Fig. 5's cells, mean over M) at the largest N, paired over
+    seeds. Reported, not decided: these are not claims of the paper."""
+    fpe, tpa = methods(fpe), methods(tpa)
     ext = sorted({v for d in (fpe, tpa) if not d.empty
                   for v in d[d.method == "external"].variant.unique()})
     if not ext:
@@ -209,7 +222,7 @@ def external_lines(fpe, tpa, envs):
          "paper.", "",
          "| env | method | metric | N | method | SIRL | Δ [95 % CI] | p | seeds |",
          "|---|---|---|---:|---:|---:|---|---:|---:|"]
-    m = main_tpa(tpa)
+    mains = [(p, main_tpa(tpa, p)) for p in protocols_run(tpa)]
     for env in envs:
         for v in ext:
             rows = []
@@ -218,12 +231,14 @@ def external_lines(fpe, tpa, envs):
                 N = d[d.variant == v].N.max()
                 at = [d[(d.variant == x) & (d.N == N)].set_index("seed").fpe for x in (v, "sirl")]
                 rows.append(("FPE (lower is better)", N, at))
-            d = m[m.env == env] if not m.empty else m
-            if not d.empty and (d.variant == v).any():
-                N = d[d.variant == v].N.max()
-                at = [d[(d.variant == x) & (d.N == N)].groupby("seed").tpa.mean()
-                      for x in (v, "sirl")]
-                rows.append(("TPA (frozen, mean over M)", N, at))
+            for protocol, m in mains:
+                d = m[m.env == env] if not m.empty else m
+                if not d.empty and (d.variant == v).any():
+                    N = d[d.variant == v].N.max()
+                    at = [d[(d.variant == x) & (d.N == N)].groupby("seed").tpa.mean()
+                          for x in (v, "sirl")]
+                    rows.append(("TPA (frozen, mean over M)" if protocol == PAPER else
+                                 f"TPA ({protocol} protocol, mean over M)", N, at))
             for metric, N, (a, b) in rows:
                 c = claims_stats.paired(v, a, b)
                 L.append(f"| {env_title(env)} | {v} | {metric} | {N} | {fmt(a.mean())} | "

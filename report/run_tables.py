@@ -1,5 +1,10 @@
 """The results file as the figure and report scripts read it: its cell tables (through
-sirl_bench), its environments' registrations, and the cells of the paper's Fig. 5."""
+sirl_bench), its environments' registrations, and the cells of the paper's Fig. 5.
+
+/tables/tpa holds every TPA protocol's cells (column `protocol`: "paper", "linear") and
+/tables/fpe and tpa the references' rows (column `reference`: truth φ*, raw input). Every
+consumer selects with of_protocol (the paper's where the paper's figures and claims were drawn
+before the protocols), and with methods / references: a reference is never a method."""
 import os
 import sys
 
@@ -39,14 +44,101 @@ def load(path):
     for k in ("fpe", "tpa", "training", "robust_fpe", "robust_tpa"):
         if "hyper_point" in t[k]:
             t[k] = t[k][t[k].hyper_point == ""]
+    t["linear_fits"] = linear_fits(res, t["timings"])
     return res, t
 
 
-def main_tpa(tpa):
-    """Fig. 5's cells (the file marks them: in_main), each method in the paper's best mode (SIRL
-    frozen, the others unfrozen)."""
+def linear_fits(res, timings):
+    """The linear protocol's fits as rows like /tables/training's (which holds the trainings by
+    gradient only): kind "tpa", protocol "linear", converged = every head's Newton converged
+    (the record's newton_converged), newton_iterations (the most of its heads). The base point
+    of any hyper-parameter axis only (a task's point: /tables/timings). Empty for a file without
+    the linear protocol."""
+    recs = res.records
+    if recs.empty or "protocol" not in recs or "newton_converged" not in recs:
+        return pd.DataFrame()
+    f = recs[recs["protocol"] == "linear"]
+    if not timings.empty and "hyper_point" in timings:
+        f = f[f.key.isin(set(timings.key[timings.hyper_point == ""]))]
+    cols = ["key", "env", "variant", "method", "N", "M", "frozen", "seed", "teacher", "best_mode",
+            "newton_iterations"]
+    out = f[[c for c in cols if c in f]].copy()
+    out.insert(0, "kind", "tpa")
+    out["converged"] = f["newton_converged"]
+    out["protocol"] = "linear"
+    out["reference"] = (f["reference"] if "reference" in f else pd.Series(False, index=f.index)) \
+        .astype("boolean").fillna(False)
+    return out.reset_index(drop=True)
+
+
+def claim_trainings(t):
+    """What the claims' "trainings converged" count: /tables/training's rows (the paper's
+    protocol's TPA cells among them) and the linear protocol's fits."""
+    tr, fits = t.get("training", pd.DataFrame()), t.get("linear_fits", pd.DataFrame())
+    if fits is None or fits.empty:
+        return tr
+    return pd.concat([tr, fits], ignore_index=True) if not tr.empty else fits
+
+
+# The TPA protocols (/tables/tpa's `protocol`), the paper's first: the report's order.
+PAPER = "paper"
+PROTOCOLS = tuple(sirl_bench.PROTOCOLS)
+PROTOCOL_TEXT = {
+    "paper": "the paper's reward head φ→1024→1024→1 trained by Adam",
+    "linear": "a Bradley–Terry linear head on the frozen φ, fit to convergence by Newton's method",
+}
+
+
+def of_protocol(tpa, protocol):
+    """The rows of TPA table `tpa` fit by `protocol` (a table without the column, or an empty
+    one, holds the paper's only)."""
+    if "protocol" not in tpa:
+        return tpa if protocol == PAPER else tpa.iloc[0:0]
+    return tpa[tpa["protocol"] == protocol]
+
+
+def _is_reference(d):
+    return d["reference"].fillna(False).astype(bool).to_numpy()
+
+
+def methods(d):
+    """The rows of the methods (a table's rows that are not references: the file marks them,
+    column `reference`; a table without it has none)."""
+    if "reference" not in d or d.empty:
+        return d
+    return d[~_is_reference(d)]
+
+
+def references(d):
+    """The rows of the reference representations (truth φ*, raw input): never a method."""
+    if "reference" not in d or d.empty:
+        return d.iloc[0:0]
+    return d[_is_reference(d)]
+
+
+def main_tpa(tpa, protocol=PAPER):
+    """Fig. 5's cells of `protocol` (the file marks them: in_main), each method in its best mode
+    (the paper's protocol: SIRL frozen, the others unfrozen; the linear protocol: every φ
+    frozen). Methods only: the references' rows are reference_tpa's."""
     if tpa.empty:
         return tpa
-    t = tpa[tpa["in_main"]] if "in_main" in tpa else tpa
+    t = methods(of_protocol(tpa, protocol))
+    t = t[t["in_main"]] if "in_main" in t else t
     # best_mode: the file's (engines ≥ 0.8.0); older files have no such column
     return t[t["best_mode"]] if "best_mode" in t else t.iloc[0:0]
+
+
+def reference_tpa(tpa, protocol=PAPER):
+    """The references' TPA rows of `protocol` (their heads on a frozen φ*, or on the raw input;
+    N <NA>): Fig. 5's reference lines."""
+    if tpa.empty:
+        return tpa
+    return references(of_protocol(tpa, protocol))
+
+
+def protocols_run(tpa):
+    """The protocols whose rows `tpa` holds, in PROTOCOLS order (any other after them)."""
+    if tpa.empty:
+        return []
+    have = set(tpa["protocol"]) if "protocol" in tpa else {PAPER}
+    return [p for p in PROTOCOLS if p in have] + sorted(have - set(PROTOCOLS))

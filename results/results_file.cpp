@@ -43,7 +43,9 @@ H5Table cell_table(const std::vector<TaskRecord>& records, const CellTableSpec& 
   H5Table t;
   for (const auto& c : spec.columns) t.add(c.name, c.type);
   for (const auto& r : records) {
-    if (r.kind != spec.kind) continue;
+    if (r.kind != spec.kind &&
+        std::find(spec.more_kinds.begin(), spec.more_kinds.end(), r.kind) == spec.more_kinds.end())
+      continue;
     const int64_t rows = spec.rows_key ? int64_t(need_num(r, spec.rows_key)) : 1;
     for (int64_t i = 0; i < rows; ++i)
       for (size_t k = 0; k < spec.columns.size(); ++k) {
@@ -55,7 +57,7 @@ H5Table cell_table(const std::vector<TaskRecord>& records, const CellTableSpec& 
             key = std::move(own);
         if (c.optional && !r.text.count(key) && !r.num.count(key)) {
           if (c.type == C::String)
-            t.columns[k].strings.push_back("");
+            t.columns[k].strings.push_back(c.absent);
           else if (c.type == C::Int)
             t.columns[k].ints.push_back(0);
           else

@@ -75,7 +75,8 @@ struct TableColumn {
   const char* name;
   H5Table::Column::Type type;
   const char* key;
-  bool optional = false;  // a record without the field gives "" (or 0) instead of an error
+  bool optional = false;    // a record without the field gives "" (or 0) instead of an error
+  const char* absent = "";  // what an optional String column gives a record without the field
 };
 struct CellTableSpec {
   std::string name;  // the table: /tables/<name>, <name>.csv
@@ -85,6 +86,7 @@ struct CellTableSpec {
   // and row i's column reads the field "<key>/<i>" where the record has one, else the record's own
   // "<key>" (the same in each of its rows).
   const char* rows_key = nullptr;
+  std::vector<std::string> more_kinds;  // records of these kinds too (rows with the same columns)
 };
 
 struct NamedTable {

@@ -1,7 +1,14 @@
 #!/usr/bin/python3
 """report/claims.py against hand-computed cases and closed forms: the paired t-test and its CI
 (df = 2 has a closed-form t distribution), Holm's adjusted p-values, the verdict rules, and the
-simulated power against scipy's noncentral-t power for one comparison."""
+simulated power against scipy's noncentral-t power for one comparison.
+
+And report/hypotheses.py on synthetic tables (issue 56): the TPA claims are decided per protocol
+("paper", "linear"); adding linear and reference (truth φ*, raw input) rows with wild values
+leaves every FPE and paper-protocol claim bit for bit as it was; the linear claims rest on the
+linear rows only; the references are never a baseline; a protocol a file lacks is "not run"; a
+table of an older engine (no protocol or reference column) decides as before; the schema-1
+fixture reads with the columns filled."""
 import math
 import os
 import sys
@@ -110,4 +117,178 @@ p2 = claims.power([comp("a", 1, 0.01, n=6, dz=50.0), comp("b", 0, 0.9, n=6, dz=0
 assert p2 < 0.1, p2
 assert math.isnan(claims.power([comp("a", 1, 0.5, n=1, dz=float("nan"))], ">"))
 print("ok: simulated power equals the noncentral-t closed form; seeds for 80 % as well")
+
+
+# --- the claims per TPA protocol, on synthetic tables (issue 56) -----------------------------
+import hypotheses  # noqa: E402  (report/: figures, run_tables, sirl_bench)
+import run_tables  # noqa: E402
+import sirl_bench  # noqa: E402
+
+SEEDS = range(6)
+rng = np.random.default_rng(56)
+BASE = {"sirl": 0.80, "vae": 0.62, "multipref10": 0.70, "multipref50": 0.72, "singlepref": 0.66,
+        "random": 0.69}
+NFREE = ("vae", "random")
+
+
+def fpe_row(env, variant, N, seed, value, reference=False):
+    return {"env": env, "method": variant, "variant": variant, "vae": variant == "vae",
+            "N": N, "seed": seed, "fpe": value, "train_mse": value, "selection": "uniform",
+            "teacher": "", "reference": reference}
+
+
+def tpa_row(env, variant, N, M, seed, value, frozen, in_main, in_ablation, best_mode,
+            protocol="paper", reference=False):
+    return {"env": env, "method": variant, "variant": variant, "vae": variant == "vae",
+            "frozen": frozen, "N": N, "M": M, "seed": seed, "tpa": value, "tpa_std": 0.01,
+            "tpa_train": value, "in_main": in_main, "in_ablation": in_ablation,
+            "selection": "uniform", "teacher": "", "best_mode": best_mode, "protocol": protocol,
+            "reference": reference}
+
+
+def typed_frames(fpe_rows, tpa_rows):
+    """The rows as the reader types them (N, M Int64 with <NA>; flags boolean)."""
+    out = []
+    for rows in (fpe_rows, tpa_rows):
+        d = pd.DataFrame(rows)
+        for c in ("N", "M"):
+            if c in d:
+                d[c] = d[c].astype("Int64")
+        for c in sirl_bench.FLAG_COLUMNS:
+            if c in d:
+                d[c] = d[c].astype("boolean")
+        out.append(d)
+    return out
+
+
+def paper_tables(envs=("grid", "jaco")):
+    """FPE and the paper's TPA cells: the main grid (SIRL frozen, the others unfrozen) and the
+    ablation's other mode, with effects strong enough for decided verdicts and noise per seed."""
+    F, T = [], []
+    for env in envs:
+        for s in SEEDS:
+            for v, b in BASE.items():
+                for N in ([None] if v in NFREE else [50, 100]):
+                    F.append(fpe_row(env, v, N, s, 0.3 - (b - 0.6) + 0.01 * rng.standard_normal()))
+                    for M in (10, 40):
+                        x = b + 0.02 * rng.standard_normal() + (0.02 if M == 40 else 0)
+                        T.append(tpa_row(env, v, N, M, s, x, v == "sirl", True, False, True))
+                        if v not in NFREE:  # the ablation's other mode (not the best)
+                            T.append(tpa_row(env, v, N, M, s, x - 0.05 if v == "sirl" else x + 0.01,
+                                             v != "sirl", False, True, False))
+    return typed_frames(F, T)
+
+
+def with_new_rows(fpe, tpa, wild=True):
+    """The tables plus the engine's new rows: linear-protocol cells of every method (frozen, best
+    mode, main grid), and the references truth (paper and linear TPA, FPE) and raw (linear TPA,
+    FPE), N <NA>. With `wild`, values that would flip every verdict if they leaked in: a truth
+    reference far better than SIRL, linear cells where SIRL is the worst."""
+    F, T = [], []
+    for env in sorted(set(fpe.env)):
+        for s in SEEDS:
+            F.append(fpe_row(env, "truth", None, s, 0.0 + 1e-4 * s, reference=True))
+            F.append(fpe_row(env, "raw", None, s, 0.001 * (s + 1) if wild else 0.5, reference=True))
+            for M in (10, 40):
+                T.append(tpa_row(env, "truth", None, M, s, 0.99 - 0.001 * s, True, True, False, True,
+                                 "paper", True))
+                for ref, x in (("truth", 1.0 - 0.002 * s), ("raw", 0.999 - 0.001 * s)):
+                    T.append(tpa_row(env, ref, None, M, s, x, True, True, False, True, "linear",
+                                     True))
+                for v, b in BASE.items():
+                    for N in ([None] if v in NFREE else [50, 100]):
+                        x = (0.3 if v == "sirl" else 0.95) + 0.01 * rng.standard_normal()
+                        T.append(tpa_row(env, v, N, M, s, x if wild else b, True, True, False,
+                                         True, "linear"))
+    f2, t2 = typed_frames(F, T)
+    return (pd.concat([fpe, f2], ignore_index=True), pd.concat([tpa, t2], ignore_index=True))
+
+
+def essence(h):
+    """Everything a claim reports, comparable with ==."""
+    out = {k: h.get(k) for k in ("env", "claim", "protocol", "verdict", "main", "power", "seeds80",
+                                 "better")}
+    out["comparisons"] = [{k: c[k] for k in ("name", "n", "diff", "lo", "hi", "p", "dz", "p_holm",
+                                             "test")} for c in h["comparisons"]]
+    return repr(out)  # nan == nan as text
+
+
+run_tables.ENV.update({"grid": {"title": "GridRobot"},
+                       "jaco": {"title": "JacoRobot", "vae_weak_claim": 1}})
+envs = ["grid", "jaco"]
+fpe, tpa = paper_tables()
+before = hypotheses.hypotheses(fpe, tpa, envs)
+# An older engine's tables: no protocol, no reference column. The same claims.
+old = hypotheses.hypotheses(fpe.drop(columns="reference"), tpa.drop(columns=["protocol", "reference"]), envs)
+paper_before = [h for h in before if h["protocol"] != "linear"]
+assert [essence(h) for h in paper_before] == [essence(h) for h in old if h["protocol"] != "linear"]
+verdicts = {(h["env"], h["claim"][:2], h["protocol"]): h["verdict"] for h in before}
+assert verdicts[("grid", "H1", None)] == "held" and verdicts[("grid", "H2", "paper")] == "held", verdicts
+assert verdicts[("grid", "H2", "linear")] == "not run", verdicts  # the file has no linear cells
+fpe2, tpa2 = with_new_rows(fpe, tpa)
+after = hypotheses.hypotheses(fpe2, tpa2, envs)
+paper_after = [h for h in after if h["protocol"] != "linear"]
+assert [essence(h) for h in paper_after] == [essence(h) for h in paper_before], \
+    "adding linear and reference rows changed an FPE or paper-protocol claim"
+assert len(paper_after) == 2 * 7 + 1, [h["claim"] for h in paper_after]  # H1, H2, Random, 4 ablation; VAE weak
+print(f"ok: {len(paper_after)} FPE and paper-protocol claims identical with wild linear and "
+      "reference rows added, and on an older engine's tables (no protocol, no reference column)")
+
+# The paper's protocol first: every FPE / paper row before the first linear row.
+prot = [h["protocol"] or "fpe" for h in after]
+assert prot.index("linear") == len(paper_after) and set(prot[len(paper_after):]) == {"linear"}, prot
+# References are never a baseline (or the claimed method) of any claim.
+names = {c["name"] for h in after for c in h["comparisons"]}
+assert not names & {"truth", "raw"}, names
+
+# The linear claims rest on the linear rows only: H2 recomputed by hand from them.
+lin = tpa2[(tpa2.protocol == "linear") & ~tpa2.reference.astype(bool)]
+for env in envs:
+    h2 = next(h for h in after if h["env"] == env and h["protocol"] == "linear" and h["claim"].startswith("H2"))
+    d = lin[lin.env == env]
+    at = lambda v: d[(d.variant == v) & ((d.N == 100) | d.N.isna())].groupby("seed").tpa.mean()  # noqa: E731
+    assert "N = 100" in h2["claim"] and h2["main"], h2["claim"]
+    got = {c["name"]: c for c in h2["comparisons"]}
+    assert sorted(got) == sorted(BASE.keys() - {"sirl"}), sorted(got)
+    for v, c in got.items():
+        t_ = stats.ttest_rel(at("sirl"), at(v))
+        close(c["p"], t_.pvalue, 1e-12, f"{env} linear H2 vs {v}: p")
+        close(c["diff"], (at("sirl") - at(v)).mean(), 1e-12, f"{env} linear H2 vs {v}: Δ")
+    assert h2["verdict"] == "not held", h2["verdict"]  # SIRL's wild linear cells are the worst
+    rnd = next(h for h in after if h["env"] == env and h["protocol"] == "linear" and "Random" in h["claim"])
+    assert rnd["verdict"] in ("held", "not held", "inconclusive") and rnd["comparisons"], rnd
+assert not any(h["protocol"] == "linear" and "ablation" in h["claim"] for h in after)
+print("ok: the linear protocol's claims are decided from its rows only (H2 by hand: scipy's "
+      "paired t), after every paper row; truth and raw are never a baseline")
+
+# Only one protocol run: the other's claims are "not run", never a crash; no references at all.
+only_linear = tpa2[tpa2.protocol == "linear"]
+H = hypotheses.hypotheses(fpe, only_linear, envs)
+v = {(h["env"], h["claim"][:2], h["protocol"]): h for h in H}
+assert v[("grid", "H2", "paper")]["verdict"] == "not run" and v[("grid", "H2", "paper")]["deciding"] is None
+assert v[("grid", "H2", "linear")]["verdict"] == "not held"
+assert not any("ablation" in h["claim"] for h in H)
+L = hypotheses.summary_lines(H)
+assert L[0].startswith("| claim | environment | protocol | verdict |"), L[0]
+assert any("| linear | **not held**" in x for x in L) and any("| paper | not run |" in x for x in L), L
+assert any("| — | **held**" in x for x in L), "H1's protocol cell is —"
+D = "\n".join(hypotheses.detail_lines(H, envs))
+assert "[paper protocol]: not run" in D and "[linear protocol] (paired t-test" in D, D
+no_tpa = hypotheses.hypotheses(fpe2, tpa2.iloc[0:0], envs)
+assert all(h["protocol"] is None for h in no_tpa), [h["claim"] for h in no_tpa]  # FPE claims only
+print("ok: a linear-only table: the paper's TPA claims 'not run', the linear ones decided; the "
+      "summary table has a protocol column (— for FPE claims)")
+
+# The schema-1 fixture (engine 0.1.0): the reader fills the columns it lacks.
+SRC = os.environ.get("SIRL_SOURCE_DIR", os.path.dirname(__file__) + "/..")
+with sirl_bench.open(os.path.join(SRC, "tests", "data", "results_v1.h5")) as r:
+    t, f = r.tables["tpa"], r.tables["fpe"]
+    assert list(t.protocol) == ["paper"] * len(t) and len(t), t
+    assert str(t.reference.dtype) == "boolean" and not t.reference.any(), t.reference
+    assert str(f.reference.dtype) == "boolean" and not f.reference.any() and "protocol" not in f
+    assert "protocol" not in r.raw_table("tpa") and "reference" not in r.raw_table("tpa")
+    assert [essence(h) for h in hypotheses.hypotheses(f, t, ["grid"])] == \
+        [essence(h) for h in hypotheses.hypotheses(f.drop(columns="reference"),
+                                                   t.drop(columns=["protocol", "reference"]), ["grid"])]
+print("ok: the schema-1 fixture reads with protocol 'paper' and reference False filled in")
 print("PASS")

@@ -102,7 +102,7 @@ def check_mirror(d, plain):
             fail("mirror's FPE is not SIRL's bit for bit")
         if not (m.method == "external").all():
             fail("an external cell's method is not 'external'")
-        k = KEYS + ["M"]
+        k = KEYS + ["M", "protocol"]  # each TPA protocol's cells (the paper's, linear) apart
         m = t[t.variant == "mirror"].set_index(k).sort_index()
         s = t[(t.variant == "sirl") & t.frozen & t.in_main].set_index(k).loc[m.index]
         if m.empty or not m.frozen.all() or not m.best_mode.all():

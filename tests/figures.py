@@ -3,18 +3,27 @@
 (tests/data/engine-test.toml) (ctest): every figure and the report exist;
 Fig. 7 draws the cells the file holds even when an environment overrides the ablation's M;
 Fig. 3 is drawn on the simplified GridRobot; a partial file (one shard of two) still plots, with
-the missing cells reported as gaps."""
+the missing cells reported as gaps.
+
+TPA protocols and references (issue 56), first on synthetic tables, then on the smoke file: Fig. 5
+is drawn per protocol (fig5_tpa from the paper's rows only, fig5_tpa_linear from the linear
+ones), Figs. 4 and 5 draw the references (truth φ*, raw input) as reference lines, never as
+methods; adding linear and reference rows changes no paper figure; a file with one protocol
+draws it and notes the other as not run; the report's summary has one row per claim ×
+environment × protocol, the paper's first."""
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
 
 import h5py
+import numpy as np
 import pandas as pd
 from scipy import stats
 
-SIRL = os.environ["SIRL"]
+SIRL = os.environ.get("SIRL", "sirl")  # ctest sets it; `figures.py FILE.h5` needs no binary
 SRC = os.environ["SIRL_SOURCE_DIR"]
 SMOKE = os.path.join(SRC, "tests", "data", "engine-test.toml")  # smoke's plan, narrow nets
 PLOT = os.path.join(SRC, "report", "plot_figures.py")
@@ -30,6 +39,127 @@ def sh(*cmd):
     return p
 
 
+def synthetic_tables():
+    """FPE and TPA rows as the reader types them: the paper's main grid and ablation, the linear
+    protocol's cells of every method, and the references (truth: paper and linear TPA, FPE; raw:
+    linear TPA, FPE), N <NA> for the N-free ones."""
+    rng = np.random.default_rng(7)
+    base = {"sirl": 0.8, "vae": 0.6, "multipref10": 0.7, "singlepref": 0.65, "random": 0.68}
+    F, T = [], []
+
+    def row(**k):
+        k.setdefault("method", k["variant"])
+        k.setdefault("vae", k["variant"] == "vae")
+        k.update(selection="uniform", teacher="")
+        return k
+
+    for env in ("grid", "jaco"):
+        for s in range(3):
+            for v, b in base.items():
+                for N in ([None] if v in ("vae", "random") else [50, 100]):
+                    F.append(row(env=env, variant=v, N=N, seed=s, fpe=1 - b + 0.01 * s, reference=False))
+                    for M in (10, 40):
+                        x = b + 0.01 * rng.standard_normal()
+                        T.append(row(env=env, variant=v, N=N, M=M, seed=s, tpa=x, frozen=v == "sirl",
+                                     in_main=True, in_ablation=False, best_mode=True,
+                                     protocol="paper", reference=False))
+                        if v not in ("vae", "random"):
+                            T.append(row(env=env, variant=v, N=N, M=M, seed=s, tpa=x - 0.03,
+                                         frozen=v != "sirl", in_main=False, in_ablation=True,
+                                         best_mode=False, protocol="paper", reference=False))
+                        T.append(row(env=env, variant=v, N=N, M=M, seed=s, tpa=0.2 + 0.01 * s,
+                                     frozen=True, in_main=True, in_ablation=False, best_mode=True,
+                                     protocol="linear", reference=False))
+            for ref, f in (("truth", 0.0), ("raw", 0.9)):
+                F.append(row(env=env, variant=ref, N=None, seed=s, fpe=f + 0.001 * s, reference=True))
+                for M in (10, 40):
+                    for protocol in (("paper", "linear") if ref == "truth" else ("linear",)):
+                        T.append(row(env=env, variant=ref, N=None, M=M, seed=s,
+                                     tpa=0.97 - 0.01 * s - (0.3 if ref == "raw" else 0), frozen=True,
+                                     in_main=True, in_ablation=False, best_mode=True,
+                                     protocol=protocol, reference=True))
+    out = []
+    for rows in (F, T):
+        d = pd.DataFrame(rows)
+        for c in ("N", "M"):
+            if c in d:
+                d[c] = d[c].astype("Int64")
+        for c in ("vae", "frozen", "in_main", "in_ablation", "best_mode", "reference"):
+            if c in d:
+                d[c] = d[c].astype("boolean")
+        out.append(d)
+    return out
+
+
+def check_synthetic(tmp):
+    """Figs. 4, 5 and 7 on synthetic tables: what they drew (figures.DRAWN), per protocol, with
+    the references apart from the methods."""
+    sys.path.insert(0, os.path.join(SRC, "report"))
+    import figures
+    import run_tables
+    run_tables.ENV.update({"grid": {"title": "GridRobot"}, "jaco": {"title": "JacoRobot"}})
+    fpe, tpa = synthetic_tables()
+    envs = ["grid", "jaco"]
+
+    def draw(f, t, name):
+        figures.DRAWN.clear()
+        out, notes = os.path.join(tmp, name), []
+        os.makedirs(out)
+        figures.plot_fig4(f, envs, out, notes)
+        for protocol in run_tables.PROTOCOLS:
+            figures.plot_fig5(t, envs, out, notes, protocol)
+        figures.plot_fig7(t, envs, out, notes)
+        return json.loads(json.dumps(figures.DRAWN)), notes, out
+
+    drawn, notes, out = draw(fpe, tpa, "syn")
+    for f in ("fig4_fpe.png", "fig5_tpa.png", "fig5_tpa_linear.png", "fig7_ablation.png"):
+        assert os.path.getsize(os.path.join(out, f)) > 200, f
+    refs = {"truth", "raw"}
+    for key in ("fig4", "fig5", "fig5_linear"):
+        for env, panels in drawn[key].items():
+            for panel in (panels.values() if key != "fig4" else [panels]):
+                assert not refs & set(panel), (key, env, panel.keys())
+    assert set(drawn["fig4_references"]["grid"]) == refs, drawn["fig4_references"]
+    want = fpe[(fpe.env == "grid") & (fpe.variant == "raw")].fpe.mean()
+    assert abs(drawn["fig4_references"]["grid"]["raw"]["0"] - want) < 1e-12
+    # Fig. 5: each protocol's figure from its own rows; every panel of an environment carries its
+    # references (the paper's protocol has no raw-input cells: truth only).
+    for protocol, key in (("paper", "fig5"), ("linear", "fig5_linear")):
+        d = tpa[(tpa.protocol == protocol) & tpa.in_main & tpa.best_mode]
+        n = 0
+        for (env, v, N, M), g in d[~d.reference].groupby(["env", "variant", "N", "M"], dropna=False):
+            panels = [str(N)] if not pd.isna(N) else list(drawn[key][env])
+            for panel in panels:
+                assert abs(drawn[key][env][panel][v][str(M)] - g.tpa.mean()) < 1e-12, (key, env, v, N, M)
+                n += 1
+        for (env, v, M), g in d[d.reference].groupby(["env", "variant", "M"]):
+            for panel in drawn[key][env]:
+                assert abs(drawn[key + "_references"][env][panel][v][str(M)] - g.tpa.mean()) < 1e-12
+                n += 1
+        assert n > 40, (protocol, n)
+    assert set(drawn["fig5_references"]["grid"]["50"]) == {"truth"}, drawn["fig5_references"]
+    assert set(drawn["fig5_linear_references"]["jaco"]["100"]) == refs
+    assert drawn["fig5_protocols"] == {"paper": "fig5_tpa", "linear": "fig5_tpa_linear"}
+    # The paper's figures are those of the tables without the new rows.
+    plain, _, _ = draw(fpe[~fpe.reference], tpa[(tpa.protocol == "paper") & ~tpa.reference], "plain")
+    for key in ("fig4", "fig5", "fig7"):
+        assert plain[key] == drawn[key], key
+    assert plain["fig5_protocols"]["linear"] == "not run" and "fig5_linear" not in plain
+    # One protocol run (a profile's [tpa] protocols = ["linear"]): the paper's Fig. 5 and Fig. 7
+    # are noted, not drawn, and nothing crashes.
+    lin, notes, out = draw(fpe, tpa[tpa.protocol == "linear"], "linear-only")
+    assert lin["fig5_protocols"] == {"paper": "not run", "linear": "fig5_tpa_linear"}, lin
+    assert "fig5" not in lin and "fig7" not in lin and lin["fig5_linear"] == drawn["fig5_linear"]
+    assert any("Fig. 5: not run" in n for n in notes), notes
+    assert not os.path.exists(os.path.join(out, "fig5_tpa.png"))
+    none, notes, _ = draw(fpe[~fpe.reference], tpa[~tpa.reference], "no-references")
+    assert "fig4_references" not in none and "fig5_references" not in none
+    assert any("Fig. 4: the references" in n and "not run" in n for n in notes), notes
+    print("ok: synthetic tables: Fig. 5 per protocol from its own rows, truth and raw drawn as "
+          "reference lines only; the paper's figures unchanged by the new rows; one protocol "
+          "or no references: noted as not run")
+
+
 def check_outputs(d):
     for f in FILES:
         p = os.path.join(d, f)
@@ -38,16 +168,59 @@ def check_outputs(d):
     return open(os.path.join(d, "report.md")).read()
 
 
-with tempfile.TemporaryDirectory() as tmp:
-    full = os.path.join(tmp, "smoke.h5")
-    sh(SIRL, "run", SMOKE, "--out", full, "--quiet")
+def decoded(f, name):
+    """A table as stored (strings decoded; flags 0/1, N and M 0 where a cell has none)."""
+    t = pd.DataFrame(f["tables/" + name][:])
+    for c in t.columns:
+        if t[c].dtype == object:
+            t[c] = t[c].str.decode("utf-8")
+    return t
+
+
+def holm_verdict(ps, diffs, better):
+    """Holm's adjusted p's by hand and the verdict they give."""
+    m = len(ps)
+    order = sorted(range(m), key=lambda i: ps[i])
+    adj, run = [0.0] * m, 0.0
+    for r, i in enumerate(order):
+        run = max(run, min(1.0, (m - r) * ps[i]))
+        adj[i] = run
+    way = (lambda x: x < 0) if better == "<" else (lambda x: x > 0)
+    want = ("held" if all(q < 0.05 and way(x) for q, x in zip(adj, diffs)) else
+            "not held" if any(q < 0.05 and not way(x) and x != 0 for q, x in zip(adj, diffs))
+            else "inconclusive")
+    return adj, want
+
+
+def without_new_rows(src, dst):
+    """A copy of results file src as an engine before issue 56 wrote it: /tables/fpe and tpa
+    without the linear protocol's rows, the references' rows and the two columns."""
+    shutil.copy(src, dst)
+    with h5py.File(dst, "r+") as f:
+        for name in ("fpe", "tpa"):
+            a = f["tables/" + name][:]
+            keep = np.ones(len(a), bool)
+            if "reference" in a.dtype.names:
+                keep &= a["reference"] == 0
+            if "protocol" in a.dtype.names:
+                keep &= a["protocol"] == b"paper"
+            cols = [c for c in a.dtype.names if c not in ("reference", "protocol")]
+            b = np.empty(int(keep.sum()), dtype=[(c, a.dtype[c]) for c in cols])
+            for c in cols:
+                b[c] = a[c][keep]
+            del f["tables/" + name]
+            f.create_dataset("tables/" + name, data=b)
+
+
+def check_smoke(full, tmp):
+    """The figures and the report of a smoke results file."""
     sh("/usr/bin/python3", PLOT, full, "--out", os.path.join(tmp, "full"))
     rep = check_outputs(os.path.join(tmp, "full"))
     for claim in ("H1", "H2", "SIRL is better frozen", "Random beats preference"):
         assert claim in rep, f"report lacks {claim}"
     assert "paired t-test" in rep and "p = " in rep and "Holm p" in rep
     # The summary table opens the report, before the figures; the profile's text closes it.
-    assert rep.index("| claim | environment | verdict") < rep.index("## Figures") < rep.index(
+    assert rep.index("| claim | environment | protocol | verdict") < rep.index("## Figures") < rep.index(
         "## Configuration"), "report order: summary, figures, …, profile"
     # The page a reader opens, in chromium: summary table first, real tables, every image loaded.
     p = subprocess.run(["node", os.path.join(SRC, "tests", "report_browser.mjs"),
@@ -63,74 +236,153 @@ with tempfile.TemporaryDirectory() as tmp:
     print("ok: every figure and the report from the smoke run; Fig. 3 on grid2")
 
     # What Figs. 4 and 5 drew equals the seed means computed here from the tables (a plot of the
-    # wrong column, of train_mse, of the ablation's cells or of the other frozen mode differs).
+    # wrong column, of train_mse, of the ablation's cells or of the other frozen mode differs):
+    # the methods' rows as methods, the references' (truth φ*, raw input) as reference lines
+    # only, and Fig. 5 once per TPA protocol from that protocol's rows.
     with h5py.File(full, "r") as f:
-        fpe = pd.DataFrame(f["tables/fpe"][:])
-        tpa = pd.DataFrame(f["tables/tpa"][:])
+        fpe, tpa = decoded(f, "fpe"), decoded(f, "tpa")
     for t in (fpe, tpa):
-        for c in ("env", "variant"):
-            t[c] = t[c].str.decode("utf-8")
+        if "reference" not in t:  # a file of an engine before the references
+            t["reference"] = 0
+    if "protocol" not in tpa:
+        tpa["protocol"] = "paper"
     checked = 0
-    for (env, v, n), g in fpe.groupby(["env", "variant", "N"]):
+    for (env, v, n, ref), g in fpe.groupby(["env", "variant", "N", "reference"]):
         want = g.fpe.mean()
-        got = drawn["fig4"][env][v][str(n)]
+        got = (drawn["fig4_references"][env][v]["0"] if ref else drawn["fig4"][env][v][str(n)])
         assert abs(got - want) < 1e-12, (env, v, n, got, want)
+        assert not ref or (n == 0 and v not in drawn["fig4"][env]), (env, v, n)
         checked += 1
-    main = tpa[(tpa.in_main == 1) & (tpa.best_mode == 1)]  # the engine marks the best mode
-    for (env, v, n, m), g in main.groupby(["env", "variant", "N", "M"]):
-        panels = [str(n)] if n > 0 else list(drawn["fig5"][env])  # N = 0 cells in every panel
-        for panel in panels:
-            got = drawn["fig5"][env][panel][v][str(m)]
-            assert abs(got - g.tpa.mean()) < 1e-12, (env, v, n, m, got, g.tpa.mean())
-            checked += 1
+    protocols = [p for p in ("paper", "linear") if (tpa.protocol == p).any()]
+    for protocol in protocols:
+        key = "fig5" if protocol == "paper" else f"fig5_{protocol}"
+        d = tpa[tpa.protocol == protocol]
+        main = d[(d.in_main == 1) & (d.best_mode == 1) & (d.reference == 0)]  # the engine marks them
+        if protocol != "paper":
+            assert (main.frozen == 1).all() and not (d.in_ablation == 1).any(), protocol
+        for (env, v, n, m), g in main.groupby(["env", "variant", "N", "M"]):
+            panels = [str(n)] if n > 0 else list(drawn[key][env])  # N = 0 cells in every panel
+            for panel in panels:
+                got = drawn[key][env][panel][v][str(m)]
+                assert abs(got - g.tpa.mean()) < 1e-12, (key, env, v, n, m, got, g.tpa.mean())
+                checked += 1
+        for (env, v, m), g in d[d.reference == 1].groupby(["env", "variant", "M"]):
+            assert (g.N == 0).all() and v not in {x for pn in drawn[key][env].values() for x in pn}
+            for panel in drawn[key][env]:
+                got = drawn[key + "_references"][env][panel][v][str(m)]
+                assert abs(got - g.tpa.mean()) < 1e-12, (key, env, v, m, got, g.tpa.mean())
+                checked += 1
     assert checked > 50, checked
-    print(f"ok: Figs. 4 and 5 drew the seed means of the tables ({checked} points checked)")
+    assert {p for p, f in drawn["fig5_protocols"].items() if f != "not run"} == set(protocols), \
+        drawn["fig5_protocols"]
+    print(f"ok: Figs. 4 and 5 drew the seed means of the tables, Fig. 5 for protocol(s) "
+          f"{', '.join(protocols)}, the references {sorted(set(fpe[fpe.reference == 1].variant))} "
+          f"as lines ({checked} points checked)")
 
     # H1 per environment recomputed here from /tables/fpe with scipy's paired t-test and Holm by
     # hand: the verdict and the adjusted p of every comparison equal claims.json's (a report that
-    # compared the wrong N, the wrong column or skipped the correction differs).
-    reported = {(h["env"], h["claim"][:2]): h for h in
-                json.load(open(os.path.join(tmp, "full", "claims.json")))}
+    # compared the wrong N, the wrong column or skipped the correction differs). H2 likewise per
+    # TPA protocol from that protocol's main cells.
+    claims = json.load(open(os.path.join(tmp, "full", "claims.json")))
+    reported = {(h["env"], h["claim"][:2], h["protocol"]): h for h in claims}
+    baselines = ["vae", "multipref10", "multipref50", "singlepref", "random"]
     for env in sorted(fpe.env.unique()):
         if env == "grid2":
             continue
-        d = fpe[fpe.env == env]
+        d = fpe[(fpe.env == env) & (fpe.reference == 0)]
         nmax = d.N.max()
         at = lambda v: d[(d.variant == v) & ((d.N == nmax) | (d.N == 0))].set_index("seed").fpe.sort_index()
-        ps, diffs = [], []
-        for v in ["vae", "multipref10", "multipref50", "singlepref", "random"]:
-            s, o = at("sirl"), at(v)
-            ps.append(stats.ttest_rel(s, o).pvalue)
-            diffs.append((s - o).mean())
-        order = sorted(range(5), key=lambda i: ps[i])
-        adj, run = [0.0] * 5, 0.0
-        for r, i in enumerate(order):
-            run = max(run, min(1.0, (5 - r) * ps[i]))
-            adj[i] = run
-        want = ("held" if all(q < 0.05 and x < 0 for q, x in zip(adj, diffs)) else
-                "not held" if any(q < 0.05 and x > 0 for q, x in zip(adj, diffs)) else "inconclusive")
-        h = reported[(env, "H1")]
+        ps = [stats.ttest_rel(at("sirl"), at(v)).pvalue for v in baselines]
+        adj, want = holm_verdict(ps, [(at("sirl") - at(v)).mean() for v in baselines], "<")
+        h = reported[(env, "H1", None)]
         assert h["verdict"] == want, (env, h["verdict"], want)
         for c, q in zip(h["comparisons"], adj):
             assert abs(c["p_holm"] - q) < 1e-9, (env, c, q)
-    print("ok: H1's verdicts and Holm p's equal a recomputation from /tables/fpe")
+        for protocol in protocols:
+            d = tpa[(tpa.env == env) & (tpa.protocol == protocol) & (tpa.in_main == 1)
+                    & (tpa.best_mode == 1) & (tpa.reference == 0)]
+            nmax = d.N.max()
+            at = lambda v: d[(d.variant == v) & ((d.N == nmax) | (d.N == 0))].groupby("seed").tpa.mean()
+            have = [v for v in baselines if (d.variant == v).any()]
+            ps = [stats.ttest_rel(at("sirl"), at(v)).pvalue for v in have]
+            adj, want = holm_verdict(ps, [(at("sirl") - at(v)).mean() for v in have], ">")
+            h = reported[(env, "H2", protocol)]
+            assert [c["name"] for c in h["comparisons"]] == have, (env, protocol, h["comparisons"])
+            if all(np.isfinite(ps)):  # else the report's exact sign test decides
+                assert h["verdict"] == want, (env, protocol, h["verdict"], want)
+                for c, q in zip(h["comparisons"], adj):
+                    assert abs(c["p_holm"] - q) < 1e-9, (env, protocol, c, q)
+    names = {c["name"] for h in claims for c in h["comparisons"]}
+    assert not names & {"truth", "raw"}, names
+    rows = [ln for ln in rep.split("\n## ", 1)[0].splitlines() if ln.startswith("| ") and
+            not ln.startswith("| claim")]
+    cells = [ln.split(" | ")[2] for ln in rows]
+    assert {"—", "paper"} <= set(cells) <= {"—", "paper", "linear"}, cells
+    if "linear" in cells:
+        assert cells.index("linear") > max(i for i, c in enumerate(cells) if c != "linear"), cells
+    print(f"ok: H1's and H2's verdicts and Holm p's ({', '.join(protocols)} protocol) equal a "
+          "recomputation from the tables; the summary lists the paper's protocol first")
 
-    # H1's "trainings converged" counts, recomputed from /tables/training by task key: the φ of
+    # H1's "trainings converged" counts, recomputed from /tables/training's columns: the φ of
     # SIRL and of each preference baseline at the largest N, and every VAE of the environment.
     with h5py.File(full, "r") as f:
-        tr = pd.DataFrame(f["tables/training"][:])
-    conv = dict(zip(tr.key.str.decode("utf-8"), tr.converged))
+        tr = decoded(f, "training")
+    sys.path.insert(0, os.path.join(SRC, "python"))
+    import sirl_bench
+    with sirl_bench.open(full) as r:
+        recs = r.records
     for env in sorted(fpe.env.unique()):
         if env == "grid2":
             continue
-        nmax = fpe[fpe.env == env].N.max()
-        keys = [k for k in conv if k.startswith(env + "/") and (
-            k.endswith("/vae") or any(k.endswith(f"/{v}/N{nmax}/rep") and "/" + v + "/" in k
-                                      for v in ("sirl", "multipref10", "multipref50", "singlepref")))]
-        want = [int(sum(conv[k] for k in keys)), len(keys)]
-        got = reported[(env, "H1")]["converged"]
-        assert list(got) == want and want[1] > 0, (env, got, want, keys)
-    print("ok: H1's trainings-converged counts equal a recount from /tables/training")
+        nmax = fpe[(fpe.env == env) & (fpe.reference == 0)].N.max()
+        t = tr[(tr.env == env) & (tr.teacher == "")]
+        use = t[(t.kind == "vae") | ((t.kind == "rep") & (t.N == nmax) & t.variant.isin(
+            ["sirl", "multipref10", "multipref50", "singlepref"]))]
+        want = [int(use.converged.sum()), len(use)]
+        got = reported[(env, "H1", None)]["converged"]
+        assert list(got) == want and want[1] > 0, (env, got, want)
+        if "linear" in protocols:  # H2 (linear): those and the Newton fits of its cells
+            d = tpa[(tpa.env == env) & (tpa.protocol == "linear") & (tpa.reference == 0)]
+            nmax = d.N.max()
+            compared = ["sirl"] + baselines
+            fits = recs[(recs.protocol == "linear") & (recs.env == env) & (recs.teacher == "")
+                        & recs.variant.isin(compared) & ((recs.N == nmax) | recs.N.isna())]
+            use = t[(t.kind == "vae") | ((t.kind == "rep") & (t.N == nmax) & t.variant.isin(compared))]
+            want = [int(use.converged.sum() + fits.newton_converged.sum()), len(use) + len(fits)]
+            got = reported[(env, "H2", "linear")]["converged"]
+            assert list(got) == want and len(fits) > 0, (env, got, want)
+    print("ok: H1's (and the linear H2's, with its Newton fits) trainings-converged counts equal "
+          "a recount from /tables/training (and the records)")
+
+    # The same file as an engine before the protocols and references wrote it: every FPE and
+    # paper-protocol claim, and Figs. 4, 5 (paper) and 7, are the same numbers.
+    old = os.path.join(tmp, "old.h5")
+    without_new_rows(full, old)
+    sh("/usr/bin/python3", PLOT, old, "--out", os.path.join(tmp, "old"))
+    was = json.load(open(os.path.join(tmp, "old", "claims.json")))
+    was_drawn = json.load(open(os.path.join(tmp, "old", "figures.json")))
+    paper = [h for h in claims if h["protocol"] != "linear"]
+    assert paper == [h for h in was if h["protocol"] != "linear"], "paper claims changed"
+    for key in ("fig4", "fig5", "fig7"):
+        assert drawn.get(key) == was_drawn.get(key), key
+    assert "fig4_references" not in was_drawn and was_drawn["fig5_protocols"]["linear"] == "not run"
+    assert all(h["verdict"] == "not run" for h in was if h["protocol"] == "linear")
+    print(f"ok: the {len(paper)} FPE and paper-protocol claims and Figs. 4, 5, 7 equal those of "
+          "the file without the linear and reference rows (an older engine's)")
+
+
+if __name__ == "__main__" and len(sys.argv) > 1:  # a results file given: its checks only
+    with tempfile.TemporaryDirectory() as tmp:
+        check_synthetic(tmp)
+        check_smoke(sys.argv[1], tmp)
+    print("PASS")
+    sys.exit(0)
+
+with tempfile.TemporaryDirectory() as tmp:
+    check_synthetic(tmp)
+    full = os.path.join(tmp, "smoke.h5")
+    sh(SIRL, "run", SMOKE, "--out", full, "--quiet")
+    check_smoke(full, tmp)
 
     # JacoRobot runs its ablation at another M than the top-level [ablation]: Fig. 7 must draw
     # the cells the file holds (16 + 4 bars: four methods × 4 configurations, VAE and Random × 2).

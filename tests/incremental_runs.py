@@ -220,12 +220,15 @@ def main():
                     fail(f"/tables/{name}: the base point's rows are not the plain run's")
                 own = t[t["hyper_point"] == point.encode()]
                 want = e["tables"][name][()]
-                keyed = {tuple(r[c] for c in ("env", "variant", "N", "seed") + (("M", "frozen") if name == "tpa" else ())): r
-                         for r in want}
+                # a cell: its fields, and for TPA its M, mode and protocol (paper, linear)
+                cell = ("env", "variant", "N", "seed") + (
+                    ("M", "frozen") + (("protocol",) if "protocol" in want.dtype.names else ())
+                    if name == "tpa" else ())
+                keyed = {tuple(r[c] for c in cell): r for r in want}
                 if len(own) == 0:
                     fail(f"/tables/{name} has no row at {point}")
                 for r in own:
-                    k = tuple(r[c] for c in ("env", "variant", "N", "seed") + (("M", "frozen") if name == "tpa" else ()))
+                    k = tuple(r[c] for c in cell)
                     if k not in keyed or not same(r[name], keyed[k][name]):
                         fail(f"/tables/{name} {k} at {point} is not the sirl.epochs=31 run's")
         # The figures: the paper's from the base point only (as the plain run's), and the axis's

@@ -7,8 +7,12 @@
 - the learning curves: each TPA cell's rows are its heads' stored curves up to each head's stop
   (the number of rows is the sum of head_epochs), and every row carries its record's fields;
 - records carry the fields the tables do (no key is taken apart anywhere);
-- the schema-1 fixture (engine 0.1.0) opens; a dataset file, a file of a future schema version
-  and a non-HDF5 file are refused with one line naming the file;
+- the TPA protocols and references (issue 56): `protocol` is str ("paper" or "linear"),
+  `reference` a boolean flag; the references (truth, raw) have no N; every linear cell is frozen,
+  best mode and in the main grid, never in the ablation;
+- the schema-1 fixture (engine 0.1.0) opens, with protocol "paper" and reference False filled in
+  where the file has no such column; a dataset file, a file of a future schema version and a
+  non-HDF5 file are refused with one line naming the file;
 - the README's one-liner works;
 - examples/analysis.py runs on the smoke file.
 """
@@ -119,10 +123,43 @@ def check_curves(r, path):
     print(f"ok: curves of {len(tpa)} TPA cells equal their stored heads up to each stop")
 
 
+def check_protocols(r):
+    """The columns of issue 56 as the reader types them, on a file that has them."""
+    fpe, tpa = r.tables["fpe"], r.tables["tpa"]
+    for name, t in (("fpe", fpe), ("tpa", tpa)):
+        if str(t.reference.dtype) != "boolean":
+            fail(f"{name}.reference: dtype {t.reference.dtype}, expected boolean")
+        refs = t[t.reference]
+        if refs.empty:
+            fail(f"{name}: no reference rows (truth, raw)")
+        if not refs.N.isna().all() or (refs.method != refs.variant).any() or \
+                not set(refs.variant) <= {"truth", "raw"}:
+            fail(f"{name}: a reference row with an N, or not truth / raw: {refs.head()}")
+        if t[~t.reference].variant.isin(["truth", "raw"]).any():
+            fail(f"{name}: truth or raw rows not marked reference")
+    if tpa.protocol.dtype != object or not all(isinstance(x, str) for x in tpa.protocol):
+        fail(f"tpa.protocol: not str ({tpa.protocol.dtype})")
+    if not set(tpa.protocol) <= set(sirl_bench.PROTOCOLS):
+        fail(f"tpa.protocol: {set(tpa.protocol)}")
+    lin = tpa[tpa.protocol == "linear"]
+    if len(lin) and not (lin.frozen.all() and lin.best_mode.all() and lin.in_main.all()
+                         and not lin.in_ablation.any()):
+        fail("a linear-protocol cell that is not frozen, best mode and in the main grid only")
+    if (tpa[tpa.protocol == "paper"].variant == "raw").any():
+        fail("raw has paper-protocol TPA cells")
+    print(f"ok: protocol (str: {sorted(set(tpa.protocol))}) and reference (boolean; "
+          f"{sorted(set(tpa[tpa.reference].variant))}, N <NA>) in /tables/tpa and fpe")
+
+
 def check_refusals(smoke, tmp):
     v1 = sirl_bench.open(os.path.join(SRC, "tests", "data", "results_v1.h5"))
     if v1.schema_version != 1 or len(v1.tables["tpa"]) != 1 or len(v1.records) != 5:
         fail("the schema-1 fixture does not open as written")
+    t1, f1 = v1.tables["tpa"], v1.tables["fpe"]
+    if list(t1.protocol) != ["paper"] or str(t1.reference.dtype) != "boolean" or \
+            t1.reference.any() or f1.reference.any() or "protocol" in f1 or \
+            "protocol" in v1.raw_table("tpa"):
+        fail("the schema-1 fixture: protocol 'paper' / reference False not filled in (or stored)")
     v1.curves  # noqa: B018 (reads every curve)
     future = os.path.join(tmp, "future.h5")
     shutil.copy(smoke, future)
@@ -167,6 +204,7 @@ def main():
             fail(f"provenance: {prov}")
         print(f"ok: provenance names the libraries: {libs}")
         check_curves(r, smoke)
+        check_protocols(r)
         check_refusals(smoke, tmp)
         p = subprocess.run(["/usr/bin/python3", "-c",
                             f"import sirl_bench as s; t = s.open({smoke!r}).tables['tpa']; "

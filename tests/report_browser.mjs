@@ -31,7 +31,7 @@ try {
     const rows = [...t.querySelectorAll("tbody tr")].map((tr) => tr.children[col]?.innerText.trim());
     return { head, rows };
   });
-  const verdicts = new Set(["held", "not held", "inconclusive", "not evaluated (no data)"]);
+  const verdicts = new Set(["held", "not held", "inconclusive", "not evaluated (no data)", "not run"]);
   if (!summary || summary.rows.length === 0) failures.push("the summary table has no rows");
   else {
     for (const want of ["claim", "environment", "verdict", "Holm p", "power"])

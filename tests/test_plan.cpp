@@ -85,26 +85,61 @@ TEST(Plan, TaskCountsMatchTheGrid) {
   const int S = 3;
   // VAE: one per seed (sirl+vae and vae need it).
   EXPECT_EQ(plan.count(vae_kind()), S);
-  // FPE: sirl, sirl+vae × 3 N; vae and random once each (no N).
-  EXPECT_EQ(plan.count(fpe_kind()), S * (2 * 3 + 2));
+  // FPE: sirl, sirl+vae × 3 N; vae and random once each (no N); the references truth and raw.
+  EXPECT_EQ(plan.count(fpe_kind()), S * (2 * 3 + 2 + 2));
   // TPA main: sirl (frozen) and multipref10 (unfrozen) × 2 N × 2 M; random (unfrozen) × 2 M.
   // Ablation: sirl, sirl+vae × 2 frozen × 1 M; random × 2 frozen. Cells shared with the main
   // grid (sirl N300 M80 frozen; random M80 unfrozen) are counted once.
+  // The truth reference under the paper's head × 2 M (raw has linear heads only).
   const int main_cells = 2 * 2 * 2 + 2;
   const int ablation_new = 2 * 2 + 2 - 2;
-  EXPECT_EQ(plan.count(tpa_kind()), S * (main_cells + ablation_new));
+  EXPECT_EQ(plan.count(tpa_kind()), S * (main_cells + ablation_new + 2));
+  // Linear evaluation: every [tpa] cell once (φ frozen: no modes), truth and raw × 2 M.
+  EXPECT_EQ(plan.count(linear_tpa_kind()), S * (main_cells + 2 * 2));
   // Representations: sirl N100/200/300, sirl+vae N100/200/300, vae, random, multipref10 N100/300.
   EXPECT_EQ(plan.count(rep_kind()), S * (3 + 3 + 1 + 1 + 2));
-  // Every dependency precedes its dependent, and every FPE/TPA task depends on one rep.
+  // Every dependency precedes its dependent, and every FPE/TPA task depends on one rep but a
+  // reference's, which reads none (φ is a function of Ξ).
   for (size_t i = 0; i < plan.tasks.size(); ++i) {
     for (int d : plan.tasks[i].deps) EXPECT_LT(size_t(d), i);
-    if (plan.tasks[i].kind == fpe_kind() || plan.tasks[i].kind == tpa_kind()) {
+    const Task& t = plan.tasks[i];
+    if (is_reference(t.variant.method)) {
+      EXPECT_TRUE(t.deps.empty()) << t.key;
+      continue;
+    }
+    if (t.kind == fpe_kind() || t.kind == tpa_kind() || t.kind == linear_tpa_kind()) {
       ASSERT_EQ(plan.tasks[i].deps.size(), 1u);
       EXPECT_EQ(plan.tasks[plan.tasks[i].deps[0]].kind, rep_kind());
     }
   }
   std::set<std::string> keys;
   for (const auto& t : plan.tasks) EXPECT_TRUE(keys.insert(t.key).second) << t.key;
+}
+
+// [tpa] protocols: "linear" alone drops every paper-protocol cell of [tpa] (the ablation's stay),
+// "paper" alone every linear one; a linear cell's key ends in /linear, reads the same φ as the
+// paper's cell and is frozen.
+TEST(Plan, TheTpaProtocolsChooseWhichCellsRun) {
+  auto with = [](const std::string& protocols) {
+    std::string text = test::kSmallProfile;
+    text.replace(text.find("M = [10, 80]\n"), 13, "M = [10, 80]\nprotocols = " + protocols + "\n");
+    return make_plan(parse_profile(text, "t.toml"));
+  };
+  const Plan both = make_plan(parse_profile(test::kSmallProfile, "t.toml"));
+  const Plan linear = with("[\"linear\"]"), paper = with("[\"paper\"]");
+  EXPECT_EQ(paper.count(linear_tpa_kind()), 0);
+  EXPECT_EQ(paper.count(tpa_kind()), both.count(tpa_kind()));
+  EXPECT_EQ(linear.count(linear_tpa_kind()), both.count(linear_tpa_kind()));
+  for (const Task& t : linear.tasks)
+    if (t.kind == tpa_kind()) EXPECT_TRUE(t.in_ablation && !t.in_main) << t.key;
+  const Task& cell = both.tasks[size_t(both.index.at("grid/s0/multipref10/N100/tpa/M10/linear"))];
+  EXPECT_TRUE(cell.frozen);
+  EXPECT_EQ(cell.input(rep_kind()), "grid/s0/multipref10/N100/rep");
+  EXPECT_EQ(both.index.count("grid/s0/raw/tpa/M10/linear"), 1u);
+  EXPECT_EQ(both.index.count("grid/s0/raw/tpa/M10/frozen"), 0u);  // raw: linear heads only
+  EXPECT_EQ(both.index.count("grid/s0/truth/tpa/M10/frozen"), 1u);
+  for (const char* bad : {"[]", "[\"paper\", \"paper\"]", "[\"probe\"]", "\"linear\""})
+    EXPECT_THROW(with(bad), ProfileError) << bad;
 }
 
 // frozen = "best" (the default): SIRL frozen, every other method unfrozen (the paper's best
@@ -114,7 +149,7 @@ TEST(Plan, FrozenBestIsSirlFrozenAndTheOthersUnfrozen) {
   int sirl = 0, others = 0;
   for (const auto& t : plan.tasks) {
     if (t.kind != tpa_kind() || !t.in_main) continue;
-    if (t.variant.method == Method::sirl) {
+    if (t.variant.method == Method::sirl || is_reference(t.variant.method)) {
       EXPECT_TRUE(t.frozen) << t.key;
       ++sirl;
     } else {

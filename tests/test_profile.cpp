@@ -54,6 +54,15 @@ TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
   EXPECT_NE(m.find("bad.toml:5"), std::string::npos) << m;
   EXPECT_NE(m.find("unknown method 'pca'"), std::string::npos) << m;
   EXPECT_NE(m.find("multipref10"), std::string::npos) << m;
+  // A reference listed as a method: the references run in every profile, beside the methods.
+  m = test::profile_error_of(base + "[fpe]\nmethods = [\"sirl\", \"truth\"]\nN = [100]\n");
+  EXPECT_NE(m.find("bad.toml:5"), std::string::npos) << m;
+  EXPECT_NE(m.find("'truth' is a reference every profile scores"), std::string::npos) << m;
+  // An unknown TPA protocol, on its line.
+  m = test::profile_error_of(base + grid + "protocols = [\"linear\", \"probe\"]\n");
+  EXPECT_NE(m.find("bad.toml:11"), std::string::npos) << m;
+  EXPECT_NE(m.find("[tpa] protocols must be a non-empty array of \"paper\""), std::string::npos)
+      << m;
   // M beyond the TPA training split.
   m = test::profile_error_of(base + grid + "[queries]\ntpa_pairs = 10\n");
   EXPECT_NE(m.find("M = 10 exceeds the 8 training pairs"), std::string::npos) << m;
@@ -174,12 +183,13 @@ TEST(Profile, APartOfTheGridIsAProfileOfItsOwn) {
   };
   auto fpe_only =
       kinds(make_plan(parse_profile(base + "[fpe]\nmethods = [\"sirl\"]\nN = [100]\n")));
-  EXPECT_EQ(fpe_only["fpe"], 2);  // one per environment
+  EXPECT_EQ(fpe_only["fpe"], 2 * 3);  // per environment: the method's and the references'
   EXPECT_EQ(fpe_only["rep"], 2);
   EXPECT_EQ(fpe_only["tpa"], 0);
   auto tpa_only = kinds(
       make_plan(parse_profile(base + "[tpa]\nmethods = [\"random\"]\nN = [100]\nM = [10, 20]\n")));
-  EXPECT_EQ(tpa_only["tpa"], 4);
+  EXPECT_EQ(tpa_only["tpa"], 4 + 4);  // random's cells and the truth reference's, 2 M × 2 envs
+  EXPECT_EQ(tpa_only["tpa_linear"], 4 + 8);  // random's, truth's and raw's
   EXPECT_EQ(tpa_only["fpe"], 0);
   const Plan ab =
       make_plan(parse_profile(base + "[ablation]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n"));

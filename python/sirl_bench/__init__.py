@@ -9,9 +9,11 @@ file `sirl evaluate` scores.
     sirl_bench.datasets("train.h5")["grid"]["seeds"]["s0"]["queries"]["similarity"]
     sirl_bench.write_embeddings("emb.h5", {("grid", 0, 100): Z})   # Z [T, d]
 """
-from .results import (FLAG_COLUMNS, SCHEMA_VERSIONS, Results, ResultsError, claims,  # noqa: F401
-                      datasets, embedding_name, open, study_analysis, typed, write_embeddings)
+from .results import (FLAG_COLUMNS, PROTOCOLS, SCHEMA_VERSIONS, Results, ResultsError,  # noqa: F401
+                      claims, datasets, embedding_name, filled, open, study_analysis, typed,
+                      write_embeddings)
 
-__all__ = ["FLAG_COLUMNS", "SCHEMA_VERSIONS", "Results", "ResultsError", "claims", "datasets",
-           "embedding_name", "open", "study_analysis", "typed", "write_embeddings"]
+__all__ = ["FLAG_COLUMNS", "PROTOCOLS", "SCHEMA_VERSIONS", "Results", "ResultsError", "claims",
+           "datasets", "embedding_name", "filled", "open", "study_analysis", "typed",
+           "write_embeddings"]
 __version__ = "0.12.0"

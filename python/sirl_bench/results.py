@@ -10,11 +10,21 @@ Types, the same in every table:
   names (env, method, variant, selection, teacher, kind, key, ...)  str; teacher "" is the
                                                                    profile's main teacher
   flags (vae, frozen, in_main, in_ablation, best_mode, converged,   bool ("boolean", with <NA>,
-         stopped)                                                   where a row has no such field)
+         stopped, reference, newton_converged)                      where a row has no such field)
   N, M                                   Int64; <NA> where the cell has none (a method that uses
                                          no queries has no N; a training that is not a TPA cell
                                          has no M and no frozen)
   dead_fraction                          float; NaN where it was not measured
+
+/tables/fpe and /tables/tpa (and robust_fpe, robust_tpa) also say what a row is, from the data
+(engines up to 0.16.0 wrote neither column; this reader fills them so every file reads the same):
+  reference   True for the reference representations every profile scores beside the methods
+              (method "truth": the true features φ*, a ceiling; "raw": the trajectory input, a
+              floor). They use no queries (N <NA>) and are never a method's competitor. Missing
+              in an older file: False.
+  protocol    the TPA tables only: how a cell's reward heads were fit. "paper" (the paper's head
+              φ→1024→1024→1 trained by Adam) or "linear" (a Bradley–Terry linear head on the
+              frozen φ, fit to convergence by Newton's method). Missing in an older file: "paper".
 """
 from __future__ import annotations
 
@@ -29,10 +39,18 @@ import pandas as pd
 # Results-file schema versions this reader understands (results/results_file.h).
 SCHEMA_VERSIONS = (1, 2, 3)
 
-FLAG_COLUMNS = ("vae", "frozen", "in_main", "in_ablation", "best_mode", "converged", "stopped")
+FLAG_COLUMNS = ("vae", "frozen", "in_main", "in_ablation", "best_mode", "converged", "stopped",
+                "reference", "newton_converged")
+# The TPA protocols (the `protocol` column of /tables/tpa), the paper's first; a file written
+# before the column existed holds the paper's only.
+PROTOCOLS = ("paper", "linear")
+# What a table lacking a column of a newer engine reads as: {table: {column: value}}.
+FILLED = {"fpe": {"reference": False}, "tpa": {"protocol": "paper", "reference": False},
+          "robust_fpe": {"reference": False},
+          "robust_tpa": {"protocol": "paper", "reference": False}}
 # Integer-valued numbers of a record (the file stores a record's numbers as float64).
 INT_FIELDS = ("N", "M", "seed", "threads", "queries", "head", "epoch", "epochs", "max_epochs",
-              "dim", "latent", "tasks_done", "tasks_total", "schema_version")
+              "dim", "latent", "tasks_done", "tasks_total", "schema_version", "newton_iterations")
 
 
 class ResultsError(ValueError):
@@ -81,6 +99,15 @@ def typed(df: pd.DataFrame) -> pd.DataFrame:
     return df
 
 
+def filled(name, df: pd.DataFrame) -> pd.DataFrame:
+    """Table `name` with the columns of FILLED it lacks (a file of an older engine), at the value
+    every row of such a file has: protocol "paper", reference False."""
+    for c, v in FILLED.get(name, {}).items():
+        if c not in df:
+            df[c] = pd.array([v] * len(df), dtype="boolean" if isinstance(v, bool) else object)
+    return df
+
+
 def _ints(x, missing):
     """Int64 (nullable) from floats x, <NA> where missing."""
     return pd.arrays.IntegerArray(np.where(missing, 0, x).astype("int64"), np.asarray(missing))
@@ -96,7 +123,7 @@ class _LazyTables(Mapping):
         if name not in self._names:
             raise KeyError(f"no table '{name}' in this file (it has: {', '.join(self._names)})")
         if name not in self._cache:
-            self._cache[name] = typed(pd.DataFrame(self._f["tables/" + name][:]))
+            self._cache[name] = filled(name, typed(pd.DataFrame(self._f["tables/" + name][:])))
         return self._cache[name]
 
     def __iter__(self):
@@ -430,9 +457,10 @@ def open(path) -> Results:  # noqa: A001 (the package's entry point: sirl_bench.
 
 
 def claims(figures_dir) -> pd.DataFrame:
-    """The report's verdicts, one row per hypothesis (env, name, verdict, comparisons, power,
-    ...), from claims.json in the folder `sirl reproduce --figures` (or report/plot_figures.py)
-    wrote."""
+    """The report's verdicts, one row per hypothesis × environment × TPA protocol (env, claim,
+    protocol: "paper" or "linear" for a TPA claim, None for an FPE claim; verdict, including
+    "not run" for a protocol the file lacks; comparisons, power, ...), from claims.json in the
+    folder `sirl reproduce --figures` (or report/plot_figures.py) wrote."""
     import builtins
     import os
     with builtins.open(os.path.join(figures_dir, "claims.json")) as fh:

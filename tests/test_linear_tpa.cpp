@@ -1,0 +1,234 @@
+// Linear evaluation (kernels/linear_bradley_terry.h, engine/linear_tpa.h) and the references
+// truth and raw (engine/representation.h): optimality of the fit, its least-norm choice, both of
+// its solution paths, and what a cell scores.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "engine/fpe.h"
+#include "engine/linear_tpa.h"
+#include "kernels/bradley_terry_loss.h"
+#include "kernels/linear_bradley_terry.h"
+#include "kernels/linear_probe.h"
+#include "kernels/rng.h"
+#include "tests/grid_world.h"
+
+namespace sirl {
+namespace {
+
+using namespace test;
+
+// A random problem: X [n, in] normal features, M pairs over its rows, labels from a noisy linear
+// reward (so the data are not separable and the minimiser is interior).
+struct Problem {
+  int n, in, M;
+  std::vector<float> X, label;
+  std::vector<int32_t> pairs;
+};
+Problem problem(int n, int in, int M, uint64_t seed) {
+  Problem p{n, in, M, {}, {}, {}};
+  Rng rng(seed);
+  p.X.resize(size_t(n) * in);
+  for (float& x : p.X) x = float(rng.normal());
+  std::vector<double> w(static_cast<size_t>(in));
+  for (double& v : w) v = rng.normal();
+  for (int i = 0; i < M; ++i) {
+    const int32_t a = int32_t(rng.uniform_int(n)), b = int32_t(rng.uniform_int(n));
+    p.pairs.push_back(a);
+    p.pairs.push_back(b);
+    double z = 0;
+    for (int j = 0; j < in; ++j)
+      z += w[size_t(j)] * (p.X[size_t(a) * in + j] - p.X[size_t(b) * in + j]);
+    p.label.push_back(z + rng.normal() > 0 ? 1.f : 0.f);
+  }
+  return p;
+}
+
+// ∂L/∂(w, c) [in + 1] of the paper's loss at the fit's weights, by the loss kernel's ∂L/∂r.
+std::vector<double> loss_gradient(const Problem& p, const std::vector<double>& theta, double l2,
+                                  double* loss = nullptr) {
+  std::vector<int32_t> by_role(size_t(2 * p.M));
+  for (int i = 0; i < p.M; ++i) {
+    by_role[size_t(i)] = p.pairs[size_t(2 * i)];
+    by_role[size_t(p.M + i)] = p.pairs[size_t(2 * i + 1)];
+  }
+  LinearBtFit f;
+  f.weights = theta;
+  const std::vector<double> r = linear_rewards(f, p.X.data(), p.in, by_role.data(), 2 * p.M);
+  std::vector<double> dr(r.size()), lab(p.label.begin(), p.label.end());
+  const double L = bradley_terry_loss<double>(r.data(), lab.data(), p.M, l2, dr.data());
+  if (loss) *loss = L;
+  std::vector<double> g(size_t(p.in + 1), 0.0);
+  for (int i = 0; i < 2 * p.M; ++i) {
+    const float* x = p.X.data() + size_t(by_role[size_t(i)]) * p.in;
+    for (int j = 0; j < p.in; ++j) g[size_t(j)] += dr[size_t(i)] * x[j];
+    g[size_t(p.in)] += dr[size_t(i)];
+  }
+  return g;
+}
+
+TEST(LinearBradleyTerry, TheFitIsAStationaryPointOfThePapersLoss) {
+  // Convex loss: a zero gradient in (w, c) is the global minimum. Checked with the loss kernel's
+  // own ∂L/∂r (not the fit's Newton algebra), and by finite differences along every coordinate.
+  const Problem p = problem(60, 5, 40, 3);
+  const LinearBtFit f = fit_linear_bradley_terry(p.X.data(), p.n, p.in, p.pairs.data(),
+                                                 p.label.data(), p.M, {.l2 = 0.5});
+  ASSERT_TRUE(f.converged);
+  EXPECT_EQ(f.rank, p.in + 1);
+  EXPECT_LE(f.iterations, 20);
+  double L0 = 0;
+  const std::vector<double> g = loss_gradient(p, f.weights, 0.5, &L0);
+  for (double v : g) EXPECT_LT(std::abs(v), 1e-9);
+  for (int j = 0; j <= p.in; ++j)
+    for (double h : {1e-3, -1e-3}) {
+      std::vector<double> t = f.weights;
+      t[size_t(j)] += h;
+      double L = 0;
+      loss_gradient(p, t, 0.5, &L);
+      EXPECT_GT(L, L0) << "coordinate " << j << " step " << h;
+    }
+}
+
+TEST(LinearBradleyTerry, AHandSolvedOnePairProblem) {
+  // One feature, one pair: x_A = 1, x_B = 0, A preferred, λ = 1. L(w, c) = softplus(−w) +
+  // (w + c)² + c². ∂/∂c = 0 gives c = −w/2, so L = softplus(−w) + w²/2 and ∂/∂w = 0 is
+  // w = 1/(1 + e^w): w* = 0.4010581375 (scipy.optimize.brentq to 1e-15), c* = −w*/2.
+  const std::vector<float> X{1.f, 0.f}, label{1.f};
+  const std::vector<int32_t> pairs{0, 1};
+  const LinearBtFit f =
+      fit_linear_bradley_terry(X.data(), 2, 1, pairs.data(), label.data(), 1, {.l2 = 1.0});
+  ASSERT_TRUE(f.converged);
+  EXPECT_NEAR(f.weights[0], 0.4010581375, 1e-9);
+  EXPECT_NEAR(f.weights[1], -0.4010581375 / 2, 1e-9);
+}
+
+TEST(LinearBradleyTerry, DirectionsNoTrainingRowSeesGetNoWeight) {
+  // Zero columns and a copy of a column added to the features: the rewards of every row are the
+  // same (the least-norm minimiser lives in the rows' span), a zero column's weight is 0, and the
+  // copy shares its original's weight equally. Padding to 25 columns (> 2M = 16 rows) switches
+  // the fit to its other solution path (the rows' Gram matrix); the answer must not change.
+  const Problem p = problem(30, 3, 8, 5);
+  Problem wide = p;
+  const int extra = 22;  // a copy of column 0, then 21 zero columns
+  wide.in = p.in + extra;
+  wide.X.assign(size_t(p.n) * wide.in, 0.f);
+  for (int i = 0; i < p.n; ++i) {
+    for (int j = 0; j < p.in; ++j) wide.X[size_t(i) * wide.in + j] = p.X[size_t(i) * p.in + j];
+    wide.X[size_t(i) * wide.in + p.in] = p.X[size_t(i) * p.in];
+  }
+  const LinearBtFit a =
+      fit_linear_bradley_terry(p.X.data(), p.n, p.in, p.pairs.data(), p.label.data(), p.M);
+  const LinearBtFit b = fit_linear_bradley_terry(wide.X.data(), wide.n, wide.in, wide.pairs.data(),
+                                                 wide.label.data(), wide.M);
+  ASSERT_TRUE(a.converged);
+  ASSERT_TRUE(b.converged);
+  EXPECT_EQ(a.rank, b.rank);
+  std::vector<int32_t> all(size_t(p.n));
+  for (int i = 0; i < p.n; ++i) all[size_t(i)] = i;
+  const auto ra = linear_rewards(a, p.X.data(), p.in, all.data(), p.n);
+  const auto rb = linear_rewards(b, wide.X.data(), wide.in, all.data(), p.n);
+  for (int i = 0; i < p.n; ++i) EXPECT_NEAR(ra[size_t(i)], rb[size_t(i)], 1e-9) << "row " << i;
+  EXPECT_NEAR(b.weights[0], b.weights[size_t(p.in)], 1e-9);  // the copy shares the weight
+  EXPECT_NEAR(b.weights[0] + b.weights[size_t(p.in)], a.weights[0], 1e-9);
+  for (int j = p.in + 1; j < wide.in; ++j) EXPECT_EQ(b.weights[size_t(j)], 0.0) << "column " << j;
+  // A wide fit is still a stationary point of the loss in every coordinate.
+  for (double v : loss_gradient(wide, b.weights, 10)) EXPECT_LT(std::abs(v), 1e-9);
+}
+
+TEST(LinearBradleyTerry, BadInputIsRefused) {
+  const std::vector<float> X{1.f, 0.f}, label{1.f};
+  const std::vector<int32_t> bad{0, 2};
+  EXPECT_THROW(fit_linear_bradley_terry(X.data(), 2, 1, bad.data(), label.data(), 1),
+               std::invalid_argument);
+  EXPECT_THROW(fit_linear_bradley_terry(X.data(), 2, 1, bad.data(), label.data(), 0),
+               std::invalid_argument);
+}
+
+TEST(LinearTpa, TheTruthReferenceLearnsLinearRewardsAlmostPerfectly) {
+  // The test rewards are linear in φ* and the teacher is perfect: a linear head on φ* must rank
+  // held-out pairs almost perfectly from 80 pairs, and a learned-free raw reference (GridRobot's
+  // input) must do worse; the untrained φ worse still than the truth.
+  World w = world();
+  const Representation truth = reference_representation(Method::truth, w.d);
+  EXPECT_EQ(truth.dim(), w.d.feature_count());
+  const LinearTpaResult t = evaluate_linear_tpa(truth, w.d, w.bundle.tpa, 80, {});
+  RecordProperty("linear_tpa_truth_m80", std::to_string(t.mean));
+  EXPECT_TRUE(t.converged);
+  EXPECT_GE(t.mean, 0.9);
+  ASSERT_EQ(t.accuracy.size(), 20u);
+  const LinearTpaResult random = evaluate_linear_tpa(trained().random, w.d, w.bundle.tpa, 80, {});
+  EXPECT_LT(random.mean, t.mean - 0.1);
+}
+
+TEST(LinearTpa, TheSameResultTwiceAndWhateverTheThreadCount) {
+  World w = world();
+  const LinearTpaResult a = evaluate_linear_tpa(trained().sirl, w.d, w.bundle.tpa, 50, {}, 1);
+  const LinearTpaResult b = evaluate_linear_tpa(trained().sirl, w.d, w.bundle.tpa, 50, {}, 2);
+  EXPECT_EQ(a.accuracy, b.accuracy);
+  EXPECT_EQ(a.iterations, b.iterations);
+}
+
+TEST(LinearTpa, MOutsideTheTrainingSplitIsRefused) {
+  World w = world();
+  const Representation truth = reference_representation(Method::truth, w.d);
+  EXPECT_THROW(evaluate_linear_tpa(truth, w.d, w.bundle.tpa, 0, {}), std::invalid_argument);
+  EXPECT_THROW(evaluate_linear_tpa(truth, w.d, w.bundle.tpa, w.bundle.tpa[0].train + 1, {}),
+               std::invalid_argument);
+}
+
+TEST(References, TruthAndRawAreTheFeaturesAndTheInputsOfTheirRows) {
+  World w = world();
+  const std::vector<int32_t> rows{5, 0, 17};
+  const Representation truth = reference_representation(Method::truth, w.d);
+  const Representation raw = reference_representation(Method::raw, w.d);
+  EXPECT_TRUE(truth.is_table());
+  EXPECT_EQ(raw.dim(), w.d.input_dim);
+  const auto t = embed_rows(truth, w.d, rows), r = embed_rows(raw, w.d, rows);
+  for (size_t i = 0; i < rows.size(); ++i) {
+    for (int j = 0; j < truth.dim(); ++j)
+      EXPECT_EQ(t[i * truth.dim() + j], w.d.feature(rows[i])[j]);
+    for (int j = 0; j < raw.dim(); ++j) EXPECT_EQ(r[i * raw.dim() + j], w.d.input(rows[i])[j]);
+  }
+  EXPECT_THROW(reference_representation(Method::sirl, w.d), std::invalid_argument);
+  // The truth's FPE is 0 up to rounding: the probe's targets are its own inputs.
+  EXPECT_LT(evaluate_fpe(truth, w.d, w.bundle.fpe).fpe, 1e-20);
+}
+
+TEST(LinearProbe, FewerRowsThanUnknownsTakesTheLeastNormExactFit) {
+  // 4 rows, 6 inputs (+ bias): many exact fits. The least-norm one is Aᵀ(AAᵀ)⁻¹y, computed here
+  // by hand-written Gaussian elimination on the 4×4 AAᵀ (independent of the probe's solver).
+  Rng rng(9);
+  const int n = 4, in = 6;
+  std::vector<float> X(static_cast<size_t>(n * in)), Y(static_cast<size_t>(n));
+  for (float& x : X) x = float(rng.normal());
+  for (float& y : Y) y = float(rng.normal());
+  const LinearProbe p = fit_linear_probe(X.data(), Y.data(), n, in, 1);
+  EXPECT_LT(linear_probe_mse(p, X.data(), Y.data(), n), 1e-20);
+  auto a = [&](int i, int j) { return j < in ? double(X[size_t(i) * in + j]) : 1.0; };
+  std::vector<double> G(n * n), y(Y.begin(), Y.end());
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < n; ++k)
+      for (int j = 0; j <= in; ++j) G[size_t(i * n + k)] += a(i, j) * a(k, j);
+  for (int c = 0; c < n; ++c)  // G is symmetric positive definite: no pivoting needed
+    for (int r2 = c + 1; r2 < n; ++r2) {
+      const double f = G[size_t(r2 * n + c)] / G[size_t(c * n + c)];
+      for (int k = c; k < n; ++k) G[size_t(r2 * n + k)] -= f * G[size_t(c * n + k)];
+      y[size_t(r2)] -= f * y[size_t(c)];
+    }
+  std::vector<double> alpha(static_cast<size_t>(n));
+  for (int r2 = n - 1; r2 >= 0; --r2) {
+    double s = y[size_t(r2)];
+    for (int k = r2 + 1; k < n; ++k) s -= G[size_t(r2 * n + k)] * alpha[size_t(k)];
+    alpha[size_t(r2)] = s / G[size_t(r2 * n + r2)];
+  }
+  for (int j = 0; j <= in; ++j) {
+    double beta = 0;
+    for (int i = 0; i < n; ++i) beta += a(i, j) * alpha[size_t(i)];
+    EXPECT_NEAR(p.weights[size_t(j)], beta, 1e-9) << "weight " << j;
+  }
+}
+
+}  // namespace
+}  // namespace sirl
