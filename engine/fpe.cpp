@@ -28,9 +28,16 @@ FpeResult evaluate_fpe(const Representation& rep, const Dataset& d, const FpeSpl
   const auto y_te = rows(d.features.data(), F, split.test);
   require_finite(e_tr, "FPE embedding");
   require_finite(e_te, "FPE embedding");
-  const LinearProbe probe =
-      fit_linear_probe(e_tr.data(), y_tr.data(), int(split.train.size()), dim, F);
   FpeResult r;
+  LinearProbe probe;
+  if (rep.method == Method::raw) {
+    RidgeProbe ridge = fit_ridge_probe_loocv(e_tr.data(), y_tr.data(), int(split.train.size()),
+                                             dim, F);
+    probe = std::move(ridge.probe);
+    r.ridge_weight = ridge.weight;
+  } else {
+    probe = fit_linear_probe(e_tr.data(), y_tr.data(), int(split.train.size()), dim, F);
+  }
   r.fpe = linear_probe_mse(probe, e_te.data(), y_te.data(), int(split.test.size()));
   r.train_mse = linear_probe_mse(probe, e_tr.data(), y_tr.data(), int(split.train.size()));
   if (!std::isfinite(r.fpe)) throw std::runtime_error("FPE is not finite");

@@ -373,6 +373,7 @@ void run_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
   const FpeResult f = evaluate_fpe(*rep, ctx.dataset(t.env), split);
   r.num["fpe"] = f.fpe;
   r.num["train_mse"] = f.train_mse;
+  if (t.variant.method == Method::raw) r.num["ridge_weight"] = f.ridge_weight;
   r.num["flops"] = probe_flops(int64_t(split.train.size() + split.test.size()), rep->dim());
 }
 // The same, and what a robustness row says of its teacher's answers.
@@ -581,7 +582,8 @@ std::string rep_settings(const Task& t, const Profile& p) {
 // teacher's answer error.
 std::string fpe_settings(const Task& t, const Profile& p) {
   return describe_data(p, t.env) + describe_queries(p.queries) +
-         (t.teacher.empty() ? "" : describe_queries(queries_for(p, t.teacher)));
+         (t.teacher.empty() ? "" : describe_queries(queries_for(p, t.teacher))) +
+         (t.variant.method == Method::raw ? "probe ridge leave-one-out 1e-8..1e2\n" : "");
 }
 
 std::string tpa_settings(const Task& t, const Profile& p) {

@@ -232,3 +232,105 @@ TEST(LinearProbe, FewerRowsThanUnknownsTakesTheLeastNormExactFit) {
 
 }  // namespace
 }  // namespace sirl
+
+namespace sirl {
+namespace {
+
+// x [m, m] · sol = b by Gaussian elimination with partial pivoting (the test's own solver).
+std::vector<double> solve_dense(std::vector<double> A, std::vector<double> b, int m) {
+  for (int c = 0; c < m; ++c) {
+    int piv = c;
+    for (int r = c + 1; r < m; ++r)
+      if (std::abs(A[size_t(r * m + c)]) > std::abs(A[size_t(piv * m + c)])) piv = r;
+    for (int k = 0; k < m; ++k) std::swap(A[size_t(c * m + k)], A[size_t(piv * m + k)]);
+    std::swap(b[size_t(c)], b[size_t(piv)]);
+    for (int r = c + 1; r < m; ++r) {
+      const double f = A[size_t(r * m + c)] / A[size_t(c * m + c)];
+      for (int k = c; k < m; ++k) A[size_t(r * m + k)] -= f * A[size_t(c * m + k)];
+      b[size_t(r)] -= f * b[size_t(c)];
+    }
+  }
+  std::vector<double> x(static_cast<size_t>(m));
+  for (int r = m - 1; r >= 0; --r) {
+    double s = b[size_t(r)];
+    for (int k = r + 1; k < m; ++k) s -= A[size_t(r * m + k)] * x[size_t(k)];
+    x[size_t(r)] = s / A[size_t(r * m + r)];
+  }
+  return x;
+}
+
+// Ridge with an unpenalised bias on rows `rows` of X [n, in], y [n]: (w, b) by the normal
+// equations of the centred rows.
+std::pair<std::vector<double>, double> ridge_fit(const std::vector<float>& X,
+                                                 const std::vector<float>& y, int in,
+                                                 const std::vector<int>& rows, double a) {
+  std::vector<double> xm(static_cast<size_t>(in), 0.0);
+  double ym = 0;
+  for (int i : rows) {
+    for (int j = 0; j < in; ++j) xm[size_t(j)] += X[size_t(i * in + j)] / double(rows.size());
+    ym += y[size_t(i)] / double(rows.size());
+  }
+  std::vector<double> A(size_t(in * in), 0.0), rhs(static_cast<size_t>(in), 0.0);
+  for (int i : rows)
+    for (int j = 0; j < in; ++j) {
+      const double xj = X[size_t(i * in + j)] - xm[size_t(j)];
+      rhs[size_t(j)] += xj * (y[size_t(i)] - ym);
+      for (int k = 0; k < in; ++k) A[size_t(j * in + k)] += xj * (X[size_t(i * in + k)] - xm[size_t(k)]);
+    }
+  for (int j = 0; j < in; ++j) A[size_t(j * in + j)] += a;
+  const std::vector<double> w = solve_dense(A, rhs, in);
+  double b = ym;
+  for (int j = 0; j < in; ++j) b -= w[size_t(j)] * xm[size_t(j)];
+  return {w, b};
+}
+
+TEST(RidgeProbe, ItsLeaveOneOutErrorIsThatOfRefittingWithoutEachRow) {
+  // 12 rows of 20 inputs (wider than the rows, as the raw reference's): for every candidate
+  // weight, the closed-form leave-one-out error must equal refitting 12 times without each row
+  // (by the test's own normal equations), and the probe must pick the smallest.
+  Rng rng(4);
+  const int n = 12, in = 20;
+  std::vector<float> X(static_cast<size_t>(n * in)), y(static_cast<size_t>(n));
+  for (float& x : X) x = float(rng.normal());
+  for (int i = 0; i < n; ++i)
+    y[size_t(i)] = X[size_t(i * in)] - 0.5f * X[size_t(i * in + 3)] + 0.1f * float(rng.normal());
+  const RidgeProbe p = fit_ridge_probe_loocv(X.data(), y.data(), n, in, 1);
+  double scale = 0;  // mean squared singular value of the centred X over its rank (n − 1)
+  {
+    std::vector<int> all(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) all[size_t(i)] = i;
+    std::vector<double> xm(static_cast<size_t>(in), 0.0);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < in; ++j) xm[size_t(j)] += X[size_t(i * in + j)] / n;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < in; ++j) scale += std::pow(X[size_t(i * in + j)] - xm[size_t(j)], 2);
+    scale /= (n - 1);
+  }
+  double best = INFINITY, best_a = 0;
+  for (int e = -8; e <= 2; ++e) {
+    const double a = scale * std::pow(10.0, e);
+    double loo = 0;
+    for (int out = 0; out < n; ++out) {
+      std::vector<int> rows;
+      for (int i = 0; i < n; ++i)
+        if (i != out) rows.push_back(i);
+      const auto [w, b] = ridge_fit(X, y, in, rows, a);
+      double pred = b;
+      for (int j = 0; j < in; ++j) pred += w[size_t(j)] * X[size_t(out * in + j)];
+      loo += std::pow(pred - y[size_t(out)], 2) / n;
+    }
+    if (loo < best) best = loo, best_a = a;
+  }
+  EXPECT_NEAR(p.weight / best_a, 1.0, 1e-9);
+  EXPECT_NEAR(p.loo_mse, best, 1e-9 * best);
+  // The probe's weights are the ridge fit on every row at that weight.
+  std::vector<int> all;
+  for (int i = 0; i < n; ++i) all.push_back(i);
+  const auto [w, b] = ridge_fit(X, y, in, all, best_a);
+  for (int j = 0; j < in; ++j) EXPECT_NEAR(p.probe.weights[size_t(j)], w[size_t(j)], 1e-9);
+  EXPECT_NEAR(p.probe.weights[size_t(in)], b, 1e-9);
+  EXPECT_THROW(fit_ridge_probe_loocv(X.data(), y.data(), 1, in, 1), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sirl
