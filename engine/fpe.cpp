@@ -31,8 +31,8 @@ FpeResult evaluate_fpe(const Representation& rep, const Dataset& d, const FpeSpl
   FpeResult r;
   LinearProbe probe;
   if (rep.method == Method::raw) {
-    RidgeProbe ridge = fit_ridge_probe_loocv(e_tr.data(), y_tr.data(), int(split.train.size()),
-                                             dim, F);
+    RidgeProbe ridge =
+        fit_ridge_probe_loocv(e_tr.data(), y_tr.data(), int(split.train.size()), dim, F);
     probe = std::move(ridge.probe);
     r.ridge_weight = ridge.weight;
   } else {

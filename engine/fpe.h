@@ -7,8 +7,8 @@
 namespace sirl {
 
 struct FpeResult {
-  double fpe = 0;        // test MSE over the 20 % split, mean over test rows × features
-  double train_mse = 0;  // the probe's fit on its own 80 %
+  double fpe = 0;           // test MSE over the 20 % split, mean over test rows × features
+  double train_mse = 0;     // the probe's fit on its own 80 %
   double ridge_weight = 0;  // the raw reference's ridge weight (0: least squares)
 };
 

@@ -150,7 +150,7 @@ GcSummary collect_garbage(const fs::path& dir, const std::set<std::string>& keep
     }
   };
   sweep(dir);
-  sweep(dir / "checkpoints");
+  if (!fs::is_symlink(dir / "checkpoints")) sweep(dir / "checkpoints");  // links: never followed
   if (!dry_run && fs::is_directory(dir / "locks"))
     for (const auto& e : fs::directory_iterator(dir / "locks")) {
       const std::string name = e.path().filename().string();

@@ -112,8 +112,20 @@ TrainingSnapshot record_snapshot(const TaskRecord& r) {
   return s;
 }
 
+namespace {
+// The checkpoint folder is the cache's own: a symbolic link there would make the store read and
+// delete files in whatever folder it points to.
+std::filesystem::path own_folder(std::filesystem::path dir) {
+  if (std::filesystem::is_symlink(dir))
+    throw std::runtime_error(dir.string() +
+                             " is a symbolic link: the task cache never follows links inside "
+                             "itself (its files would be deleted elsewhere); remove the link");
+  return dir;
+}
+}  // namespace
+
 CheckpointStore::CheckpointStore(std::filesystem::path dir, double interval_seconds)
-    : store_(std::move(dir)), interval_(interval_seconds) {}
+    : store_(own_folder(std::move(dir))), interval_(interval_seconds) {}
 
 std::unique_ptr<Checkpointer> CheckpointStore::for_task(const std::string& id,
                                                         const std::string& label) {

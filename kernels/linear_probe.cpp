@@ -52,7 +52,8 @@ RidgeProbe fit_ridge_probe_loocv(const float* X, const float* Y, int n, int in, 
     lambda(j) = all(keep[size_t(j)]);
   }
   const MatD Z = primal ? MatD(xc * E) : MatD(E * lambda.cwiseSqrt().asDiagonal());
-  const MatD Q = primal ? E : MatD(xc.transpose() * E * lambda.cwiseSqrt().cwiseInverse().asDiagonal());
+  const MatD Q =
+      primal ? E : MatD(xc.transpose() * E * lambda.cwiseSqrt().cwiseInverse().asDiagonal());
   const MatD Zty = Z.transpose() * yc;  // [k, out]
   const double scale = k ? lambda.sum() / k : 1.0;
   RidgeProbe best;
@@ -61,7 +62,7 @@ RidgeProbe fit_ridge_probe_loocv(const float* X, const float* Y, int n, int in, 
   for (int p = -8; p <= 2; ++p) {
     const double a = scale * std::pow(10.0, p);
     const Eigen::VectorXd shrink = (lambda.array() + a).inverse().matrix();  // 1/(λ + a)
-    const MatD gamma = shrink.asDiagonal() * Zty;                             // [k, out]
+    const MatD gamma = shrink.asDiagonal() * Zty;                            // [k, out]
     const MatD resid = yc - Z * gamma;
     // leverage of row i: Σ_j Z_ij² / (λ_j + a), plus 1/n for the fitted mean
     const Eigen::VectorXd h = (Z.array().square().matrix() * shrink).array() + 1.0 / n;

@@ -24,8 +24,8 @@ LinearProbe fit_linear_probe(const float* X, const float* Y, int n, int in, int 
 // error wins (closed form: residual / (1 − leverage)). Throws std::invalid_argument if n < 2.
 struct RidgeProbe {
   LinearProbe probe;
-  double weight = 0;         // the chosen ridge weight
-  double loo_mse = 0;        // its leave-one-out mean squared error
+  double weight = 0;   // the chosen ridge weight
+  double loo_mse = 0;  // its leave-one-out mean squared error
 };
 RidgeProbe fit_ridge_probe_loocv(const float* X, const float* Y, int n, int in, int out);
 

@@ -162,17 +162,28 @@ std::string commit_id(const fs::path& p) {
 
 }  // namespace
 
+bool TaskStore::is_commit_name(const std::string& name) {
+  return name.size() == 19 && name.ends_with(".h5") &&
+         name.find_first_not_of("0123456789abcdef") == 16;
+}
+
+bool TaskStore::is_temporary_name(const std::string& name) {
+  return name.size() >= 23 && name.ends_with(".tmp") && is_commit_name(name.substr(0, 19)) &&
+         name[19] == '.';
+}
+
 TaskStore::TaskStore(fs::path dir) : dir_(std::move(dir)) {
   std::error_code ec;
   fs::create_directories(dir_, ec);
   if (ec) throw H5Error(dir_.string() + ": cannot create the task directory: " + ec.message());
   for (const auto& e : fs::directory_iterator(dir_)) {
     const auto name = e.path().filename().string();
-    if (name.ends_with(".tmp")) {
+    if (e.is_symlink()) continue;  // never followed, never removed
+    if (is_temporary_name(name)) {
       if (abandoned_tmp(name)) fs::remove(e.path(), ec);
       continue;
     }
-    if (!name.ends_with(".h5")) continue;
+    if (!is_commit_name(name)) continue;  // not the store's: left alone
     try {
       index_[commit_id(e.path())] = e.path();
     } catch (const H5Error&) {
@@ -186,7 +197,7 @@ std::vector<std::string> TaskStore::ids_in(const fs::path& dir) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) return ids;
   for (const auto& e : fs::directory_iterator(dir, ec)) {
-    if (!e.path().filename().string().ends_with(".h5")) continue;
+    if (e.is_symlink() || !is_commit_name(e.path().filename().string())) continue;
     try {
       ids.push_back(commit_id(e.path()));
     } catch (const H5Error&) {

@@ -18,8 +18,13 @@ namespace sirl {
 class TaskStore {
  public:
   // Opens (creating if needed) the directory and indexes the records already committed there.
-  // Leftover temporary files of an interrupted commit are removed.
+  // Leftover temporary files of an interrupted commit are removed. Only files named as the store
+  // names its own ("<16 hex digits>.h5", and their temporary names) are read or ever removed:
+  // anything else in the folder (a results file, notes) is left alone.
   explicit TaskStore(std::filesystem::path dir);
+  // Whether a file name is one the store writes: a commit, or a commit's temporary file.
+  static bool is_commit_name(const std::string& name);
+  static bool is_temporary_name(const std::string& name);
   const std::filesystem::path& dir() const { return dir_; }
   // Whether a record is filed under `id`: in this object's index, or committed since by another
   // process (then indexed).

@@ -275,7 +275,8 @@ std::pair<std::vector<double>, double> ridge_fit(const std::vector<float>& X,
     for (int j = 0; j < in; ++j) {
       const double xj = X[size_t(i * in + j)] - xm[size_t(j)];
       rhs[size_t(j)] += xj * (y[size_t(i)] - ym);
-      for (int k = 0; k < in; ++k) A[size_t(j * in + k)] += xj * (X[size_t(i * in + k)] - xm[size_t(k)]);
+      for (int k = 0; k < in; ++k)
+        A[size_t(j * in + k)] += xj * (X[size_t(i * in + k)] - xm[size_t(k)]);
     }
   for (int j = 0; j < in; ++j) A[size_t(j * in + j)] += a;
   const std::vector<double> w = solve_dense(A, rhs, in);

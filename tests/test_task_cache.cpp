@@ -17,6 +17,7 @@
 #include "experiment/profile.h"
 #include "experiment/task_digest.h"
 #include "jobs/task_cache.h"
+#include "jobs/task_checkpoints.h"
 #include "results/h5.h"
 #include "tests/scratch_dir.h"
 #include "tests/small_profile.h"
@@ -144,6 +145,43 @@ TEST(TaskCache, OpeningSweepsAbandonedTemporaryFilesButNotALiveWritersOnes) {
   EXPECT_FALSE(fs::exists(dir / dead));
   EXPECT_TRUE(fs::exists(dir / elsewhere));
   EXPECT_FALSE(fs::exists(dir / legacy));
+}
+
+// A cache folder may hold the user's own files (a results file, notes): opening it, running and
+// gc never read or remove what the store did not write, and a checkpoints/ folder that is a
+// symbolic link is refused, not emptied (issue 57: both deleted files before).
+TEST(TaskCache, NothingTheCacheDidNotWriteIsEverRemoved) {
+  const test::ScratchDir scratch;
+  const fs::path dir = scratch.path() / "c", elsewhere = scratch.path() / "elsewhere";
+  fs::create_directories(dir);
+  fs::create_directories(elsewhere);
+  const std::vector<std::string> mine{"base.h5",
+                                      "notes.h5",
+                                      "notes.tmp",
+                                      "run.h5.tmp",
+                                      "0123456789ABCDEF.h5",
+                                      "0123456789abcdef.h5.bak"};
+  for (const auto& n : mine) std::ofstream(dir / n) << "the user's " << n;
+  std::ofstream(elsewhere / "thesis.h5") << "not the cache's";
+  std::ofstream(elsewhere / "0123456789abcdef.h5") << "named like a commit, but not the cache's";
+  {
+    TaskCache cache(dir);
+    cache.store().commit(cache_record("k"), TaskCache::id(kDigestA, "zen5"));
+  }
+  fs::create_directory_symlink(elsewhere, dir / "checkpoints");
+  EXPECT_THROW(CheckpointStore(dir / "checkpoints", 0), std::runtime_error);
+  TaskStore reopened(dir);
+  EXPECT_EQ(reopened.keys().size(), 1u);
+  const GcSummary s = collect_garbage(dir, {}, false);
+  EXPECT_EQ(s.removed, 1);  // the one commit
+  for (const auto& n : mine) {
+    std::ifstream in(dir / n);
+    std::string text;
+    std::getline(in, text);
+    EXPECT_EQ(text, "the user's " + n) << n << " was removed or changed";
+  }
+  EXPECT_TRUE(fs::exists(elsewhere / "thesis.h5"));
+  EXPECT_TRUE(fs::exists(elsewhere / "0123456789abcdef.h5"));
 }
 
 TEST(TaskCache, VerifyNamesAndRemovesADamagedResult) {
