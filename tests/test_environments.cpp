@@ -216,7 +216,7 @@ M = [16]
     EXPECT_EQ(r.key.rfind("toyline/s0/", 0), 0u) << r.key;
     kinds.insert(r.kind);
   }
-  EXPECT_EQ(kinds, (std::set<std::string>{"rep", "fpe", "tpa"}));
+  EXPECT_EQ(kinds, (std::set<std::string>{"rep", "fpe", "tpa", "tpa_linear"}));
   for (const auto& r : records) {
     if (r.kind == "fpe") {
       EXPECT_TRUE(std::isfinite(r.num.at("fpe")));

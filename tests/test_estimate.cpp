@@ -24,6 +24,7 @@ TEST(Estimate, AddsEachTasksFlopsOverItsKindsRate) {
     std::string kind = t.kind.name();
     if (t.kind == rep_kind()) kind = t.variant.method == Method::sirl ? "rep_sirl" : "rep_pref";
     if (t.kind == tpa_kind()) kind = t.frozen ? "tpa_frozen" : "tpa_unfrozen";
+    if (t.kind == linear_tpa_kind()) kind = "fpe";  // timed at the probe's rate
     const auto it = e.gflops_per_s.find(t.env + "/" + kind);
     const double rate = it == e.gflops_per_s.end() ? 1e9 : std::max(it->second, 1e-3) * 1e9;
     const auto once = e.call_seconds.find(t.env + "/" + kind);

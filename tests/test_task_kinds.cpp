@@ -27,7 +27,8 @@ TEST(TaskKinds, EveryKindIsRegisteredOnceByNameWithItsOwnTable) {
   // Each kind's file registered it, in name order, whatever order the files were linked in.
   EXPECT_EQ(names, (std::vector<std::string>{"active", "fpe", "rep", "robust_fpe", "robust_tpa",
                                              "study_analysis", "study_heldout", "study_rep",
-                                             "study_simulated", "study_tpa", "tpa", "vae"}));
+                                             "study_simulated", "study_tpa", "tpa", "tpa_linear",
+                                             "vae"}));
   EXPECT_EQ(tables, (std::set<std::string>{"fpe", "tpa", "robust_fpe", "robust_tpa", "study"}));
   EXPECT_STREQ(TaskKind(tpa_kind()).name(), "tpa");
   EXPECT_TRUE(TaskKind(tpa_kind()) == tpa_kind());
@@ -44,7 +45,7 @@ TEST(TaskKinds, ARegistrationWithAFunctionMissingOrANameTakenIsRefused) {
   copy.run = fpe_kind().run;
   copy.complete_fields = nullptr;  // an upgrade test without its step
   EXPECT_THROW(TaskKindRegistration{copy}, std::logic_error);
-  EXPECT_EQ(task_kinds().size(), 12u);  // nothing was added
+  EXPECT_EQ(task_kinds().size(), 13u);  // nothing was added
 }
 
 // Two TPA cells that differ in one field are two tasks: a key scheme that dropped a field would
