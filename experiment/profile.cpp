@@ -842,9 +842,10 @@ namespace {
 Profile parse_profile_table(const toml::table& root, const std::string& text,
                             const std::string& path) {
   Reader r(root, path);
-  std::set<std::string> top{"name",    "description", "envs",   "seeds",     "queries",
-                            "teacher", "fpe",         "tpa",    "ablation",  "hyper",
-                            "study",   "robustness",  "active", "precision", "external"};
+  std::set<std::string> top{"name",     "description", "envs",     "seeds",
+                            "queries",  "teacher",     "fpe",      "tpa",
+                            "ablation", "hyper",       "study",    "robustness",
+                            "active",   "precision",   "external", "references"};
   for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
   r.only_keys(root, "the profile", top);
   Profile p;
@@ -862,6 +863,11 @@ Profile parse_profile_table(const toml::table& root, const std::string& text,
   }
   parse_data_tables(r, root, p.data);
   p.precision = r.string(root, "precision", "fp32");
+  if (const toml::node* n = root.get("references")) {
+    if (!n->is_boolean())
+      r.fail(n, "references must be true (the default: truth and raw beside the methods) or false");
+    p.references = *n->value<bool>();
+  }
   try {
     validate_precision(p.precision);
   } catch (const std::invalid_argument& e) {

@@ -121,6 +121,9 @@ struct Profile {
   // engine/linear_tpa.h). Default: both. [ablation] and [robustness] cells are the paper's.
   std::vector<std::string> tpa_protocols{"paper", "linear"};
   bool runs_protocol(const std::string& protocol) const;
+  // Top-level `references = false` leaves the references truth and raw out (default: in every
+  // FPE and TPA table; docs/linear-evaluation.md).
+  bool references = true;
   // Fig. 7: every listed method × {frozen, unfrozen} × {no VAE, VAE} (where VAE applies).
   std::vector<Method> ablation_methods;
   std::vector<int64_t> ablation_N, ablation_M;

@@ -40,6 +40,7 @@ void add_linear_cell(Plan& plan, const Profile& p, const std::string& env, int64
 // cells; where it has [tpa] cells, truth under the paper's head and both under linear evaluation.
 void add_reference_cells(Plan& plan, const Profile& p, const std::string& env, int64_t seed,
                          const std::string& point) {
+  if (!p.references) return;
   const EnvAxes& axes = p.axes.at(env);
   for (Method m : {Method::truth, Method::raw}) {
     const Variant v{m};

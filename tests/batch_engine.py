@@ -186,7 +186,9 @@ with tempfile.TemporaryDirectory() as tmp:
         for c in ("env", "variant"):
             fpe[c] = fpe[c].str.decode("utf-8")
         checked = 0
-        for _, row in fpe[fpe.seed == 0].iterrows():
+        # The references (truth, raw) have no rep task: tests/test_linear_tpa.cpp checks them.
+        methods = fpe[fpe.reference == 0] if "reference" in fpe else fpe
+        for _, row in methods[methods.seed == 0].iterrows():
             g = f"datasets/{row.env}"
             key = f"{row.env}/s0/{row.variant}" + (f"/N{row.N}" if row.N else "") + "/rep"
             E = f[f"runs/{key}/embedding"][:].astype(np.float64)
