@@ -499,9 +499,9 @@ void run_linear_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   r.arrays["train_accuracy"] = TaskRecord::Array::of(floats(res.train_accuracy));
   r.arrays["newton_iterations"] = TaskRecord::Array::of(floats(res.iterations));
   r.arrays["span_rank"] = TaskRecord::Array::of(floats(res.rank));
-  double train_mean = 0;
-  for (double a : res.train_accuracy) train_mean += a / double(res.train_accuracy.size());
-  r.num["tpa_train"] = train_mean;
+  double own_pairs = 0;  // accuracy on the heads' own training pairs
+  for (double a : res.train_accuracy) own_pairs += a / double(res.train_accuracy.size());
+  r.num["tpa_train"] = own_pairs;
   r.num["newton_iterations"] = *std::max_element(res.iterations.begin(), res.iterations.end());
   // Not "converged": that names a training's loss curve (/tables/training).
   r.num["newton_converged"] = res.converged;

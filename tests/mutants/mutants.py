@@ -127,7 +127,7 @@ MUTANTS = [
      'TaskStore.*', 'a commit read without checking its checksum (HDF5 crashes)'),
     ("results/study_store.cpp", "    f.close();  // a full disk shows here, not silently in a destructor", "",
      "ctest:disk_full", "a study file's failed write reported as success"),
-    ("results/task_store.cpp", "    if (name.ends_with(\".tmp\")) {", "    if (name.ends_with(\".tmpx\")) {",
+    ("results/task_store.cpp", "    if (is_temporary_name(name)) {", "    if (false && is_temporary_name(name)) {",
      "TaskStore.*", "torn commits not swept"),
     # engine/ — training checkpoints; kernels/ — the libxsmm GEMM; app/ — the study server
     ("engine/train_vae.cpp", "                                snap.get_rng(\"vae/noise\", noise);\n", "",
@@ -226,7 +226,7 @@ MUTANTS = [
      "std::copy_n(rep.table.begin() + ptrdiff_t(rows[i]) * dim, dim, out.begin() + i * dim);",
      "std::copy_n(rep.table.begin() + ptrdiff_t(rows[i] ^ 1) * dim, dim, out.begin() + i * dim);",
      "ExternalRepresentation.*:Fpe.*:Tpa.*", "a neighbouring row of φ(Ξ) looked up"),
-    ("experiment/profile.cpp", "  if (v.method == Method::external) return {true};  // no weights to fine-tune",
+    ("experiment/profile.cpp", "  if (v.method == Method::external || is_reference(v.method)) return {true};  // no weights",
      "", "ProfileExternal.*", "external methods given the grid's unfrozen cells"),
     ("experiment/profile.cpp", "      merge_into(*b->as_table(), std::move(*v.as_table()));",
      "      base.insert_or_assign(k, std::move(v));", "ProfileCompose.*",
