@@ -14,6 +14,7 @@
 - `sirl plan --cache` counts what the cache holds; `sirl gc` keeps what a profile needs and
   removes the rest.
 """
+import collections
 import glob
 import json
 import os
@@ -309,9 +310,15 @@ def main():
 
         # 5. A corrupted result: named, removed, computed again.
         # A task of smoke's own plan that no earlier --set step filed under another digest.
+        # (A key filed twice, e.g. under the stop rule's settings, may be the copy smoke never reads.)
         entries = sorted(cache_keys(cache).items())
-        fixed = [e for e in entries if e[1] == "grid/s0/sirl/N100/fpe"]
-        victim_file, victim_key = fixed[0] if fixed else entries[7]
+        count = collections.Counter(k for _, k in entries)
+        smoke_tasks = plan_inputs(SMOKE)
+        candidates = [e for e in entries if count[e[1]] == 1 and e[1] in smoke_tasks]
+        if not candidates:
+            fail("no task of smoke's plan is filed exactly once in the cache")
+        fixed = [e for e in candidates if e[1] == "grid/s0/sirl/N100/fpe"]
+        victim_file, victim_key = fixed[0] if fixed else candidates[0]
         with open(os.path.join(cache, victim_file), "r+b") as f:
             f.seek(-100, os.SEEK_END)
             b = f.read(1)
