@@ -361,7 +361,9 @@ void register_inspect(CLI::App& app, Runner& run) {
   static std::string file, env = "grid";
   auto* cmd = app.add_subcommand(
       "inspect", "Read a dataset file back (checking every shape and type) and summarise it");
-  cmd->add_option("file", file, "HDF5 file written by `sirl dataset`")->required();
+  cmd->add_option("file", file, "HDF5 file written by `sirl dataset`")
+      ->required()
+      ->check(CLI::ExistingFile);
   cmd->add_option("--env", env, "Environment group to read")
       ->check(CLI::IsMember(env_choices()))
       ->capture_default_str();

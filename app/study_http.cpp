@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "app/study_service.h"
 
@@ -40,15 +41,36 @@ std::string bad_framing(const httplib::Request& r) {
   return "";
 }
 
+// Only `POST /api/answer` takes a body, read by its own bounded reader. cpp-httplib reads any
+// other request's body whole before routing it (chunked: unbounded; a POST, PUT, PATCH or DELETE
+// without Content-Length: until the client closes), so a request elsewhere that announces one,
+// or a body-carrying method that gives no length, is refused before a byte of it is read.
+// Returns {status, why}, or {0, ""}.
+std::pair<int, std::string> unwanted_body(const httplib::Request& r) {
+  const bool chunked = r.has_header("Transfer-Encoding");
+  // bad_framing has made sure a Content-Length is decimal digits: a non-zero digit means a body.
+  const bool sized =
+      r.get_header_value("Content-Length").find_first_not_of('0') != std::string::npos;
+  const bool takes_body = r.method == "POST" || r.method == "PUT" || r.method == "PATCH" ||
+                          r.method == "DELETE" || r.method == "PRI";
+  const bool answer = r.method == "POST" && r.path == "/api/answer";
+  if (!answer && (chunked || sized))
+    return {413, "only POST /api/answer takes a request body"};
+  if (takes_body && !chunked && !r.has_header("Content-Length"))
+    return {411, "a request body needs Content-Length or chunked transfer encoding"};
+  return {0, ""};
+}
+
 }  // namespace
 
 void configure_study_http(httplib::Server& srv, StudyService& service, const fs::path& web) {
   srv.set_payload_max_length(kMaxAnswerBody);  // a declared longer body: 413, never read
   srv.set_pre_routing_handler([](const httplib::Request& r, httplib::Response& res) {
-    const std::string why = bad_framing(r);
-    if (why.empty()) return httplib::Server::HandlerResponse::Unhandled;
+    std::pair<int, std::string> refusal{400, bad_framing(r)};
+    if (refusal.second.empty()) refusal = unwanted_body(r);
+    if (refusal.second.empty()) return httplib::Server::HandlerResponse::Unhandled;
     res.set_header("Connection", "close");  // the unread body must not be parsed as a request
-    json_reply(res, error_reply(400, why));
+    json_reply(res, error_reply(refusal.first, refusal.second));
     return httplib::Server::HandlerResponse::Handled;
   });
   // Slow or idle clients must not starve a participant: each connection holds a worker thread

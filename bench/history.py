@@ -106,13 +106,34 @@ def add_night(con, meta, speed, science=(), digests=()):
 
 def night_from_json(night):
     """The store's view of a bench/nightly JSON night (repetitions when it kept them, else its
-    medians as one repetition each)."""
+    medians as one repetition each). Raises HistoryError on a night of another shape (a list
+    root, strings or non-finite values where numbers belong, a benchmark without its seconds)."""
+    if not isinstance(night, dict):
+        raise HistoryError(f"a night is a JSON object, not {type(night).__name__}")
+    try:
+        meta, speed, science, digests = _night_parts(night)
+        for field in ("label", "time", "git_commit", "host", "cpu_class"):
+            meta[field] = str(meta[field])
+        meta["cores"] = int(meta["cores"])
+    except (TypeError, ValueError, KeyError, AttributeError) as e:
+        raise HistoryError(f"not a bench/nightly night ({type(e).__name__}: {e})")
+    for name, reps in speed.items():
+        if not reps or not all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                               and math.isfinite(x) and x >= 0 for x in reps):
+            raise HistoryError(f"benchmark {name}: its seconds must be finite numbers ≥ 0")
+    for prof, _, metric, _, value in science:
+        if not math.isfinite(value):
+            raise HistoryError(f"{prof}: metric {metric} is {value}, not a finite number")
+    return meta, speed, science, digests
+
+
+def _night_parts(night):
     meta = {"label": night.get("date", "?"), "time": night.get("time", night.get("date", "?")),
             "git_commit": night.get("git_commit", "?"), "host": night.get("host", "?"),
             "cpu_class": night.get("cpu_class", "?"), "cores": night.get("cores", 0)}
     speed = {}
     for name, v in night.get("micro", {}).items():
-        speed[name] = v.get("repetitions") or [v["seconds"]]
+        speed[str(name)] = list(v.get("repetitions") or [v["seconds"]])
     for name, v in night.get("torch", {}).items() if isinstance(night.get("torch"), dict) else []:
         if isinstance(v, dict) and "ms" in v:  # the PyTorch baseline's cases: their medians
             speed["torch/" + name] = [v["ms"] * 1e-3]
@@ -131,8 +152,14 @@ def night_from_json(night):
             else:
                 science.append((prof, pd, metric, -1, float(value)))  # the mean only
         for tbl, d in p.get("digests", {}).items():
-            digests.append((prof, pd, tbl, d))
+            digests.append((prof, str(pd), str(tbl), str(d)))
     return meta, speed, science, digests
+
+
+def _plain(text):
+    """`text` for a matplotlib label, drawn as written: a '$' would start mathtext, and a name
+    such as '$\\frac{1}{$' would make the figure fail to draw."""
+    return str(text).replace("$", r"\$")
 
 
 # ----------------------------------------------------------------------------------- analysis
@@ -375,9 +402,10 @@ def dashboard(con, out, k=K_DEFAULT, floor=FLOOR_DEFAULT, alpha=ALPHA_DEFAULT):
                 i = [x[0]["label"] for x in s].index(step["night"])
                 ax.axvline(i - 0.5, color="#d62728", ls="--", lw=1)
             ax.set_xticks(range(len(s)))
-            ax.set_xticklabels([last_commit(n)[:7] for n, _ in s], rotation=90, fontsize=6)
+            ax.set_xticklabels([_plain(last_commit(n)[:7]) for n, _ in s], rotation=90,
+                               fontsize=6)
             ax.set_ylabel("seconds (median)")
-            ax.set_title(f"{b} — {cls}", fontsize=8)
+            ax.set_title(_plain(f"{b} — {cls}"), fontsize=8)
             ax.grid(alpha=0.3)
             name = f"c{ci}-speed-{len(body)}.png"
             fig.savefig(os.path.join(out, name), dpi=110, bbox_inches="tight")
@@ -398,8 +426,9 @@ def dashboard(con, out, k=K_DEFAULT, floor=FLOOR_DEFAULT, alpha=ALPHA_DEFAULT):
             fig, ax = plt.subplots(figsize=(8, 2.2))
             ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", ms=3, color="#2ca02c")
             ax.set_xticks(range(len(same)))
-            ax.set_xticklabels([last_commit(n)[:7] for n in same], rotation=90, fontsize=6)
-            ax.set_title(f"{m} — {cls}", fontsize=8)
+            ax.set_xticklabels([_plain(last_commit(n)[:7]) for n in same], rotation=90,
+                               fontsize=6)
+            ax.set_title(_plain(f"{m} — {cls}"), fontsize=8)
             ax.grid(alpha=0.3)
             name = f"c{ci}-science-{len(body)}.png"
             fig.savefig(os.path.join(out, name), dpi=110, bbox_inches="tight")
@@ -452,7 +481,11 @@ def main(argv=None):
                         night = json.load(open(path))
                     except (OSError, json.JSONDecodeError) as e:
                         raise HistoryError(f"{path}: {e}")
-                    add_night(con, *night_from_json(night))
+                    try:
+                        parts = night_from_json(night)
+                    except HistoryError as e:
+                        raise HistoryError(f"{path}: {e}")
+                    add_night(con, *parts)
                     print(f"history: filed {path}")
                 return 0
             if a.cmd == "check":

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -982,15 +983,30 @@ void merge_into(toml::table& base, toml::table&& over) {
 std::filesystem::path find_profile(const std::string& path_or_name,
                                    const std::filesystem::path& near = {});
 
+// What resolving one profile's `extends` has seen: the chain being resolved (a cycle), and every
+// file already resolved (a file reached twice, e.g. two parents sharing a grandparent, is read
+// once: without this a chain where each file names the next twice costs 2^depth reads).
+struct ResolveState {
+  std::vector<std::string> chain;
+  std::map<std::string, toml::table> resolved;
+  bool composed = false;
+};
+// Deeper `extends` chains than this are refused (no honest profile comes near it).
+constexpr size_t kMaxExtendsDepth = 32;
+
 // A profile file with its parents (`extends = "quick"` or a list, merged left to right, then the
-// file's own keys on top), resolved recursively; `chain` catches a cycle.
-toml::table resolve_profile(const std::filesystem::path& file, std::vector<std::string>& chain,
-                            bool& composed) {
+// file's own keys on top), resolved recursively.
+toml::table resolve_profile(const std::filesystem::path& file, ResolveState& st) {
   namespace fs = std::filesystem;
+  std::vector<std::string>& chain = st.chain;
   const std::string id = fs::weakly_canonical(file).string();
   if (std::find(chain.begin(), chain.end(), id) != chain.end())
     throw ProfileError(file.string() + ": `extends` makes a cycle (" + chain.front() + " → … → " +
                        id + ")");
+  if (auto it = st.resolved.find(id); it != st.resolved.end()) return it->second;
+  if (chain.size() >= kMaxExtendsDepth)
+    throw ProfileError(file.string() + ": `extends` nests deeper than " +
+                       std::to_string(kMaxExtendsDepth) + " profiles (from " + chain.front() + ")");
   chain.push_back(id);
   std::ifstream in(file);
   std::stringstream ss;
@@ -1000,9 +1016,10 @@ toml::table resolve_profile(const std::filesystem::path& file, std::vector<std::
   const toml::node* ext = own.get("extends");
   if (!ext) {
     chain.pop_back();
+    st.resolved.emplace(id, own);
     return own;
   }
-  composed = true;
+  st.composed = true;
   std::vector<std::string> parents;
   auto bad = [&] {
     throw ProfileError(file.string() + ":" + std::to_string(ext->source().begin.line) +
@@ -1021,10 +1038,11 @@ toml::table resolve_profile(const std::filesystem::path& file, std::vector<std::
   if (parents.empty()) bad();
   toml::table merged;
   for (const auto& parent : parents)
-    merge_into(merged, resolve_profile(find_profile(parent, file.parent_path()), chain, composed));
+    merge_into(merged, resolve_profile(find_profile(parent, file.parent_path()), st));
   own.erase("extends");
   merge_into(merged, std::move(own));
   chain.pop_back();
+  st.resolved.emplace(id, merged);
   return merged;
 }
 
@@ -1046,10 +1064,9 @@ toml::table parse_setting(const std::string& setting) {
 
 Profile load_profile(const std::string& path_or_name, const std::vector<std::string>& settings) {
   const std::filesystem::path file = find_profile(path_or_name);
-  std::vector<std::string> chain;
-  bool composed = false;
-  toml::table root = resolve_profile(file, chain, composed);
-  if (!composed && settings.empty()) {  // the file as written is the profile's text
+  ResolveState st;
+  toml::table root = resolve_profile(file, st);
+  if (!st.composed && settings.empty()) {  // the file as written is the profile's text
     std::ifstream in(file);
     std::stringstream ss;
     ss << in.rdbuf();
@@ -1058,7 +1075,7 @@ Profile load_profile(const std::string& path_or_name, const std::vector<std::str
   for (const auto& s : settings) merge_into(root, parse_setting(s));
   // The resolved profile is the one recorded (results, resume, merge): one self-contained text.
   std::ostringstream text;
-  text << "# " << file.string() << (composed ? " with its parents (extends)" : "");
+  text << "# " << file.string() << (st.composed ? " with its parents (extends)" : "");
   for (const auto& s : settings) text << ", --set " << s;
   text << ", resolved\n" << root << "\n";
   return parse_profile_table(root, text.str(), file.string());

@@ -95,7 +95,9 @@ void parse_shard(const std::string& text, int& index, int& count) {
     // Digits, one slash, digits: nothing else (no spaces, signs or hex).
     if (slash == std::string::npos || slash == 0 || slash + 1 == text.size() || text.size() > 19 ||
         text.find_first_not_of("0123456789/") != std::string::npos ||
-        text.find('/', slash + 1) != std::string::npos)
+        text.find('/', slash + 1) != std::string::npos ||
+        // One spelling per shard ("00/2" is "0/2": two runs must not file one shard twice).
+        (text[0] == '0' && slash > 1) || (text[slash + 1] == '0' && slash + 2 < text.size()))
       throw std::invalid_argument("");
     size_t p1 = 0, p2 = 0;
     index = std::stoi(text.substr(0, slash), &p1);

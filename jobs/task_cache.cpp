@@ -45,9 +45,25 @@ std::string host_name() {
   return buf;
 }
 
+// Takes the cache's gate (gc.lock, see task_cache.h) in mode `how` (LOCK_SH or LOCK_EX),
+// waiting for it; returns its descriptor (closing it releases the lock).
+int take_gate(const fs::path& dir, int how) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  const int fd = open_lock_file(dir / "gc.lock");
+  while (::flock(fd, how) != 0)
+    if (errno != EINTR) {
+      const int err = errno;
+      ::close(fd);
+      throw std::runtime_error((dir / "gc.lock").string() + ": cannot lock: " +
+                               std::strerror(err));
+    }
+  return fd;
+}
+
 }  // namespace
 
-TaskCache::TaskCache(fs::path dir) : store_(std::move(dir)) {
+TaskCache::TaskCache(fs::path dir) : gate_fd_(take_gate(dir, LOCK_SH)), store_(std::move(dir)) {
   std::error_code ec;
   for (const char* sub : {"locks", "runs"}) {
     refuse_symlink((store_.dir() / sub).string());
@@ -57,6 +73,7 @@ TaskCache::TaskCache(fs::path dir) : store_(std::move(dir)) {
 }
 
 TaskCache::~TaskCache() {
+  if (gate_fd_ >= 0) ::close(gate_fd_);
   if (needs_fd_ >= 0) {
     std::error_code ec;
     fs::remove(needs_path_, ec);
@@ -88,6 +105,8 @@ void TaskCache::register_needs(const std::vector<std::string>& digests) {
   if (::ftruncate(needs_fd_, 0) != 0 ||
       ::pwrite(needs_fd_, text.data(), text.size(), 0) != ssize_t(text.size()))
     throw std::runtime_error(needs_path_.string() + ": cannot write: " + std::strerror(errno));
+  ::close(gate_fd_);  // declared: a sweep from now on keeps them
+  gate_fd_ = -1;
 }
 
 TaskCache::Claim::~Claim() {
@@ -115,6 +134,19 @@ TaskCache::Claim TaskCache::claim(const std::string& digest,
 
 GcSummary collect_garbage(const fs::path& dir, const std::set<std::string>& keep, bool dry_run) {
   if (!fs::is_directory(dir)) throw std::runtime_error(dir.string() + ": no such cache folder");
+  // Exclusive: no run is between listing the cache and declaring its needs while this sweeps.
+  // (A dry run of a folder it may not write proceeds without it: it removes nothing.)
+  struct Gate {
+    int fd = -1;
+    ~Gate() {
+      if (fd >= 0) ::close(fd);
+    }
+  } gate;
+  try {
+    gate.fd = take_gate(dir, LOCK_EX);
+  } catch (const std::runtime_error&) {
+    if (!dry_run) throw;
+  }
   std::set<std::string> needed = keep;
   std::set<std::string> held;  // needed by a running process
   std::error_code ec;

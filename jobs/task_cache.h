@@ -6,6 +6,9 @@
 //   <dir>/checkpoints/         trainings in progress, by digest (jobs/task_checkpoints.h)
 //   <dir>/locks/<digest>.lock  held (flock) while a process computes that task
 //   <dir>/runs/<host>.<pid>    the digests a running process needs, held (flock) while it runs
+//   <dir>/gc.lock              the gate: `sirl gc` holds it exclusively while it reads runs/ and
+//                              sweeps; a run holds it shared from before it lists the cache until
+//                              its needs are declared, so no sweep removes what a starting run saw
 // A task is computed by one process at a time: a second run that reaches it waits for the
 // first's commit and reads it. `sirl gc` removes what no given profile and no running process
 // needs.
@@ -24,7 +27,8 @@ namespace sirl {
 
 class TaskCache {
  public:
-  // Opens (creating) the directory. Throws H5Error if it cannot.
+  // Opens (creating) the directory, waiting while `sirl gc` sweeps it. Throws H5Error if it
+  // cannot.
   explicit TaskCache(std::filesystem::path dir);
   ~TaskCache();
   TaskCache(const TaskCache&) = delete;
@@ -39,7 +43,8 @@ class TaskCache {
   // one computed on another class; "" when there is none.
   std::string find(const std::string& digest, const std::string& cpu_class, bool any_class) const;
 
-  // Declares the digests this process needs until it ends (sirl gc keeps them).
+  // Declares the digests this process needs until it ends (sirl gc keeps them), and lets a
+  // waiting gc in.
   void register_needs(const std::vector<std::string>& digests);
 
   // Exclusive right to compute one task: waits while another process holds it.
@@ -57,6 +62,8 @@ class TaskCache {
   Claim claim(const std::string& digest, const std::function<void()>& waiting = {}) const;
 
  private:
+  int gate_fd_;  // gc.lock, held shared until register_needs (declared first: taken before the
+                 // store lists the folder)
   TaskStore store_;
   int needs_fd_ = -1;
   std::filesystem::path needs_path_;

@@ -21,18 +21,26 @@ FileLock::FileLock(const std::string& file, const std::string& holder, const std
     throw std::runtime_error(path_ + ": cannot create the lock file: " + std::strerror(errno));
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
-    char buf[32] = {};
+    char buf[128] = {};
     const ssize_t n = ::pread(fd_, buf, sizeof buf - 1, 0);
     ::close(fd_);
-    if (err == EWOULDBLOCK)
-      throw FileBusy(file + " is in use by another " + holder +
-                     (n > 0 ? " (pid " + std::string(buf, size_t(n)) + ")" : std::string()) + "; " +
-                     advice);
+    if (err == EWOULDBLOCK) {
+      // The holder wrote "<pid> <command>": name what actually holds it, not what we are.
+      const std::string text = n > 0 ? std::string(buf, size_t(n)) : std::string();
+      const size_t space = text.find(' ');
+      const std::string pid = text.substr(0, space);
+      const bool has_pid = !pid.empty() && pid.find_first_not_of("0123456789") == std::string::npos;
+      const std::string who = space != std::string::npos && text.substr(space + 1).starts_with("sirl ")
+                                  ? text.substr(space + 1)
+                                  : std::string("another sirl process");
+      throw FileBusy(file + " is in use by " + who + (has_pid ? " (pid " + pid + ")" : "") +
+                     "; " + advice);
+    }
     throw std::runtime_error(path_ + ": cannot lock: " + std::strerror(err));
   }
-  const std::string pid = std::to_string(::getpid());
-  if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, pid.data(), pid.size(), 0) < 0) {
-    // the lock holds without the pid; a second writer just cannot name us
+  const std::string me = std::to_string(::getpid()) + " " + holder;
+  if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, me.data(), me.size(), 0) < 0) {
+    // the lock holds without the note; a second writer just cannot name us
   }
 }
 

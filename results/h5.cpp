@@ -89,6 +89,22 @@ void write_any(hid_t file, const std::string& path, const std::string& name, hid
     fail(path, "cannot write dataset " + name);
 }
 
+// The engine stores every dataset's bytes inside its file. A dataset whose bytes live elsewhere
+// (HDF5 external raw storage, or a virtual dataset mapping other files) is refused before it is
+// read: a file's checksum would not cover them, and they could point at any file on the machine.
+bool storage_outside(hid_t ds, const std::string& path, const std::string& name) {
+  Hid dcpl(H5Dget_create_plist(ds), H5Pclose);
+  if (dcpl < 0) fail(path, "cannot read the storage of dataset " + name + " (file corrupt?)");
+  return H5Pget_external_count(dcpl) != 0 || H5Pget_layout(dcpl) == H5D_VIRTUAL;
+}
+
+void refuse_storage_outside(hid_t ds, const std::string& path, const std::string& name) {
+  if (storage_outside(ds, path, name))
+    throw H5Error(path + ": " + name +
+                  " keeps its values outside the file (external or virtual storage), which no "
+                  "checksum of the file covers: refused");
+}
+
 template <typename T>
 std::vector<T> read_any(hid_t file, const std::string& path, const std::string& name,
                         hid_t mem_type, H5T_class_t cls, const std::vector<int64_t>& expect,
@@ -96,6 +112,7 @@ std::vector<T> read_any(hid_t file, const std::string& path, const std::string& 
   if (H5Lexists(file, name.c_str(), H5P_DEFAULT) <= 0) fail(path, "missing dataset " + name);
   Hid ds(H5Dopen2(file, name.c_str(), H5P_DEFAULT), H5Dclose);
   if (ds < 0) fail(path, "cannot open dataset " + name + " (file corrupt?)");
+  refuse_storage_outside(ds, path, name);
   Hid ftype(H5Dget_type(ds), H5Tclose);
   if (H5Tget_class(ftype) != cls || H5Tget_size(ftype) != sizeof(T))
     // What the file holds, not a failed system call: no errno reason (a stale one misleads).
@@ -253,6 +270,14 @@ std::vector<uint64_t> H5File::dims(const std::string& name) const {
   return {d.begin(), d.end()};
 }
 
+bool H5File::stored_outside(const std::string& name) const {
+  quiet();
+  if (H5Lexists(id_, name.c_str(), H5P_DEFAULT) <= 0) fail(path_, "missing dataset " + name);
+  Hid ds(H5Dopen2(id_, name.c_str(), H5P_DEFAULT), H5Dclose);
+  if (ds < 0) fail(path_, "cannot open dataset " + name + " (file corrupt?)");
+  return storage_outside(ds, path_, name);
+}
+
 std::vector<float> H5File::read_f32(const std::string& n, const std::vector<int64_t>& e,
                                     std::vector<uint64_t>* d) const {
   return read_any<float>(id_, path_, n, H5T_NATIVE_FLOAT, H5T_FLOAT, e, d, "float32");
@@ -284,6 +309,8 @@ void H5File::write_strings(const std::string& name, const std::vector<std::strin
 std::vector<std::string> H5File::read_strings(const std::string& name) const {
   if (!exists(name)) fail(path_, "missing dataset " + name);
   Hid ds(H5Dopen2(id_, name.c_str(), H5P_DEFAULT), H5Dclose);
+  if (ds < 0) fail(path_, "cannot open dataset " + name + " (file corrupt?)");
+  refuse_storage_outside(ds, path_, name);
   Hid ftype(H5Dget_type(ds), H5Tclose);
   if (H5Tget_class(ftype) != H5T_STRING || H5Tis_variable_str(ftype) <= 0)
     fail(path_, name + " is not a string dataset");

@@ -67,6 +67,9 @@ class H5File {
   void write_table(const std::string& name, const struct H5Table& table);
   // A dataset's extents (without reading it); throws H5Error if it is missing.
   std::vector<uint64_t> dims(const std::string& name) const;
+  // Whether a dataset keeps its values outside the file (HDF5 external or virtual storage, which
+  // no checksum of the file covers). Every read refuses such a dataset.
+  bool stored_outside(const std::string& name) const;
   // Reads and checks the element type and shape; a dim of -1 in `expect` matches any extent.
   std::vector<float> read_f32(const std::string& name, const std::vector<int64_t>& expect,
                               std::vector<uint64_t>* dims = nullptr) const;

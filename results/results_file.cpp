@@ -435,22 +435,31 @@ bool verify_checksum(const std::string& path) {
                    "): the file changed after it was written (corrupted?); restore it, or rerun "
                    "with --force to recompute");
   };
-  std::string head(kResultsFrameBytes, '\0');
+  constexpr std::string_view kHdf5Signature = "\x89HDF\r\n\x1a\n";
+  std::string head(kResultsFrameBytes + kHdf5Signature.size(), '\0');
   {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw H5Error(path + ": cannot read");
     in.read(head.data(), std::streamsize(head.size()));
     head.resize(size_t(in.gcount()));
   }
-  const bool framed = head.starts_with("SIRLRESULTS");
+  // Only a file starting with HDF5's own signature is an older engine's unframed file: a file
+  // whose first bytes are neither that nor the frame (one flipped bit in "SIRLRESULTS") is a
+  // damaged frame, never a reason to stop checking (HDF5 would still find its superblock at 1024).
+  const bool framed = !head.starts_with(kHdf5Signature);
+  const bool hdf5_after_frame = head.size() > kResultsFrameBytes &&
+                                head.substr(kResultsFrameBytes).starts_with(kHdf5Signature);
+  if (framed && !hdf5_after_frame && !head.starts_with("SIRLRESULTS"))
+    throw H5Error(path + ": not an HDF5 file (neither a sirl results file nor a dataset file)");
+  head.resize(std::min<size_t>(head.size(), kResultsFrameBytes));
   if (framed) {
     const size_t d = kResultsMagic.size();
     const std::string want = head.size() > d + 32 ? head.substr(d, 32) : "";
     if (!head.starts_with(kResultsMagic) || head.size() != kResultsFrameBytes ||
         results_frame(want) != head)
       throw H5Error(path + ": its checksum frame (the first " + std::to_string(kResultsFrameBytes) +
-                    " bytes) is damaged: corrupted or truncated; restore it, or rerun with "
-                    "--force to recompute");
+                    " bytes) is damaged (corrupted or truncated), or it is not a sirl results "
+                    "file; restore it, or rerun with --force to recompute");
     const std::string got = digest_of(path, kResultsFrameBytes);
     if (got != want) throw mismatch("checksum", got, want);
   }

@@ -15,6 +15,11 @@ void write_study(const std::string& path, const Study& s) {
   const std::string tmp = path + ".tmp";
   try {
     H5File f = H5File::create(tmp);
+    // The file holds each participant's token (their credential for the study page): readable
+    // by its owner only, from before the first token is written.
+    std::filesystem::permissions(
+        tmp, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write,
+        std::filesystem::perm_options::replace);
     f.group("/study");
     f.set_attr("/study", "format", std::string("sirl-study-1"));
     f.set_attr("/study", "env", s.env);

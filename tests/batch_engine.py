@@ -374,7 +374,7 @@ with tempfile.TemporaryDirectory() as tmp:
     assert first.poll() is None, "the first run ended before the second could meet its lock"
     p = run("run", SMOKE, "--out", busy, "--quiet", check=False)
     os.kill(first.pid, signal.SIGCONT)
-    assert p.returncode == 2 and f"another sirl run (pid {first.pid})" in p.stderr, p.stderr
+    assert p.returncode == 2 and f"in use by sirl run (pid {first.pid})" in p.stderr, p.stderr
     assert first.wait() == 0, first.stderr.read()
     same(tables(one), tables(busy), f"a second writer refused ({p.stderr.strip()}); the first run")
 
@@ -443,12 +443,19 @@ with tempfile.TemporaryDirectory() as tmp:
         p.stderr
     print("ok: an edited results file is refused by its checksum:", p.stderr.strip()[:120])
     # A file of another engine version, without checksums as engine 0.1.0 wrote it: no .sum, and
-    # its first 1024 bytes (the checksum frame) blank; HDF5 finds its superblock at 1024 either way.
-    with h5py.File(one, "r+") as f:
-        f.attrs["engine_version"] = "0.0.1"
+    # no checksum frame (plain HDF5 from byte 0: every object copied into a file without one).
     os.remove(one + ".sum")
-    with open(one, "r+b") as f:
-        f.write(bytes(1024))
+    framed = one + ".framed"
+    os.replace(one, framed)
+    with h5py.File(framed, "r") as a, h5py.File(one, "w") as b:
+        for k, v in a.attrs.items():
+            b.attrs[k] = v
+        for name in a:
+            a.copy(a[name], b, name=name)
+        b.attrs["engine_version"] = "0.0.1"
+    os.remove(framed)
+    with open(one, "rb") as f:
+        assert f.read(8) == b"\x89HDF\r\n\x1a\n"
     p = run("run", SMOKE, "--out", one)
     assert "not reused" in p.stderr and "(%d reused" % n_all in p.stdout, \
         (p.stdout, p.stderr)  # its records not trusted; the cache's are

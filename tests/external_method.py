@@ -161,7 +161,19 @@ def check_bad_inputs(d, emb):
             z[3, 1] = np.nan
         return z
 
+    def outside(name):
+        """The embeddings with the last array's values in HDF5 external raw storage: the file's
+        digest does not cover them, and such storage may name any file (e.g. /etc/passwd)."""
+        path = variant(name, lambda k, z: None if k == last else z)
+        z = np.ascontiguousarray(emb[last], dtype=np.float32)
+        z.tofile(f"{d}/{name}.raw")
+        with h5py.File(path, "a") as f:
+            f.create_dataset(sirl_bench.embedding_name(*last), shape=z.shape, dtype=np.float32,
+                             external=[(f"{d}/{name}.raw", 0, z.nbytes)])
+        return path
+
     cases = [
+        (outside("external"), "outside the file"),
         (variant("missing", lambda k, z: None if k == last else z), "no array"),
         (variant("short", lambda k, z: z[:-1] if k == last else z), "rows;"),
         (variant("nan", nan), "nan at row 3, column 1"),

@@ -184,7 +184,51 @@ def torch_ratio_uses_the_fastest_form():
     print("nightly_history: PyTorch ratios against the fastest form:", row[0])
 
 
+def malformed_nights_are_refused_and_odd_names_drawn():
+    """`add` of a night of another shape exits 2 with one line naming the file, and files nothing;
+    a benchmark or commit named like TeX ('$\\frac{1}{$') is drawn as written."""
+    tmp = tempfile.mkdtemp(prefix="sirl-history-bad-")
+    hist = os.path.join(SRC, "bench", "history.py")
+    store = os.path.join(tmp, "h.sqlite")
+    good = {"date": "d1", "time": "2026-01-01T00:00:01", "git_commit": "$\\frac{1}{$" + "0" * 20,
+            "host": "h", "cpu_class": "c", "cores": 2,
+            "micro": {"BM_$\\frac{1}{$": {"seconds": 0.01}},
+            "pipeline": {"smoke": {"wall_seconds": 10, "metrics": {"fpe $x$": 0.5}}}}
+    bad = [[1, 2],                                                     # a list root
+           dict(good, micro={"b": {"seconds": "fast"}}),                # a string for a number
+           dict(good, micro={"b": {"seconds": float("nan")}}),          # NaN
+           dict(good, micro={"b": {"ms": 3}}),                          # no seconds
+           dict(good, pipeline={"smoke": {"metrics": {"m": float("nan")}}}),
+           dict(good, micro=[1]), dict(good, cores="two")]
+    for i, night in enumerate(bad):
+        path = os.path.join(tmp, f"bad{i}.json")
+        json.dump(night, open(path, "w"))
+        p = subprocess.run(["/usr/bin/python3", hist, "add", store, path], capture_output=True,
+                           text=True)
+        if p.returncode != 2 or p.stderr.count("\n") != 1 or path not in p.stderr \
+                or "Traceback" in p.stderr:
+            fail(f"malformed night {i}: exit {p.returncode}, {p.stderr!r}")
+    con = history.open_store(store)
+    if con.execute("SELECT COUNT(*) FROM nights").fetchone()[0] != 0:
+        fail("a malformed night was filed")
+    con.close()
+    for i in range(2):
+        night = dict(good, date=f"d{i}", time=f"2026-01-01T00:00:0{i}")
+        path = os.path.join(tmp, f"good{i}.json")
+        json.dump(night, open(path, "w"))
+        p = subprocess.run(["/usr/bin/python3", hist, "add", store, path], capture_output=True,
+                           text=True)
+        if p.returncode != 0:
+            fail(f"a good night was refused: {p.stderr}")
+    p = subprocess.run(["/usr/bin/python3", hist, "dashboard", store, "--out",
+                        os.path.join(tmp, "dash")], capture_output=True, text=True)
+    if p.returncode != 0 or not os.path.exists(os.path.join(tmp, "dash", "index.html")):
+        fail(f"dashboard with TeX-like names: exit {p.returncode}, {p.stderr[-500:]}")
+    print("nightly_history: 7 malformed nights refused (exit 2, one line), TeX-like names drawn")
+
+
 if __name__ == "__main__":
     main()
     torch_ratio_uses_the_fastest_form()
+    malformed_nights_are_refused_and_odd_names_drawn()
     print("nightly_history: OK")

@@ -127,7 +127,8 @@ with tempfile.TemporaryDirectory() as tmp:
                              "--scenario", "Stay low.", "--out", study, "--port", "0"],
                             capture_output=True, text=True,
                             stdin=subprocess.DEVNULL, timeout=30)
-    assert second.returncode == 2 and "in use by another" in second.stderr, second.stderr
+    assert second.returncode == 2 and "in use by sirl study serve" in second.stderr, \
+        second.stderr
     with h5py.File(study, "r") as f:
         assert "bob" not in f["study/participants"], "the refused server wrote to the file"
     print("ok: a second server on the same study file is refused:", second.stderr.strip())
@@ -235,6 +236,29 @@ with tempfile.TemporaryDirectory() as tmp:
     assert answers(study, "alice")[0] == [2, 0, 0], answers(study, "alice")[0]
     print("ok: duplicate, non-decimal and conflicting Content-Length refused (400); a chunked "
           "answer within 64 KiB accepted")
+
+    # Every other path is bounded too: a chunked 100 MB upload to a path that takes no body, with
+    # no token, is refused before it is read (cpp-httplib alone reads it whole before the 404).
+    before = rss_kib(srv.pid)
+    for line in (b"POST /nope", b"POST /api/state", b"PUT /api/answer", b"GET /api/state"):
+        reply, sent = raw(line + b" HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n",
+                          (chunk for _ in range(1600)))
+        assert reply.startswith(b"HTTP/1.1 413"), (line, reply[:200])
+    reply, _ = raw(b"GET /nope HTTP/1.1\r\nHost: x\r\nContent-Length: 99999999\r\n\r\n",
+                   (chunk for _ in range(100)))
+    assert reply.startswith(b"HTTP/1.1 413"), reply[:200]
+    # A body-carrying method without a length would be read until the client closes: 411.
+    reply, _ = raw(b"POST /api/answer HTTP/1.1\r\nHost: x\r\n\r\n", (chunk for _ in range(100)))
+    assert reply.startswith(b"HTTP/1.1 411"), reply[:200]
+    reply, _ = raw(b"DELETE /nope HTTP/1.1\r\nHost: x\r\n\r\n", (chunk for _ in range(100)))
+    assert reply.startswith(b"HTTP/1.1 411"), reply[:200]
+    after = rss_kib(srv.pid)
+    assert after - before < 8 * 1024, f"resident memory grew {after - before} KiB"
+    # A GET without a body is still served.
+    st, _ = http("GET", f"{base}/api/state?p=alice&t={token}")
+    assert st == 200, st
+    print(f"ok: bodies to other paths refused (413) and bodies without a length (411); resident "
+          f"memory {before} → {after} KiB")
 
     # Slow and idle clients cannot starve a participant: 64 connections trickling one header line
     # per 0.5 s and 200 connected but silent ones, then a real request must be answered in < 2 s.

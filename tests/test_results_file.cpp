@@ -131,6 +131,37 @@ TEST(ResultsFile, AFlippedByteIsRefusedByTheChecksumBeforeHdf5ReadsIt) {
   fs::remove(p + ".sum");
 }
 
+// One flipped bit in the frame's magic ("SIRLRESULTS") must not make a file look like an older
+// engine's unframed one, which is read unverified: only HDF5's own signature at byte 0 means that.
+TEST(ResultsFile, AFlippedBitInTheFramesMagicIsRefusedNotReadUnverified) {
+  const std::string p = temp_copy("magic.h5");
+  const auto records = read_results_records(kFixture);
+  write_results_file(p, read_run_info(kFixture), {}, records, result_tables(records));
+  fs::remove(p + ".sum");  // a copied .h5: the frame is all that vouches for it
+  for (std::streamoff at = 0; at < 11; ++at) {
+    const auto flip = [&] {
+      std::fstream f(p, std::ios::in | std::ios::out | std::ios::binary);
+      f.seekg(at);
+      char c = 0;
+      f.read(&c, 1);
+      c = char(c ^ 0x01);
+      f.seekp(at);
+      f.write(&c, 1);
+    };
+    flip();
+    try {
+      (void)read_run_info(p);
+      ADD_FAILURE() << "a file with byte " << at << " of its frame flipped was read";
+    } catch (const H5Error& e) {
+      EXPECT_NE(std::string(e.what()).find("checksum frame"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(read_results_records(p), H5Error) << "byte " << at;
+    flip();  // restored: it reads again
+    EXPECT_NO_THROW(read_run_info(p)) << "byte " << at;
+  }
+  fs::remove(p);
+}
+
 TaskRecord fpe_record(const std::string& key, double fpe) {
   TaskRecord r;
   r.key = key;

@@ -1,6 +1,7 @@
 // The study file: a round trip of every field, and refusing files that are not studies.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 
@@ -41,6 +42,9 @@ TEST(StudyStore, FileRoundTripsAndRejectsForeignFiles) {
   s.participants[1].preference_time.resize(7);
   s.participants[2].scenario = "Stay \"far\" from the laptop.";
   write_study(path, s);
+  // The tokens are credentials: the file is its owner's alone.
+  const fs::perms mode = fs::status(path).permissions();
+  EXPECT_EQ(mode & (fs::perms::group_all | fs::perms::others_all), fs::perms::none);
   const Study r = read_study(path);
   EXPECT_EQ(r.env, "grid");
   EXPECT_EQ(r.trajectories, 777);

@@ -89,10 +89,12 @@ TEST(TaskCache, ASecondClaimOnATaskWaitsForTheFirst) {
 TEST(TaskCache, GcKeepsWhatProfilesAndLiveRunsNeedAndRemovesTheRest) {
   const test::ScratchDir scratch;
   const fs::path dir = scratch.path() / "c";
-  TaskCache cache(dir);
-  for (const std::string& d : {kDigestA, kDigestB, kDigestC})
-    cache.store().commit(cache_record("key-" + d.substr(0, 1)), TaskCache::id(d, "zen5"));
-  cache.store().commit(cache_record("legacy/key"));  // an old engine's file, by key
+  {
+    TaskCache cache(dir);  // a run that ended
+    for (const std::string& d : {kDigestA, kDigestB, kDigestC})
+      cache.store().commit(cache_record("key-" + d.substr(0, 1)), TaskCache::id(d, "zen5"));
+    cache.store().commit(cache_record("legacy/key"));  // an old engine's file, by key
+  }
   // A live run (held runs/ file) needs B; C is being computed (its lock is held).
   TaskCache live(dir);
   live.register_needs({kDigestB});
@@ -111,6 +113,33 @@ TEST(TaskCache, GcKeepsWhatProfilesAndLiveRunsNeedAndRemovesTheRest) {
   EXPECT_EQ(std::set<std::string>(left.begin(), left.end()),
             (std::set<std::string>{TaskCache::id(kDigestA, "zen5"), TaskCache::id(kDigestB, "zen5"),
                                    TaskCache::id(kDigestC, "zen5")}));
+}
+
+// A run lists the cache when it opens it and declares its needs a moment later: a gc sweeping
+// in between must wait for the declaration, never remove what the run has listed (the run would
+// then find its result gone and call it corrupted).
+TEST(TaskCache, GcWaitsForAStartingRunToDeclareItsNeeds) {
+  const test::ScratchDir scratch;
+  const fs::path dir = scratch.path() / "c";
+  const std::string id = TaskCache::id(kDigestA, "zen5");
+  TaskStore(dir).commit(cache_record("k"), id);
+  std::atomic<bool> swept{false};
+  std::thread gc;
+  {
+    TaskCache starting(dir);  // has listed the folder: it holds the result of A
+    ASSERT_EQ(starting.find(kDigestA, "zen5", false), id);
+    gc = std::thread([&] {
+      collect_garbage(dir, {}, false);  // no profile keeps A
+      swept = true;
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    EXPECT_FALSE(swept.load()) << "gc swept while a run was between listing and declaring";
+    starting.register_needs({kDigestA});
+    gc.join();
+    EXPECT_TRUE(fs::exists(TaskStore::file_for(dir, id))) << "gc removed what the run listed";
+    EXPECT_EQ(starting.store().load(id, "k"), cache_record("k"));
+  }
+  EXPECT_EQ(collect_garbage(dir, {}, false).removed, 1);  // the run has ended: A goes
 }
 
 TEST(TaskCache, GcOfNothingNeededEmptiesTheCacheOnceTheRunHasEnded) {
