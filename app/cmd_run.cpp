@@ -349,6 +349,8 @@ void register_plan(CLI::App& app, Runner& run) {
     const int th = threads > 0 ? threads : default_threads();
     print_plan_summary(p, plan, cache);
     std::fflush(stdout);
+    // Calibrating trains real tasks: one past this machine's memory is refused, as a run would.
+    refuse_tasks_beyond_memory(plan, std::vector<char>(plan.tasks.size(), 1));
     std::fprintf(stderr, "calibrating on this machine...\n");
     const PlanEstimate e = estimate_plan(plan, p, th);
     print_calibration(e);

@@ -100,6 +100,13 @@ const ExternalMethod& external_method(const Profile& p, const std::string& name)
 
 namespace {
 
+// The most values one list of a profile (seeds, N, M) may hold.
+constexpr size_t kMaxListValues = 1024;
+
+}  // namespace
+
+namespace {
+
 // Reads a parsed TOML document, checking every key; errors carry "file:line: ".
 class Reader {
  public:
@@ -192,6 +199,10 @@ class Reader {
       return {};
     }
     if (!n->is_array()) fail(n, std::string(key) + " must be an array of integers");
+    // A grid axis of more values than this is a typo, and planning it would take gigabytes.
+    if (n->as_array()->size() > kMaxListValues)
+      fail(n, std::string(key) + " lists " + std::to_string(n->as_array()->size()) +
+                  " values; at most " + std::to_string(kMaxListValues));
     std::vector<int64_t> out;
     for (auto&& e : *n->as_array()) {
       if (!e.is_integer()) fail(n, std::string(key) + " must contain only integers");
@@ -265,6 +276,9 @@ HyperValue hyper_value(const Reader& r, const toml::node& n, const std::string& 
                   : want == HyperType::integer_list ? n.is_array() || n.is_integer()
                                                     : n.is_string();
   if (!ok) r.fail(&n, key + " must be " + hyper_type_name(want));
+  // A profile trains what it names: 0 epochs would score an untrained network under its name.
+  if (key.ends_with(".epochs") && n.is_integer() && *n.value<int64_t>() < 1)
+    r.fail(&n, key + " must be >= 1 (0 epochs would leave the network untrained)");
   if (n.is_integer()) return *n.value<int64_t>();
   if (n.is_floating_point()) return *n.value<double>();
   if (n.is_boolean()) return *n.value<bool>();

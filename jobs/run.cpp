@@ -440,6 +440,8 @@ std::vector<TaskRecord> finished_records(const Profile& p, const Plan& plan,
   return records;
 }
 
+}  // namespace
+
 // A task whose working set (its cost model's estimate: weights, gradient, Adam's moments, a
 // batch's activations) exceeds this machine's memory would fail deep inside its training, or
 // take the machine down with it: refused before anything runs, naming the task.
@@ -453,6 +455,8 @@ void refuse_tasks_beyond_memory(const Plan& plan, const std::vector<char>& mine)
           " GiB to train, this machine has " + std::to_string(int64_t(ram / (1 << 30))) +
           " GiB (`sirl plan PROFILE --tasks` lists every task's working set in MiB)");
 }
+
+namespace {
 
 // The worker threads (MPI: worker ranks) a run uses. More threads than cores would not run more
 // tasks at once (oneTBB has no more workers), only claim so in the progress line and the file's

@@ -79,5 +79,8 @@ size_t write_plan_records(const std::string& out, const Profile& p, RunInfo info
 
 // Parses "i/n" (0 ≤ i < n). Throws std::invalid_argument.
 void parse_shard(const std::string& text, int& index, int& count);
+// Throws std::runtime_error naming the first task (of those `mine` marks) whose estimated working
+// set exceeds this machine's memory.
+void refuse_tasks_beyond_memory(const Plan& plan, const std::vector<char>& mine);
 
 }  // namespace sirl

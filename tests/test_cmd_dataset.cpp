@@ -84,6 +84,9 @@ TEST(DatasetCli, NumbersAreStrictAndErrorsAreOneReadableLine) {
       {" run smoke --out " + path.string() + " --shard ' 0/2'", "--shard must look like i/n"},
       {" run smoke --out " + path.string() + " --shard ''", "--shard: must look like i/n"},
       {" run smoke --out " + path.string() + " --shard 0/2/2", "--shard must look like i/n"},
+      {" run smoke --out " + path.string() + " --shard 00/2", "--shard must look like i/n"},
+      {" run smoke --out " + path.string() + " --shard 1/02", "--shard must look like i/n"},
+      {" inspect " + path.string() + ".missing", "File does not exist"},
   };
   for (const auto& [args, words] : cases) {
     EXPECT_EQ(run(sirl + args, &out), 2) << args << "\n" << out;

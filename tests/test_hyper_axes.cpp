@@ -75,7 +75,8 @@ TEST(HyperAxes, BadAxesAreRefusedWithTheirLine) {
            {"\"sirl.epochs\" = [30, 30]", "listed twice"},
            {"\"sirl.margin\" = [1, 1.0]", "listed twice"},  // one text, one point name
            {"\"sirl.epochs\" = [30, 30.5]", "sirl.epochs must be"},
-           {"\"sirl.epochs\" = [30, -1]", "sirl.epochs must be >= 0"},
+           {"\"sirl.epochs\" = [30, -1]", "sirl.epochs must be >= 1"},
+           {"\"sirl.epochs\" = [0, 30]", "sirl.epochs must be >= 1"},
            {"\"tpa.stop\" = [\"fixed\", \"never\"]", "tpa.stop"}}) {
     const std::string err = test::profile_error_of(small_with_hyper(line));
     EXPECT_NE(err.find(want), std::string::npos) << line << " → " << err;

@@ -75,6 +75,14 @@ TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
   EXPECT_NE(m.find("unknown hyper-parameter 'sirl.epoch'"), std::string::npos) << m;
   m = test::profile_error_of(base + grid + "[hyper.grid]\n\"sirl.lr\" = -1\n");
   EXPECT_NE(m.find("sirl.lr must be > 0"), std::string::npos) << m;
+  m = test::profile_error_of(base + grid + "[hyper.grid]\n\"sirl.epochs\" = 0\n");
+  EXPECT_NE(m.find("sirl.epochs must be >= 1"), std::string::npos) << m;
+  {  // 1025 seeds: more than any list of a profile may hold
+    std::string many = "seeds = [0";
+    for (int i = 1; i <= 1024; ++i) many += "," + std::to_string(i);
+    m = test::profile_error_of("name = \"x\"\nenvs = [\"grid\"]\n" + many + "]\n" + grid);
+    EXPECT_NE(m.find("lists 1025 values; at most 1024"), std::string::npos) << m;
+  }
   // "+vae" only where it applies; a missing table; TOML syntax errors keep their line.
   EXPECT_NE(test::profile_error_of(base + "[fpe]\nmethods = [\"random+vae\"]\nN = [100]\n" +
                                    "[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n")
