@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "kernels/mlp.h"
+#include "probes/cpu_class.h"
 #include "tests/grad_check.h"
 
 namespace sirl {
@@ -178,12 +179,36 @@ void expect_fused_backward_adam_matches(const MlpShape& s, int batch) {
                         threads);
     }
     ASSERT_EQ(adam.step, ref_adam.step);
-    for (size_t i = 0; i < P; ++i) {
-      ASSERT_EQ(p[i], ref[i]) << "weight " << i << ", threads " << threads;
-      ASSERT_EQ(adam.m[i], ref_adam.m[i]) << "m " << i;
-      ASSERT_EQ(adam.v[i], ref_adam.v[i]) << "v " << i;
-    }
     ASSERT_NE(p, p0);
+    if (avx512_in_use()) {  // the fused pass's row blocks have the whole product's bits
+      for (size_t i = 0; i < P; ++i) {
+        ASSERT_EQ(p[i], ref[i]) << "weight " << i << ", threads " << threads;
+        ASSERT_EQ(adam.m[i], ref_adam.m[i]) << "m " << i;
+        ASSERT_EQ(adam.v[i], ref_adam.v[i]) << "v " << i;
+      }
+      continue;
+    }
+    // AVX2 paths: a weight gradient by row blocks sums in another order than the whole product
+    // (docs/kernels.md), so the two agree to rounding: Adam's moments (linear and quadratic in
+    // the gradients) within 1e-4 of their tensor's root mean square, each weight within 1e-5 of
+    // its size plus 1e-3 of one step's length lr: m̂/(√v̂ + ε) is ±1 to rounding wherever one
+    // gradient dominates, so a rounding change of a gradient moves the step by far less.
+    auto rms = [](const std::vector<float>& x) {
+      double s2 = 0;
+      for (float v : x) s2 += double(v) * v;
+      return std::sqrt(s2 / double(x.size()));
+    };
+    const double m_scale = rms(ref_adam.m), v_scale = rms(ref_adam.v);
+    double worst_m = 0, worst_v = 0, worst_p = 0;
+    for (size_t i = 0; i < P; ++i) {
+      worst_m = std::max(worst_m, std::fabs(double(adam.m[i]) - ref_adam.m[i]) / m_scale);
+      worst_v = std::max(worst_v, std::fabs(double(adam.v[i]) - ref_adam.v[i]) / v_scale);
+      worst_p = std::max(worst_p, std::fabs(double(p[i]) - ref[i]) /
+                                      (1e-5 * std::fabs(ref[i]) + 1e-3 * cfg.lr));
+    }
+    EXPECT_LE(worst_m, 1e-4) << "threads " << threads;
+    EXPECT_LE(worst_v, 1e-4) << "threads " << threads;
+    EXPECT_LE(worst_p, 1.0) << "threads " << threads;
   }
 }
 
