@@ -100,6 +100,36 @@ TEST(ActiveSelection, SpendsTheBudgetAsksNothingTwiceAndKeepsTheTeachersAnswers)
   }
 }
 
+// A Ξ so small that the budget takes as many of its triplets as the selection accepts (budget +
+// pool ≤ half of them: 16 trajectories, 560 unordered triplets, 220 asked, pools of 60): the
+// later rounds' pools are often triplets already asked, and none may be asked again.
+TEST(ActiveSelection, ATinyXiNearlyExhaustedStillAsksNothingTwice) {
+  const Dataset full = make_grid_dataset();
+  Dataset d = full;
+  const int T = 16, F = full.feature_count();
+  d.count = T;
+  d.inputs.clear();
+  d.features.clear();
+  d.features_raw.clear();
+  for (int i = 0; i < T; ++i) {
+    const int64_t row = int64_t(i) * (full.count / T) + 3;  // spread over Ξ: distinct features
+    d.inputs.insert(d.inputs.end(), full.input(row), full.input(row) + full.input_dim);
+    d.features_raw.insert(d.features_raw.end(), full.features_raw.begin() + row * F,
+                          full.features_raw.begin() + (row + 1) * F);
+  }
+  normalise_features(d);
+  ActiveConfig c = small(Selection::vote);
+  c.budget = 220;
+  c.pool = 60;
+  c.batch = 40;
+  const ActiveQueries a = select_active_queries(d, Teacher{}, c, 5);
+  ASSERT_EQ(a.queries.count, 220);
+  std::set<std::array<int32_t, 3>> seen;
+  for (int64_t i = 0; i < a.queries.count; ++i)
+    EXPECT_TRUE(seen.insert(sorted_triple(a.queries.idx.data() + 3 * i)).second)
+        << "triplet " << i << " asked twice";
+}
+
 using test::Interrupted;
 using test::MemoryCheckpointer;
 

@@ -30,6 +30,37 @@ TEST(Queries, EveryQueryShowsDistinctTrajectories) {
     for (int64_t i = 0; i < p->count; ++i) ASSERT_NE(p->pairs[2 * i], p->pairs[2 * i + 1]) << i;
 }
 
+// TPA measures generalisation: a held-out pair that repeats one of that reward's training pairs
+// (in either order) would be scored on what the head was fit to. On GridRobot's Ξ with quick's
+// budget (250 pairs per reward, 200 of them training) and every test reward, none does.
+TEST(Queries, TpaHeldOutPairsNeverRepeatTheirTrainingPairs) {
+  const Dataset d = make_grid_dataset();
+  QueryBundleConfig c;
+  c.similarity = 100;
+  c.preference = 100;
+  c.tpa_pairs = 250;
+  for (uint64_t seed : {0, 1, 2, 3, 4}) {
+    const QueryBundle b = make_query_bundle(d, c, seed);
+    ASSERT_FALSE(b.tpa.empty());
+    int64_t held_out = 0;
+    for (const TpaSet& t : b.tpa) {
+      ASSERT_EQ(t.train, 200);
+      std::set<std::pair<int32_t, int32_t>> train;
+      for (int64_t i = 0; i < t.train; ++i) {
+        const int32_t a = t.pairs.pairs[2 * i], bb = t.pairs.pairs[2 * i + 1];
+        train.insert({std::min(a, bb), std::max(a, bb)});
+      }
+      for (int64_t i = t.train; i < t.pairs.count; ++i, ++held_out) {
+        const int32_t a = t.pairs.pairs[2 * i], bb = t.pairs.pairs[2 * i + 1];
+        EXPECT_EQ(train.count({std::min(a, bb), std::max(a, bb)}), 0u)
+            << "seed " << seed << ": held-out pair " << i << " (" << a << ", " << bb
+            << ") is a training pair";
+      }
+    }
+    EXPECT_EQ(held_out, int64_t(b.tpa.size()) * 50);
+  }
+}
+
 TEST(Rewards, UnitNormDisjointAndSeeded) {
   const auto r = make_reward_sets(4, 11);
   EXPECT_EQ(r.test.count, 20);

@@ -157,6 +157,39 @@ TEST(TaskStore, ACommitOfTheFnvFrameIsStillReadAndVerified) {
   EXPECT_THROW(TaskStore::load_from(dir, r.key), H5Error);
 }
 
+// An edit that keeps the file well-formed — a record's value changed, and the frame's digest
+// rewritten to match the edited bytes — is still refused: the record checksum beside the record
+// covers its values.
+TEST(TaskStore, AnEditedValueWithARewrittenFrameIsRefused) {
+  namespace fs = std::filesystem;
+  const test::ScratchDir scratch;
+  const fs::path dir = scratch.path() / "tasks";
+  TaskRecord r;
+  r.key = "grid/s0/sirl/N100/tpa/M10/frozen";
+  r.kind = "tpa";
+  r.num["tpa"] = 0.61;
+  TaskStore(dir).commit(r);
+  const fs::path file = the_commit(dir);
+  {
+    H5File f = H5File::open_rw(file.string());
+    f.set_attr("/r", "tpa", 0.99);  // a better number than the one computed
+  }
+  std::string head = "SIRLTASK2\n" + file_digest(file.string(), 1024) + "\n" + r.key + "\n";
+  head.resize(1024, '\0');
+  {
+    std::fstream out(file, std::ios::in | std::ios::out | std::ios::binary);
+    out.write(head.data(), std::streamsize(head.size()));
+  }
+  EXPECT_TRUE(TaskStore(dir).has(r.key)) << "the rewritten frame no longer reads as a commit";
+  try {
+    TaskStore::load_from(dir, r.key);
+    ADD_FAILURE() << "an edited value was loaded";
+  } catch (const H5Error& e) {
+    EXPECT_NE(std::string(e.what()).find("record checksum mismatch"), std::string::npos)
+        << e.what();
+  }
+}
+
 // (Durability under a crash is batch_engine.py's kill -9 test; this one is the file format.)
 TEST(TaskStore, CommitsRoundTripAndTornCommitsAreSwept) {
   namespace fs = std::filesystem;
