@@ -4,7 +4,11 @@
 #include <filesystem>
 #include <string>
 
+#include "app/cluster_options.h"
 #include "app/commands.h"
+#include "experiment/plan.h"
+#include "jobs/estimate.h"
+#include "jobs/progress.h"
 #include "experiment/install_paths.h"
 #include "experiment/profile.h"
 #include "jobs/mpi_run.h"
@@ -23,6 +27,29 @@ void draw_figures(const std::string& results, const std::string& figures) {
   if (status != 0) throw std::runtime_error("the plotting script failed (" + command + ")");
 }
 
+// Before a run of a profile with a budget (budget_minutes): what `sirl plan` predicts on this
+// machine, and a warning naming the smallest profile when that is well over the budget (the
+// budget is set on one CPU class; without AVX-512 a run takes two to three times as long).
+void announce_prediction(const Profile& p, int threads) {
+  if (p.budget_minutes <= 0) return;
+  const int th = threads > 0 ? threads : default_threads();
+  std::fprintf(stderr, "sirl reproduce: predicting the time on this machine (sirl plan %s)...\n",
+               p.name.c_str());
+  const PlanEstimate e = estimate_plan(make_plan(p), p, th);
+  const double budget = 60.0 * double(p.budget_minutes);
+  std::fprintf(stderr,
+               "sirl reproduce: %s is predicted to take %s on %d thread(s) here (its budget: %s; "
+               "tasks already in the cache are skipped)\n",
+               p.name.c_str(), format_duration(e.seconds).c_str(), th,
+               format_duration(budget).c_str());
+  if (e.seconds > 1.5 * budget)
+    std::fprintf(stderr,
+                 "sirl reproduce: warning: that is %.1fx %s's budget on this machine; `sirl "
+                 "reproduce --profile smoke` runs the whole pipeline at toy scale in under a "
+                 "minute, and `sirl run` resumes if you stop this one (Ctrl-C)\n",
+                 e.seconds / budget, p.name.c_str());
+}
+
 void register_reproduce(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "reproduce",
@@ -36,7 +63,8 @@ void register_reproduce(CLI::App& app, Runner& run) {
                   "Profile: a name in configs/ (" + bundled_profile_names() + ") or a .toml path")
       ->capture_default_str();
   cmd->add_option("--out", out, "Results file (default: out/<profile>.h5)")->check(output_file());
-  cmd->add_option("--figures", figures, "Figure directory (default: out/<profile>-figures)");
+  cmd->add_option("--figures", figures,
+                  "Figure directory (default: beside the results file, <out stem>-figures)");
   cmd->add_option("--threads", threads, "Worker threads (default: every core)")
       ->check(CLI::Range(1, 4096));
   cmd->add_flag("--force", force, "Overwrite results from another profile or engine version");
@@ -45,9 +73,14 @@ void register_reproduce(CLI::App& app, Runner& run) {
   add_cache_options(cmd);
   run = [] {
     const std::string stem = std::filesystem::path(profile).stem().string();
-    // out/ (git-ignored; run_command makes it) is the default home of results.
+    // out/ (git-ignored; run_command makes it) is the default home of results; the figures go
+    // beside the results file (out/quick.h5 → out/quick-figures/).
     if (out.empty()) out = "out/" + stem + ".h5";
-    if (figures.empty()) figures = "out/" + stem + "-figures";
+    if (figures.empty()) {
+      const std::filesystem::path o(out);
+      figures = (o.parent_path() / (o.stem().string() + "-figures")).string();
+    }
+    if (mpi_rank_from_env() <= 0) announce_prediction(load_profile(profile, profile_settings()), threads);
     const int rc = run_command(profile, out, threads, force, "", false, no_study);
     if (rc != 0 || mpi_rank_from_env() > 0) return rc;  // MPI workers do not plot
     draw_figures(out, figures);

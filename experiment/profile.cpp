@@ -860,7 +860,8 @@ Profile parse_profile_table(const toml::table& root, const std::string& text,
   std::set<std::string> top{"name",     "description", "envs",     "seeds",
                             "queries",  "teacher",     "fpe",      "tpa",
                             "ablation", "hyper",       "study",    "robustness",
-                            "active",   "precision",   "external", "references"};
+                            "active",   "precision",   "external", "references",
+                            "budget_minutes"};
   for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
   r.only_keys(root, "the profile", top);
   Profile p;
@@ -877,6 +878,7 @@ Profile parse_profile_table(const toml::table& root, const std::string& text,
     }
   }
   parse_data_tables(r, root, p.data);
+  p.budget_minutes = r.number(root, "budget_minutes", 0, 0, 1e8);
   p.precision = r.string(root, "precision", "fp32");
   if (const toml::node* n = root.get("references")) {
     if (!n->is_boolean())

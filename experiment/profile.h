@@ -124,6 +124,10 @@ struct Profile {
   // Top-level `references = false` leaves the references truth and raw out (default: in every
   // FPE and TPA table; docs/linear-evaluation.md).
   bool references = true;
+  // Top-level `budget_minutes`: the wall time the profile is meant to fit on the machine its
+  // comment names (0: none). `sirl reproduce` predicts this machine's time first and says when it
+  // is well over.
+  double budget_minutes = 0;
   // Fig. 7: every listed method × {frozen, unfrozen} × {no VAE, VAE} (where VAE applies).
   std::vector<Method> ablation_methods;
   std::vector<int64_t> ablation_N, ablation_M;

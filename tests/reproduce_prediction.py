@@ -1,0 +1,57 @@
+#!/usr/bin/python3
+"""`sirl reproduce` says what `sirl plan` predicts before a run of a profile with a budget
+(budget_minutes), warns naming the smallest profile when the prediction is well over it, says
+nothing of the kind for a profile without one, and draws its figures beside the results file
+(--out DIR/x.h5 → DIR/x-figures/, not ./out/).
+"""
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+SIRL = os.environ["SIRL"]
+SRC = os.environ["SIRL_SOURCE_DIR"]
+SMOKE = os.path.join(SRC, "configs", "smoke.toml")
+
+
+def fail(msg):
+    print("reproduce_prediction: FAIL:", msg)
+    sys.exit(1)
+
+
+def main():
+    with tempfile.TemporaryDirectory() as tmp:
+        tight = os.path.join(tmp, "tight.toml")
+        with open(tight, "w") as f:  # smoke with a budget of 0.06 s: any machine is over it
+            f.write(f'extends = "{SMOKE}"\nname = "tight"\nbudget_minutes = 0.001\n')
+        out = os.path.join(tmp, "res", "tight.h5")
+        p = subprocess.run([SIRL, "reproduce", "--profile", tight, "--out", out, "--no-study",
+                            "--threads", "2"], capture_output=True, text=True, cwd=tmp,
+                           stdin=subprocess.DEVNULL, timeout=900)
+        if p.returncode != 0:
+            fail(f"reproduce exited {p.returncode}:\n{p.stderr[-2000:]}")
+        m = re.search(r"tight is predicted to take (\S+) on 2 thread\(s\) here", p.stderr)
+        if not m:
+            fail(f"no prediction before the run:\n{p.stderr[:2000]}")
+        if "warning: that is" not in p.stderr or "--profile smoke" not in p.stderr:
+            fail(f"no warning for a run far over its budget:\n{p.stderr[:2000]}")
+        if p.stderr.index("predicted to take") > p.stderr.index("sirl run:"):
+            fail("the prediction came after the run started")
+        figs = os.path.join(tmp, "res", "tight-figures")
+        if not os.path.exists(os.path.join(figs, "report.md")):
+            fail(f"the figures are not beside the results file: {os.listdir(tmp)}")
+        if os.path.exists(os.path.join(tmp, "out")):
+            fail("reproduce --out wrote into ./out/")
+        print(f"ok: predicted {m.group(1)}, warned (over a 0.06 s budget); figures beside --out")
+        p = subprocess.run([SIRL, "reproduce", "--profile", SMOKE, "--out",
+                            os.path.join(tmp, "smoke.h5"), "--no-study"], capture_output=True,
+                           text=True, cwd=tmp, stdin=subprocess.DEVNULL, timeout=900)
+        if p.returncode != 0 or "predicted to take" in p.stderr:
+            fail(f"smoke (no budget): rc {p.returncode}, or it calibrated:\n{p.stderr[:1000]}")
+        print("ok: a profile without a budget starts at once")
+    print("reproduce_prediction: OK")
+
+
+if __name__ == "__main__":
+    main()
