@@ -253,7 +253,9 @@ with tempfile.TemporaryDirectory() as tmp:
     reply, _ = raw(b"DELETE /nope HTTP/1.1\r\nHost: x\r\n\r\n", (chunk for _ in range(100)))
     assert reply.startswith(b"HTTP/1.1 411"), reply[:200]
     after = rss_kib(srv.pid)
-    assert after - before < 8 * 1024, f"resident memory grew {after - before} KiB"
+    # 400 MB were sent at these paths: buffering any one of them would add 100 MB. The bound
+    # leaves room for the worker threads' stacks and ThreadSanitizer's shadow memory.
+    assert after - before < 32 * 1024, f"resident memory grew {after - before} KiB"
     # A GET without a body is still served.
     st, _ = http("GET", f"{base}/api/state?p=alice&t={token}")
     assert st == 200, st
