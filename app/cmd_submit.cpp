@@ -375,7 +375,16 @@ void register_submit(CLI::App& app, Runner& run) {
   cmd->add_option("profile", o.profile,
                   "Profile: a name in configs/ (" + bundled_profile_names() + ") or a .toml path");
   cmd->add_option("--out", o.out, "The submission's folder (default: out/PROFILE-slurm)")
-      ->type_name("DIR");
+      ->type_name("DIR")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            std::error_code ec;
+            if (v.empty()) return "must name a folder, got an empty path";
+            if (std::filesystem::exists(v, ec) && !std::filesystem::is_directory(v, ec))
+              return "must name a folder (new or a submission's), got the file '" + v + "'";
+            return "";
+          },
+          "DIR", "submission_folder"));
   CLI::Option* shards =
       cmd->add_option("--shards", o.shards, "Array tasks: the plan split into this many shards")
           ->check(CLI::Range(1, 100000))

@@ -120,6 +120,10 @@ CLI::Validator output_file() {
         if (v.empty()) return "must name a file, got an empty path";
         if (v.back() == '/' || std::filesystem::is_directory(v, ec))
           return "must name a file, got the folder '" + v + "'";
+        // A FIFO or device would block the write forever, or never hold a results file.
+        const auto st = std::filesystem::status(v, ec);
+        if (!ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
+          return "must name a regular file, got '" + v + "' (a pipe, socket or device)";
         return "";
       },
       "FILE", "output_file");

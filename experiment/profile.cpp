@@ -1024,6 +1024,8 @@ toml::table resolve_profile(const std::filesystem::path& file, ResolveState& st)
     throw ProfileError(file.string() + ": `extends` nests deeper than " +
                        std::to_string(kMaxExtendsDepth) + " profiles (from " + chain.front() + ")");
   chain.push_back(id);
+  if (std::error_code ec; !fs::is_regular_file(file, ec))  // a FIFO would block the read forever
+    throw ProfileError(file.string() + ": not a regular file");
   std::ifstream in(file);
   std::stringstream ss;
   ss << in.rdbuf();

@@ -438,6 +438,10 @@ bool verify_checksum(const std::string& path) {
   constexpr std::string_view kHdf5Signature = "\x89HDF\r\n\x1a\n";
   std::string head(kResultsFrameBytes + kHdf5Signature.size(), '\0');
   {
+    // Opening a FIFO would block until a writer comes: only a regular file is read.
+    std::error_code ec;
+    if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+      throw H5Error(path + ": not a regular file (a pipe, socket, device or folder)");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw H5Error(path + ": cannot read");
     in.read(head.data(), std::streamsize(head.size()));

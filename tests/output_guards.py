@@ -95,6 +95,31 @@ def main():
         if p.returncode == 0 or "not an HDF5 file" not in p.stderr or "No such file" in p.stderr:
             fail(f"inspect on a text file: {p.stderr!r}")
     print("ok: empty and folder output paths refused in one line; no stale OS reason")
+    # A FIFO as an input or an output would block forever (no writer, or no reader, ever comes):
+    # refused in one line, within the timeout.
+    with tempfile.TemporaryDirectory() as cwd:
+        fifo = os.path.join(cwd, "pipe.h5")
+        os.mkfifo(fifo)
+        for args in (["inspect", fifo], ["export", fifo, "--csv", os.path.join(cwd, "c")],
+                     ["run", "smoke", "--out", fifo], ["merge", fifo, FIXTURE],
+                     ["dataset", "--env", "grid", "--out", fifo]):
+            try:
+                p = subprocess.run([SIRL, *args], capture_output=True, text=True, cwd=cwd,
+                                   stdin=subprocess.DEVNULL, timeout=30)
+            except subprocess.TimeoutExpired:
+                fail(f"sirl {' '.join(args[:2])} blocked on a FIFO")
+            if p.returncode == 0 or "regular file" not in p.stderr or p.stderr.count("\n") != 1:
+                fail(f"sirl {' '.join(args[:2])} on a FIFO: rc {p.returncode}, {p.stderr!r}")
+        # submit's --out is a folder: an existing file is refused before anything is calibrated.
+        plain = os.path.join(cwd, "notes")
+        open(plain, "w").write("mine\n")
+        p = subprocess.run([SIRL, "submit", "smoke", "--shards", "2", "--out", plain],
+                           capture_output=True, text=True, cwd=cwd, stdin=subprocess.DEVNULL,
+                           timeout=60)
+        if p.returncode != 2 or "must name a folder" not in p.stderr or \
+                open(plain).read() != "mine\n" or "filesystem error" in p.stderr:
+            fail(f"submit --out FILE: rc {p.returncode}, {p.stderr!r}")
+    print("ok: FIFOs as inputs and outputs refused in one line; submit --out FILE refused")
     print("output_guards: OK")
 
 
