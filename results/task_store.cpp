@@ -187,7 +187,12 @@ TaskStore::TaskStore(fs::path dir) : dir_(std::move(dir)) {
     try {
       index_[commit_id(e.path())] = e.path();
     } catch (const H5Error&) {
-      fs::remove(e.path(), ec);  // cannot happen with rename commits; never trust a bad file
+      // A damaged commit (its frame's magic says the store wrote it) is removed: a rerun computes
+      // the task again. A file that only has a commit's name is the user's: left alone.
+      std::ifstream in(e.path(), std::ios::binary);
+      char magic[8] = {};
+      in.read(magic, sizeof magic);
+      if (std::string_view(magic, size_t(in.gcount())) == "SIRLTASK") fs::remove(e.path(), ec);
     }
   }
 }

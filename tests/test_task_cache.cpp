@@ -185,6 +185,7 @@ TEST(TaskCache, NothingTheCacheDidNotWriteIsEverRemoved) {
   fs::create_directories(dir);
   fs::create_directories(elsewhere);
   const std::vector<std::string> mine{"base.h5",
+                                      "0123456789abcdee.h5",  // a commit's name, the user's text
                                       "notes.h5",
                                       "notes.tmp",
                                       "run.h5.tmp",
