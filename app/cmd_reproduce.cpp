@@ -6,12 +6,12 @@
 
 #include "app/cluster_options.h"
 #include "app/commands.h"
-#include "experiment/plan.h"
-#include "jobs/estimate.h"
-#include "jobs/progress.h"
 #include "experiment/install_paths.h"
+#include "experiment/plan.h"
 #include "experiment/profile.h"
+#include "jobs/estimate.h"
 #include "jobs/mpi_run.h"
+#include "jobs/progress.h"
 #include "results/study_store.h"
 
 namespace sirl::app {
@@ -80,12 +80,12 @@ void register_reproduce(CLI::App& app, Runner& run) {
       const std::filesystem::path o(out);
       figures = (o.parent_path() / (o.stem().string() + "-figures")).string();
     }
-    if (mpi_rank_from_env() <= 0) announce_prediction(load_profile(profile, profile_settings()), threads);
+    const Profile p = load_profile(profile, profile_settings());
+    if (mpi_rank_from_env() <= 0) announce_prediction(p, threads);
     const int rc = run_command(profile, out, threads, force, "", false, no_study);
     if (rc != 0 || mpi_rank_from_env() > 0) return rc;  // MPI workers do not plot
     draw_figures(out, figures);
     // The user-study pipeline on a simulated cohort (Fig. 6), when the profile asks for it.
-    const Profile p = load_profile(profile, profile_settings());
     std::string study_line;
     if (p.study.enabled && !no_study) {
       // The study ran as tasks of the plan, its analysis too (/tables/study): here Fig. 6 and

@@ -54,8 +54,7 @@ std::pair<int, std::string> unwanted_body(const httplib::Request& r) {
   const bool takes_body = r.method == "POST" || r.method == "PUT" || r.method == "PATCH" ||
                           r.method == "DELETE" || r.method == "PRI";
   const bool answer = r.method == "POST" && r.path == "/api/answer";
-  if (!answer && (chunked || sized))
-    return {413, "only POST /api/answer takes a request body"};
+  if (!answer && (chunked || sized)) return {413, "only POST /api/answer takes a request body"};
   if (takes_body && !chunked && !r.has_header("Content-Length"))
     return {411, "a request body needs Content-Length or chunked transfer encoding"};
   return {0, ""};

@@ -103,10 +103,6 @@ namespace {
 // The most values one list of a profile (seeds, N, M) may hold.
 constexpr size_t kMaxListValues = 1024;
 
-}  // namespace
-
-namespace {
-
 // Reads a parsed TOML document, checking every key; errors carry "file:line: ".
 class Reader {
  public:
@@ -857,11 +853,10 @@ namespace {
 Profile parse_profile_table(const toml::table& root, const std::string& text,
                             const std::string& path) {
   Reader r(root, path);
-  std::set<std::string> top{"name",     "description", "envs",     "seeds",
-                            "queries",  "teacher",     "fpe",      "tpa",
-                            "ablation", "hyper",       "study",    "robustness",
-                            "active",   "precision",   "external", "references",
-                            "budget_minutes"};
+  std::set<std::string> top{"name",       "description",   "envs",   "seeds",     "queries",
+                            "teacher",    "fpe",           "tpa",    "ablation",  "hyper",
+                            "study",      "robustness",    "active", "precision", "external",
+                            "references", "budget_minutes"};
   for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
   r.only_keys(root, "the profile", top);
   Profile p;

@@ -55,8 +55,7 @@ int take_gate(const fs::path& dir, int how) {
     if (errno != EINTR) {
       const int err = errno;
       ::close(fd);
-      throw std::runtime_error((dir / "gc.lock").string() + ": cannot lock: " +
-                               std::strerror(err));
+      throw std::runtime_error((dir / "gc.lock").string() + ": cannot lock: " + std::strerror(err));
     }
   return fd;
 }

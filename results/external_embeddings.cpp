@@ -35,8 +35,9 @@ ExternalEmbedding read_external_embedding(const std::string& file, const std::st
            std::to_string(seed) + ", N " + std::to_string(N) + ")");
     // Values in another file (external or virtual storage) escape the digest checked above.
     if (f.stored_outside(name))
-      fail(name + " keeps its values outside the file (external or virtual storage), which its "
-                  "XXH3-128 does not cover: write the values into the file itself");
+      fail(name +
+           " keeps its values outside the file (external or virtual storage), which its "
+           "XXH3-128 does not cover: write the values into the file itself");
     // The shape first, so a file of the wrong size is refused before anything is allocated.
     std::vector<uint64_t> dims = f.dims(name);
     if (dims.size() != 2)

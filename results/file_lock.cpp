@@ -30,11 +30,12 @@ FileLock::FileLock(const std::string& file, const std::string& holder, const std
       const size_t space = text.find(' ');
       const std::string pid = text.substr(0, space);
       const bool has_pid = !pid.empty() && pid.find_first_not_of("0123456789") == std::string::npos;
-      const std::string who = space != std::string::npos && text.substr(space + 1).starts_with("sirl ")
-                                  ? text.substr(space + 1)
-                                  : std::string("another sirl process");
-      throw FileBusy(file + " is in use by " + who + (has_pid ? " (pid " + pid + ")" : "") +
-                     "; " + advice);
+      const std::string who =
+          space != std::string::npos && text.substr(space + 1).starts_with("sirl ")
+              ? text.substr(space + 1)
+              : std::string("another sirl process");
+      throw FileBusy(file + " is in use by " + who + (has_pid ? " (pid " + pid + ")" : "") + "; " +
+                     advice);
     }
     throw std::runtime_error(path_ + ": cannot lock: " + std::strerror(err));
   }

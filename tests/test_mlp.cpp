@@ -203,8 +203,8 @@ void expect_fused_backward_adam_matches(const MlpShape& s, int batch) {
     for (size_t i = 0; i < P; ++i) {
       worst_m = std::max(worst_m, std::fabs(double(adam.m[i]) - ref_adam.m[i]) / m_scale);
       worst_v = std::max(worst_v, std::fabs(double(adam.v[i]) - ref_adam.v[i]) / v_scale);
-      worst_p = std::max(worst_p, std::fabs(double(p[i]) - ref[i]) /
-                                      (1e-5 * std::fabs(ref[i]) + 1e-3 * cfg.lr));
+      worst_p = std::max(
+          worst_p, std::fabs(double(p[i]) - ref[i]) / (1e-5 * std::fabs(ref[i]) + 1e-3 * cfg.lr));
     }
     EXPECT_LE(worst_m, 1e-4) << "threads " << threads;
     EXPECT_LE(worst_v, 1e-4) << "threads " << threads;

@@ -126,15 +126,14 @@ TEST(ProfileCompose, AFileReachedManyWaysIsResolvedOnceAndDepthIsBounded) {
   ComposeDir d;
   d.write("p24.toml", test::kSmallProfile);
   for (int i = 23; i >= 0; --i)
-    d.write("p" + std::to_string(i) + ".toml",
-            "extends = [\"p" + std::to_string(i + 1) + "\", \"p" + std::to_string(i + 1) + "\"]\n" +
-                (i == 0 ? "seeds = [7]\n" : ""));
+    d.write("p" + std::to_string(i) + ".toml", "extends = [\"p" + std::to_string(i + 1) +
+                                                   "\", \"p" + std::to_string(i + 1) + "\"]\n" +
+                                                   (i == 0 ? "seeds = [7]\n" : ""));
   const Profile p = load_profile((d.path / "p0.toml").string());
   EXPECT_EQ(p.seeds, (std::vector<int64_t>{7}));
   d.write("q40.toml", test::kSmallProfile);
   for (int i = 39; i >= 0; --i)
-    d.write("q" + std::to_string(i) + ".toml",
-            "extends = \"q" + std::to_string(i + 1) + "\"\n");
+    d.write("q" + std::to_string(i) + ".toml", "extends = \"q" + std::to_string(i + 1) + "\"\n");
   EXPECT_NE(compose_error((d.path / "q0.toml").string()).find("nests deeper than 32"),
             std::string::npos);
 }

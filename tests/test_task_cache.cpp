@@ -320,7 +320,8 @@ TEST(TaskDigest, AnEnvironmentsDataSettingChangesItsTasksOnly) {
   for (const std::string& line : {"data_seed = 3", "max_deformation = 0.25"}) {
     const std::set<std::string> c = digest_changes(base, base + line + "\n");
     const auto all = plan_digests_by_key(parse_profile(base));
-    ASSERT_EQ(all.size(), 12u);  // per environment: SIRL's and Random's φ, their FPE, truth's and raw's FPE
+    ASSERT_EQ(all.size(),
+              12u);  // per environment: SIRL's and Random's φ, their FPE, truth's and raw's FPE
     for (const auto& [k, d] : all) EXPECT_EQ(c.count(k), k.starts_with("jaco/") ? 1u : 0u) << k;
   }
 }
