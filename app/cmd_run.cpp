@@ -249,15 +249,17 @@ void print_plan_summary(const Profile& p, const Plan& plan, const std::string& c
   std::printf("%-16s %8zu %14.1f\n", "total", plan.tasks.size(), total * 1e-9);
   if (protocol > total * (1 + 1e-9)) {
     // Trainings that end early by rule: the FLOPs above are what they are expected to execute.
-    std::printf("%-16s %8s %14.1f  every epoch of every schedule; the rows above expect",
-                "protocol", "", protocol * 1e-9);
-    std::printf(" SIRL's exact skip%s (measured medians: experiment/expected_epochs.cpp)\n",
-                std::any_of(p.hyper.begin(), p.hyper.end(),
-                            [](const auto& kv) { return kv.second.tpa_stop != "fixed"; }) ||
-                        std::any_of(p.tpa_stop_by_method.begin(), p.tpa_stop_by_method.end(),
-                                    [](const auto& kv) { return kv.second != "fixed"; })
-                    ? " and converged reward heads"
-                    : "");
+    const bool heads_stop =
+        std::any_of(p.hyper.begin(), p.hyper.end(),
+                    [](const auto& kv) { return kv.second.tpa_stop != "fixed"; }) ||
+        std::any_of(p.tpa_stop_by_method.begin(), p.tpa_stop_by_method.end(),
+                    [](const auto& kv) { return kv.second != "fixed"; });
+    std::printf("%-16s %8s %14.1f  every epoch of every schedule\n", "protocol", "",
+                protocol * 1e-9);
+    std::printf("executes %.3g PFLOP of the protocol's %.3g PFLOP (%.1f %%): the rows above expect"
+                " SIRL's exact skip%s (measured stopping epochs: experiment/expected_epochs.cpp)\n",
+                total * 1e-15, protocol * 1e-15, 100 * total / protocol,
+                heads_stop ? " and reward heads stopped by the profile's tpa.stop rules" : "");
   }
   if (cache.empty()) return;
   const CacheHoldings h = cache_holdings(plan, p, cache);

@@ -311,28 +311,44 @@ void parse_tpa(const Reader& r, const toml::table& tpa, TpaGrid& g) {
   }
 }
 
-// [tpa] stop = { sirl = "fixed" }: a stop rule per variant listed in [tpa] methods.
+// [tpa] stop = { sirl = "fixed", jaco = { "sirl+vae" = "converged" } }: a stop rule per variant
+// listed in [tpa] methods, in every environment or (under an environment's name) in that one.
 void parse_tpa_stop(const Reader& r, const toml::table& tpa, Profile& p) {
   const toml::node* n = tpa.get("stop");
   if (!n) return;
   const toml::table* t = n->as_table();
   if (!t)
     r.fail(n, "[tpa] stop must be a table of method = rule, e.g. stop = { sirl = \"fixed\" }");
-  for (auto&& [key, value] : *t) {
-    const std::string name(key.str());
+  const auto one = [&](const std::string& env, const std::string& name, const toml::node& value) {
+    const std::string where = "[tpa] stop." + (env.empty() ? "" : env + ".") + name;
     const bool listed = std::any_of(p.tpa.methods.begin(), p.tpa.methods.end(),
                                     [&](const Variant& v) { return v.name() == name; });
-    if (!listed) r.fail(&value, "[tpa] stop: '" + name + "' is not one of [tpa] methods");
-    if (!value.is_string())
-      r.fail(&value, "[tpa] stop." + name + " must be a string: a tpa.stop rule");
+    if (!listed)
+      r.fail(&value, "[tpa] stop" + (env.empty() ? "" : "." + env) + ": '" + name +
+                         "' is not one of [tpa] methods");
+    if (!value.is_string()) r.fail(&value, where + " must be a string: a tpa.stop rule");
     Hyper check;  // validate() names the rules
     check.tpa_stop = *value.value<std::string>();
     try {
       validate(check);
     } catch (const std::invalid_argument& e) {
-      r.fail(&value, "[tpa] stop." + name + ": " + e.what());
+      r.fail(&value, where + ": " + e.what());
     }
-    p.tpa_stop_by_method[name] = check.tpa_stop;
+    p.tpa_stop_by_method[tpa_stop_key(env, name)] = check.tpa_stop;
+  };
+  for (auto&& [key, value] : *t) {
+    const std::string name(key.str());
+    if (const toml::table* per_env = value.as_table()) {
+      if (std::find(p.envs.begin(), p.envs.end(), name) == p.envs.end()) {
+        std::string envs;
+        for (const std::string& e : p.envs) envs += (envs.empty() ? "" : ", ") + e;
+        r.fail(&value, "[tpa] stop." + name + ": a table here must be named after one of envs (" +
+                           envs + "), with method = rule inside");
+      }
+      for (auto&& [k, v] : *per_env) one(name, std::string(k.str()), v);
+    } else {
+      one("", name, value);
+    }
   }
 }
 
@@ -932,11 +948,19 @@ const Hyper& hyper_at(const Profile& p, const std::string& env, const std::strin
   throw std::invalid_argument("no hyper-parameter point '" + tag + "' in environment " + env);
 }
 
+std::string tpa_stop_key(const std::string& env, const std::string& variant) {
+  return env.empty() ? variant : env + "/" + variant;
+}
+
 Hyper tpa_cell_hyper(const Profile& p, const std::string& env, const std::string& tag,
                      const Variant& v) {
   Hyper h = hyper_at(p, env, tag);
-  if (auto it = p.tpa_stop_by_method.find(v.name()); it != p.tpa_stop_by_method.end())
-    h.tpa_stop = it->second;
+  // The environment's own entry first, then the one for every environment.
+  for (const std::string& key : {tpa_stop_key(env, v.name()), tpa_stop_key("", v.name())})
+    if (auto it = p.tpa_stop_by_method.find(key); it != p.tpa_stop_by_method.end()) {
+      h.tpa_stop = it->second;
+      break;
+    }
   return h;
 }
 

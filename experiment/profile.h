@@ -110,11 +110,13 @@ struct Profile {
   std::vector<Variant> fpe_methods;
   std::vector<int64_t> fpe_N;
   TpaGrid tpa;
-  // [tpa] stop = { <variant> = "<rule>" }: the tpa.stop rule ("fixed", "converged",
+  // [tpa] stop = { <variant> = "<rule>", <env> = { <variant> = "<rule>" } }: the tpa.stop rule ("fixed", "converged",
   // "converged-unfrozen") of every TPA cell of that variant — [tpa]'s, [ablation]'s and
   // [robustness]'s — over [hyper]'s, e.g. the paper's epochs for the one method where a stopping
   // rule was not equivalent (configs/jaco-fig5.toml). A rule is a property of the method, not of
-  // the grid a cell is listed in, so a cell two grids share is one task.
+  // the grid a cell is listed in, so a cell two grids share is one task. An environment's entry
+  // wins over the one for every environment (the rules were tested per environment). Keys:
+  // tpa_stop_key(env or "", variant name).
   std::map<std::string, std::string> tpa_stop_by_method;
   // [tpa] protocols: how [tpa]'s cells score a representation: "paper" (the paper's reward head,
   // engine/tpa.h) and "linear" (linear evaluation: a Bradley–Terry linear head fit to convergence,
@@ -156,6 +158,8 @@ std::string hyper_points_text(const Profile& p);
 // The values of point `tag` of environment `env` ("" = the base point, Profile::hyper). Throws
 // std::invalid_argument for an unknown tag.
 const Hyper& hyper_at(const Profile& p, const std::string& env, const std::string& tag);
+// The key of Profile::tpa_stop_by_method for one variant in one environment ("" = every one).
+std::string tpa_stop_key(const std::string& env, const std::string& variant);
 // What a TPA cell of variant v trains its heads with: hyper_at's values with the variant's
 // [tpa] stop rule, if the profile gives it one.
 Hyper tpa_cell_hyper(const Profile& p, const std::string& env, const std::string& tag,

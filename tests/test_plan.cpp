@@ -79,6 +79,67 @@ TEST(Plan, AMethodsStopRuleOverridesHyperForEveryTpaCellOfThatMethod) {
       EXPECT_NE(tpa_kind().settings(t, q).find("tpa.stop = converged"), std::string::npos);
 }
 
+// [tpa] stop = { sirl = "fixed", jaco = { "sirl+vae" = "converged" } }: an environment's entry
+// applies in that environment only and wins over the entry for every environment; a table must
+// be named after one of the profile's envs.
+TEST(Plan, AnEnvironmentsStopRuleAppliesThereOnlyAndWinsOverTheGeneralOne) {
+  const std::string head = "name = \"t\"\nenvs = [\"grid\", \"jaco\"]\nseeds = [0]\n"
+                           "[tpa]\nmethods = [\"sirl\", \"sirl+vae\", \"random\"]\nN = [100]\n"
+                           "M = [10]\n";
+  const std::string hyper = "[hyper.jaco]\n\"tpa.stop\" = \"converged-unfrozen\"\n";
+  const Profile p = parse_profile(head +
+                                      "stop = { \"sirl+vae\" = \"fixed\", sirl = \"fixed\", "
+                                      "jaco = { \"sirl+vae\" = \"converged\" } }\n" +
+                                      hyper,
+                                  "t.toml");
+  const auto rule = [&](const std::string& env, const char* method) {
+    return tpa_cell_hyper(p, env, "", parse_variant(method)).tpa_stop;
+  };
+  EXPECT_EQ(rule("jaco", "sirl+vae"), "converged");  // the environment's own entry
+  EXPECT_EQ(rule("grid", "sirl+vae"), "fixed");      // the general entry elsewhere
+  EXPECT_EQ(rule("jaco", "sirl"), "fixed");
+  EXPECT_EQ(rule("jaco", "random"), "converged-unfrozen");  // no entry: [hyper.jaco]'s rule
+  EXPECT_EQ(rule("grid", "random"), "fixed");               // no entry: the default
+  const auto error = [&](const std::string& stop) {
+    try {
+      parse_profile(head + stop + hyper, "t.toml");
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error("stop = { jaco2 = { sirl = \"fixed\" } }\n")
+                .find("must be named after one of envs (grid, jaco)"),
+            std::string::npos);
+  EXPECT_NE(error("stop = { jaco = { vae = \"fixed\" } }\n").find("stop.jaco: 'vae' is not one of [tpa] methods"),
+            std::string::npos);
+  EXPECT_NE(error("stop = { jaco = { sirl = \"early\" } }\n").find("stop.jaco.sirl"),
+            std::string::npos);
+}
+
+// The paper profile stops reward heads only where a rule was tested equivalent on JacoRobot
+// (docs/stopping-rule.md): unfrozen cells by the first rule, SIRL+VAE's frozen cells by the
+// second, SIRL and every other frozen cell at the paper's epochs; GridRobot's at the paper's.
+TEST(Plan, ThePaperProfileStopsHeadsOnlyWhereARuleWasTestedEquivalent) {
+  const Profile p = load_profile("paper");
+  const Plan plan = make_plan(p);
+  int stopped = 0;
+  double total = 0, protocol = 0;
+  for (const Task& t : plan.tasks) {
+    total += t.flops, protocol += t.protocol_flops;
+    if (!(t.kind == tpa_kind())) continue;
+    const Hyper h = tpa_cell_hyper(p, t.env, t.hyper, t.variant);
+    const StopRule r = tpa_stop_rule(h, t.frozen);
+    const bool want = t.env == "jaco" && t.variant.name() != "sirl" &&
+                      (!t.frozen || t.variant.name() == "sirl+vae");
+    EXPECT_EQ(r.converged, want) << t.key;
+    if (want) EXPECT_EQ(r.rel_tol, t.frozen ? 0.001 : 0.01) << t.key;
+    stopped += want;
+  }
+  EXPECT_GT(stopped, 0);
+  EXPECT_LT(total, protocol);  // what `sirl plan paper` prints as executed against the protocol
+}
+
 TEST(Plan, TaskCountsMatchTheGrid) {
   const Profile p = parse_profile(test::kSmallProfile, "t.toml");
   const Plan plan = make_plan(p);
