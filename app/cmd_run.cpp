@@ -256,10 +256,11 @@ void print_plan_summary(const Profile& p, const Plan& plan, const std::string& c
                     [](const auto& kv) { return kv.second != "fixed"; });
     std::printf("%-16s %8s %14.1f  every epoch of every schedule\n", "protocol", "",
                 protocol * 1e-9);
-    std::printf("executes %.3g PFLOP of the protocol's %.3g PFLOP (%.1f %%): the rows above expect"
-                " SIRL's exact skip%s (measured stopping epochs: experiment/expected_epochs.cpp)\n",
-                total * 1e-15, protocol * 1e-15, 100 * total / protocol,
-                heads_stop ? " and reward heads stopped by the profile's tpa.stop rules" : "");
+    std::printf(
+        "executes %.3g PFLOP of the protocol's %.3g PFLOP (%.1f %%): the rows above expect"
+        " SIRL's exact skip%s (measured stopping epochs: experiment/expected_epochs.cpp)\n",
+        total * 1e-15, protocol * 1e-15, 100 * total / protocol,
+        heads_stop ? " and reward heads stopped by the profile's tpa.stop rules" : "");
   }
   if (cache.empty()) return;
   const CacheHoldings h = cache_holdings(plan, p, cache);
@@ -369,8 +370,8 @@ void register_plan(CLI::App& app, Runner& run) {
 void register_export(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand("export",
                                  "Write every table of a results file (fpe, tpa, robust_fpe, "
-                                 "robust_tpa, timings, training, vae_latents, tpa_heads) as "
-                                 "<table>.csv into a directory.");
+                                 "robust_tpa, study, timings, training, vae_latents, tpa_heads: "
+                                 "nine) as <table>.csv into a directory.");
   static std::string file, dir;
   cmd->add_option("file", file, "Results file (HDF5)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--csv", dir, "Directory for the CSV files (one per table)")

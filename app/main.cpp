@@ -19,6 +19,10 @@ int main(int argc, char** argv) {
       "sirl"};
   app.require_subcommand(1);
   app.fallthrough(false);
+  // `sirl --version`: one line; `sirl version` prints the build, the CPU class and the roof.
+  app.set_version_flag("--version", std::string("sirl-bench ") + sirl::app::engine_version() +
+                                        " (commit " + sirl::app::git_commit() +
+                                        "; `sirl version` for the build and CPU)");
   sirl::app::register_all(app);
   // An unknown first word is an unknown command, not "a subcommand is required".
   if (argc > 1 && argv[1][0] != '-') {
@@ -39,6 +43,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     // One line naming the option and what it accepts; exit code 2 for every usage error.

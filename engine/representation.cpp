@@ -1,58 +1,35 @@
 #include "engine/representation.h"
 
+#include "engine/method_catalog.h"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 namespace sirl {
 
-namespace {
-constexpr Method kAll[] = {Method::sirl,        Method::vae,        Method::multipref10,
-                           Method::multipref50, Method::singlepref, Method::random};
-}
-
+// Names and roles come from the one declaration of each method (engine/method_catalog.cpp).
 const char* method_name(Method m) {
-  switch (m) {
-    case Method::sirl:
-      return "sirl";
-    case Method::vae:
-      return "vae";
-    case Method::multipref10:
-      return "multipref10";
-    case Method::multipref50:
-      return "multipref50";
-    case Method::singlepref:
-      return "singlepref";
-    case Method::random:
-      return "random";
-    case Method::external:
-      return "external";
-    case Method::truth:
-      return "truth";
-    case Method::raw:
-      return "raw";
-  }
-  return "?";
+  return method_spec(m).name;
 }
 
 Method parse_method(const std::string& name) {
-  for (Method m : kAll)
-    if (name == method_name(m)) return m;
-  for (Method m : {Method::external, Method::truth, Method::raw})
-    if (name == method_name(m)) return m;
+  for (const MethodSpec& s : method_catalog())
+    if (name == s.name) return s.method;
   std::string known;
-  for (Method m : kAll) known += (known.empty() ? "" : ", ") + std::string(method_name(m));
+  for (const MethodSpec& s : method_catalog())
+    if (s.listable) known += (known.empty() ? "" : ", ") + std::string(s.name);
   throw std::invalid_argument("unknown method '" + name + "' (expected one of " + known + ")");
 }
 
 bool uses_queries(Method m) {
-  return m != Method::vae && m != Method::random && !is_reference(m);
+  return method_spec(m).uses_queries;
 }
 bool accepts_vae_pretrain(Method m) {
-  return uses_queries(m) && m != Method::external;
+  return method_spec(m).accepts_vae;
 }
 bool is_reference(Method m) {
-  return m == Method::truth || m == Method::raw;
+  return method_spec(m).role == MethodRole::reference;
 }
 
 Representation reference_representation(Method m, const Dataset& d) {

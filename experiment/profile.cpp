@@ -1,5 +1,7 @@
 #include "experiment/profile.h"
 
+#include "engine/method_catalog.h"
+
 #include "experiment/install_paths.h"
 
 #include "datasets/environments.h"
@@ -50,10 +52,12 @@ Variant parse_variant(const std::string& name) {
     throw std::invalid_argument("'" + name +
                                 "' is a reference every profile scores beside the methods (truth, "
                                 "raw): it is not listed among them");
-  if (v.vae && !accepts_vae_pretrain(v.method))
-    throw std::invalid_argument("'" + name +
-                                "': VAE pre-training applies only to sirl, multipref10, "
-                                "multipref50 and singlepref");
+  if (v.vae && !accepts_vae_pretrain(v.method)) {
+    std::string takes;
+    for (const MethodSpec& m : method_catalog())
+      if (m.accepts_vae) takes += (takes.empty() ? "" : ", ") + std::string(m.name);
+    throw std::invalid_argument("'" + name + "': VAE pre-training applies only to " + takes);
+  }
   return v;
 }
 
@@ -64,8 +68,7 @@ std::vector<bool> frozen_settings(const TpaGrid& grid, const Variant& v) {
 }
 
 bool is_best_mode(const Variant& v, bool frozen) {
-  return frozen ==
-         (v.method == Method::sirl || v.method == Method::external || is_reference(v.method));
+  return frozen == method_spec(v.method).best_frozen;
 }
 
 std::string external_name_problem(const std::string& name) {

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <chrono>
+#include <map>
 #include <stdexcept>
 
 #include "engine/checkpoint.h"
+#include "engine/method_catalog.h"
 #include "kernels/gemm_bf16.h"
 #include "probes/cpu_class.h"
 
@@ -157,7 +159,51 @@ TaskRecord run_task(const Task& t, RunContext& ctx) {
   return r;
 }
 
-ResultTables result_tables(const std::vector<TaskRecord>& records, const Roofs& roofs) {
+namespace {
+
+// /methods: the presentation of every variant the records hold (engine/method_catalog.h), so the
+// figure scripts need no list of methods. Externals take their colours in the order of their
+// names.
+std::vector<MethodAttributes> method_attributes(const std::vector<TaskRecord>& records) {
+  std::map<std::string, const TaskRecord*> variants;
+  for (const TaskRecord& r : records)
+    if (const auto v = r.text.find("variant"); v != r.text.end() && r.text.count("method"))
+      variants.emplace(v->second, &r);
+  std::vector<MethodAttributes> out;
+  int externals = 0;
+  for (const auto& [name, r] : variants) {
+    const auto sel = r->text.find("selection");
+    const auto vae = r->num.find("vae");
+    VariantStyle s;
+    try {
+      const Method m = parse_method(r->text.at("method"));
+      s = variant_style(m, vae != r->num.end() && vae->second != 0,
+                        sel == r->text.end() || sel->second.empty() ? Selection::uniform
+                                                                    : parse_selection(sel->second),
+                        name, m == Method::external ? externals++ : 0);
+    } catch (const std::invalid_argument&) {
+      continue;  // a record of an engine that knew other methods: drawn with default styles
+    }
+    MethodAttributes a;
+    a.name = name;
+    a.text = {{"method", s.method},
+              {"label", s.label},
+              {"colour", s.colour},
+              {"role", s.role},
+              {"queries", s.queries},
+              {"selection", s.selection},
+              {"selection_label", s.selection_label},
+              {"selection_colour", s.selection_colour},
+              {"dashes", s.dashes}};
+    a.integers = {{"figure_order", s.figure_order},        {"catalog_order", s.catalog_order},
+                  {"selection_order", s.selection_order},  {"vae", int64_t(s.vae)},
+                  {"best_frozen", int64_t(s.best_frozen)}, {"accepts_vae", int64_t(s.accepts_vae)}};
+    out.push_back(std::move(a));
+  }
+  return out;
+}
+
+ResultTables tables_of(const std::vector<TaskRecord>& records, const Roofs& roofs) {
   std::vector<CellTableSpec> cells;
   for (const TaskKindSpec* k : task_kinds())
     if (!k->table.name.empty()) cells.push_back(k->table);
@@ -174,6 +220,14 @@ ResultTables result_tables(const std::vector<TaskRecord>& records, const Roofs& 
     return build_tables(completed, cells, roofs);
   }
   return build_tables(records, cells, roofs);
+}
+
+}  // namespace
+
+ResultTables result_tables(const std::vector<TaskRecord>& records, const Roofs& roofs) {
+  ResultTables t = tables_of(records, roofs);
+  t.methods = method_attributes(records);
+  return t;
 }
 
 }  // namespace sirl

@@ -12,28 +12,44 @@ from scipy import stats  # noqa: E402
 
 from run_tables import (ENV, PAPER, PROTOCOL_TEXT, env_title, main_tpa, methods,  # noqa: E402
                         of_protocol, reference_tpa, references)
+import sirl_bench  # noqa: E402  (on the path once run_tables is imported)
 
-# One colour and one label per method variant, shared by every figure.
-STYLE = {
-    "sirl": ("#d62728", "SIRL"),
-    "sirl+vae": ("#ff9896", "SIRL+VAE"),
-    "vae": ("#2ca02c", "VAE"),
-    "multipref10": ("#1f77b4", "MultiPref-10"),
-    "multipref50": ("#17becf", "MultiPref-50"),
-    "singlepref": ("#9467bd", "SinglePref"),
-    "random": ("#7f7f7f", "Random"),
-}
+# One colour and one label per variant, shared by every figure, as the engine declares each
+# method (engine/method_catalog.cpp) and the results file stores it (/methods/<variant>):
+# filled by load_styles before anything is drawn, so no method is named here.
+# STYLE {variant: (colour, label)} and ORDER (the method lines of Figs. 4, 5 and the curves, in
+# the engine's order, external methods last); REFERENCE_STYLE {variant: (colour, label, dashes)}
+# for the references (ceiling and floor), drawn as reference lines, never as methods; METHODS
+# the file's /methods table itself (res.methods: role, queries, best_frozen, accepts_vae, …).
+STYLE = {}
+ORDER = []
+REFERENCE_STYLE = {}
+METHODS = None
 
 
-ORDER = list(STYLE)
+def load_styles(res):
+    """Fills STYLE, ORDER, REFERENCE_STYLE and METHODS from the file's /methods; raises
+    sirl_bench.ResultsError for a file without it (an engine before 0.19.0)."""
+    global METHODS
+    m = res.methods
+    if m.empty:
+        raise sirl_bench.ResultsError(
+            f"{res.path}: no /methods (written by an engine before 0.19.0): `sirl merge NEW.h5 "
+            "THIS.h5` rewrites it with the current engine")
+    METHODS = m
+    STYLE.clear(), ORDER.clear(), REFERENCE_STYLE.clear()
+    for v, r in m.sort_values(["catalog_order", "figure_order"]).iterrows():
+        STYLE[v] = (r.colour, r.label)
+        if r.role == "reference":
+            dashes = tuple(float(x) for x in str(r.dashes).split()) or (4.0, 2.0)
+            REFERENCE_STYLE[v] = (r.colour, r.label, (0, dashes))
+    ORDER.extend(m[m.figure_order >= 0].sort_values("figure_order").index)
 
-# The reference representations every profile scores beside the methods (the tables' `reference`
-# rows): drawn as reference lines, never as methods (not in STYLE or ORDER). Colour, label and
-# line style. A reference the table holds but this dict does not name gets a grey dash-dot line.
-REFERENCE_STYLE = {
-    "truth": ("#000000", "truth φ* (ceiling)", (0, (6, 3))),
-    "raw": ("#555555", "raw input (floor)", (0, (1, 1.5))),
-}
+
+def methods_of(role):
+    """The plain methods (no +vae, no query selection) of one role, in the figures' order."""
+    m = METHODS[(METHODS.role == role) & ~METHODS.vae & (METHODS.selection == "uniform")]
+    return list(m.sort_values("figure_order").index)
 
 
 def reference_style(v):
@@ -44,25 +60,6 @@ def fig_name(base, protocol):
     """A figure's file and figures.json name under a TPA protocol: the paper's keeps the plain
     name (fig5_tpa, fig5), another gets its own suffix (fig5_tpa_linear, fig5_linear)."""
     return base if protocol == PAPER else f"{base}_{protocol}"
-
-
-# Methods evaluated from outside the engine (`sirl evaluate`: method "external", the variant is
-# the name the user gave), drawn after the built-in ones in these colours.
-EXTERNAL_COLOURS = ["#8c564b", "#e377c2", "#bcbd22", "#000000", "#ff7f0e", "#aec7e8"]
-
-
-def add_external_styles(t):
-    """Gives every external method of the file a colour and its own name as label."""
-    names = []
-    for k in ("fpe", "tpa"):
-        d = t.get(k)
-        if d is not None and not d.empty and "method" in d:
-            names += [v for v in d[d.method == "external"].variant.unique() if v not in names]
-    for i, v in enumerate(sorted(names)):
-        if v not in STYLE:
-            STYLE[v] = (EXTERNAL_COLOURS[i % len(EXTERNAL_COLOURS)], v)
-            ORDER.append(v)
-    return sorted(names)
 
 
 # What each figure drew, written to figures.json beside them (tests and users check it):
@@ -298,8 +295,7 @@ def plot_fig7(tpa, envs, out, notes):
         return
     fig, axes = plt.subplots(1, len(envs), figsize=(7 * len(envs), 3.8), squeeze=False,
                              constrained_layout=True)
-    bases = [b for b in ["sirl", "vae", "multipref10", "multipref50", "singlepref", "random"]
-             if b in set(ab.method)]
+    bases = [b for b in methods_of("sirl") + methods_of("baseline") if b in set(ab.method)]
     configs = [(1, 0, "frozen"), (0, 0, "unfrozen"), (1, 1, "frozen + VAE"), (0, 1, "unfrozen + VAE")]
     hatches = ["", "//", "..", "xx"]
     for ax, env in zip(axes[0], envs):
@@ -322,7 +318,7 @@ def plot_fig7(tpa, envs, out, notes):
                    color=colours, edgecolor="black", hatch=hatches[k], alpha=0.85, label=name)
             for xi, m, b in zip(x, ms, bases):
                 if np.isnan(m):
-                    applicable = vae == 0 or b not in ("vae", "random")
+                    applicable = vae == 0 or bool(METHODS.accepts_vae[b])
                     ax.text(xi, 0.41, "n/a" if not applicable else "missing", rotation=90,
                             ha="center", va="bottom", fontsize=7)
                     if applicable:

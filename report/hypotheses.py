@@ -3,6 +3,7 @@ power), and their lines in the report: the summary table and the details."""
 import math
 
 import claims as claims_stats
+import figures
 from figures import STYLE
 from run_tables import (ENV, PAPER, PROTOCOL_TEXT, PROTOCOLS, env_title, main_tpa, methods,
                         of_protocol)
@@ -61,7 +62,14 @@ def rested_on(tr, env, N, variants, tpa_cells, protocol=PAPER):
     return t[use]
 
 
-BASELINES = ["vae", "multipref10", "multipref50", "singlepref", "random"]
+def baselines():
+    """The paper's baselines, as the file's /methods declares them (figures.load_styles)."""
+    return figures.methods_of("baseline")
+
+
+def pretrained_on(queries):
+    """The baselines whose φ learns from this kind of human answer ("preference")."""
+    return [v for v in baselines() if figures.METHODS.queries[v] == queries]
 
 
 def tpa_claims(H, tpa, env, protocol, training):
@@ -87,7 +95,7 @@ def tpa_claims(H, tpa, env, protocol, training):
         x = m[(m.variant == v) & ((m.N == nmax) | m.N.isna())]
         return x.groupby("seed").tpa.mean()
 
-    compared = ["sirl"] + BASELINES
+    compared = ["sirl"] + baselines()
     if protocol == PAPER:
         h2 = (f"H2 — SIRL's TPA (frozen, mean over M) is higher than every baseline's "
               f"(unfrozen) at N = {nmax}")
@@ -95,12 +103,12 @@ def tpa_claims(H, tpa, env, protocol, training):
         h2 = (f"H2 — SIRL's TPA (mean over M) is higher than every baseline's at N = {nmax} "
               f"(every φ frozen)")
     claim(H, env, h2,
-          [claims_stats.paired(v, tpa_at("sirl"), tpa_at(v)) for v in BASELINES
+          [claims_stats.paired(v, tpa_at("sirl"), tpa_at(v)) for v in baselines()
            if (m.variant == v).any()], ">", main=True,
           trainings=rested_on(training, env, nmax, compared, True, protocol), protocol=protocol)
     claim(H, env, "Secondary — Random beats preference pre-training (TPA)",
           [claims_stats.paired(v, tpa_at("random"), tpa_at(v))
-           for v in ["multipref10", "multipref50", "singlepref"] if (m.variant == v).any()],
+           for v in pretrained_on("preference") if (m.variant == v).any()],
           ">", protocol=protocol)
 
 
@@ -112,8 +120,8 @@ def hypotheses(fpe, tpa, envs, training=None):
     H = []
     fpe, tpa = methods(fpe), methods(tpa)
     has_tpa = "env" in tpa and not tpa.empty
-    baselines = BASELINES
-    compared = ["sirl"] + baselines
+    base = baselines()
+    compared = ["sirl"] + base
     for env in envs:
         d = fpe[fpe.env == env] if not fpe.empty else fpe
         if not d.empty:
@@ -124,17 +132,18 @@ def hypotheses(fpe, tpa, envs, training=None):
                 return x.set_index("seed").fpe
 
             claim(H, env, f"H1 — SIRL's FPE is lower than every baseline's at N = {nmax}",
-                  [claims_stats.paired(v, fpe_at("sirl"), fpe_at(v)) for v in baselines
+                  [claims_stats.paired(v, fpe_at("sirl"), fpe_at(v)) for v in base
                    if (d.variant == v).any()], "<", main=True,
                   trainings=rested_on(training, env, nmax, compared, False))
         if has_tpa:
             tpa_claims(H, tpa, env, PAPER, training)
         paper = of_protocol(tpa, PAPER) if has_tpa else tpa
         ab = paper[(paper.env == env) & (paper.vae == 0)] if has_tpa else paper
-        for meth, text in [("sirl", "SIRL is better frozen"),
-                           ("multipref10", "MultiPref-10 is better unfrozen"),
-                           ("multipref50", "MultiPref-50 is better unfrozen"),
-                           ("singlepref", "SinglePref is better unfrozen")]:
+        # The paper's best modes, for every method that learns from answers: SIRL frozen, the
+        # preference methods unfrozen (their /methods best_frozen).
+        for meth in [v for v in figures.methods_of("sirl") + base if figures.METHODS.queries[v]]:
+            frozen_best = bool(figures.METHODS.best_frozen[meth])
+            text = f"{STYLE[meth][1]} is better {'frozen' if frozen_best else 'unfrozen'}"
             if ab.empty:
                 break
             x = ab[ab.method == meth]
@@ -147,7 +156,7 @@ def hypotheses(fpe, tpa, envs, training=None):
             fr = x[x.frozen == 1].groupby("seed").tpa.mean()
             un = x[x.frozen == 0].groupby("seed").tpa.mean()
             claim(H, env, f"Secondary — {text} (ablation cells, mean over N, M)",
-                  [claims_stats.paired("frozen − unfrozen", fr, un)], ">" if meth == "sirl" else "<",
+                  [claims_stats.paired("frozen − unfrozen", fr, un)], ">" if frozen_best else "<",
                   protocol=PAPER)
         if ENV.get(env, {}).get("vae_weak_claim"):
             x = fpe[(fpe.env == env)] if not fpe.empty else fpe

@@ -16,35 +16,47 @@ import os
 
 import matplotlib.pyplot as plt
 import numpy as np
-from scipy import stats
 
+import figures
 from run_tables import PAPER, methods, of_protocol
 
-# The selection rules: colour and label (uniform = the paper's SIRL).
-SELECTION = {"sirl": ("#d62728", "uniform (the paper)"),
-             "sirl@vote": ("#1f77b4", "active: vote entropy"),
-             "sirl@infogain": ("#2ca02c", "active: information gain")}
-METHOD_STYLE = {"sirl": ("#d62728", "SIRL"), "vae": ("#2ca02c", "VAE"),
-                "multipref10": ("#1f77b4", "MultiPref-10"),
-                "multipref50": ("#17becf", "MultiPref-50"),
-                "singlepref": ("#9467bd", "SinglePref"), "random": ("#7f7f7f", "Random")}
+# The query-selection variants of SIRL (uniform = the paper's) and the methods of the noisy-teacher
+# figures, as colour and label from the file's /methods (figures.load_styles fills it first).
+
+
+def selection_styles():
+    """{variant: (colour, label)} of SIRL's selection rules in the file, uniform first."""
+    m = figures.METHODS
+    m = m[(m.role == "sirl") & ~m.vae].sort_values("selection_order")
+    return {v: (r.selection_colour, r.selection_label) for v, r in m.iterrows()}
+
+
+def method_styles():
+    """{variant: (colour, label)} of the plain methods, in the figures' order."""
+    return {v: figures.STYLE[v] for v in figures.methods_of("sirl") + figures.methods_of("baseline")}
+
+
 AXES = {"beta": ("Boltzmann β", True), "mistake": ("mistake rate", False),
         "attend": ("share of features attended", True)}  # True: noisier as the value falls
 BOOTSTRAP = 2000
 
 
-# The active variants' query selection rules (the `selection` column of every table).
-RULE = {"sirl@vote": "vote", "sirl@infogain": "infogain"}
+def active_rules():
+    """{variant: its query selection rule} of SIRL's active variants in the file (the
+    `selection` column of every table), in the engine's order."""
+    return {v: s for v, s in selection_rules().items() if s != "uniform"}
+
+
+def selection_rules():
+    m = figures.METHODS
+    m = m[(m.role == "sirl") & ~m.vae].sort_values("selection_order")
+    return dict(zip(m.index, m.selection))
 
 
 def mean_ci(v):
-    v = np.asarray(v, dtype=float)
-    v = v[np.isfinite(v)]
-    if len(v) == 0:
-        return np.nan, np.nan
-    if len(v) == 1:
-        return float(v[0]), np.nan
-    return float(v.mean()), float(stats.t.ppf(0.975, len(v) - 1) * v.std(ddof=1) / math.sqrt(len(v)))
+    """figures.mean_ci as plain floats (the JSON of what was drawn)."""
+    m, ci = figures.mean_ci(v)
+    return float(m), float(ci)
 
 
 def save(fig, out, name):
@@ -58,7 +70,7 @@ def save(fig, out, name):
 def active_envs(fpe):
     if fpe.empty:
         return []
-    has = fpe[fpe.variant.isin(["sirl@vote", "sirl@infogain"])]
+    has = fpe[fpe.variant.isin(list(active_rules()))]
     return [e for e in dict.fromkeys(has.env)]
 
 
@@ -118,7 +130,7 @@ def plot_active(fpe, tpa, out, notes, drawn):
     for c, env in enumerate(envs):
         ax = axes[0][c]
         d = fpe[fpe.env == env]
-        for v, (colour, label) in SELECTION.items():
+        for v, (colour, label) in selection_styles().items():
             dv = d[d.variant == v]
             if dv.empty:
                 continue
@@ -140,7 +152,8 @@ def plot_active(fpe, tpa, out, notes, drawn):
         ax = axes[1][c]
         t = tpa[(tpa.env == env) & tpa.frozen] if not tpa.empty else tpa
         Ms = sorted(int(m) for m in t.M.dropna().unique()) if not t.empty else []
-        if t.empty or not t.variant.isin(["sirl@vote", "sirl@infogain"]).any():
+        SELECTION = selection_styles()
+        if t.empty or not t.variant.isin([v for v in SELECTION if v != "sirl"]).any():
             ax.set_axis_off()
             continue
         Ns = sorted(int(n) for n in t[t.variant.isin(list(SELECTION))].N.dropna().unique())
@@ -188,7 +201,7 @@ def active_lines(fpe, tim, envs):
          "|---|---|---|---:|---|---:|---:|"]
     for env in envs:
         d = fpe[fpe.env == env]
-        for v in ("sirl@vote", "sirl@infogain"):
+        for v, rule in active_rules().items():
             e = n_star_estimate(d, v)
             if not e:
                 continue
@@ -196,7 +209,7 @@ def active_lines(fpe, tim, envs):
             lo, hi = e["ci"]
             ci = "—" if not math.isfinite(lo) and not math.isfinite(hi) and len(d.seed.unique()) < 2 \
                 else f"[{lo:.0f}, {'> ' + str(e['N_top']) if not math.isfinite(hi) else f'{hi:.0f}'}]"
-            L.append(f"| {env} | {RULE[v]} | {e['uniform_at_top']:.4f} → "
+            L.append(f"| {env} | {rule} | {e['uniform_at_top']:.4f} → "
                      f"{e['active_at_top']:.4f} (N = {e['N_top']}) | {ns} | {ci} | "
                      f"{100 * e['share_reached']:.0f} % | {e['seeds']} |")
     if len(tim):
@@ -206,8 +219,8 @@ def active_lines(fpe, tim, envs):
               "| env | selection | choosing: s | GFLOP | SIRL φ of that selection: s |",
               "|---|---|---:|---:|---:|"]
         for env in envs:
-            for v in ("sirl", "sirl@vote", "sirl@infogain"):
-                rule = RULE.get(v)
+            for v, rule in selection_rules().items():
+                rule = None if rule == "uniform" else rule
                 act = tim[(tim.kind == "active") & (tim.env == env) & (tim.selection == rule)
                           & (tim.teacher == "")] if rule else tim.iloc[0:0]
                 # the main teacher's φ of this selection only (not the robustness cells' φ)
@@ -284,7 +297,7 @@ def plot_robustness(fpe, tpa, rfpe, rtpa, out, notes, drawn):
                 errs = [0.0] + [float(da[(da.perfect == 0) & (da.level == lv)][
                     "similarity_error" if metric == "fpe" else "preference_error"].mean())
                     for lv in levels]
-                for v, (colour, label) in METHOD_STYLE.items():
+                for v, (colour, label) in method_styles().items():
                     dv = da[da.variant == v]
                     if dv.empty:
                         continue
@@ -341,6 +354,7 @@ def robustness_lines(fpe, tpa, rfpe, rtpa, envs):
                     continue
                 levels = axis_points(da[da.perfect == 0], axis)
                 worst = levels[-1]
+                METHOD_STYLE = method_styles()
                 for v in METHOD_STYLE:
                     dv = da[da.variant == v]
                     p = dv[dv.perfect == 1].set_index("seed")[metric]

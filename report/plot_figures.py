@@ -43,7 +43,10 @@ def main():
     except sirl_bench.ResultsError as e:
         sys.exit(f"plot_figures: {e}")
     run_tables.load_envs(res)
-    figures.add_external_styles(t)
+    try:
+        figures.load_styles(res)
+    except sirl_bench.ResultsError as e:
+        sys.exit(f"plot_figures: {e}")
     envs = [e for e in run_tables.ENV if any(not t[k].empty and (t[k].env == e).any()
                                   for k in ("fpe", "tpa", "training"))] or list(run_tables.ENV)[:1]
     notes = []

@@ -390,6 +390,12 @@ void write_results_file(const std::string& path, const RunInfo& info,
       }
       f.write_strings("/runs_index", keys);
       for (const auto& t : tables.tables) f.write_table("/tables/" + t.name, t.table);
+      for (const MethodAttributes& m : tables.methods) {
+        const std::string g = "/methods/" + m.name;
+        f.group(g);
+        for (const auto& [k, v] : m.text) f.set_attr(g, k, v);
+        for (const auto& [k, v] : m.integers) f.set_attr(g, k, v);
+      }
       f.flush();  // a full disk shows here, not silently in the destructor
     }
     write_frame(partial);

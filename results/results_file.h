@@ -93,8 +93,17 @@ struct NamedTable {
   std::string name;
   H5Table table;
 };
+// /methods/<name>: how figures and the report show one variant of the file (its attributes:
+// engine/method_catalog.h's VariantStyle, filled by the experiment layer).
+struct MethodAttributes {
+  std::string name;
+  std::vector<std::pair<std::string, std::string>> text;
+  std::vector<std::pair<std::string, int64_t>> integers;
+};
+
 struct ResultTables {
-  std::vector<NamedTable> tables;  // in the file's order
+  std::vector<NamedTable> tables;         // in the file's order
+  std::vector<MethodAttributes> methods;  // every variant the records hold
   // The table called `name`; throws std::out_of_range naming it.
   const H5Table& at(const std::string& name) const;
 };

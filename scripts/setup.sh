@@ -3,7 +3,8 @@
 # Idempotent: running it twice installs nothing the second time. Needs root (or sudo) only
 # when something is missing. --tests adds what only the test suite needs: a one-node Slurm
 # (slurmctld, slurmd, munge; the Slurm test starts and stops its own daemons in a temporary
-# folder, with its own config and key).
+# folder, with its own config and key). --list prints the packages (one per line, with --tests'
+# too if given first) and installs nothing: the list to hand a cluster's administrators.
 set -euo pipefail
 
 packages=(
@@ -31,6 +32,11 @@ packages=(
 )
 if [ "${1:-}" = "--tests" ]; then
   packages+=(slurmctld slurmd slurm-client munge)
+  shift
+fi
+if [ "${1:-}" = "--list" ]; then
+  printf '%s\n' "${packages[@]}" npm
+  exit 0
 fi
 
 missing=()

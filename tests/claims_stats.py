@@ -124,6 +124,10 @@ import hypotheses  # noqa: E402  (report/: figures, run_tables, sirl_bench)
 import run_tables  # noqa: E402
 import sirl_bench  # noqa: E402
 
+
+import declared_methods  # noqa: E402  (tests/)
+
+hypotheses.figures.load_styles(declared_methods.Declared)
 SEEDS = range(6)
 rng = np.random.default_rng(56)
 BASE = {"sirl": 0.80, "vae": 0.62, "multipref10": 0.70, "multipref50": 0.72, "singlepref": 0.66,

@@ -95,9 +95,11 @@ def check_synthetic(tmp):
     """Figs. 4, 5 and 7 on synthetic tables: what they drew (figures.DRAWN), per protocol, with
     the references apart from the methods."""
     sys.path.insert(0, os.path.join(SRC, "report"))
+    import declared_methods
     import figures
     import run_tables
     run_tables.ENV.update({"grid": {"title": "GridRobot"}, "jaco": {"title": "JacoRobot"}})
+    figures.load_styles(declared_methods.Declared)
     fpe, tpa = synthetic_tables()
     envs = ["grid", "jaco"]
 

@@ -7,9 +7,12 @@ falling back to the build's source folder), from an unrelated working folder:
   figures and writes the report, with the figure scripts run by the interpreter $SIRL_PYTHON
   names (a wrapper that records it was used);
 - the installed reader imports from P/share/sirl-bench/python and opens the results file;
+- every relative link of the installed README (docs, examples, CHANGELOG, ...) resolves inside
+  P/share/sirl-bench, and so does every link between the installed docs pages;
 - a missing data folder is one clear line.
 """
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -42,6 +45,27 @@ def main():
         env.pop("SIRL_DATA_DIR", None)
         work = os.path.join(tmp, "work")
         os.makedirs(work)
+
+        share = os.path.join(moved, "share", "sirl-bench")
+        pages = [os.path.join(share, "README.md")] + [
+            os.path.join(share, "docs", f) for f in sorted(os.listdir(os.path.join(share, "docs")))
+            if f.endswith(".md")]
+        checked, dead = 0, []
+        for page in pages:
+            # Links only: not code blocks or inline code (a C++ lambda reads like a link).
+            text = re.sub(r"```.*?```", "", open(page).read(), flags=re.S)
+            text = re.sub(r"`[^`\n]*`", "", text)
+            for target in re.findall(r"\]\(([^)#\s]+)", text):
+                if target.startswith(("http://", "https://", "mailto:")):
+                    continue
+                resolved = os.path.normpath(os.path.join(os.path.dirname(page), target))
+                if page.endswith("README.md") or resolved.startswith(os.path.join(share, "docs")):
+                    checked += 1
+                    if not os.path.exists(resolved):
+                        dead.append(f"{os.path.relpath(page, share)} -> {target}")
+        if dead or checked < 30:
+            fail(f"{len(dead)} of {checked} installed links are dead: {dead[:10]}")
+        print(f"ok: all {checked} links of the installed README and between its docs resolve")
 
         h = subprocess.run([sirl, "run", "--help"], capture_output=True, text=True, env=env, cwd=work)
         if "quick" not in h.stdout or "smoke" not in h.stdout:

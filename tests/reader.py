@@ -13,6 +13,9 @@
 - the schema-1 fixture (engine 0.1.0) opens, with protocol "paper" and reference False filled in
   where the file has no such column; a dataset file, a file of a future schema version and a
   non-HDF5 file are refused with one line naming the file;
+- /methods (issue 59): every variant of the tables has its row, and the built-in methods'
+  rows are what tests/declared_methods.py says (the fixture the report tests use without a
+  file);
 - the README's one-liner works;
 - examples/analysis.py runs on the smoke file.
 """
@@ -151,6 +154,25 @@ def check_protocols(r):
           f"{sorted(set(tpa[tpa.reference].variant))}, N <NA>) in /tables/tpa and fpe")
 
 
+def check_methods(r):
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import declared_methods
+    m = r.methods
+    variants = set(r.tables["fpe"].variant) | set(r.tables["tpa"].variant)
+    if not variants <= set(m.index):
+        fail(f"/methods lacks {sorted(variants - set(m.index))}")
+    want = declared_methods.Declared.methods
+    for v in sorted(set(want.index) & set(m.index)):
+        for c in want.columns:
+            if c in ("selection_order",):
+                continue
+            if m.at[v, c] != want.at[v, c]:
+                fail(f"/methods/{v} {c} is {m.at[v, c]!r}, the fixture says {want.at[v, c]!r}")
+    if not {"sirl", "vae", "random", "truth", "raw"} <= set(m.index):
+        fail(f"smoke's /methods: {sorted(m.index)}")
+    print(f"ok: /methods declares the file's {len(m)} variants as the fixture does")
+
+
 def check_refusals(smoke, tmp):
     v1 = sirl_bench.open(os.path.join(SRC, "tests", "data", "results_v1.h5"))
     if v1.schema_version != 1 or len(v1.tables["tpa"]) != 1 or len(v1.records) != 5:
@@ -205,6 +227,7 @@ def main():
         print(f"ok: provenance names the libraries: {libs}")
         check_curves(r, smoke)
         check_protocols(r)
+        check_methods(r)
         check_refusals(smoke, tmp)
         p = subprocess.run(["/usr/bin/python3", "-c",
                             f"import sirl_bench as s; t = s.open({smoke!r}).tables['tpa']; "

@@ -224,6 +224,31 @@ class Results:
         return out
 
     @property
+    def methods(self) -> pd.DataFrame:
+        """How figures show every variant of the file, one row per variant (index: its name, as
+        the tables' `variant` column holds it): method, label, colour, role ("sirl", "baseline",
+        "reference", "external"), queries (the answers it learns from: "similarity", "preference"
+        or ""), figure_order (its place among the method lines of Figs. 4 and 5; -1: none),
+        catalog_order, vae, best_frozen (the paper's best TPA mode is frozen), accepts_vae,
+        selection, selection_label, selection_colour, selection_order, dashes (a reference line's dash pattern,
+        "6 3"). Declared once per method in the engine
+        (engine/method_catalog.cpp); empty for files of engines before 0.19.0."""
+        cols = ["method", "label", "colour", "role", "queries", "figure_order", "catalog_order",
+                "vae", "best_frozen", "accepts_vae", "selection", "selection_label",
+                "selection_colour", "selection_order", "dashes"]
+        rows = {}
+        for name, g in (self._f["methods"].items() if "methods" in self._f else []):
+            rows[name] = {k: _attr(g.attrs[k]) for k in cols if k in g.attrs}
+        df = pd.DataFrame.from_dict(rows, orient="index", columns=cols)
+        df.index.name = "variant"
+        if not df.empty:
+            for c in ("figure_order", "catalog_order", "selection_order"):
+                df[c] = df[c].astype(int)
+            for c in ("vae", "best_frozen", "accepts_vae"):
+                df[c] = df[c].astype(bool)
+        return df
+
+    @property
     def complete(self) -> bool:
         return bool(self.provenance.get("complete", 0))
 

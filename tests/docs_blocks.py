@@ -1,0 +1,125 @@
+#!/usr/bin/python3
+"""Every shell and Python block of README.md and docs/*.md runs (ctest).
+
+The blocks (```sh and ```python fences) run in the order README.md, then docs/*.md by name, in one
+scratch folder that looks like a checkout: configs/, examples/, bench/, python/, results/,
+report/ and scripts/ link to the source, build/release to the build. `sirl` on PATH is an
+installed copy (`cmake --install BUILD --prefix P`), so a block that says `sirl …` runs the
+installed binary and one that says `build/release/app/sirl …` runs the build. Python blocks run
+under /usr/bin/python3 with the installed reader on PYTHONPATH.
+
+What the blocks show is run as written except for three rewrites, applied to every block:
+- the `quick` profile (15 minutes and more) becomes `smoke` (seconds), everywhere in the block;
+- an optional part of a synopsis, `[--threads N]`, is left out;
+- `...` at the end of a line (more of the same) is left out.
+
+A block that cannot run here says why on the line before its fence:
+    <!-- docs-test: skip: needs a Slurm cluster -->
+and one that needs a file made first names the command:
+    <!-- docs-test: setup: sirl dataset --env grid --out grid.h5 -->
+Skipped blocks are listed by file and line in the output; a skip without a reason fails.
+"""
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+SIRL_BUILD = os.environ["SIRL_BUILD_DIR"]
+SRC = os.environ["SIRL_SOURCE_DIR"]
+LINKED = ["configs", "examples", "bench", "python", "results", "report", "scripts", "docs"]
+MARK = re.compile(r"<!--\s*docs-test:\s*(skip|setup):\s*(.*?)\s*-->\s*$")
+
+
+def fail(msg):
+    print("docs_blocks: FAIL:", msg)
+    sys.exit(1)
+
+
+def blocks():
+    """(page, line, language, code, marks) for every sh/python block, in run order."""
+    pages = ["README.md"] + sorted(os.path.join("docs", f) for f in os.listdir(os.path.join(SRC, "docs"))
+                                   if f.endswith(".md"))
+    out = []
+    for page in pages:
+        lines = open(os.path.join(SRC, page)).read().split("\n")
+        i = 0
+        while i < len(lines):
+            m = re.fullmatch(r"```(sh|python)\s*", lines[i])
+            if not m:
+                i += 1
+                continue
+            marks, j = [], i - 1
+            while j >= 0 and MARK.search(lines[j]):
+                marks.insert(0, MARK.search(lines[j]).groups())
+                j -= 1
+            end = lines.index("```", i + 1)
+            out.append((page, i + 1, m.group(1), "\n".join(lines[i + 1:end]) + "\n", marks))
+            i = end + 1
+    return out
+
+
+def rewrite(code):
+    code = re.sub(r"\bquick\b", "smoke", code)
+    code = re.sub(r" ?\[[^\]\n]*--[^\]\n]*\]", "", code)       # [--option VALUE …]
+    code = re.sub(r" \.\.\.[ \t]*(#.*)?$", r" \1", code, flags=re.M)
+    return code
+
+
+def main():
+    found = blocks()
+    if len(found) < 10:
+        fail(f"only {len(found)} blocks found (the parsing broke)")
+    with tempfile.TemporaryDirectory() as tmp:
+        prefix = os.path.join(tmp, "prefix")
+        p = subprocess.run(["cmake", "--install", SIRL_BUILD, "--prefix", prefix],
+                           capture_output=True, text=True)
+        if p.returncode:
+            fail(f"cmake --install: {p.stderr}")
+        work = os.path.join(tmp, "work")
+        os.makedirs(os.path.join(work, "build"))
+        os.symlink(SIRL_BUILD, os.path.join(work, "build", "release"))
+        for d in LINKED:
+            os.symlink(os.path.join(SRC, d), os.path.join(work, d))
+        env = dict(os.environ, PATH=os.path.join(prefix, "bin") + ":" + os.environ["PATH"],
+                   PYTHONPATH=os.path.join(prefix, "share", "sirl-bench", "python"),
+                   MPLBACKEND="Agg", SIRL_PYTHON="/usr/bin/python3")
+        ran, skipped, seen = 0, [], set()
+        for page, line, lang, code, marks in found:
+            where = f"{page}:{line}"
+            skip = [reason for kind, reason in marks if kind == "skip"]
+            if skip:
+                if not skip[0]:
+                    fail(f"{where}: a skip mark must say why")
+                skipped.append(f"{where} ({skip[0]})")
+                continue
+            code = rewrite(code)
+            if (lang, code) in seen:
+                print(f"ok: {where}: the same block as one above")
+                continue
+            seen.add((lang, code))
+            for kind, cmd in marks:
+                if kind == "setup":
+                    s = subprocess.run(["bash", "-euo", "pipefail", "-c", rewrite(cmd)], cwd=work,
+                                       env=env, capture_output=True, text=True, timeout=600)
+                    if s.returncode:
+                        fail(f"{where}: its setup `{cmd}` failed:\n{s.stderr[-1500:]}")
+            t0 = time.time()
+            argv = (["bash", "-euo", "pipefail", "-c", code] if lang == "sh"
+                    else ["/usr/bin/python3", "-c", code])
+            r = subprocess.run(argv, cwd=work, env=env, capture_output=True, text=True, timeout=900)
+            if r.returncode:
+                fail(f"{where}: the {lang} block failed (rc {r.returncode}), as run:\n{code}\n"
+                     f"stdout: {r.stdout[-1500:]}\nstderr: {r.stderr[-2500:]}")
+            ran += 1
+            print(f"ok: {where} ({lang}, {time.time() - t0:.0f} s)")
+        print(f"skipped {len(skipped)} block(s), each with its reason:")
+        for s in skipped:
+            print("  " + s)
+        print(f"docs_blocks: OK ({ran} blocks ran)")
+
+
+if __name__ == "__main__":
+    main()

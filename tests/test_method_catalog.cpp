@@ -1,0 +1,103 @@
+// The method catalog (engine/method_catalog.h): every method's name round-trips, and what the
+// figures and the report read from it is the paper's: its figure order, its best modes, its
+// baselines; variants get their labels and colours from their method.
+#include <gtest/gtest.h>
+
+#include <set>
+#include <string>
+
+#include "engine/method_catalog.h"
+#include "experiment/profile.h"
+
+namespace sirl {
+namespace {
+
+TEST(MethodCatalog, EveryNameRoundTripsAndIsUnique) {
+  std::set<std::string> names, labels, colours;
+  for (const MethodSpec& s : method_catalog()) {
+    EXPECT_EQ(parse_method(s.name), s.method) << s.name;
+    EXPECT_STREQ(method_name(s.method), s.name);
+    EXPECT_TRUE(names.insert(s.name).second) << s.name;
+    EXPECT_TRUE(labels.insert(s.label).second) << s.label;
+    if (s.role != MethodRole::external) EXPECT_TRUE(colours.insert(s.colour).second) << s.colour;
+  }
+  EXPECT_EQ(names.size(), 9u);
+  try {
+    parse_method("sirll");
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {  // lists only what a profile may list
+    EXPECT_NE(
+        std::string(e.what()).find("sirl, vae, multipref10, multipref50, singlepref, random)"),
+        std::string::npos)
+        << e.what();
+  }
+}
+
+// The paper's Figs. 4 and 5 draw SIRL, SIRL+VAE, VAE, MultiPref-10, MultiPref-50, SinglePref and
+// Random in this order; the references are reference lines; the other "+vae" variants and the
+// active-query variants are not method lines.
+TEST(MethodCatalog, FigureOrderIsThePapers) {
+  const char* order[] = {"sirl",        "sirl+vae",   "vae",   "multipref10",
+                         "multipref50", "singlepref", "random"};
+  for (int i = 0; i < 7; ++i) {
+    const Variant v = parse_variant(order[i]);
+    EXPECT_EQ(variant_style(v.method, v.vae, v.selection, v.name()).figure_order, i) << order[i];
+  }
+  for (const char* name : {"multipref10+vae", "singlepref+vae", "sirl@vote", "sirl+vae@infogain"}) {
+    const Variant v = parse_variant(name);
+    EXPECT_EQ(variant_style(v.method, v.vae, v.selection, v.name()).figure_order, -1) << name;
+  }
+  EXPECT_EQ(variant_style(Method::truth, false, Selection::uniform, "truth").figure_order, -1);
+  EXPECT_EQ(variant_style(Method::truth, false, Selection::uniform, "truth").dashes, "6 3");
+  EXPECT_EQ(variant_style(Method::truth, false, Selection::uniform, "truth").role, "reference");
+}
+
+TEST(MethodCatalog, VariantsTakeTheirMethodsLabelAndColour) {
+  const auto style = [](const char* name) {
+    const Variant v = parse_variant(name);
+    return variant_style(v.method, v.vae, v.selection, v.name());
+  };
+  EXPECT_EQ(style("sirl+vae").label, "SIRL+VAE");
+  EXPECT_EQ(style("sirl+vae").colour, "#ff9896");  // SIRL+VAE's own line in Figs. 4 and 5
+  EXPECT_EQ(style("multipref10+vae").label, "MultiPref-10+VAE");
+  EXPECT_EQ(style("multipref10+vae").colour, style("multipref10").colour);
+  EXPECT_EQ(style("sirl@vote").label, "SIRL (active: vote entropy)");
+  EXPECT_EQ(style("sirl@vote").selection, "vote");
+  EXPECT_EQ(style("sirl@vote").selection_order, 1);
+  EXPECT_EQ(style("sirl").selection_label, "uniform (the paper)");
+  EXPECT_EQ(style("multipref50").queries, "preference");
+  EXPECT_EQ(style("sirl").queries, "similarity");
+  EXPECT_EQ(style("random").queries, "");
+  EXPECT_EQ(style("vae").role, "baseline");
+  EXPECT_EQ(style("sirl").role, "sirl");
+  // Externals: their own name as label, colours by their position, after every built-in line.
+  const VariantStyle a = variant_style(Method::external, false, Selection::uniform, "mine", 0);
+  const VariantStyle b = variant_style(Method::external, false, Selection::uniform, "yours", 1);
+  const VariantStyle g = variant_style(Method::external, false, Selection::uniform, "other", 6);
+  EXPECT_EQ(a.label, "mine");
+  EXPECT_NE(a.colour, b.colour);
+  EXPECT_EQ(g.colour, a.colour);  // six colours, then around again
+  EXPECT_GT(a.figure_order, 6);
+  EXPECT_LT(a.figure_order, b.figure_order);
+}
+
+// The paper's best TPA modes: SIRL (with or without VAE) frozen, every other method unfrozen;
+// an external method and the references have no weights: frozen.
+TEST(MethodCatalog, BestModesAreThePapers) {
+  EXPECT_TRUE(is_best_mode(parse_variant("sirl"), true));
+  EXPECT_TRUE(is_best_mode(parse_variant("sirl+vae"), true));
+  for (const char* name : {"vae", "multipref10", "multipref50", "singlepref", "random"}) {
+    EXPECT_TRUE(is_best_mode(parse_variant(name), false)) << name;
+    EXPECT_FALSE(is_best_mode(parse_variant(name), true)) << name;
+  }
+  Variant ext;
+  ext.method = Method::external;
+  EXPECT_TRUE(is_best_mode(ext, true));
+  EXPECT_TRUE(method_spec(Method::raw).best_frozen);
+  // VAE pre-training: exactly the methods that learn from answers, external ones aside.
+  for (const MethodSpec& s : method_catalog())
+    EXPECT_EQ(s.accepts_vae, s.uses_queries && s.method != Method::external) << s.name;
+}
+
+}  // namespace
+}  // namespace sirl
