@@ -14,25 +14,6 @@
 
 namespace sirl {
 
-const char* selection_name(Selection s) {
-  switch (s) {
-    case Selection::uniform:
-      return "uniform";
-    case Selection::vote:
-      return "vote";
-    case Selection::infogain:
-      return "infogain";
-  }
-  return "?";
-}
-
-Selection parse_selection(const std::string& name) {
-  for (Selection s : {Selection::uniform, Selection::vote, Selection::infogain})
-    if (name == selection_name(s)) return s;
-  throw std::invalid_argument("unknown query selection '" + name +
-                              "' (expected uniform, vote or infogain)");
-}
-
 double vote_entropy(const int* votes, int K) {
   std::array<int, 3> n{};
   for (int k = 0; k < K; ++k) ++n[size_t(votes[k])];

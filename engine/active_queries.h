@@ -24,13 +24,9 @@
 #include "engine/checkpoint.h"
 #include "engine/execution.h"
 #include "engine/hyperparams.h"
+#include "engine/selection.h"
 
 namespace sirl {
-
-enum class Selection { uniform, vote, infogain };
-// "uniform", "vote", "infogain" and back (throws std::invalid_argument listing the names).
-const char* selection_name(Selection s);
-Selection parse_selection(const std::string& name);
 
 // How the ensemble asks, round by round: a profile's [active] table (defaults measured in
 // docs/active.md).

@@ -154,4 +154,28 @@ VariantStyle variant_style(Method m, bool vae, Selection selection, const std::s
   return v;
 }
 
+// Names and roles, read from the declarations above.
+const char* method_name(Method m) {
+  return method_spec(m).name;
+}
+
+Method parse_method(const std::string& name) {
+  for (const MethodSpec& s : method_catalog())
+    if (name == s.name) return s.method;
+  std::string known;
+  for (const MethodSpec& s : method_catalog())
+    if (s.listable) known += (known.empty() ? "" : ", ") + std::string(s.name);
+  throw std::invalid_argument("unknown method '" + name + "' (expected one of " + known + ")");
+}
+
+bool uses_queries(Method m) {
+  return method_spec(m).uses_queries;
+}
+bool accepts_vae_pretrain(Method m) {
+  return method_spec(m).accepts_vae;
+}
+bool is_reference(Method m) {
+  return method_spec(m).role == MethodRole::reference;
+}
+
 }  // namespace sirl

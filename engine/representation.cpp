@@ -1,36 +1,10 @@
 #include "engine/representation.h"
 
-#include "engine/method_catalog.h"
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 namespace sirl {
-
-// Names and roles come from the one declaration of each method (engine/method_catalog.cpp).
-const char* method_name(Method m) {
-  return method_spec(m).name;
-}
-
-Method parse_method(const std::string& name) {
-  for (const MethodSpec& s : method_catalog())
-    if (name == s.name) return s.method;
-  std::string known;
-  for (const MethodSpec& s : method_catalog())
-    if (s.listable) known += (known.empty() ? "" : ", ") + std::string(s.name);
-  throw std::invalid_argument("unknown method '" + name + "' (expected one of " + known + ")");
-}
-
-bool uses_queries(Method m) {
-  return method_spec(m).uses_queries;
-}
-bool accepts_vae_pretrain(Method m) {
-  return method_spec(m).accepts_vae;
-}
-bool is_reference(Method m) {
-  return method_spec(m).role == MethodRole::reference;
-}
 
 Representation reference_representation(Method m, const Dataset& d) {
   if (!is_reference(m))

@@ -6,30 +6,10 @@
 
 #include "datasets/dataset.h"
 #include "engine/hyperparams.h"
+#include "engine/method_catalog.h"
 #include "kernels/mlp.h"
 
 namespace sirl {
-
-// `external`: a representation learned outside the engine and handed in as its embedding of Ξ
-// (a profile's [external.<name>], `sirl evaluate`); it has no weights, so its TPA cells are frozen.
-// `truth` and `raw`: the references every profile scores beside the methods (never a baseline of
-// the paper's claims): φ*(ξ) itself, the normalised true features (the ceiling), and the
-// trajectory's network input itself (the floor a learned representation must beat). Both are
-// functions of Ξ alone: no training, no weights, frozen cells only.
-enum class Method { sirl, vae, multipref10, multipref50, singlepref, random, external, truth, raw };
-
-// "sirl", "vae", "multipref10", "multipref50", "singlepref", "random", "external".
-const char* method_name(Method m);
-// Inverse of method_name; throws std::invalid_argument listing the valid names (the built-in
-// six; "external" is accepted too, as records of external methods carry it).
-Method parse_method(const std::string& name);
-// Methods whose φ is trained on human queries (N matters). An external method hands in one
-// embedding per N, so N matters for it too.
-bool uses_queries(Method m);
-// Methods that accept VAE pre-training as a switch (SIRL+VAE, MultiPref+VAE, SinglePref+VAE).
-bool accepts_vae_pretrain(Method m);
-// truth and raw: the reference representations (see Method).
-bool is_reference(Method m);
 
 struct Representation {
   MlpShape shape;             // input → hidden… → d
