@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "datasets/query_bundle.h"
+
 namespace sirl {
 
 const char* role_name(MethodRole r) {
@@ -18,6 +20,21 @@ const char* role_name(MethodRole r) {
   return "?";
 }
 
+namespace {
+
+MethodTraining preference_training(PreferenceSet QueryBundle::*answers,
+                                   RewardSet RewardSets::*humans) {
+  return {.train = train_preferences,
+          .schedule = &Hyper::pref,
+          .hyper_prefix = "pref.",
+          .rows_per_answer = 2,
+          .rate_class = "rep_pref",
+          .preferences = answers,
+          .humans = humans};
+}
+
+}  // namespace
+
 const std::vector<MethodSpec>& method_catalog() {
   // The colours are matplotlib's tab10/tab20 ones the paper's figures resemble.
   static const std::vector<MethodSpec> c = {
@@ -30,7 +47,13 @@ const std::vector<MethodSpec>& method_catalog() {
        .uses_queries = true,
        .accepts_vae = true,
        .best_frozen = true,
-       .vae_colour = "#ff9896"},
+       .vae_colour = "#ff9896",
+       .training = {.train = train_sirl,
+                    .schedule = &Hyper::sirl,
+                    .hyper_prefix = "sirl.",
+                    .rows_per_answer = 3,
+                    .stops_at_fixed_point = true,
+                    .rate_class = "rep_sirl"}},
       {.method = Method::vae, .name = "vae", .label = "VAE", .colour = "#2ca02c"},
       {.method = Method::multipref10,
        .name = "multipref10",
@@ -38,21 +61,24 @@ const std::vector<MethodSpec>& method_catalog() {
        .colour = "#1f77b4",
        .queries = "preference",
        .uses_queries = true,
-       .accepts_vae = true},
+       .accepts_vae = true,
+       .training = preference_training(&QueryBundle::multipref10, &RewardSets::multipref10)},
       {.method = Method::multipref50,
        .name = "multipref50",
        .label = "MultiPref-50",
        .colour = "#17becf",
        .queries = "preference",
        .uses_queries = true,
-       .accepts_vae = true},
+       .accepts_vae = true,
+       .training = preference_training(&QueryBundle::multipref50, &RewardSets::multipref50)},
       {.method = Method::singlepref,
        .name = "singlepref",
        .label = "SinglePref",
        .colour = "#9467bd",
        .queries = "preference",
        .uses_queries = true,
-       .accepts_vae = true},
+       .accepts_vae = true,
+       .training = preference_training(&QueryBundle::singlepref, &RewardSets::singlepref)},
       {.method = Method::random, .name = "random", .label = "Random", .colour = "#7f7f7f"},
       // An external method's label and colour are its own (variant_style); it hands in one
       // embedding per N, so N is an axis of its cells.

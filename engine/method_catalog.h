@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "engine/hyperparams.h"
+#include "engine/method_trainers.h"
 #include "engine/selection.h"
 
 namespace sirl {
@@ -42,6 +44,31 @@ enum class MethodRole {
 };
 const char* role_name(MethodRole r);  // "sirl", "baseline", "reference", "external"
 
+struct PreferenceSet;
+struct RewardSet;
+struct RewardSets;
+
+// How a method obtains φ: the function that trains it, the settings it reads, and what one
+// training answer costs (the plan's FLOP model and its calibration class read these).
+struct MethodTraining {
+  // null: φ is not trained by the method's own task (Random: its seeded initialisation; VAE: the
+  // VAE task's encoder; external, truth, raw: φ(Ξ) is given).
+  TrainFn train = nullptr;
+  // The schedule (epochs, batch, Adam) it trains with, and the prefix of every setting of its
+  // own it reads ("sirl.": sirl.epochs, sirl.lr, sirl.margin, …).
+  TrainSchedule Hyper::*schedule = nullptr;
+  const char* hyper_prefix = "";
+  int rows_per_answer = 0;  // trajectories one answer feeds through φ: 3 (triplet), 2 (pair)
+  // Training may end at an exact fixed point (SIRL's hinge), so the plan expects fewer epochs
+  // than the schedule's (experiment/expected_epochs.h).
+  bool stops_at_fixed_point = false;
+  // The calibration class that times it on this machine (experiment/calibration.h).
+  const char* rate_class = "";
+  // Preference methods: the bundle's answers they train on and the humans (heads) behind them.
+  PreferenceSet QueryBundle::*preferences = nullptr;
+  RewardSet RewardSets::*humans = nullptr;
+};
+
 struct MethodSpec {
   Method method = Method::sirl;
   const char* name = "";    // "sirl", "multipref10", …: profiles, task keys, tables
@@ -63,6 +90,7 @@ struct MethodSpec {
   // Whether a profile may list it among its methods (external: [external.<name>]; references:
   // every profile scores them).
   bool listable = true;
+  MethodTraining training;
 };
 
 // Every method, in the order figures draw them.

@@ -18,7 +18,7 @@ struct MethodConfig {
   int64_t queries = 0;  // N: similarity triplets (SIRL) or preference pairs (the Pref methods)
   bool vae_pretrain = false;  // start φ from the VAE encoder's mean head
   Hyper hyper;
-  // SIRL: end training where it reaches a fixed point (engine/methods.cpp; the same weights and
+  // SIRL: end training where it reaches a fixed point (engine/train_sirl.cpp; the same weights and
   // curve as running every epoch). false runs every epoch (the tests' reference).
   bool skip_fixed_point = true;
 };

@@ -1,6 +1,6 @@
 // The epochs a training is expected to execute, for the cost model (`sirl plan`): the schedule's,
 // except where the engine ends a training early by rule:
-// - SIRL's exact skip (engine/methods.cpp): a training stops at its fixed point;
+// - SIRL's exact skip (engine/train_sirl.cpp): a training stops at its fixed point;
 // - reward heads under tpa.stop = "converged" (engine/convergence.h, StopRule).
 // Where that happens depends on the data, so these are measured medians (the tables in
 // expected_epochs.cpp say where from), interpolated in the number of queries and clamped to the

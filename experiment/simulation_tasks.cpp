@@ -259,10 +259,8 @@ bool reads_vae(const Variant& v) {
 // method's schedule, and the VAE's when it starts from (or is) the VAE's encoder.
 std::string rep_hyper(const Variant& v, const Hyper& h) {
   std::string s = hyper_lines(h, {"phi.", "precision"});
-  if (v.method == Method::sirl)
-    s += hyper_lines(h, {"sirl."});
-  else if (uses_queries(v.method))
-    s += hyper_lines(h, {"pref."});
+  if (const char* own = method_spec(v.method).training.hyper_prefix; *own)
+    s += hyper_lines(h, {own});
   if (reads_vae(v)) s += hyper_lines(h, {"vae."});
   return s;
 }
@@ -275,19 +273,19 @@ void rep_cost(Task& t, const Profile& p) {
     t.bytes = 4.0 * double(z.trajectories) * double(z.h.embedding_dim);
     return;
   }
-  if (t.variant.method == Method::sirl) {
-    t.protocol_flops = z.phi.train_flops(3 * t.N, z.h.sirl.epochs);
-    // Trainings end at their fixed point (the exact skip): what they are expected to run.
+  // A trained method: `rows_per_answer` rows through φ per answer, every epoch of its schedule.
+  if (const MethodTraining& how = method_spec(t.variant.method).training; how.train) {
+    const TrainSchedule& s = z.h.*how.schedule;
+    const int64_t rows = how.rows_per_answer * t.N;
+    const int batch_rows = how.rows_per_answer * s.batch;
+    t.protocol_flops = z.phi.train_flops(rows, s.epochs);
     t.flops = t.protocol_flops;
-    if (const double e = expected_sirl_epochs(t.env, t.N, t.variant.vae, z.h); e < z.h.sirl.epochs)
-      t.flops *= e / z.h.sirl.epochs;
-    t.bytes = working_set(z.phi, 3 * z.h.sirl.batch);
-    t.stream_bytes = stream_bytes(z.phi, 3 * t.N, 3 * z.h.sirl.batch, z.h.sirl.epochs);
-  } else if (uses_queries(t.variant.method)) {
-    t.flops = z.phi.train_flops(2 * t.N, z.h.pref.epochs);
-    t.bytes = working_set(z.phi, 2 * z.h.pref.batch);
-    t.stream_bytes = stream_bytes(z.phi, 2 * t.N, 2 * z.h.pref.batch, z.h.pref.epochs);
-    t.protocol_flops = t.flops;
+    // Trainings that end at their fixed point (the exact skip): what they are expected to run.
+    if (how.stops_at_fixed_point)
+      if (const double e = expected_sirl_epochs(t.env, t.N, t.variant.vae, z.h); e < s.epochs)
+        t.flops *= e / s.epochs;
+    t.bytes = working_set(z.phi, batch_rows);
+    t.stream_bytes = stream_bytes(z.phi, rows, batch_rows, s.epochs);
   }
   t.flops += z.phi.forward_flops(int(z.trajectories));  // the embedding of Ξ it stores
   t.protocol_flops += z.phi.forward_flops(int(z.trajectories));
@@ -336,8 +334,7 @@ void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
   // The protocol's count: what the epochs skipped at a fixed point would have added.
   r.num["protocol_flops"] = r.num["flops"] + rep.skipped_flops;
   if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
-  if (t.variant.method != Method::vae && t.variant.method != Method::random)
-    record_convergence(rep.loss_curve, r);
+  if (method_spec(t.variant.method).training.train) record_convergence(rep.loss_curve, r);
   ctx.keep(t.key, std::make_shared<const Representation>(get_representation(r)));
 }
 
@@ -653,6 +650,15 @@ const RateClass& preference_training_rate() {
       }};
   return rate;
 }
+// The class a representation's training is timed by: its method's (MethodTraining::rate_class).
+// An untrained φ (VAE, Random) costs only its embedding of Ξ, timed as the preference class.
+const RateClass& rep_training_rate(const Variant& v) {
+  const std::string_view want = method_spec(v.method).training.rate_class;
+  if (want.empty() || want == preference_training_rate().name) return preference_training_rate();
+  if (want == sirl_training_rate().name) return sirl_training_rate();
+  throw std::logic_error("method " + std::string(method_name(v.method)) +
+                         " names an unknown rate class '" + std::string(want) + "'");
+}
 const RateClass& vae_training_rate() {
   static const RateClass rate{
       "vae", [](const CalibrationSample& s, int scale) {
@@ -724,9 +730,7 @@ const TaskKindSpec& rep_kind() {
           },
       .settings = rep_settings,
       .cost = rep_cost,
-      .rate = [](const Task& t) -> const RateClass& {
-        return t.variant.method == Method::sirl ? sirl_training_rate() : preference_training_rate();
-      },
+      .rate = [](const Task& t) -> const RateClass& { return rep_training_rate(t.variant); },
       .shard_group = by_representation,
       .bf16_products = env_precision_is_bf16,
       .stores_weights = true,

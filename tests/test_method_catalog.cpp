@@ -3,9 +3,11 @@
 // baselines; variants get their labels and colours from their method.
 #include <gtest/gtest.h>
 
+#include <map>
 #include <set>
 #include <string>
 
+#include "datasets/queries.h"
 #include "engine/method_catalog.h"
 #include "experiment/profile.h"
 
@@ -36,6 +38,34 @@ TEST(MethodCatalog, EveryNameRoundTripsAndIsUnique) {
 // The paper's Figs. 4 and 5 draw SIRL, SIRL+VAE, VAE, MultiPref-10, MultiPref-50, SinglePref and
 // Random in this order; the references are reference lines; the other "+vae" variants and the
 // active-query variants are not method lines.
+// A method that learns from answers declares how it trains: its function, schedule, settings
+// prefix, rows through φ per answer (a triplet 3, a pair 2) and rate class; a preference method
+// also the set it trains on, whose humans are the paper's (MultiPref-10: 10, MultiPref-50: 50,
+// SinglePref: 1). Methods that learn from no answers train nothing in their own task.
+TEST(MethodCatalog, EveryMethodThatLearnsFromAnswersDeclaresItsTraining) {
+  const RewardSets humans = make_reward_sets(8, 1);
+  const std::map<std::string, int> paper_humans{
+      {"multipref10", 10}, {"multipref50", 50}, {"singlepref", 1}};
+  for (const MethodSpec& s : method_catalog()) {
+    const MethodTraining& how = s.training;
+    const std::string queries = s.queries;
+    if (queries.empty()) {
+      EXPECT_EQ(how.train, nullptr) << s.name;
+      continue;
+    }
+    ASSERT_NE(how.train, nullptr) << s.name;
+    EXPECT_NE(how.schedule, nullptr) << s.name;
+    EXPECT_NE(std::string(how.hyper_prefix), "") << s.name;
+    EXPECT_NE(std::string(how.rate_class), "") << s.name;
+    EXPECT_EQ(how.rows_per_answer, queries == "similarity" ? 3 : 2) << s.name;
+    if (queries == "preference") {
+      ASSERT_NE(how.humans, nullptr) << s.name;
+      ASSERT_NE(how.preferences, nullptr) << s.name;
+      EXPECT_EQ((humans.*how.humans).count, paper_humans.at(s.name)) << s.name;
+    }
+  }
+}
+
 TEST(MethodCatalog, FigureOrderIsThePapers) {
   const char* order[] = {"sirl",        "sirl+vae",   "vae",   "multipref10",
                          "multipref50", "singlepref", "random"};

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "datasets/environments.h"
 #include "experiment/expected_epochs.h"
 #include "experiment/plan.h"
 #include "experiment/profile.h"
@@ -41,6 +42,42 @@ TEST(Plan, ExpectedHeadEpochsFollowTheMeasuredTableOfTheCellsTolerance) {
   EXPECT_EQ(expected_head_epochs("jaco", true, 50, h), 1000);
   h.tpa_stop_min_epochs = 50;  // another minimum: never measured
   EXPECT_EQ(expected_head_epochs("jaco", false, 50, h), 1000);
+}
+
+// A representation's cost is its method's declared training (MethodTraining): per epoch of its
+// schedule, 3 rows through φ per SIRL triplet and 2 per preference pair, forward + backward (3 ×
+// a forward's 2·in·out per layer), plus the one forward pass over Ξ it stores. Counted by hand
+// from the widths here, not by MlpShape.
+TEST(Plan, ARepresentationCostsItsMethodsRowsPerAnswerOverEveryEpochOfItsSchedule) {
+  const Profile p = parse_profile(test::kSmallProfile, "t.toml");
+  const Plan plan = make_plan(p);
+  int checked_sirl = 0, checked_pref = 0, untrained = 0;
+  for (const Task& t : plan.tasks) {
+    if (!(t.kind == rep_kind())) continue;
+    const Hyper& h = hyper_at(p, t.env, t.hyper);
+    std::vector<int> w{env_spec(t.env).input_dim(p.data)};
+    w.insert(w.end(), h.phi_hidden.begin(), h.phi_hidden.end());
+    w.push_back(h.embedding_dim);
+    double forward_per_row = 0;
+    for (size_t i = 0; i + 1 < w.size(); ++i) forward_per_row += 2.0 * w[i] * w[i + 1];
+    const double embed = forward_per_row * double(env_spec(t.env).trajectories(p.data));
+    const std::string m = method_name(t.variant.method);
+    if (m == "sirl") {
+      EXPECT_DOUBLE_EQ(t.protocol_flops, 3 * forward_per_row * 3.0 * t.N * 7 + embed) << t.key;
+      ++checked_sirl;
+    } else if (m == "multipref10") {
+      EXPECT_DOUBLE_EQ(t.protocol_flops, 3 * forward_per_row * 2.0 * t.N * h.pref.epochs + embed)
+          << t.key;
+      EXPECT_DOUBLE_EQ(t.flops, t.protocol_flops) << t.key;  // no early end
+      ++checked_pref;
+    } else if (m == "random") {
+      EXPECT_DOUBLE_EQ(t.protocol_flops, embed) << t.key;  // no training: Ξ's embedding only
+      ++untrained;
+    }
+  }
+  EXPECT_GT(checked_sirl, 0);
+  EXPECT_GT(checked_pref, 0);
+  EXPECT_GT(untrained, 0);
 }
 
 // [tpa] stop = { sirl = "fixed" }: every TPA cell of SIRL (its [tpa] and [ablation] cells, frozen
@@ -83,9 +120,10 @@ TEST(Plan, AMethodsStopRuleOverridesHyperForEveryTpaCellOfThatMethod) {
 // applies in that environment only and wins over the entry for every environment; a table must
 // be named after one of the profile's envs.
 TEST(Plan, AnEnvironmentsStopRuleAppliesThereOnlyAndWinsOverTheGeneralOne) {
-  const std::string head = "name = \"t\"\nenvs = [\"grid\", \"jaco\"]\nseeds = [0]\n"
-                           "[tpa]\nmethods = [\"sirl\", \"sirl+vae\", \"random\"]\nN = [100]\n"
-                           "M = [10]\n";
+  const std::string head =
+      "name = \"t\"\nenvs = [\"grid\", \"jaco\"]\nseeds = [0]\n"
+      "[tpa]\nmethods = [\"sirl\", \"sirl+vae\", \"random\"]\nN = [100]\n"
+      "M = [10]\n";
   const std::string hyper = "[hyper.jaco]\n\"tpa.stop\" = \"converged-unfrozen\"\n";
   const Profile p = parse_profile(head +
                                       "stop = { \"sirl+vae\" = \"fixed\", sirl = \"fixed\", "
@@ -111,7 +149,8 @@ TEST(Plan, AnEnvironmentsStopRuleAppliesThereOnlyAndWinsOverTheGeneralOne) {
   EXPECT_NE(error("stop = { jaco2 = { sirl = \"fixed\" } }\n")
                 .find("must be named after one of envs (grid, jaco)"),
             std::string::npos);
-  EXPECT_NE(error("stop = { jaco = { vae = \"fixed\" } }\n").find("stop.jaco: 'vae' is not one of [tpa] methods"),
+  EXPECT_NE(error("stop = { jaco = { vae = \"fixed\" } }\n")
+                .find("stop.jaco: 'vae' is not one of [tpa] methods"),
             std::string::npos);
   EXPECT_NE(error("stop = { jaco = { sirl = \"early\" } }\n").find("stop.jaco.sirl"),
             std::string::npos);
