@@ -75,7 +75,7 @@ struct EnvSizes {
 };
 EnvSizes env_sizes(const Task& t, const Profile& p) {
   const EnvSpec& e = env_spec(t.env);
-  const Hyper& h = hyper_at(p, t.env, t.hyper);
+  const Hyper& h = t.hyper_values();
   const int in = e.input_dim(p.data);
   return {h, in, e.trajectories(p.data), phi_shape(in, h)};
 }
@@ -228,7 +228,7 @@ bool name_vae_cell(TaskRecord& r);
 
 void run_vae(const Task& t, RunContext& ctx, TaskRecord& r) {
   const auto checkpoint = ctx.checkpointer(t.key);
-  const VaeModel v = train_vae(ctx.dataset(t.env), hyper_at(ctx.profile(), t.env, t.hyper),
+  const VaeModel v = train_vae(ctx.dataset(t.env), t.hyper_values(),
                                task_seed(t.env, t.seed, "vae"), {t.threads, checkpoint.get()});
   put_vae(v, r);
   r.num["flops"] = v.train_flops;
@@ -310,7 +310,7 @@ void run_external_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
 
 void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
   if (t.variant.method == Method::external) return run_external_rep(t, ctx, r);
-  const Hyper& h = hyper_at(ctx.profile(), t.env, t.hyper);
+  const Hyper& h = t.hyper_values();
   const Dataset& d = ctx.dataset(t.env);
   std::shared_ptr<const VaeModel> vae;
   if (reads_vae(t.variant)) vae = ctx.vae(t.input(vae_kind()));
@@ -383,7 +383,7 @@ void run_robust_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
 
 void tpa_cost(Task& t, const Profile& p) {
   const EnvSizes z = env_sizes(t, p);
-  const Hyper h = tpa_cell_hyper(p, t.env, t.hyper, t.variant);
+  const Hyper& h = t.hyper_values();
   const MlpShape net = tpa_network(z.phi, h, t.frozen);
   t.protocol_flops = kTestRewards * net.train_flops(2 * t.M, h.tpa.epochs);
   // Under tpa.stop = "converged" the heads stop early: what they are expected to run.
@@ -416,7 +416,7 @@ void record_heads_convergence(const TpaResult& res, TaskRecord& r) {
 
 void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   const auto checkpoint = ctx.checkpointer(t.key);
-  const Hyper h = tpa_cell_hyper(ctx.profile(), t.env, t.hyper, t.variant);
+  const Hyper& h = t.hyper_values();
   const TpaResult res = evaluate_tpa(
       *cell_representation(t, ctx), ctx.dataset(t.env), ctx.bundle(t.env, t.seed, t.teacher).tpa,
       TpaConfig{t.M, t.frozen, h}, task_seed(t.env, t.seed, "tpa"), {t.threads, checkpoint.get()});
@@ -474,16 +474,16 @@ void describe_linear_tpa(const Task& t, TaskRecord& r) {
 }
 
 std::string linear_tpa_settings(const Task& t, const Profile& p) {
-  const LinearBtOptions o = linear_options(hyper_at(p, t.env, t.hyper));
+  const LinearBtOptions o = linear_options(t.hyper_values());
   return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
-         hyper_lines(hyper_at(p, t.env, t.hyper), {"tpa.l2"}) + "linear tolerance " +
+         hyper_lines(t.hyper_values(), {"tpa.l2"}) + "linear tolerance " +
          exact_number(o.tolerance) + " floor " + exact_number(o.floor) + " max_iterations " +
          std::to_string(o.max_iterations) + " rank_tolerance " + exact_number(o.rank_tolerance) +
          "\n";
 }
 
 void run_linear_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const Hyper& h = hyper_at(ctx.profile(), t.env, t.hyper);
+  const Hyper& h = t.hyper_values();
   const LinearTpaResult res = evaluate_linear_tpa(*cell_representation(t, ctx), ctx.dataset(t.env),
                                                   ctx.bundle(t.env, t.seed, t.teacher).tpa, t.M,
                                                   linear_options(h), t.threads);
@@ -512,7 +512,7 @@ ActiveConfig active_config(const Task& t, const Profile& p) {
   static_cast<ActiveRounds&>(c) = p.active.at(t.env);
   c.rule = t.variant.selection;
   c.budget = queries_for(p, t.teacher).similarity;  // as many as the uniform set holds
-  c.hyper = hyper_at(p, t.env, t.hyper);
+  c.hyper = t.hyper_values();
   return c;
 }
 
@@ -560,11 +560,21 @@ std::string tpa_cell_key(const Task& t) {
   return cell_prefix(t) + "tpa/M" + std::to_string(t.M) + (t.frozen ? "/frozen" : "/unfrozen");
 }
 
+// ---- hyper-parameters: resolved once per task when it is planned (Task::resolved_hyper) ----
+
+// Its environment's values at its hyper-parameter point.
+Hyper env_point_hyper(const Task& t, const Profile& p) {
+  return hyper_at(p, t.env, t.hyper);
+}
+// A TPA cell's: its point's, with its method's stop rule ([tpa] stop).
+Hyper tpa_hyper(const Task& t, const Profile& p) {
+  return tpa_cell_hyper(p, t.env, t.hyper, t.variant);
+}
+
 // ---- settings: what each kind reads of the profile (experiment/task_settings.h) ----
 
 std::string vae_settings(const Task& t, const Profile& p) {
-  return describe_data(p, t.env) +
-         hyper_lines(hyper_at(p, t.env, t.hyper), {"phi.", "vae.", "precision"});
+  return describe_data(p, t.env) + hyper_lines(t.hyper_values(), {"phi.", "vae.", "precision"});
 }
 
 std::string rep_settings(const Task& t, const Profile& p) {
@@ -572,7 +582,7 @@ std::string rep_settings(const Task& t, const Profile& p) {
     return describe_data(p, t.env) + describe_external(external_method(p, t.variant.external));
   // Every φ is handed its seed's query bundle (methods that ask nothing ignore it).
   return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
-         rep_hyper(t.variant, hyper_at(p, t.env, t.hyper));
+         rep_hyper(t.variant, t.hyper_values());
 }
 
 // The probe's split comes from the main teacher's bundle; a robustness row also states its own
@@ -585,13 +595,13 @@ std::string fpe_settings(const Task& t, const Profile& p) {
 
 std::string tpa_settings(const Task& t, const Profile& p) {
   return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
-         hyper_lines(tpa_cell_hyper(p, t.env, t.hyper, t.variant), {"phi.", "tpa.", "precision"});
+         hyper_lines(t.hyper_values(), {"phi.", "tpa.", "precision"});
 }
 
 std::string active_settings(const Task& t, const Profile& p) {
   return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
          describe_active(p.active.at(t.env)) +
-         hyper_lines(hyper_at(p, t.env, t.hyper), {"phi.", "sirl.", "precision"});
+         hyper_lines(t.hyper_values(), {"phi.", "sirl.", "precision"});
 }
 
 using C = H5Table::Column;
@@ -712,6 +722,7 @@ const TaskKindSpec& vae_kind() {
       .table = {},
       .lacks_fields = vae_lacks_cell_fields,
       .complete_fields = name_vae_cell,
+      .resolve_hyper = env_point_hyper,
   };
   return kind;
 }
@@ -739,6 +750,7 @@ const TaskKindSpec& rep_kind() {
       .table = {},
       .lacks_fields = lacks_cell_fields,
       .complete_fields = complete_cell_fields,
+      .resolve_hyper = env_point_hyper,
   };
   return kind;
 }
@@ -773,6 +785,7 @@ const TaskKindSpec& fpe_kind() {
                  {"reference", C::Int, "reference", true}}},
       .lacks_fields = lacks_cell_fields,
       .complete_fields = complete_cell_fields,
+      .resolve_hyper = env_point_hyper,
   };
   return kind;
 }
@@ -817,6 +830,7 @@ const TaskKindSpec& tpa_kind() {
                 {"tpa_linear"}},
       .lacks_fields = lacks_cell_fields,
       .complete_fields = complete_cell_fields,
+      .resolve_hyper = tpa_hyper,
   };
   return kind;
 }
@@ -839,6 +853,7 @@ const TaskKindSpec& linear_tpa_kind() {
       .describe = describe_linear_tpa,
       .run = run_linear_tpa,
       .table = {},
+      .resolve_hyper = env_point_hyper,
   };
   return kind;
 }
@@ -897,6 +912,7 @@ const TaskKindSpec& active_kind() {
       .describe = describe_active,
       .run = run_active,
       .table = {},
+      .resolve_hyper = env_point_hyper,
   };
   return kind;
 }

@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,12 @@ struct Task {
   // or inputs the point changes (a φ is shared by every point of a "tpa.lr" axis), and its key
   // then carries it after the seed: "grid/s0/sirl.epochs=300/sirl/N100/rep".
   std::string hyper;
+  // The hyper-parameters it runs at, resolved once when it is planned (add_task, by its kind's
+  // `resolve_hyper`): its environment's values at its point and, for a TPA cell, its method's
+  // stop rule. Its settings, cost and runner all read these. Null for kinds that read none.
+  std::shared_ptr<const Hyper> resolved_hyper;
+  // *resolved_hyper; std::logic_error when the task was not planned by add_task.
+  const Hyper& hyper_values() const;
   std::vector<int> deps;  // indices into Plan::tasks (set by add_task)
   // The key of the input of each kind it reads, by kind name (set by add_task): a runner finds
   // its φ, VAE or active queries here, whichever point they were planned at.

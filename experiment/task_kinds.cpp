@@ -58,6 +58,13 @@ const std::string& Task::input(TaskKind k) const {
   return it->second;
 }
 
+const Hyper& Task::hyper_values() const {
+  if (!resolved_hyper)
+    throw std::logic_error("task " + key +
+                           " has no resolved hyper-parameters (not planned by add_task)");
+  return *resolved_hyper;
+}
+
 int Plan::count(TaskKind k) const {
   int n = 0;
   for (const auto& t : tasks) n += t.kind == k;
@@ -79,7 +86,8 @@ double Plan::protocol_flops(TaskKind k) const {
 }
 
 bool env_precision_is_bf16(const Task& t, const Profile& p) {
-  return hyper_at(p, t.env, t.hyper).precision == "bf16";
+  (void)p;
+  return t.hyper_values().precision == "bf16";
 }
 
 bool never_bf16(const Task&, const Profile&) {
@@ -104,11 +112,20 @@ int add_task(Plan& plan, const Profile& p, Task t) {
     t.input_keys[dep.kind.name()] = dep.key;
     input_at_point = input_at_point || !dep.hyper.empty();
   }
+  const auto resolve = [&](Task& x) {
+    if (kind.resolve_hyper)
+      x.resolved_hyper = std::make_shared<const Hyper>(kind.resolve_hyper(x, p));
+  };
+  resolve(t);
   // A hyper-parameter point it does not read (and no input of it read) is the base task.
   if (!t.hyper.empty() && !input_at_point) {
     Task base = t;
     base.hyper.clear();
-    if (kind.settings(t, p) == kind.settings(base, p)) t.hyper.clear();
+    resolve(base);
+    if (kind.settings(t, p) == kind.settings(base, p)) {
+      t.hyper.clear();
+      t.resolved_hyper = base.resolved_hyper;
+    }
   }
   t.key = kind.key(t);
   if (!t.hyper.empty()) {  // after "<env>/s<seed>/"

@@ -50,6 +50,9 @@ struct TaskKindSpec {
   // fills them in (both null: its records have not changed).
   bool (*lacks_fields)(const TaskRecord& r) = nullptr;
   bool (*complete_fields)(TaskRecord& r) = nullptr;
+  // The hyper-parameters a task of this kind runs at (Task::resolved_hyper), worked out once by
+  // add_task; null: the kind reads none.
+  Hyper (*resolve_hyper)(const Task& t, const Profile& p) = nullptr;
 };
 
 // Registers a kind with the engine, from a static object in the kind's own file:
