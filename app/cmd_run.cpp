@@ -9,6 +9,7 @@
 
 #include "app/cluster_options.h"
 #include "app/commands.h"
+#include "experiment/cost_model.h"
 #include "experiment/plan.h"
 #include "experiment/profile.h"
 #include "experiment/task_kinds.h"
@@ -139,11 +140,6 @@ void register_run(CLI::App& app, Runner& run) {
   };
 }
 
-// Main-memory bandwidth per core assumed when --node-bandwidth is not given: this machine's
-// STREAM triad on both cores (30.9 GB/s, docs/roofline.md) per core, up to a 12-channel DDR5-4800
-// socket's 460 GB/s.
-constexpr double kStreamPerCore = 15.5e9, kSocketBandwidth = 460e9;
-
 ClusterModel cluster_model(const PlanClusterOptions& o) {
   ClusterModel m;
   m.nodes = o.nodes;
@@ -152,9 +148,8 @@ ClusterModel cluster_model(const PlanClusterOptions& o) {
   m.threads_per_worker = o.threads_per_worker;
   m.max_task_threads = o.task_threads > 0 ? o.task_threads : m.cores_per_node;
   m.serial_fraction = o.serial_fraction;
-  m.node_bandwidth = o.node_bandwidth_gbs > 0
-                         ? o.node_bandwidth_gbs * 1e9
-                         : std::min(kSocketBandwidth, kStreamPerCore * m.cores_per_node);
+  m.node_bandwidth = o.node_bandwidth_gbs > 0 ? o.node_bandwidth_gbs * 1e9
+                                              : default_node_bandwidth(m.cores_per_node);
   return m;
 }
 

@@ -13,7 +13,8 @@
 #include "engine/methods.h"
 #include "engine/tpa.h"
 #include "experiment/calibration.h"
-#include "experiment/expected_epochs.h"
+#include "experiment/cost_model.h"
+#include "experiment/simulation_costs.h"
 #include "experiment/task_outputs.h"
 #include "experiment/task_settings.h"
 #include "kernels/vae.h"
@@ -63,45 +64,6 @@ Task experiment_cell(TaskKind kind, const std::string& env, int64_t seed, const 
 }
 
 namespace {
-
-// ---- sizes the cost models read ----
-
-// φ's shape and the trajectory space of one environment under a profile.
-struct EnvSizes {
-  const Hyper& h;
-  int input_dim;
-  int64_t trajectories;
-  MlpShape phi;
-};
-EnvSizes env_sizes(const Task& t, const Profile& p) {
-  const EnvSpec& e = env_spec(t.env);
-  const Hyper& h = t.hyper_values();
-  const int in = e.input_dim(p.data);
-  return {h, in, e.trajectories(p.data), phi_shape(in, h)};
-}
-
-// Bytes of one training: params, gradient, Adam's m and v, and one batch's activations.
-double working_set(const MlpShape& s, int batch_rows) {
-  double act = 0;
-  for (int w : s.widths) act += double(w) * batch_rows;
-  return 4.0 * (4.0 * double(s.param_count()) + 2 * act);
-}
-
-// Main-memory traffic of an Adam training whose state (weights and both moments, plus a
-// gradient's worth of slack: 16 bytes a parameter) does not fit a core's share of the caches
-// (kCacheShare: Zen 4's 1 MiB L2 + a 32 MiB L3 shared by 8 cores). Every optimizer step reads the
-// weights three times (the forward pass, ∂L/∂input, Adam's update) and Adam's m and v, and writes
-// the weights, m and v: 8 floats = 32 bytes a parameter. (The gradient is never stored: every
-// step fuses Adam into its backward pass, kernels/mlp.h.) `models` step side by side, one step
-// of each in turn (an active-selection ensemble), so all of their states must fit.
-constexpr double kCacheShare = 5.0 * 1024 * 1024;
-double stream_bytes(const MlpShape& s, int64_t rows_per_epoch, int batch, int epochs,
-                    int models = 1) {
-  const double state = 16.0 * double(s.param_count()) * models;
-  if (state <= kCacheShare) return 0;
-  const double steps = double(epochs) * double((rows_per_epoch + batch - 1) / std::max(1, batch));
-  return 32.0 * double(s.param_count()) * models * steps;
-}
 
 // ---- what the runners share ----
 
@@ -211,19 +173,6 @@ void describe_tpa(const Task& t, TaskRecord& r) {
 
 // ---- vae ----
 
-void vae_cost(Task& t, const Profile& p) {
-  const EnvSizes z = env_sizes(t, p);
-  const VaeShape vs = make_vae_shape(z.input_dim, z.h.phi_hidden, z.h.embedding_dim);
-  // training, then one pass over Ξ measuring the posterior (train_vae)
-  t.flops = vs.encoder.train_flops(z.trajectories, z.h.vae.epochs) +
-            vs.decoder.train_flops(z.trajectories, z.h.vae.epochs) +
-            vs.encoder.forward_flops(int(z.trajectories)) +
-            vs.decoder.forward_flops(int(z.trajectories));
-  t.bytes = working_set(vs.encoder, z.h.vae.batch) + working_set(vs.decoder, z.h.vae.batch);
-  t.stream_bytes = stream_bytes(vs.encoder, z.trajectories, z.h.vae.batch, z.h.vae.epochs) +
-                   stream_bytes(vs.decoder, z.trajectories, z.h.vae.batch, z.h.vae.epochs);
-}
-
 bool name_vae_cell(TaskRecord& r);
 
 void run_vae(const Task& t, RunContext& ctx, TaskRecord& r) {
@@ -263,32 +212,6 @@ std::string rep_hyper(const Variant& v, const Hyper& h) {
     s += hyper_lines(h, {own});
   if (reads_vae(v)) s += hyper_lines(h, {"vae."});
   return s;
-}
-
-void rep_cost(Task& t, const Profile& p) {
-  const EnvSizes z = env_sizes(t, p);
-  t.flops = 0;
-  if (t.variant.method == Method::external) {  // reads its embedding of Ξ: no arithmetic
-    t.protocol_flops = 0;
-    t.bytes = 4.0 * double(z.trajectories) * double(z.h.embedding_dim);
-    return;
-  }
-  // A trained method: `rows_per_answer` rows through φ per answer, every epoch of its schedule.
-  if (const MethodTraining& how = method_spec(t.variant.method).training; how.train) {
-    const TrainSchedule& s = z.h.*how.schedule;
-    const int64_t rows = how.rows_per_answer * t.N;
-    const int batch_rows = how.rows_per_answer * s.batch;
-    t.protocol_flops = z.phi.train_flops(rows, s.epochs);
-    t.flops = t.protocol_flops;
-    // Trainings that end at their fixed point (the exact skip): what they are expected to run.
-    if (how.stops_at_fixed_point)
-      if (const double e = expected_sirl_epochs(t.env, t.N, t.variant.vae, z.h); e < s.epochs)
-        t.flops *= e / s.epochs;
-    t.bytes = working_set(z.phi, batch_rows);
-    t.stream_bytes = stream_bytes(z.phi, rows, batch_rows, s.epochs);
-  }
-  t.flops += z.phi.forward_flops(int(z.trajectories));  // the embedding of Ξ it stores
-  t.protocol_flops += z.phi.forward_flops(int(z.trajectories));
 }
 
 // An external method's "training" is reading its embedding of Ξ for this (env, seed, N): the
@@ -340,28 +263,6 @@ void run_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
 
 // ---- fpe ----
 
-// FPE reads φ(ξ) from its representation's stored embedding of Ξ; what it computes is the
-// linear probe: the normal equations [d+1, d+1] and [d+1, F] over the training rows, and the
-// predictions of every row (d = embedding width, F ≤ 8 features: the count is an estimate).
-double probe_flops(int64_t rows, int d) {
-  constexpr int kFeatures = 8;
-  return 2.0 * double(rows) * (d + 1) * (d + 1 + 2 * kFeatures);
-}
-
-// The width of φ(ξ) a cell's probe or head reads: the embedding's; the raw reference's is the
-// input's, truth's the features' (at most 8 in every environment: an estimate).
-int probed_width(const Task& t, const EnvSizes& z) {
-  if (t.variant.method == Method::raw) return z.input_dim;
-  return t.variant.method == Method::truth ? 8 : z.h.embedding_dim;
-}
-
-void fpe_cost(Task& t, const Profile& p) {
-  const EnvSizes z = env_sizes(t, p);
-  const int w = probed_width(t, z);
-  t.flops = probe_flops(p.queries.fpe_trajectories, w);
-  t.bytes = 4.0 * double(p.queries.fpe_trajectories) * (w + 16);
-}
-
 // FPE's labelled trajectories are the true features whoever the teacher (its split is drawn
 // from a stream no teacher touches, so every teacher's φ is probed on the same rows).
 void run_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
@@ -380,21 +281,6 @@ void run_robust_fpe(const Task& t, RunContext& ctx, TaskRecord& r) {
 }
 
 // ---- tpa ----
-
-void tpa_cost(Task& t, const Profile& p) {
-  const EnvSizes z = env_sizes(t, p);
-  const Hyper& h = t.hyper_values();
-  const MlpShape net = tpa_network(z.phi, h, t.frozen);
-  t.protocol_flops = kTestRewards * net.train_flops(2 * t.M, h.tpa.epochs);
-  // Under tpa.stop = "converged" the heads stop early: what they are expected to run.
-  t.flops = t.protocol_flops;
-  if (const double e = expected_head_epochs(t.env, t.frozen, t.M, h); e < h.tpa.epochs)
-    t.flops *= e / h.tpa.epochs;
-  t.bytes = kTestRewards * working_set(net, 2 * h.tpa.batch);
-  // The heads train one after another (engine/tpa.h): what must fit the cache is one head's.
-  t.stream_bytes = kTestRewards * stream_bytes(net, 2 * t.M, 2 * h.tpa.batch, h.tpa.epochs);
-  if (t.flops < t.protocol_flops) t.stream_bytes *= t.flops / t.protocol_flops;
-}
 
 // Converged when every head's loss curve is (the fraction tells how many were); the relative
 // change reported is the median head's.
@@ -456,17 +342,6 @@ LinearBtOptions linear_options(const Hyper& h) {
   return o;
 }
 
-void linear_tpa_cost(Task& t, const Profile& p) {
-  const EnvSizes z = env_sizes(t, p);
-  // Per reward: the Gram matrix of the smaller side of the 2M training rows × (w + 1) features
-  // and its eigensolver, about 10 Newton steps in its span, the rewards of its held-out rows.
-  const double w = probed_width(t, z) + 1, n = 2.0 * double(t.M), g = std::min(w, n);
-  const double held = 2.0 * double(queries_for(p, t.teacher).tpa_pairs);
-  t.flops = kTestRewards * (2 * n * w * g + 9 * g * g * g + 10 * 4 * n * g * g + 2 * held * w);
-  t.protocol_flops = t.flops;
-  t.bytes = 8.0 * ((n + held) * w + 2 * g * g + n * w);
-}
-
 void describe_linear_tpa(const Task& t, TaskRecord& r) {
   describe_tpa(t, r);
   r.text["protocol"] = "linear";
@@ -506,33 +381,6 @@ void run_linear_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
 }
 
 // ---- active ----
-
-ActiveConfig active_config(const Task& t, const Profile& p) {
-  ActiveConfig c;
-  static_cast<ActiveRounds&>(c) = p.active.at(t.env);
-  c.rule = t.variant.selection;
-  c.budget = queries_for(p, t.teacher).similarity;  // as many as the uniform set holds
-  c.hyper = t.hyper_values();
-  return c;
-}
-
-void active_cost(Task& t, const Profile& p) {
-  const EnvSizes z = env_sizes(t, p);
-  const ActiveConfig c = active_config(t, p);
-  // Round r ≥ 1 trains K members for E epochs on the r·batch triplets answered before it, then
-  // embeds its pool's rows (≤ 3·pool) with each member.
-  t.flops = 0;
-  const int64_t rounds = (c.budget + c.batch - 1) / c.batch;
-  for (int64_t r = 1; r < rounds; ++r) {
-    t.flops += c.members * z.phi.train_flops(3 * std::min(c.budget, r * c.batch), c.round_epochs);
-    t.flops += c.members * z.phi.forward_flops(int(std::min<int64_t>(3 * c.pool, z.trajectories)));
-  }
-  t.bytes = c.members * working_set(z.phi, 3 * z.h.sirl.batch);
-  t.stream_bytes = 0;
-  for (int64_t r = 1; r < rounds; ++r)
-    t.stream_bytes += stream_bytes(z.phi, 3 * std::min(c.budget, r * c.batch), 3 * z.h.sirl.batch,
-                                   c.round_epochs, c.members);
-}
 
 void run_active(const Task& t, RunContext& ctx, TaskRecord& r) {
   const ActiveConfig c = active_config(t, ctx.profile());
