@@ -8,6 +8,7 @@
 #include <type_traits>
 #include <variant>
 
+#include "datasets/enum_names.h"
 #include "datasets/environments.h"
 
 namespace sirl {
@@ -188,20 +189,16 @@ HyperType hyper_type(const std::string& key) {
   return *type;
 }
 
+namespace {
+constexpr EnumName<HyperType> kHyperTypeNames[] = {
+    {HyperType::integer, "an integer"},    {HyperType::number, "a number"},
+    {HyperType::boolean, "true or false"}, {HyperType::integer_list, "an array of integers"},
+    {HyperType::word, "a string"},
+};
+}  // namespace
+
 const char* hyper_type_name(HyperType t) {
-  switch (t) {
-    case HyperType::integer:
-      return "an integer";
-    case HyperType::number:
-      return "a number";
-    case HyperType::boolean:
-      return "true or false";
-    case HyperType::integer_list:
-      return "an array of integers";
-    case HyperType::word:
-      return "a string";
-  }
-  return "?";
+  return name_in(kHyperTypeNames, t);
 }
 
 std::vector<std::string> hyper_keys() {

@@ -2,22 +2,22 @@
 
 #include <stdexcept>
 
+#include "datasets/enum_names.h"
 #include "datasets/query_bundle.h"
 
 namespace sirl {
 
+namespace {
+constexpr EnumName<MethodRole> kRoleNames[] = {
+    {MethodRole::sirl, "sirl"},
+    {MethodRole::baseline, "baseline"},
+    {MethodRole::reference, "reference"},
+    {MethodRole::external, "external"},
+};
+}  // namespace
+
 const char* role_name(MethodRole r) {
-  switch (r) {
-    case MethodRole::sirl:
-      return "sirl";
-    case MethodRole::baseline:
-      return "baseline";
-    case MethodRole::reference:
-      return "reference";
-    case MethodRole::external:
-      return "external";
-  }
-  return "?";
+  return name_in(kRoleNames, r);
 }
 
 namespace {

@@ -1,26 +1,20 @@
 #include "engine/selection.h"
 
-#include <stdexcept>
+#include "datasets/enum_names.h"
 
 namespace sirl {
 
+namespace {
+constexpr EnumName<Selection> kSelectionNames[] = {
+    {Selection::uniform, "uniform"}, {Selection::vote, "vote"}, {Selection::infogain, "infogain"}};
+}  // namespace
+
 const char* selection_name(Selection s) {
-  switch (s) {
-    case Selection::uniform:
-      return "uniform";
-    case Selection::vote:
-      return "vote";
-    case Selection::infogain:
-      return "infogain";
-  }
-  return "?";
+  return name_in(kSelectionNames, s);
 }
 
 Selection parse_selection(const std::string& name) {
-  for (Selection s : {Selection::uniform, Selection::vote, Selection::infogain})
-    if (name == selection_name(s)) return s;
-  throw std::invalid_argument("unknown query selection '" + name +
-                              "' (expected uniform, vote or infogain)");
+  return value_named(kSelectionNames, name, "query selection");
 }
 
 }  // namespace sirl

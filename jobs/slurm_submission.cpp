@@ -6,6 +6,7 @@
 
 #include <toml++/toml.h>
 
+#include "datasets/enum_names.h"
 #include "jobs/stop_request.h"
 #include "results/durable.h"
 
@@ -245,20 +246,16 @@ ShardState read_shard_state(const SlurmSubmission& s, int shard) {
   return st;
 }
 
+namespace {
+constexpr EnumName<ShardState::Phase> kPhaseNames[] = {
+    {ShardState::kNotStarted, "not started"}, {ShardState::kRunning, "running"},
+    {ShardState::kStopped, "stopped"},        {ShardState::kDone, "done"},
+    {ShardState::kFailed, "failed"},
+};
+}  // namespace
+
 const char* phase_name(ShardState::Phase p) {
-  switch (p) {
-    case ShardState::kNotStarted:
-      return "not started";
-    case ShardState::kRunning:
-      return "running";
-    case ShardState::kStopped:
-      return "stopped";
-    case ShardState::kDone:
-      return "done";
-    case ShardState::kFailed:
-      return "failed";
-  }
-  return "?";
+  return name_in(kPhaseNames, p);
 }
 
 }  // namespace sirl

@@ -5,6 +5,7 @@
 
 #include <map>
 #include <set>
+#include <stdexcept>
 #include <string>
 
 #include "datasets/queries.h"
@@ -64,6 +65,22 @@ TEST(MethodCatalog, EveryMethodThatLearnsFromAnswersDeclaresItsTraining) {
       EXPECT_EQ((humans.*how.humans).count, paper_humans.at(s.name)) << s.name;
     }
   }
+}
+
+// Named enums read their names from one table both ways (datasets/enum_names.h): every query
+// selection round-trips, and an unknown name is refused with every valid one listed.
+TEST(MethodCatalog, SelectionNamesRoundTripAndAnUnknownOneListsThem) {
+  for (Selection s : {Selection::uniform, Selection::vote, Selection::infogain})
+    EXPECT_EQ(parse_selection(selection_name(s)), s);
+  EXPECT_STREQ(selection_name(Selection::infogain), "infogain");
+  try {
+    parse_selection("greedy");
+    ADD_FAILURE() << "an unknown selection was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "unknown query selection 'greedy' (expected uniform, vote or infogain)");
+  }
+  EXPECT_STREQ(selection_name(static_cast<Selection>(7)), "?");
+  EXPECT_STREQ(role_name(MethodRole::reference), "reference");
 }
 
 TEST(MethodCatalog, FigureOrderIsThePapers) {
