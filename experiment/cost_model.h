@@ -42,8 +42,8 @@ double probe_flops(int64_t rows, int d);
 int probed_width(const Task& t, const EnvSizes& z);
 
 // Main-memory bandwidth of a node of `cores` cores when the user names none (--node-bandwidth):
-// the STREAM triad per core of the 2-core machines the defaults were measured on (docs/roofline.md),
-// times the cores, up to what a 12-channel DDR5-4800 socket delivers.
+// the STREAM triad per core of the 2-core machines the defaults were measured on
+// (docs/roofline.md), times the cores, up to what a 12-channel DDR5-4800 socket delivers.
 double default_node_bandwidth(int cores);
 
 }  // namespace sirl
