@@ -40,6 +40,11 @@ Representation train_representation(const Dataset& d, const QueryBundle& bundle,
   if (cfg.vae_pretrain && !accepts_vae_pretrain(cfg.method))
     throw std::invalid_argument(std::string("VAE pre-training is not a switch of ") +
                                 method_name(cfg.method));
+  // external, truth, raw: φ(Ξ) is given (table_representation, reference_representation), never
+  // trained; an untrained network under their name would be a silent wrong result.
+  if (cfg.method == Method::external || is_reference(cfg.method))
+    throw std::invalid_argument(std::string(method_name(cfg.method)) +
+                                " is not trained: its embedding of Ξ is given");
   if (uses_queries(cfg.method) && cfg.queries < 1)
     throw std::invalid_argument(std::string(method_name(cfg.method)) + " needs N >= 1 queries");
   if (cfg.method == Method::vae) {

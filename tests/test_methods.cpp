@@ -130,6 +130,20 @@ TEST(Methods, SirlPlusVaeStartsFromTheEncoder) {
                std::invalid_argument);  // not a switch of Random
 }
 
+// Methods whose φ(Ξ) is given (an external one, the references truth and raw) are refused by
+// training, not handed back as an untrained network under their name.
+TEST(Methods, GivenEmbeddingsAreNotTrained) {
+  const World& w = world();
+  for (Method m : {Method::external, Method::truth, Method::raw}) {
+    try {
+      train_representation(w.d, w.bundle, MethodConfig{m, 10, false, fast_hyper()}, 11);
+      ADD_FAILURE() << method_name(m) << " was trained";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("is not trained"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Methods, MultiPrefGivesEachHumanNOverKQueries) {
   const World& w = world();
   for (int K : {10, 50}) {
