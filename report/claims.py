@@ -71,15 +71,17 @@ def _goes_claimed_way(diff, better):
     return diff < 0 if better == "<" else diff > 0
 
 
-def decide(comparisons, better, alpha=ALPHA):
-    """Adds 'p_holm' to every comparison and returns (verdict, deciding comparison).
+def decide(comparisons, better, alpha=ALPHA, adjusted=False):
+    """Adds 'p_holm' to every comparison and returns (verdict, deciding comparison); with
+    `adjusted`, the comparisons' 'p_holm' is already set (Holm over a larger family) and kept.
     The deciding comparison is the one the verdict rests on: for *held* the weakest (largest
     adjusted p), for *not held* the strongest against the claim, for *inconclusive* the weakest
     of those going the claimed way (or the first, if none does)."""
     if not comparisons:
         return "not evaluated", None
-    for c, q in zip(comparisons, holm([c["p"] for c in comparisons])):
-        c["p_holm"] = q
+    if not adjusted:
+        for c, q in zip(comparisons, holm([c["p"] for c in comparisons])):
+            c["p_holm"] = q
     sig = [c for c in comparisons if np.isfinite(c["p_holm"]) and c["p_holm"] < alpha]
     good = [c for c in sig if _goes_claimed_way(c["diff"], better)]
     bad = [c for c in sig if not _goes_claimed_way(c["diff"], better) and c["diff"] != 0]

@@ -26,7 +26,7 @@ def comparison_text(c):
 
 
 def claim(claims, env, name, comparisons, better, main=False, trainings=None, protocol=None,
-          verdict=None):
+          verdict=None, family=None):
     """Decides one hypothesis (claims.decide) and keeps it for the summary and the details;
     `trainings`: the /tables/training rows its numbers rest on (for the converged count);
     `protocol`: the TPA protocol a TPA claim is decided under (None: an FPE claim); `verdict`:
@@ -35,7 +35,8 @@ def claim(claims, env, name, comparisons, better, main=False, trainings=None, pr
     if verdict is not None:
         v, deciding = verdict, None
     h = {"env": env, "claim": name, "protocol": protocol, "better": better,
-         "comparisons": comparisons, "verdict": v, "deciding": deciding, "main": main}
+         "comparisons": comparisons, "verdict": v, "deciding": deciding, "main": main,
+         "family": family}
     if trainings is not None and not trainings.empty:
         h["converged"] = (int(trainings.converged.sum()), len(trainings))
     if comparisons:
@@ -105,11 +106,12 @@ def tpa_claims(H, tpa, env, protocol, training):
     claim(H, env, h2,
           [claims_stats.paired(v, tpa_at("sirl"), tpa_at(v)) for v in baselines()
            if (m.variant == v).any()], ">", main=True,
-          trainings=rested_on(training, env, nmax, compared, True, protocol), protocol=protocol)
+          trainings=rested_on(training, env, nmax, compared, True, protocol), protocol=protocol,
+          family="H2")
     claim(H, env, "Secondary — Random beats preference pre-training (TPA)",
           [claims_stats.paired(v, tpa_at("random"), tpa_at(v))
            for v in pretrained_on("preference") if (m.variant == v).any()],
-          ">", protocol=protocol)
+          ">", protocol=protocol, family="random-vs-preference")
 
 
 def hypotheses(fpe, tpa, envs, training=None):
@@ -170,18 +172,47 @@ def hypotheses(fpe, tpa, envs, training=None):
         for protocol in [p for p in PROTOCOLS if p != PAPER]:
             for env in envs:
                 tpa_claims(H, tpa, env, protocol, training)
+    across_protocols(H)
     return H
 
 
-def protocol_cell(h):
-    """The summary's protocol column: a TPA claim's protocol, "—" for an FPE claim."""
-    return h.get("protocol") or "—"
+def across_protocols(H):
+    """A TPA claim decided under several protocols is one claim tested several ways: Holm runs
+    over the comparisons of all its protocols together, and each protocol's verdict is decided
+    again from those adjusted p-values (so a second protocol cannot add a chance to hold)."""
+    groups = {}
+    for h in H:
+        if h.get("family") and h["comparisons"]:
+            groups.setdefault((h["env"], h["family"]), []).append(h)
+    for hs in groups.values():
+        if len(hs) < 2:
+            continue
+        comps = [c for h in hs for c in h["comparisons"]]
+        for c, q in zip(comps, claims_stats.holm([c["p"] for c in comps])):
+            c["p_holm"] = q
+        for h in hs:
+            h["verdict"], h["deciding"] = claims_stats.decide(h["comparisons"], h["better"],
+                                                              adjusted=True)
+            h["holm_across"] = len(hs)
 
 
-def summary_lines(H, missing=None):
+def protocol_cell(h, scale=None):
+    """The summary's protocol column: a TPA claim's protocol ("paper", the primary one, with the
+    head's width and epochs this run used against the paper's; "linear", secondary), "—" for an
+    FPE claim."""
+    p = h.get("protocol")
+    if not p:
+        return "—"
+    if p == PAPER:
+        return f"paper (primary{'; ' + scale[h['env']] if scale and h['env'] in scale else ''})"
+    return f"{p} (secondary)"
+
+
+def summary_lines(H, missing=None, scale=None):
     """The report's first table: one row per claim × environment × TPA protocol (an FPE claim has
     one, protocol "—"), in H's order (the paper's protocol first). `missing`: environment → the
-    number of its tasks a partial merge lacks; those environments' verdicts are marked ⧗."""
+    number of its tasks a partial merge lacks; those environments' verdicts are marked ⧗.
+    `scale`: environment → the paper protocol's head as this run trained it."""
     missing = missing or {}
     L = ["| claim | environment | protocol | verdict | deciding comparison: Δ [95 % CI] | Holm p | "
          "seeds | power | seeds for 80 % | trainings converged |",
@@ -190,7 +221,7 @@ def summary_lines(H, missing=None):
         c = h["deciding"]
         if c is None:
             verdict = h["verdict"] if h["verdict"] == "not run" else "not evaluated (no data)"
-            L.append(f"| {h['claim']} | {env_title(h['env'])} | {protocol_cell(h)} | {verdict} | "
+            L.append(f"| {h['claim']} | {env_title(h['env'])} | {protocol_cell(h, scale)} | {verdict} | "
                      f"— | — | — | — | — | — |")
             continue
         conv = h.get("converged")
@@ -200,7 +231,7 @@ def summary_lines(H, missing=None):
         pw = h.get("power", math.nan)
         claim_text = f"**{h['claim']}**" if h["main"] else h["claim"]
         partial = " ⧗" if missing.get(h["env"]) else ""
-        L.append(f"| {claim_text} | {env_title(h['env'])} | {protocol_cell(h)} | "
+        L.append(f"| {claim_text} | {env_title(h['env'])} | {protocol_cell(h, scale)} | "
                  f"**{h['verdict']}**{partial} | {label}: "
                  f"{fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, {fmt(c['hi'], '+.4f')}] | "
                  f"{fmt(c.get('p_holm'), '.3g')} | {c['n']} | {fmt(100 * pw, '.0f') + ' %' if pw == pw else '—'} | "
@@ -219,8 +250,12 @@ def summary_lines(H, missing=None):
           f"paper protocol's head trainings, the linear protocol's Newton fits), how "
           f"many met the convergence criterion of the table below; ⚠ marks a verdict resting on "
           f"trainings that were still learning.",
-          "", "*Protocol*: how a TPA claim's reward heads were fit; each TPA claim is decided "
-          "separately under each. " + " ".join(
+          "", "*Protocol*: how a TPA claim's reward heads were fit. The paper's protocol is the "
+          "primary one; the linear protocol is **secondary**: it was added after the paper "
+          "protocol's result (JacoRobot's H2 inconclusive) was seen, and it freezes every φ, the "
+          "baselines' included (their worse mode in the paper). A claim decided under both is one "
+          "claim: Holm's correction runs over the comparisons of both protocols together. "
+          + " ".join(
               f"*{p}* = {PROTOCOL_TEXT[p]}" + (" (SIRL frozen, the others unfrozen, as the paper)."
                                                if p == PAPER else
                                                " (every method's φ frozen: the standard "

@@ -10,9 +10,11 @@ import numpy as np
 import pandas as pd
 
 import claims as claims_stats
+import ledger
 import plot_beyond
 from hypotheses import detail_lines, fmt, hypotheses, summary_lines
-from run_tables import ENV, PAPER, claim_trainings, env_title, main_tpa, methods, protocols_run
+from run_tables import (ENV, PAPER, claim_trainings, env_title, main_tpa, methods, protocols_run,
+                        sirl_bench)
 
 
 def convergence_lines(t):
@@ -163,7 +165,13 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
         # registration names the key's prefix (the key itself is never taken apart).
         env = next((e for e in ENV if key.startswith(e + "/")), "other")
         missing[env] = missing.get(env, 0) + 1
-    L = [f"# {title}", ""] + summary_lines(H, missing)
+    L = [f"# {title}", ""] + summary_lines(H, missing, ledger.head_scale(res.datasets, envs))
+    try:
+        study = sirl_bench.study_analysis(res.path)
+    except sirl_bench.ResultsError:
+        study = None  # the profile ran no study
+    book = ledger.ledger(fpe, tpa, envs, study)
+    L += ledger.lines(book, ledger.scale_lines(res.datasets, methods(fpe), methods(tpa), envs))
     L += ["", f"Engine {a.get('engine_version')} (commit {a.get('git_commit')}), host "
           f"{a.get('host')}, {a.get('threads')} threads; started {a.get('started')}, finished "
           f"{a.get('finished')}, wall time {float(a.get('wall_seconds', 0)):.0f} s; tasks: "
@@ -199,6 +207,10 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
         fh.write(text)
     with open(os.path.join(out, "report.html"), "w") as fh:
         fh.write(report_html(title, "\n".join(L[2:])))
+    with open(os.path.join(out, "ledger.json"), "w") as fh:
+        json.dump(json_safe({"counts": ledger.counts(book),
+                             "statements": [{k: v for k, v in r.items() if k != "deciding"}
+                                            for r in book]}), fh, indent=1)
     with open(os.path.join(out, "claims.json"), "w") as fh:
         json.dump(json_safe([{k: v for k, v in h.items() if k != "deciding"} for h in H]), fh,
                   indent=1)

@@ -208,12 +208,14 @@ def with_new_rows(fpe, tpa, wild=True):
     return (pd.concat([fpe, f2], ignore_index=True), pd.concat([tpa, t2], ignore_index=True))
 
 
-def essence(h):
-    """Everything a claim reports, comparable with ==."""
-    out = {k: h.get(k) for k in ("env", "claim", "protocol", "verdict", "main", "power", "seeds80",
-                                 "better")}
-    out["comparisons"] = [{k: c[k] for k in ("name", "n", "diff", "lo", "hi", "p", "dz", "p_holm",
-                                             "test")} for c in h["comparisons"]]
+def essence(h, across=False):
+    """Everything a claim reports, comparable with ==; `across`: a claim whose Holm runs over
+    several protocols, so its adjusted p and verdict are left out (checked by hand below)."""
+    keys = ("env", "claim", "protocol", "main", "better") + (() if across else
+                                                          ("verdict", "power", "seeds80"))
+    out = {k: h.get(k) for k in keys}
+    out["comparisons"] = [{k: c[k] for k in ("name", "n", "diff", "lo", "hi", "p", "dz", "test")
+                           + (() if across else ("p_holm",))} for c in h["comparisons"]]
     return repr(out)  # nan == nan as text
 
 
@@ -232,8 +234,24 @@ assert verdicts[("grid", "H2", "linear")] == "not run", verdicts  # the file has
 fpe2, tpa2 = with_new_rows(fpe, tpa)
 after = hypotheses.hypotheses(fpe2, tpa2, envs)
 paper_after = [h for h in after if h["protocol"] != "linear"]
-assert [essence(h) for h in paper_after] == [essence(h) for h in paper_before], \
+across = [bool(h.get("holm_across")) for h in paper_after]
+assert [essence(h, x) for h, x in zip(paper_after, across)] == \
+    [essence(h, x) for h, x in zip(paper_before, across)], \
     "adding linear and reference rows changed an FPE or paper-protocol claim"
+# A TPA claim under both protocols is one claim: Holm over both protocols' comparisons, by hand.
+assert sum(across) == 4, across  # H2 and Random-vs-preference, per environment
+for env in envs:
+    for fam in ("H2", "random-vs-preference"):
+        hs = [h for h in after if h["env"] == env and h.get("family") == fam]
+        assert [h["protocol"] for h in hs] == ["paper", "linear"], hs
+        cs = [c for h in hs for c in h["comparisons"]]
+        ps = np.array([c["p"] for c in cs])
+        order, adj, run = np.argsort(ps, kind="stable"), np.empty(len(ps)), 0.0
+        for k, i in enumerate(order):
+            run = max(run, min(1.0, (len(ps) - k) * ps[i]))
+            adj[i] = run
+        for c, q in zip(cs, adj):
+            close(c["p_holm"], q, 1e-12, f"{env} {fam}: Holm across protocols")
 assert len(paper_after) == 2 * 7 + 1, [h["claim"] for h in paper_after]  # H1, H2, Random, 4 ablation; VAE weak
 print(f"ok: {len(paper_after)} FPE and paper-protocol claims identical with wild linear and "
       "reference rows added, and on an older engine's tables (no protocol, no reference column)")
@@ -274,7 +292,8 @@ assert v[("grid", "H2", "linear")]["verdict"] == "not held"
 assert not any("ablation" in h["claim"] for h in H)
 L = hypotheses.summary_lines(H)
 assert L[0].startswith("| claim | environment | protocol | verdict |"), L[0]
-assert any("| linear | **not held**" in x for x in L) and any("| paper | not run |" in x for x in L), L
+assert any("| linear (secondary) | **not held**" in x for x in L) and \
+    any("| paper (primary) | not run |" in x for x in L), L
 assert any("| — | **held**" in x for x in L), "H1's protocol cell is —"
 D = "\n".join(hypotheses.detail_lines(H, envs))
 assert "[paper protocol]: not run" in D and "[linear protocol] (paired t-test" in D, D
