@@ -97,8 +97,10 @@ TripletSet sample_similarity_queries(const Dataset& d, int64_t N, const Teacher&
 }
 
 namespace {
+// `exclude`: unordered pairs (smaller row first) that are drawn again.
 void append_pairs(const Dataset& d, int64_t n, const RewardSet& r, int row, const Teacher& t,
-                  Rng& rng, Rng& answers, PreferenceSet& s) {
+                  Rng& rng, Rng& answers, PreferenceSet& s,
+                  const std::set<std::pair<int32_t, int32_t>>* exclude = nullptr) {
   int64_t done = 0, attempts = 0;
   while (done < n) {
     check_attempts(++attempts, n, "preference queries");
@@ -106,6 +108,7 @@ void append_pairs(const Dataset& d, int64_t n, const RewardSet& r, int row, cons
     int32_t b;
     do b = int32_t(rng.uniform_int(d.count));
     while (b == a);
+    if (exclude && exclude->count({std::min(a, b), std::max(a, b)})) continue;
     const auto l = answer_preference(t, r.weights.data() + size_t(row) * r.dim, d.feature(a),
                                      d.feature(b), d.feature_count(), answers);
     if (!l) {
@@ -185,8 +188,13 @@ TpaSet sample_tpa_set(const Dataset& d, int64_t total, const RewardSet& r, int r
   TpaSet s;
   s.train = std::min<int64_t>(total, std::llround(train_fraction * double(total)));
   append_pairs(d, s.train, r, row, t, rng, answers ? *answers : rng, s.pairs);
+  std::set<std::pair<int32_t, int32_t>> seen;
+  for (int64_t i = 0; i < s.pairs.count; ++i) {
+    const int32_t a = s.pairs.pairs[size_t(2 * i)], b = s.pairs.pairs[size_t(2 * i + 1)];
+    seen.insert({std::min(a, b), std::max(a, b)});
+  }
   const Teacher truth;  // the held-out pairs: the true reward's labels (draws nothing)
-  append_pairs(d, total - s.train, r, row, truth, rng, rng, s.pairs);
+  append_pairs(d, total - s.train, r, row, truth, rng, rng, s.pairs, &seen);
   return s;
 }
 

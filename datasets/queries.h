@@ -73,7 +73,10 @@ PreferenceSet take_per_human(const PreferenceSet& s, int64_t N, int K);
 // One reward's labelled pairs for TPA: the first `train` rows train the head (M ≤ train), the
 // rest are held out (80/20 by default). The teacher answers the training pairs; the held-out
 // pairs are labelled by the true reward (a perfect oracle on every feature), so accuracy is
-// always measured against the truth.
+// always measured against the truth. A held-out pair never repeats a training pair of its
+// reward, in either order (it is drawn again from the same stream): TPA scores generalisation.
+// kTpaHeldOutRule names that rule in the settings of every task that reads these sets.
+inline constexpr const char* kTpaHeldOutRule = "tpa held_out=distinct_from_training\n";
 struct TpaSet {
   PreferenceSet pairs;
   int64_t train = 0;

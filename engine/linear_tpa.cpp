@@ -35,8 +35,8 @@ LinearTpaResult evaluate_linear_tpa(const Representation& rep, const Dataset& d,
     std::vector<int32_t> train(size_t(2 * M)), test(size_t(2 * held));
     for (int64_t i = 0; i < 2 * M; ++i) train[size_t(i)] = int32_t(i);
     for (int64_t i = 0; i < 2 * held; ++i) test[size_t(i)] = int32_t(2 * M + i);
-    const LinearBtFit fit = fit_linear_bradley_terry(X.data(), n, dim, train.data(),
-                                                     s.pairs.label.data(), int(M), options);
+    const LinearBtFit fit = fit_linear_bradley_terry_cv(X.data(), n, dim, train.data(),
+                                                        s.pairs.label.data(), int(M), options);
     // Rewards laid out as the loss reads them: every pair's A, then every pair's B.
     auto accuracy = [&](const std::vector<int32_t>& idx, const float* label, int64_t pairs) {
       std::vector<int32_t> by_role(size_t(2 * pairs));
@@ -52,6 +52,7 @@ LinearTpaResult evaluate_linear_tpa(const Representation& rep, const Dataset& d,
     res.train_accuracy.push_back(accuracy(train, s.pairs.label.data(), M));
     res.iterations.push_back(fit.iterations);
     res.rank.push_back(fit.rank);
+    res.alpha.push_back(fit.alpha);
     res.converged = res.converged && fit.converged;
     res.flops += fit.flops + 2.0 * double(2 * (M + held)) * (dim + 1);
   }

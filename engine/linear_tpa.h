@@ -1,9 +1,9 @@
 // TPA under linear evaluation: the standard linear-evaluation protocol of representation learning
 // beside the paper's reward head (engine/tpa.h). For each test reward, a linear Bradley–Terry
-// head r(ξ) = w·φ(ξ) + c on the frozen φ, fit to convergence by Newton's method
-// (kernels/linear_bradley_terry.h) on the same first M training pairs, with the paper's L2 term
-// on the predicted rewards (tpa.l2), and scored on the same held-out pairs. Nothing is drawn at
-// random: the result is a function of φ, the pairs and λ.
+// head on the frozen φ, standardised (kernels/linear_bradley_terry.h): L2-regularised logistic
+// regression on the same first M training pairs, its penalty chosen by cross-validation on those
+// M pairs only, fit to convergence by Newton's method, and scored on the same held-out pairs.
+// Nothing is drawn at random: the result is a function of φ and the pairs.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -20,6 +20,7 @@ struct LinearTpaResult {
   std::vector<double> train_accuracy;  // [R] accuracy on its own M training pairs
   std::vector<int> iterations;         // [R] Newton steps of each head
   std::vector<int> rank;               // [R] dimension of the span its fit ran in
+  std::vector<double> alpha;           // [R] the penalty cross-validation chose
   double mean = 0, stddev = 0;         // TPA = mean over rewards; stddev over rewards (n − 1)
   bool converged = true;               // every head's fit converged
   double flops = 0;

@@ -7,6 +7,7 @@
 #include "engine/tpa.h"
 #include "experiment/cost_model.h"
 #include "experiment/expected_epochs.h"
+#include "kernels/linear_bradley_terry.h"
 #include "kernels/vae.h"
 
 namespace sirl {
@@ -74,11 +75,17 @@ void tpa_cost(Task& t, const Profile& p) {
 
 void linear_tpa_cost(Task& t, const Profile& p) {
   const EnvSizes z = env_sizes(t, p);
-  // Per reward: the Gram matrix of the smaller side of the 2M training rows × (w + 1) features
-  // and its eigensolver, about 10 Newton steps in its span, the rewards of its held-out rows.
-  const double w = probed_width(t, z) + 1, n = 2.0 * double(t.M), g = std::min(w, n);
+  // Per reward: cross-validation's grid × folds fits and the final one, each the Gram matrix of
+  // the smaller side of ≤ M pair differences × w features and its eigensolver, about 10 Newton
+  // steps in its span; then the rewards of the held-out rows.
+  const LinearBtOptions o;
+  const double fits = double(o.alpha_grid.size()) * o.folds + 1;
+  const double w = probed_width(t, z), m = double(t.M), g = std::min(w, m);
   const double held = 2.0 * double(queries_for(p, t.teacher).tpa_pairs);
-  t.flops = kTestRewards * (2 * n * w * g + 9 * g * g * g + 10 * 4 * n * g * g + 2 * held * w);
+  const double n = 2.0 * m;
+  t.flops =
+      kTestRewards *
+      (fits * (6 * m * w + 2 * m * w * g + 9 * g * g * g + 10 * 2 * m * g * g) + 2 * held * w);
   t.protocol_flops = t.flops;
   t.bytes = 8.0 * ((n + held) * w + 2 * g * g + n * w);
 }

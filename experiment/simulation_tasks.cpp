@@ -334,12 +334,10 @@ void run_robust_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
 
 // ---- linear evaluation ----
 
-// The Newton fit's stopping rule and rank cut are the protocol's (docs/linear-evaluation.md);
-// λ is the paper's tpa.l2.
-LinearBtOptions linear_options(const Hyper& h) {
-  LinearBtOptions o;
-  o.l2 = h.tpa_l2;
-  return o;
+// The penalty grid, folds, Newton stopping rule and rank cut are the protocol's
+// (docs/linear-evaluation.md); no hyper-parameter of the profile enters a linear head.
+LinearBtOptions linear_options() {
+  return {};
 }
 
 void describe_linear_tpa(const Task& t, TaskRecord& r) {
@@ -349,19 +347,21 @@ void describe_linear_tpa(const Task& t, TaskRecord& r) {
 }
 
 std::string linear_tpa_settings(const Task& t, const Profile& p) {
-  const LinearBtOptions o = linear_options(t.hyper_values());
-  return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
-         hyper_lines(t.hyper_values(), {"tpa.l2"}) + "linear tolerance " +
+  const LinearBtOptions o = linear_options();
+  std::string grid;
+  for (double a : o.alpha_grid) grid += " " + exact_number(a);
+  return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) + kTpaHeldOutRule +
+         "linear standardised ridge-cv folds " + std::to_string(o.folds) + " alpha_grid" + grid +
+         " single_pair_alpha " + exact_number(o.single_pair_alpha) + " tolerance " +
          exact_number(o.tolerance) + " floor " + exact_number(o.floor) + " max_iterations " +
          std::to_string(o.max_iterations) + " rank_tolerance " + exact_number(o.rank_tolerance) +
          "\n";
 }
 
 void run_linear_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const Hyper& h = t.hyper_values();
   const LinearTpaResult res = evaluate_linear_tpa(*cell_representation(t, ctx), ctx.dataset(t.env),
                                                   ctx.bundle(t.env, t.seed, t.teacher).tpa, t.M,
-                                                  linear_options(h), t.threads);
+                                                  linear_options(), t.threads);
   r.num["tpa"] = res.mean;
   r.num["tpa_std"] = res.stddev;
   r.num["flops"] = res.flops;
@@ -371,6 +371,7 @@ void run_linear_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   r.arrays["train_accuracy"] = TaskRecord::Array::of(floats(res.train_accuracy));
   r.arrays["newton_iterations"] = TaskRecord::Array::of(floats(res.iterations));
   r.arrays["span_rank"] = TaskRecord::Array::of(floats(res.rank));
+  r.arrays["ridge_alpha"] = TaskRecord::Array::of(floats(res.alpha));
   double own_pairs = 0;  // accuracy on the heads' own training pairs
   for (double a : res.train_accuracy) own_pairs += a / double(res.train_accuracy.size());
   r.num["tpa_train"] = own_pairs;
@@ -442,7 +443,7 @@ std::string fpe_settings(const Task& t, const Profile& p) {
 }
 
 std::string tpa_settings(const Task& t, const Profile& p) {
-  return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
+  return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) + kTpaHeldOutRule +
          hyper_lines(t.hyper_values(), {"phi.", "tpa.", "precision"});
 }
 

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "datasets/environments.h"
+#include "datasets/queries.h"
 #include "engine/tpa.h"
 #include "experiment/simulation_tasks.h"
 #include "experiment/task_outputs.h"
@@ -379,7 +380,9 @@ const TaskKindSpec& study_simulated_kind() {
       .description = "user study: TPA on simulated perfect preferences",
       .key = [](const Task&) { return std::string(kSimulatedKey); },
       .inputs = [](const Task&, const Profile& p) { return seed0_representations(p); },
-      .settings = study_settings,
+      // Its simulated preferences are TPA sets (datasets/queries.h): their held-out rule too.
+      .settings = [](const Task& t,
+                     const Profile& p) { return study_settings(t, p) + kTpaHeldOutRule; },
       .cost = study_simulated_cost,
       .rate = unfrozen_tpa_rate,
       .shard_group = the_study,

@@ -1,11 +1,10 @@
 #include "kernels/linear_bradley_terry.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
-
-#include "kernels/bradley_terry_loss.h"
 
 namespace sirl {
 
@@ -15,6 +14,14 @@ using VecD = Eigen::VectorXd;
 
 double sigmoid(double z) {
   return z >= 0 ? 1.0 / (1.0 + std::exp(-z)) : std::exp(z) / (1.0 + std::exp(z));
+}
+double softplus(double z) {
+  return z > 0 ? z + std::log1p(std::exp(-z)) : std::log1p(std::exp(z));
+}
+
+// BCE(σ(z), ℓ) = ℓ·softplus(−z) + (1 − ℓ)·softplus(z), the loss of one pair.
+double pair_bce(double z, double label) {
+  return label * softplus(-z) + (1 - label) * softplus(z);
 }
 
 // An orthonormal basis Q [p, k] of the row span of A [m, p] and the rows' coordinates Z = A·Q
@@ -50,52 +57,71 @@ SpanBasis span_basis(const MatD& A, double rank_tolerance) {
   return b;
 }
 
-// L(β) of the rewards r = Zβ (rows 0..M−1 the A's, M..2M−1 the B's), with ∂L/∂r into dr.
-double loss_at(const MatD& Z, const VecD& beta, const std::vector<double>& label, double l2,
-               VecD& r, VecD& dr) {
-  r = Z * beta;
-  dr.resize(r.size());
-  return bradley_terry_loss<double>(r.data(), label.data(), int(label.size()), l2, dr.data());
+// L(β) = (1/M) Σ BCE(σ(z_i), ℓ_i) + α‖β‖² at z = Zβ, with ∂L/∂z into dz.
+double loss_at(const MatD& Z, const VecD& beta, const std::vector<double>& label, double alpha,
+               VecD& z, VecD& dz) {
+  z = Z * beta;
+  const double M = double(label.size());
+  dz.resize(z.size());
+  double L = 0;
+  for (Eigen::Index i = 0; i < z.size(); ++i) {
+    L += pair_bce(z(i), label[size_t(i)]) / M;
+    dz(i) = (sigmoid(z(i)) - label[size_t(i)]) / M;
+  }
+  return L + alpha * beta.squaredNorm();
+}
+
+void check_rows(const int32_t* pairs, int M, int64_t n) {
+  for (int i = 0; i < 2 * M; ++i)
+    if (pairs[i] < 0 || pairs[i] >= n)
+      throw std::invalid_argument("linear Bradley–Terry fit: row " + std::to_string(pairs[i]) +
+                                  " outside [0, " + std::to_string(n) + ")");
 }
 }  // namespace
 
 LinearBtFit fit_linear_bradley_terry(const float* X, int64_t n, int in, const int32_t* pairs,
-                                     const float* label, int M, const LinearBtOptions& o) {
+                                     const float* label, int M, double alpha,
+                                     const LinearBtOptions& o) {
   if (M < 1 || in < 1)
     throw std::invalid_argument("linear Bradley–Terry fit: needs M >= 1 pairs of >= 1 features");
-  // A [2M, in + 1]: the A rows, then the B rows, each with a 1 for the bias.
-  MatD A(2 * M, in + 1);
-  for (int i = 0; i < 2 * M; ++i) {
-    const int32_t row = pairs[i < M ? 2 * i : 2 * (i - M) + 1];
-    if (row < 0 || row >= n)
-      throw std::invalid_argument("linear Bradley–Terry fit: row " + std::to_string(row) +
-                                  " outside [0, " + std::to_string(n) + ")");
-    for (int j = 0; j < in; ++j) A(i, j) = X[int64_t(row) * in + j];
-    A(i, in) = 1.0;
+  if (!(alpha > 0))
+    throw std::invalid_argument("linear Bradley–Terry fit: the penalty must be > 0");
+  check_rows(pairs, M, n);
+  auto x = [&](int32_t row, int j) { return double(X[int64_t(row) * in + j]); };
+  // μ, σ [in] over the 2M training rows (two passes); σ = 0 (a constant feature) → no weight.
+  VecD mu = VecD::Zero(in), sd = VecD::Zero(in);
+  for (int i = 0; i < 2 * M; ++i)
+    for (int j = 0; j < in; ++j) mu(j) += x(pairs[i], j) / (2.0 * M);
+  for (int i = 0; i < 2 * M; ++i)
+    for (int j = 0; j < in; ++j) sd(j) += std::pow(x(pairs[i], j) - mu(j), 2) / (2.0 * M);
+  VecD inv = VecD::Zero(in);  // 1/σ, or 0 for a feature constant up to rounding
+  for (int j = 0; j < in; ++j) {
+    const double s = std::sqrt(sd(j));
+    if (s > 1e-10 * std::abs(mu(j)) && s > 0) inv(j) = 1.0 / s;
   }
-  std::vector<double> lab(label, label + M);
-  const SpanBasis b = span_basis(A, o.rank_tolerance);
+  // D [M, in]: the standardised differences x̃_A − x̃_B.
+  MatD D(M, in);
+  for (int i = 0; i < M; ++i)
+    for (int j = 0; j < in; ++j) D(i, j) = (x(pairs[2 * i], j) - x(pairs[2 * i + 1], j)) * inv(j);
+  const std::vector<double> lab(label, label + M);
+  const SpanBasis b = span_basis(D, o.rank_tolerance);
   const MatD& Z = b.Z;
   const int k = int(Z.cols());
   LinearBtFit f;
+  f.alpha = alpha;
   f.rank = k;
-  f.flops = b.flops;
-  VecD beta = VecD::Zero(k), r, dr, r_try, dr_try;
-  double L = loss_at(Z, beta, lab, o.l2, r, dr);
-  const double l2_curv = 2.0 * o.l2 / M;  // ∂²(λ/M Σ r²)/∂r²
+  f.flops = 6.0 * M * in + b.flops;
+  VecD beta = VecD::Zero(k), z, dz, z_try, dz_try;
+  double L = loss_at(Z, beta, lab, alpha, z, dz);
   while (k > 0 && f.iterations < o.max_iterations) {
-    const VecD grad = Z.transpose() * dr;
-    // H = Zᵀ W Z, W = ∂²L/∂r²: σσ'/M on each pair's difference, 2λ/M on every reward.
-    MatD WZ = l2_curv * Z;
-    for (int i = 0; i < M; ++i) {
-      const double z = r(i) - r(M + i), s = sigmoid(z) * sigmoid(-z) / M;
-      const auto diff = (Z.row(i) - Z.row(M + i)).eval();
-      WZ.row(i) += s * diff;
-      WZ.row(M + i) -= s * diff;
-    }
-    const MatD H = Z.transpose() * WZ;
+    const VecD grad = Z.transpose() * dz + 2 * alpha * beta;
+    // H = Zᵀ diag(σ(z)σ(−z)/M) Z + 2α I.
+    VecD w(M);
+    for (int i = 0; i < M; ++i) w(i) = sigmoid(z(i)) * sigmoid(-z(i)) / M;
+    MatD H = Z.transpose() * w.asDiagonal() * Z;
+    H.diagonal().array() += 2 * alpha;
     const VecD step = -H.ldlt().solve(grad);
-    f.flops += 2.0 * double(2 * M) * k * (2 + 2 * k) + double(k) * k * k / 3;
+    f.flops += 2.0 * M * k * (2 + k) + double(k) * k * k / 3;
     f.decrement = -0.5 * grad.dot(step);
     if (!(f.decrement > o.tolerance)) {  // NaN (no curvature) stops too, unconverged
       f.converged = f.decrement <= o.tolerance;
@@ -103,10 +129,10 @@ LinearBtFit fit_linear_bradley_terry(const float* X, int64_t n, int in, const in
     }
     ++f.iterations;
     double t = 1;  // backtracking (Armijo) from the full Newton step
-    double L_try = loss_at(Z, beta + t * step, lab, o.l2, r_try, dr_try);
+    double L_try = loss_at(Z, beta + t * step, lab, alpha, z_try, dz_try);
     for (int h = 0; h < 60 && !(L_try <= L + 1e-4 * t * grad.dot(step)); ++h) {
       t *= 0.5;
-      L_try = loss_at(Z, beta + t * step, lab, o.l2, r_try, dr_try);
+      L_try = loss_at(Z, beta + t * step, lab, alpha, z_try, dz_try);
     }
     if (!(L_try < L)) {  // no descent left at working precision
       f.converged = f.decrement <= o.floor;
@@ -114,12 +140,64 @@ LinearBtFit fit_linear_bradley_terry(const float* X, int64_t n, int in, const in
     }
     beta += t * step;
     L = L_try;
-    r.swap(r_try);
-    dr.swap(dr_try);
+    z.swap(z_try);
+    dz.swap(dz_try);
   }
   if (k == 0) f.converged = true;  // no direction to fit: every reward is 0
-  const VecD theta = k ? VecD(b.Q * beta) : VecD::Zero(in + 1);
-  f.weights.assign(theta.data(), theta.data() + theta.size());
+  // Back to the original units: r(x) = Σ_j w̃_j (x_j − μ_j)/σ_j.
+  const VecD wt = k ? VecD(b.Q * beta) : VecD::Zero(in);
+  f.weights.assign(size_t(in) + 1, 0.0);
+  for (int j = 0; j < in; ++j) {
+    f.weights[size_t(j)] = wt(j) * inv(j);
+    f.weights[size_t(in)] -= wt(j) * inv(j) * mu(j);
+  }
+  return f;
+}
+
+LinearBtFit fit_linear_bradley_terry_cv(const float* X, int64_t n, int in, const int32_t* pairs,
+                                        const float* label, int M, const LinearBtOptions& o) {
+  if (o.alpha_grid.empty() || o.folds < 2)
+    throw std::invalid_argument("linear Bradley–Terry fit: needs a penalty grid and >= 2 folds");
+  if (M < 2) return fit_linear_bradley_terry(X, n, in, pairs, label, M, o.single_pair_alpha, o);
+  check_rows(pairs, M, n);
+  const int folds = std::min(o.folds, M);
+  double flops = 0, best = INFINITY, best_alpha = o.alpha_grid.front();
+  bool converged = true;
+  for (double alpha : o.alpha_grid) {
+    double held_loss = 0;  // Σ over every pair of its BCE when its fold was held out
+    for (int fold = 0; fold < folds; ++fold) {
+      std::vector<int32_t> fit_pairs, held_pairs;
+      std::vector<float> fit_label;
+      std::vector<double> held_label;
+      for (int i = 0; i < M; ++i) {
+        auto& dst = i % folds == fold ? held_pairs : fit_pairs;
+        dst.push_back(pairs[2 * i]);
+        dst.push_back(pairs[2 * i + 1]);
+        if (i % folds == fold)
+          held_label.push_back(label[i]);
+        else
+          fit_label.push_back(label[i]);
+      }
+      const LinearBtFit f = fit_linear_bradley_terry(X, n, in, fit_pairs.data(), fit_label.data(),
+                                                     int(fit_label.size()), alpha, o);
+      flops += f.flops;
+      converged = converged && f.converged;
+      const std::vector<double> r =
+          linear_rewards(f, X, in, held_pairs.data(), int64_t(held_pairs.size()));
+      for (size_t i = 0; i < held_label.size(); ++i)
+        held_loss += pair_bce(r[2 * i] - r[2 * i + 1], held_label[i]);
+    }
+    held_loss /= M;
+    // Ascending grid: a larger α of equal loss (up to rounding) wins, the simpler head.
+    if (held_loss <= best + 1e-12 * std::abs(best) || !std::isfinite(best)) {
+      best = held_loss;
+      best_alpha = alpha;
+    }
+  }
+  LinearBtFit f = fit_linear_bradley_terry(X, n, in, pairs, label, M, best_alpha, o);
+  f.cv_loss = best;
+  f.flops += flops;
+  f.converged = f.converged && converged;
   return f;
 }
 

@@ -252,10 +252,14 @@ def plot_fig5(tpa, envs, out, notes, protocol=PAPER):
                 if np.isnan(ms).any():
                     notes.append(f"{title} {env_title(env)} N={n}: {label} missing at M = "
                                  f"{[m for m, x in zip(Ms, ms) if np.isnan(x)]} (gaps)")
-                ax.plot(Ms, ms, "o-", color=colour, label=label, ms=4)
-                ok = np.isfinite(cis)
-                ax.fill_between(np.array(Ms)[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour,
-                                alpha=0.15)
+                if len(Ms) >= 3:
+                    ax.plot(Ms, ms, "o-", color=colour, label=label, ms=4)
+                    ok = np.isfinite(cis)
+                    ax.fill_between(np.array(Ms)[ok], (ms - cis)[ok], (ms + cis)[ok],
+                                    color=colour, alpha=0.15)
+                else:  # two M points far apart: a line between them would invent a curve
+                    ax.errorbar(Ms, ms, yerr=np.nan_to_num(cis), fmt="o", color=colour,
+                                label=label, ms=4, capsize=3)
             for v, dv in reference_rows(refs, env):  # N-free: the same line in every panel
                 rMs = sorted(int(m) for m in dv.M.dropna().unique())
                 ms = np.array([mean_ci(dv[dv.M == m].tpa)[0] for m in rMs])

@@ -459,6 +459,10 @@ def lines(rows, scale_text):
          "docs/ledger.md), decided from this run: " +
          ", ".join(f"**{n.get(k, 0)} {k}**" for k in order) + ".", ""]
     L += scale_text
+    L += ["", "Every seed of a run shares one trajectory set Ξ per environment (made from the "
+          "environment's data seed, not from the run's seed): the seeds vary the queries, the "
+          "simulated answers, the test rewards, initialisations and batch order, so the spread "
+          "over seeds does not include a new Ξ."]
     L += ["", "| id | paper (section) | environment | we find: Δ [95 % CI] | adjusted p | seeds | "
           "verdict |", "|---|---|---|---|---:|---:|---|"]
     for r in rows:

@@ -1,6 +1,6 @@
 // Linear evaluation (kernels/linear_bradley_terry.h, engine/linear_tpa.h) and the references
-// truth and raw (engine/representation.h): optimality of the fit, its least-norm choice, both of
-// its solution paths, and what a cell scores.
+// truth and raw (engine/representation.h): optimality of the fit, its invariance to units, both
+// of its solution paths, cross-validation's choice, and what a cell scores.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -46,82 +46,89 @@ Problem problem(int n, int in, int M, uint64_t seed) {
   return p;
 }
 
-// ∂L/∂(w, c) [in + 1] of the paper's loss at the fit's weights, by the loss kernel's ∂L/∂r.
-std::vector<double> loss_gradient(const Problem& p, const std::vector<double>& theta, double l2,
-                                  double* loss = nullptr) {
-  std::vector<int32_t> by_role(size_t(2 * p.M));
+// The ridge loss of docs/linear-evaluation.md at weights θ [in + 1] (original units), computed
+// here from its definition: the features standardised over the 2M training rows, w̃_j = θ_j σ_j,
+// L = (1/M) Σ BCE(σ(r_A − r_B), ℓ) + α Σ w̃².
+double ridge_loss(const Problem& p, const std::vector<double>& theta, double alpha) {
+  std::vector<double> mu(size_t(p.in), 0.0), var(size_t(p.in), 0.0);
+  for (int i = 0; i < 2 * p.M; ++i)
+    for (int j = 0; j < p.in; ++j) mu[size_t(j)] += p.X[size_t(p.pairs[size_t(i)]) * p.in + j];
+  for (double& m : mu) m /= 2 * p.M;
+  for (int i = 0; i < 2 * p.M; ++i)
+    for (int j = 0; j < p.in; ++j)
+      var[size_t(j)] += std::pow(p.X[size_t(p.pairs[size_t(i)]) * p.in + j] - mu[size_t(j)], 2);
+  double L = 0;
+  for (int j = 0; j < p.in; ++j)
+    L += alpha * std::pow(theta[size_t(j)], 2) * var[size_t(j)] / (2 * p.M);
   for (int i = 0; i < p.M; ++i) {
-    by_role[size_t(i)] = p.pairs[size_t(2 * i)];
-    by_role[size_t(p.M + i)] = p.pairs[size_t(2 * i + 1)];
+    double z = 0;
+    for (int j = 0; j < p.in; ++j)
+      z += theta[size_t(j)] * (double(p.X[size_t(p.pairs[size_t(2 * i)]) * p.in + j]) -
+                               p.X[size_t(p.pairs[size_t(2 * i + 1)]) * p.in + j]);
+    const double l = p.label[size_t(i)];
+    L += (l * std::log1p(std::exp(-z)) + (1 - l) * std::log1p(std::exp(z))) / p.M;
   }
-  LinearBtFit f;
-  f.weights = theta;
-  const std::vector<double> r = linear_rewards(f, p.X.data(), p.in, by_role.data(), 2 * p.M);
-  std::vector<double> dr(r.size()), lab(p.label.begin(), p.label.end());
-  const double L = bradley_terry_loss<double>(r.data(), lab.data(), p.M, l2, dr.data());
-  if (loss) *loss = L;
-  std::vector<double> g(size_t(p.in + 1), 0.0);
-  for (int i = 0; i < 2 * p.M; ++i) {
-    const float* x = p.X.data() + size_t(by_role[size_t(i)]) * p.in;
-    for (int j = 0; j < p.in; ++j) g[size_t(j)] += dr[size_t(i)] * x[j];
-    g[size_t(p.in)] += dr[size_t(i)];
-  }
-  return g;
+  return L;
 }
 
-TEST(LinearBradleyTerry, TheFitIsAStationaryPointOfThePapersLoss) {
-  // Convex loss: a zero gradient in (w, c) is the global minimum. Checked with the loss kernel's
-  // own ∂L/∂r (not the fit's Newton algebra), and by finite differences along every coordinate.
+TEST(LinearBradleyTerry, TheFitIsTheMinimumOfTheRidgeLoss) {
+  // Convex loss: a zero gradient in w is the global minimum. Checked on the test's own loss by
+  // central differences along every coordinate, and by the loss rising on both sides of each.
   const Problem p = problem(60, 5, 40, 3);
-  const LinearBtFit f = fit_linear_bradley_terry(p.X.data(), p.n, p.in, p.pairs.data(),
-                                                 p.label.data(), p.M, {.l2 = 0.5});
+  const double alpha = 0.05;
+  const LinearBtFit f =
+      fit_linear_bradley_terry(p.X.data(), p.n, p.in, p.pairs.data(), p.label.data(), p.M, alpha);
   ASSERT_TRUE(f.converged);
-  EXPECT_EQ(f.rank, p.in + 1);
+  EXPECT_EQ(f.rank, p.in);
   EXPECT_LE(f.iterations, 20);
-  double L0 = 0;
-  const std::vector<double> g = loss_gradient(p, f.weights, 0.5, &L0);
-  for (double v : g) EXPECT_LT(std::abs(v), 1e-9);
-  for (int j = 0; j <= p.in; ++j)
+  const double L0 = ridge_loss(p, f.weights, alpha);
+  for (int j = 0; j < p.in; ++j) {
+    std::vector<double> up = f.weights, down = f.weights;
+    up[size_t(j)] += 1e-5;
+    down[size_t(j)] -= 1e-5;
+    EXPECT_NEAR((ridge_loss(p, up, alpha) - ridge_loss(p, down, alpha)) / 2e-5, 0.0, 1e-7)
+        << "coordinate " << j;
     for (double h : {1e-3, -1e-3}) {
       std::vector<double> t = f.weights;
       t[size_t(j)] += h;
-      double L = 0;
-      loss_gradient(p, t, 0.5, &L);
-      EXPECT_GT(L, L0) << "coordinate " << j << " step " << h;
+      EXPECT_GT(ridge_loss(p, t, alpha), L0) << "coordinate " << j << " step " << h;
     }
+  }
 }
 
 TEST(LinearBradleyTerry, AHandSolvedOnePairProblem) {
-  // One feature, one pair: x_A = 1, x_B = 0, A preferred, λ = 1. L(w, c) = softplus(−w) +
-  // (w + c)² + c². ∂/∂c = 0 gives c = −w/2, so L = softplus(−w) + w²/2 and ∂/∂w = 0 is
-  // w = 1/(1 + e^w): w* = 0.4010581375 (scipy.optimize.brentq to 1e-15), c* = −w*/2.
+  // One feature, one pair: x_A = 1, x_B = 0, A preferred, α = 1. Over the two rows μ = 0.5 and
+  // σ = 0.5, so the standardised difference is 2 and L(w̃) = softplus(−2w̃) + w̃²; ∂L/∂w̃ = 0 is
+  // w̃ = 1/(1 + e^{2w̃}): w̃* = 0.3374158071711997 (bisection to 1e-16). In the input's units the
+  // weight is w̃*/σ and the bias −w̃*μ/σ.
   const std::vector<float> X{1.f, 0.f}, label{1.f};
   const std::vector<int32_t> pairs{0, 1};
   const LinearBtFit f =
-      fit_linear_bradley_terry(X.data(), 2, 1, pairs.data(), label.data(), 1, {.l2 = 1.0});
+      fit_linear_bradley_terry(X.data(), 2, 1, pairs.data(), label.data(), 1, 1.0);
   ASSERT_TRUE(f.converged);
-  EXPECT_NEAR(f.weights[0], 0.4010581375, 1e-9);
-  EXPECT_NEAR(f.weights[1], -0.4010581375 / 2, 1e-9);
+  EXPECT_NEAR(f.weights[0], 2 * 0.3374158071711997, 1e-9);
+  EXPECT_NEAR(f.weights[1], -0.3374158071711997, 1e-9);
 }
 
-TEST(LinearBradleyTerry, DirectionsNoTrainingRowSeesGetNoWeight) {
-  // Zero columns and a copy of a column added to the features: the rewards of every row are the
-  // same (the least-norm minimiser lives in the rows' span), a zero column's weight is 0, and the
-  // copy shares its original's weight equally. Padding to 25 columns (> 2M = 16 rows) switches
-  // the fit to its other solution path (the rows' Gram matrix); the answer must not change.
+TEST(LinearBradleyTerry, TheRewardsDoNotDependOnFeatureUnitsOrOnFeaturesNoRowVaries) {
+  // A column rescaled and shifted, a constant column and zero columns added: every row's reward
+  // is the same (standardisation removes units; a feature constant over the training rows gets no
+  // weight). Padding to 25 columns (> M = 8 pairs) switches the fit to its other solution path
+  // (the pairs' Gram matrix); the answer must not change.
   const Problem p = problem(30, 3, 8, 5);
   Problem wide = p;
-  const int extra = 22;  // a copy of column 0, then 21 zero columns
+  const int extra = 22;  // column 0 × 1000 + 5 in its place, a constant 7, then 21 zero columns
   wide.in = p.in + extra;
   wide.X.assign(size_t(p.n) * wide.in, 0.f);
   for (int i = 0; i < p.n; ++i) {
     for (int j = 0; j < p.in; ++j) wide.X[size_t(i) * wide.in + j] = p.X[size_t(i) * p.in + j];
-    wide.X[size_t(i) * wide.in + p.in] = p.X[size_t(i) * p.in];
+    wide.X[size_t(i) * wide.in] = 1000.f * p.X[size_t(i) * p.in] + 5.f;
+    wide.X[size_t(i) * wide.in + p.in] = 7.f;
   }
   const LinearBtFit a =
-      fit_linear_bradley_terry(p.X.data(), p.n, p.in, p.pairs.data(), p.label.data(), p.M);
+      fit_linear_bradley_terry(p.X.data(), p.n, p.in, p.pairs.data(), p.label.data(), p.M, 0.1);
   const LinearBtFit b = fit_linear_bradley_terry(wide.X.data(), wide.n, wide.in, wide.pairs.data(),
-                                                 wide.label.data(), wide.M);
+                                                 wide.label.data(), wide.M, 0.1);
   ASSERT_TRUE(a.converged);
   ASSERT_TRUE(b.converged);
   EXPECT_EQ(a.rank, b.rank);
@@ -129,20 +136,59 @@ TEST(LinearBradleyTerry, DirectionsNoTrainingRowSeesGetNoWeight) {
   for (int i = 0; i < p.n; ++i) all[size_t(i)] = i;
   const auto ra = linear_rewards(a, p.X.data(), p.in, all.data(), p.n);
   const auto rb = linear_rewards(b, wide.X.data(), wide.in, all.data(), p.n);
-  for (int i = 0; i < p.n; ++i) EXPECT_NEAR(ra[size_t(i)], rb[size_t(i)], 1e-9) << "row " << i;
-  EXPECT_NEAR(b.weights[0], b.weights[size_t(p.in)], 1e-9);  // the copy shares the weight
-  EXPECT_NEAR(b.weights[0] + b.weights[size_t(p.in)], a.weights[0], 1e-9);
-  for (int j = p.in + 1; j < wide.in; ++j) EXPECT_EQ(b.weights[size_t(j)], 0.0) << "column " << j;
-  // A wide fit is still a stationary point of the loss in every coordinate.
-  for (double v : loss_gradient(wide, b.weights, 10)) EXPECT_LT(std::abs(v), 1e-9);
+  for (int i = 0; i < p.n; ++i) EXPECT_NEAR(ra[size_t(i)], rb[size_t(i)], 1e-6) << "row " << i;
+  EXPECT_NEAR(b.weights[0] * 1000, a.weights[0], 1e-5 * std::abs(a.weights[0]));
+  for (int j = p.in; j < wide.in; ++j) EXPECT_EQ(b.weights[size_t(j)], 0.0) << "column " << j;
+}
+
+TEST(LinearBradleyTerry, CrossValidationChoosesThePenaltyOfLeastHeldOutLoss) {
+  // The fold assignment (pair i in fold i mod 5) and the choice, redone here from single fits:
+  // for each α the held-out BCE of every pair when its fold was left out; the chosen α is the
+  // one of least loss, and the returned head is the fit on all pairs at it.
+  const Problem p = problem(80, 30, 23, 11);  // wider than its pairs, as the raw reference
+  const LinearBtOptions o;
+  const LinearBtFit cv =
+      fit_linear_bradley_terry_cv(p.X.data(), p.n, p.in, p.pairs.data(), p.label.data(), p.M, o);
+  double best = INFINITY, best_alpha = 0;
+  for (double alpha : o.alpha_grid) {
+    double loss = 0;
+    for (int fold = 0; fold < 5; ++fold) {
+      std::vector<int32_t> fit_pairs;
+      std::vector<float> fit_label;
+      for (int i = 0; i < p.M; ++i)
+        if (i % 5 != fold) {
+          fit_pairs.insert(fit_pairs.end(), {p.pairs[size_t(2 * i)], p.pairs[size_t(2 * i + 1)]});
+          fit_label.push_back(p.label[size_t(i)]);
+        }
+      const LinearBtFit f = fit_linear_bradley_terry(
+          p.X.data(), p.n, p.in, fit_pairs.data(), fit_label.data(), int(fit_label.size()), alpha);
+      for (int i = fold; i < p.M; i += 5) {
+        const int32_t ab[2] = {p.pairs[size_t(2 * i)], p.pairs[size_t(2 * i + 1)]};
+        const auto r = linear_rewards(f, p.X.data(), p.in, ab, 2);
+        const double z = r[0] - r[1], l = p.label[size_t(i)];
+        loss += (l * std::log1p(std::exp(-z)) + (1 - l) * std::log1p(std::exp(z))) / p.M;
+      }
+    }
+    if (loss < best) best = loss, best_alpha = alpha;
+  }
+  EXPECT_EQ(cv.alpha, best_alpha);
+  EXPECT_NEAR(cv.cv_loss, best, 1e-12);
+  const LinearBtFit all = fit_linear_bradley_terry(p.X.data(), p.n, p.in, p.pairs.data(),
+                                                   p.label.data(), p.M, best_alpha);
+  EXPECT_EQ(cv.weights, all.weights);
+  EXPECT_TRUE(cv.converged);
 }
 
 TEST(LinearBradleyTerry, BadInputIsRefused) {
   const std::vector<float> X{1.f, 0.f}, label{1.f};
-  const std::vector<int32_t> bad{0, 2};
-  EXPECT_THROW(fit_linear_bradley_terry(X.data(), 2, 1, bad.data(), label.data(), 1),
+  const std::vector<int32_t> bad{0, 2}, good{0, 1};
+  EXPECT_THROW(fit_linear_bradley_terry(X.data(), 2, 1, bad.data(), label.data(), 1, 1.0),
                std::invalid_argument);
-  EXPECT_THROW(fit_linear_bradley_terry(X.data(), 2, 1, bad.data(), label.data(), 0),
+  EXPECT_THROW(fit_linear_bradley_terry(X.data(), 2, 1, good.data(), label.data(), 0, 1.0),
+               std::invalid_argument);
+  EXPECT_THROW(fit_linear_bradley_terry(X.data(), 2, 1, good.data(), label.data(), 1, 0.0),
+               std::invalid_argument);
+  EXPECT_THROW(fit_linear_bradley_terry_cv(X.data(), 2, 1, bad.data(), label.data(), 1),
                std::invalid_argument);
 }
 

@@ -61,6 +61,54 @@ TEST(Queries, TpaHeldOutPairsNeverRepeatTheirTrainingPairs) {
   }
 }
 
+// The same rule where repeats are certain if allowed: 12 trajectories have 66 unordered pairs; 40
+// training pairs and 20 held out per reward. Every held-out pair is new, and a reward whose
+// training draw repeats nothing keeps the held-out pairs it would have drawn without the rule
+// (they are the same stream's next draws).
+TEST(Queries, TpaHeldOutPairsAreDrawnAgainWhenTheyRepeatATrainingPair) {
+  const Dataset full = make_grid_dataset();
+  Dataset d = full;
+  d.count = 12;
+  d.inputs.resize(size_t(12) * d.input_dim);
+  d.features.resize(size_t(12) * d.feature_count());
+  d.features_raw.resize(size_t(12) * d.feature_count());
+  const RewardSets r = make_reward_sets(d.feature_count(), 3);
+  int redrawn = 0;
+  for (int row = 0; row < r.test.count; ++row) {
+    Rng rng(100 + row);
+    const TpaSet t = sample_tpa_set(d, 60, r.test, row, Teacher{}, rng);
+    ASSERT_EQ(t.train, 48);
+    std::set<std::pair<int32_t, int32_t>> train;
+    for (int64_t i = 0; i < t.train; ++i)
+      train.insert({std::min(t.pairs.pairs[2 * i], t.pairs.pairs[2 * i + 1]),
+                    std::max(t.pairs.pairs[2 * i], t.pairs.pairs[2 * i + 1])});
+    // The draws without the rule: the same stream, pairs of distinct rows, nothing skipped.
+    Rng plain(100 + row);
+    std::vector<std::pair<int32_t, int32_t>> draws;
+    for (int i = 0; i < 60 + 200; ++i) {
+      const int32_t a = int32_t(plain.uniform_int(d.count));
+      int32_t b;
+      do b = int32_t(plain.uniform_int(d.count));
+      while (b == a);
+      draws.push_back({a, b});
+    }
+    size_t next = size_t(t.train);
+    for (int64_t i = t.train; i < t.pairs.count; ++i) {
+      const int32_t a = t.pairs.pairs[2 * i], b = t.pairs.pairs[2 * i + 1];
+      EXPECT_EQ(train.count({std::min(a, b), std::max(a, b)}), 0u) << "reward " << row;
+      // It is the first later draw that is not a training pair.
+      while (train.count({std::min(draws[next].first, draws[next].second),
+                          std::max(draws[next].first, draws[next].second)})) {
+        ++next;
+        ++redrawn;
+      }
+      EXPECT_EQ(std::make_pair(a, b), draws[next]) << "reward " << row << " pair " << i;
+      ++next;
+    }
+  }
+  EXPECT_GT(redrawn, 20);  // 48 of 66 pairs train: most rewards had to draw again
+}
+
 TEST(Rewards, UnitNormDisjointAndSeeded) {
   const auto r = make_reward_sets(4, 11);
   EXPECT_EQ(r.test.count, 20);
