@@ -8,7 +8,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from run_tables import PAPER, methods, of_protocol
+from run_tables import PAPER, methods, of_protocol, references
 
 CELL = ["variant", "N", "M", "frozen", "seed", "teacher", "protocol"]
 
@@ -44,8 +44,50 @@ def metric_rows(fpe, tpa, env):
     return out
 
 
+def plot_fig5_points(tpa, env, tags, style, order, mean_ci, save, out, drawn):
+    """Fig. 5 at every point of an environment's axes (fig_hyper_fig5_<env>.png): TPA against M
+    at the largest N, each method in its best mode and the truth reference, one panel per point
+    on a shared y axis. Returns the report's lines ([] without TPA cells)."""
+    p = of_protocol(tpa, PAPER)
+    p = p[p.env == env] if not p.empty else p
+    if p.empty:
+        return []
+    m = methods(p)
+    m = m[m.in_main & m.best_mode]
+    nmax = m.N.max() if not m.empty else None
+    cells = pd.concat([m[(m.N == nmax) | m.N.isna()], references(p)])
+    fig, axes = plt.subplots(1, len(tags), figsize=(4.2 * len(tags), 3.6), squeeze=False,
+                             sharey=True, constrained_layout=True)
+    from figures import REFERENCE_STYLE  # the file's reference styles (truth φ*)
+    for ax, tag in zip(axes[0], tags):
+        d = at_point(cells, tag, tags[0])
+        refs = [v for v in REFERENCE_STYLE if (d.variant == v).any()]
+        for v in [v for v in order if (d.variant == v).any()] + refs:
+            dv = d[d.variant == v]
+            Ms = sorted(int(x) for x in dv.M.dropna().unique())
+            st = [mean_ci(dv[dv.M == M].tpa) for M in Ms]
+            colour, name = style[v] if v in style else REFERENCE_STYLE[v][:2]
+            ax.errorbar(Ms, [x[0] for x in st], yerr=[x[1] if np.isfinite(x[1]) else 0 for x in st],
+                        color=colour, marker="o" if v in style else "s", capsize=3, label=name,
+                        ls=("-" if v in style else "--") if len(Ms) >= 3 else "none")
+            drawn.setdefault("hyper_fig5", {}).setdefault(env, {}).setdefault(tag, {})[v] = {
+                str(M): float(x[0]) for M, x in zip(Ms, st)}
+        ax.axhline(0.5, color="0.6", lw=0.8, ls=":")
+        ax.set_title(tag + (" (base point)" if tag == tags[0] else ""), fontsize=9)
+        ax.set_xlabel("M (reward-head queries)")
+        ax.grid(alpha=0.3)
+    axes[0][0].set_ylabel(f"TPA at N = {int(nmax) if nmax is not None else '—'}")
+    axes[0][-1].legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5))
+    fig.suptitle(f"{env}: Fig. 5 at every point of its axes (paper protocol; mean ± 95 % CI "
+                 "over seeds; dotted: chance)", fontsize=10)
+    name = f"fig_hyper_fig5_{env}"
+    save(fig, out, name)
+    return [f"![{env}: Fig. 5 at every point]({name}.png)", ""]
+
+
 def plot_hyper(fpe, tpa, points, style, order, mean_ci, save, out, notes, drawn):
-    """Draws fig_hyper_<env>.png for every environment with axes; returns the report's lines."""
+    """Draws fig_hyper_<env>.png and fig_hyper_fig5_<env>.png for every environment with axes;
+    returns the report's lines."""
     lines = []
     for env, tags in points.items():
         rows = metric_rows(fpe, tpa, env)
@@ -78,6 +120,7 @@ def plot_hyper(fpe, tpa, points, style, order, mean_ci, save, out, notes, drawn)
         name = f"fig_hyper_{env}"
         save(fig, out, name)
         lines += [f"![{env}: hyper-parameter axes]({name}.png)", ""]
+        lines += plot_fig5_points(tpa, env, tags, style, order, mean_ci, save, out, drawn)
     if lines:
         lines = ["", "## Hyper-parameter axes", "",
                  "The profile lists values for some hyper-parameters; every figure and claim above "
