@@ -392,12 +392,26 @@ void register_export(CLI::App& app, Runner& run) {
 
 // Every task record of the shard files, once: files of one profile and engine, a task in two
 // files with the same results (timings aside). `wall` is the longest shard's wall time.
+// An input no checksum verifies is refused unless `accept_unverified`; its name (and any its own
+// merge accepted) goes into `unverified`, which the merged file records.
 std::map<std::string, TaskRecord> gather_shard_records(const std::vector<std::string>& inputs,
-                                                       const RunInfo& first, double& wall) {
+                                                       const RunInfo& first, double& wall,
+                                                       bool accept_unverified,
+                                                       std::string& unverified) {
   std::map<std::string, TaskRecord> all;
   for (const auto& in : inputs) {
     const RunInfo info = read_run_info(in);
-    if (!info.verified) std::fprintf(stderr, "sirl merge: %s\n", unverified_note(in).c_str());
+    if (!info.verified && !accept_unverified)
+      throw UsageError(in +
+                       " carries no checksum (a file of engine 0.7.0 or older without its .sum), "
+                       "so nothing vouches for its values, and merge would write them into a new "
+                       "checksummed file: --accept-unverified merges it anyway (the output "
+                       "records it in /@unverified_inputs)");
+    if (!info.verified) {
+      std::fprintf(stderr, "sirl merge: %s\n", unverified_note(in).c_str());
+      unverified += in + "\n";
+    }
+    unverified += info.unverified_inputs;
     if (info.profile_text != first.profile_text)
       throw UsageError(in + " was run under profile '" + info.profile_name + "', " +
                        inputs.front() + " under '" + first.profile_name +
@@ -429,7 +443,7 @@ void register_merge(CLI::App& app, Runner& run) {
       "a merge that lacks some of the plan's tasks unless --partial.");
   static std::string out;
   static std::vector<std::string> inputs;
-  static bool force = false, partial = false;
+  static bool force = false, partial = false, accept_unverified = false;
   cmd->add_option("out", out, "Merged results file (a new file: see --force)")
       ->required()
       ->check(output_file());
@@ -439,6 +453,9 @@ void register_merge(CLI::App& app, Runner& run) {
                 "Write what the inputs hold even when tasks are missing (a shard failed or is "
                 "still running): the file lists them (/@missing_tasks), its figures show gaps "
                 "and its report marks what rests on them");
+  cmd->add_flag("--accept-unverified", accept_unverified,
+                "Merge inputs that no checksum verifies (files of engine 0.7.0 or older without "
+                "their .sum); the output lists them in /@unverified_inputs");
   run = [] {
     // A forgotten output name makes the first shard the output: never write over an input, and
     // never replace an existing file unless asked. The lock keeps a run writing OUT out.
@@ -457,7 +474,9 @@ void register_merge(CLI::App& app, Runner& run) {
     const FileLock lock(out, "sirl merge", "wait for it to finish, or choose another output");
     RunInfo first = read_run_info(inputs.front());
     double wall = 0;
-    const std::map<std::string, TaskRecord> all = gather_shard_records(inputs, first, wall);
+    std::string unverified;
+    const std::map<std::string, TaskRecord> all =
+        gather_shard_records(inputs, first, wall, accept_unverified, unverified);
     const Profile p = parse_profile(first.profile_text, inputs.front() + "@profile_text");
     const Plan plan = make_plan(p);
     const size_t total = plan.tasks.size();
@@ -475,6 +494,7 @@ void register_merge(CLI::App& app, Runner& run) {
     RunInfo info = first;
     info.shard = "";
     info.wall_seconds = wall;
+    info.unverified_inputs = unverified;
     const size_t written = write_plan_records(out, p, info, all);
     std::printf("merged %zu files: %zu of %zu tasks%s → %s\n", inputs.size(), written, total,
                 written == total ? " (complete)" : " (INCOMPLETE)", out.c_str());

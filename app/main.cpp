@@ -9,6 +9,34 @@
 #include "jobs/memory_reuse.h"
 #include "jobs/stop_request.h"
 
+namespace {
+// An error message may quote bytes of a file someone else wrote (an attribute's name, a lock's
+// text): it reaches the terminal as valid UTF-8 without control characters (no escapes), each
+// other byte shown as '?'.
+std::string printable(const std::string& s) {
+  std::string out;
+  for (size_t i = 0; i < s.size();) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    size_t len = c < 0x80           ? 1
+                 : (c >> 5) == 0x6  ? 2
+                 : (c >> 4) == 0xE  ? 3
+                 : (c >> 3) == 0x1E ? 4
+                                    : 0;
+    bool ok = len > 0 && i + len <= s.size();
+    for (size_t k = 1; ok && k < len; ++k) ok = (static_cast<unsigned char>(s[i + k]) >> 6) == 0x2;
+    if (ok && len == 1 && ((c < 0x20 && c != '\n' && c != '\t') || c == 0x7F)) ok = false;
+    if (!ok) {
+      out += '?';
+      ++i;
+      continue;
+    }
+    out.append(s, i, len);
+    i += len;
+  }
+  return out;
+}
+}  // namespace
+
 int main(int argc, char** argv) {
   sirl::keep_freed_memory_for_reuse();  // before any thread exists (jobs/memory_reuse.h)
   CLI::App app{
@@ -54,7 +82,7 @@ int main(int argc, char** argv) {
   try {
     return sirl::app::run_selected(app);
   } catch (const sirl::app::UsageError& e) {
-    std::fprintf(stderr, "sirl: error: %s\n", e.what());
+    std::fprintf(stderr, "sirl: error: %s\n", printable(e.what()).c_str());
     return 2;
   } catch (const sirl::StopRequested&) {
     std::fprintf(stderr,
@@ -63,7 +91,7 @@ int main(int argc, char** argv) {
                  sirl::stop_signal_name(), sirl::kExitStopped);
     return sirl::kExitStopped;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "sirl: error: %s\n", e.what());
+    std::fprintf(stderr, "sirl: error: %s\n", printable(e.what()).c_str());
     return 1;
   }
 }

@@ -6,6 +6,9 @@ import os
 import matplotlib
 
 matplotlib.use("Agg")
+# Labels come from the results file (a method's label, an environment's title): drawn as text,
+# never parsed as TeX ("$" in a label is a dollar sign, not a formula that can fail to parse).
+matplotlib.rcParams["text.parse_math"] = False
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402

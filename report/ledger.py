@@ -34,11 +34,12 @@ QUERY_METHODS = ["sirl", "sirl+vae"] + PREF
 VERDICT = {"held": "confirmed", "not held": "contradicted", "inconclusive": "undecided"}
 
 # The paper's scale, for "paper architecture, 15 of 1000 epochs" (its §4.3 and App. B).
+# They are also the engine's defaults where a profile sets none (datasets/environments.cpp).
 PAPER_SCALE = {
-    "grid": {"head": "φ→128→128→1", "tpa_epochs": 500, "sirl_epochs": 3000, "N": "100–1000",
-             "M": "10–190"},
-    "jaco": {"head": "φ→1024→1024→1", "tpa_epochs": 1000, "sirl_epochs": 3000, "N": "100–1000",
-             "M": "10–190"},
+    "grid": {"head": "φ→128→128→1", "hidden": [128, 128], "tpa_epochs": 500, "sirl_epochs": 3000,
+             "N": "100–1000", "M": "10–190"},
+    "jaco": {"head": "φ→1024→1024→1", "hidden": [1024, 1024], "tpa_epochs": 1000,
+             "sirl_epochs": 3000, "N": "100–1000", "M": "10–190"},
 }
 
 
@@ -398,52 +399,66 @@ def _fmt(x, spec):
     return "—" if x is None or not np.isfinite(x) else format(x, spec)
 
 
-def _hyper(attrs):
-    """An environment's hyper-parameters from its /datasets/<env> "hyper" text (key = value)."""
-    out = {}
-    for line in str(attrs.get("hyper", "")).splitlines():
-        if "=" in line:
-            k, v = line.split("=", 1)
-            out[k.strip()] = v.strip()
-    return out
+def _hyper(profile_text, env):
+    """An environment's head width, head epochs and SIRL epochs as the run used them: its
+    profile's [hyper.<env>] (the file records the resolved profile; an axis's first value is the
+    base point the claims use), else the engine's defaults, the paper's."""
+    import tomllib
+    try:
+        h = tomllib.loads(profile_text or "").get("hyper", {}).get(env, {})
+    except (tomllib.TOMLDecodeError, AttributeError):
+        h = {}
+    h = h if isinstance(h, dict) else {}
+    p = PAPER_SCALE[env]
+
+    def base(key, default):
+        v = h.get(key, default)
+        if isinstance(v, list) and v and isinstance(v[0], (list, int)) and key != "tpa.hidden":
+            v = v[0]
+        if key == "tpa.hidden" and isinstance(v, list) and v and isinstance(v[0], list):
+            v = v[0]
+        return v
+
+    hidden = base("tpa.hidden", p["hidden"])
+    width = "→".join(str(x) for x in hidden) if isinstance(hidden, list) else str(hidden)
+    return {"head": f"φ→{width}→1", "tpa.epochs": base("tpa.epochs", p["tpa_epochs"]),
+            "sirl.epochs": base("sirl.epochs", p["sirl_epochs"])}
 
 
-def head_scale(datasets, envs):
-    """environment → "the paper's 128-wide head, 200 of 500 epochs": the paper protocol's head as
-    this run trained it, against the paper's (for the report's first table)."""
+def head_scale(profile_text, envs):
+    """environment → "the paper's head φ→128→128→1, 200 of 500 epochs": the paper protocol's head
+    as this run trained it, against the paper's (for the report's first table)."""
     out = {}
     for env in envs:
         if env not in PAPER_SCALE:
             continue
-        p, h = PAPER_SCALE[env], _hyper(datasets.get(env, {}).get("attrs", {}))
-        w = h.get("tpa.hidden", "?")
-        same = f"φ→{w}→{w}→1" == p["head"]
-        out[env] = (f"{'the paper' + chr(39) + 's ' if same else ''}{w}-wide head"
-                    f"{'' if same else ' (paper: ' + p['head'] + ')'}, {h.get('tpa.epochs', '?')} "
-                    f"of {p['tpa_epochs']} epochs")
+        p, h = PAPER_SCALE[env], _hyper(profile_text, env)
+        same = h["head"] == p["head"]
+        out[env] = ((f"the paper's head {h['head']}" if same else
+                     f"head {h['head']} (paper: {p['head']})") +
+                    f", {h['tpa.epochs']} of {p['tpa_epochs']} epochs")
     return out
 
 
-def scale_lines(datasets, fpe, tpa, envs):
+def scale_lines(profile_text, fpe, tpa, envs):
     """This run's scale beside the paper's, per environment: the head's width and epochs, SIRL's
-    epochs, seeds, N and M (datasets: sirl_bench's res.datasets)."""
+    epochs, seeds, N and M."""
     L = ["| environment | reward head (paper protocol) | SIRL epochs | seeds | N | M |",
          "|---|---|---|---:|---|---|"]
     for env in envs:
         if env not in PAPER_SCALE:
             continue
-        p, h = PAPER_SCALE[env], _hyper(datasets.get(env, {}).get("attrs", {}))
-        width = h.get("tpa.hidden", "?")
-        head = f"φ→{width}→{width}→1" if width != "?" else "?"
-        arch = "the paper's architecture" if head == p["head"] else f"{head} (paper: {p['head']})"
+        p, h = PAPER_SCALE[env], _hyper(profile_text, env)
+        arch = ("the paper's architecture" if h["head"] == p["head"] else
+                f"{h['head']} (paper: {p['head']})")
         f = fpe[fpe.env == env] if not fpe.empty else fpe
         t = tpa[tpa.env == env] if not tpa.empty else tpa
         seeds = len(pd.unique(pd.concat([f.get("seed", pd.Series(dtype=int)),
                                          t.get("seed", pd.Series(dtype=int))])))
         Ns = sorted(int(x) for x in pd.unique(f.N.dropna())) if "N" in f else []
         Ms = sorted(int(x) for x in pd.unique(t.M.dropna())) if "M" in t else []
-        L.append(f"| {env_title(env)} | {arch}, {h.get('tpa.epochs', '?')} of {p['tpa_epochs']} "
-                 f"epochs | {h.get('sirl.epochs', '?')} of {p['sirl_epochs']} | {seeds} (paper: "
+        L.append(f"| {env_title(env)} | {arch}, {h['tpa.epochs']} of {p['tpa_epochs']} "
+                 f"epochs | {h['sirl.epochs']} of {p['sirl_epochs']} | {seeds} (paper: "
                  f"not stated) | {', '.join(map(str, Ns)) or '—'} (paper: {p['N']}) | "
                  f"{', '.join(map(str, Ms)) or '—'} (paper: {p['M']}) |")
     return L

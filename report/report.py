@@ -5,6 +5,7 @@ import html
 import json
 import math
 import os
+import re
 
 import numpy as np
 import pandas as pd
@@ -165,13 +166,13 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
         # registration names the key's prefix (the key itself is never taken apart).
         env = next((e for e in ENV if key.startswith(e + "/")), "other")
         missing[env] = missing.get(env, 0) + 1
-    L = [f"# {title}", ""] + summary_lines(H, missing, ledger.head_scale(res.datasets, envs))
+    L = [f"# {title}", ""] + summary_lines(H, missing, ledger.head_scale(a.get("profile_text", ""), envs))
     try:
         study = sirl_bench.study_analysis(res.path)
     except sirl_bench.ResultsError:
         study = None  # the profile ran no study
     book = ledger.ledger(fpe, tpa, envs, study)
-    L += ledger.lines(book, ledger.scale_lines(res.datasets, methods(fpe), methods(tpa), envs))
+    L += ledger.lines(book, ledger.scale_lines(a.get("profile_text", ""), methods(fpe), methods(tpa), envs))
     L += ["", f"Engine {a.get('engine_version')} (commit {a.get('git_commit')}), host "
           f"{a.get('host')}, {a.get('threads')} threads; started {a.get('started')}, finished "
           f"{a.get('finished')}, wall time {float(a.get('wall_seconds', 0)):.0f} s; tasks: "
@@ -199,8 +200,8 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
         L += ["", "## Notes", ""] + [f"- {n}" for n in notes]
     prof = a.get("profile_text", "")
     if prof:
-        L += ["", "## Configuration (the profile this file was run with)", "", "```toml",
-              prof.strip(), "```"]
+        L += ["", "## Configuration (the profile this file was run with)", ""]
+        L += fenced(prof.strip(), "toml")
     L.append("")
     text = "\n".join(L)
     with open(os.path.join(out, "report.md"), "w") as fh:
@@ -215,6 +216,13 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
         json.dump(json_safe([{k: v for k, v in h.items() if k != "deciding"} for h in H]), fh,
                   indent=1)
     return text
+
+
+def fenced(text, lang):
+    """A Markdown code block of `text` whose fence is longer than any run of backticks in it, so
+    no text (a profile's, from any file) can close the block and continue as markup."""
+    fence = "`" * max(3, 1 + max((len(r) for r in re.findall(r"`+", text)), default=0))
+    return [fence + lang, text, fence]
 
 
 def external_lines(fpe, tpa, envs):
@@ -283,7 +291,15 @@ def report_html(title, body_md):
     """The report's Markdown as HTML (Debian's python3-markdown, tables + fenced code). The
     first element of the page is the summary table, its caption the report's title."""
     import markdown
-    body = markdown.markdown(body_md, extensions=["tables", "fenced_code"])
+    md = markdown.Markdown(extensions=["tables", "fenced_code"])
+    # Every value in the report comes from a results file or a profile, which anyone may have
+    # written: raw HTML in them is shown as text, never passed through (no stored script).
+    md.preprocessors.deregister("html_block")
+    md.inlinePatterns.deregister("html")
+    body = md.convert(body_md)
+    # Links and images with a script URL from a file's text ([x](javascript:…)) go nowhere.
+    body = re.sub(r'(href|src)="\s*(?:javascript|vbscript|data):[^"]*"', r'\1="#"', body,
+                  flags=re.IGNORECASE)
     t = html.escape(title.replace("`", ""))
     body = body.replace("<table>", f'<table id="summary"><caption>{t}</caption>', 1)
     return (f"<!doctype html><html><head><meta charset='utf-8'><title>{t}</title>"

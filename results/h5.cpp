@@ -23,8 +23,7 @@ void quiet() {
 // disk, a file-size limit, a read-only or failing device).
 std::string os_reason() {
   const int e = errno;
-  if (e == ENOSPC || e == EFBIG || e == EDQUOT || e == EIO || e == EROFS || e == EACCES ||
-      e == ENOENT)
+  if (e == ENOSPC || e == EFBIG || e == EDQUOT || e == EIO || e == EROFS || e == EACCES)
     return std::string(" (") + std::strerror(e) + ")";
   return "";
 }
@@ -196,7 +195,9 @@ H5File H5File::create(const std::string& path, uint64_t userblock_bytes) {
   }
   hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl, H5P_DEFAULT);
   if (fcpl != H5P_DEFAULT) H5Pclose(fcpl);
-  if (f < 0) fail(path, "cannot create file");
+  if (f < 0)
+    fail(path,
+         errno == ENOENT ? "cannot create file (its folder does not exist)" : "cannot create file");
   return H5File(f, path);
 }
 
@@ -212,7 +213,24 @@ H5File H5File::open_read(const std::string& path) {
   }
   hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   if (f < 0) fail(path, "cannot open (truncated or corrupt HDF5 file?)");
-  return H5File(f, path);
+  H5File file(f, path);
+  // A link to another file (external or user-defined) would pull values no checksum of this
+  // file covers: a file holding one is refused whole, before any object is read.
+  std::string foreign;
+  const herr_t visited = H5Lvisit(
+      f, H5_INDEX_NAME, H5_ITER_NATIVE,
+      [](hid_t, const char* name, const H5L_info_t* info, void* out) -> herr_t {
+        if (info->type == H5L_TYPE_HARD || info->type == H5L_TYPE_SOFT) return 0;
+        *static_cast<std::string*>(out) = name;
+        return 1;
+      },
+      &foreign);
+  if (visited < 0) fail(path, "cannot list its objects (corrupt HDF5 file?)");
+  if (!foreign.empty())
+    throw H5Error(path + ": /" + foreign +
+                  " is a link to another file (an HDF5 external link), which no checksum of this "
+                  "file covers; sirl reads no such file");
+  return file;
 }
 
 H5File H5File::open_rw(const std::string& path) {

@@ -14,6 +14,7 @@
 
 #include "results/dataset_store.h"
 #include "results/durable.h"
+#include "results/isolated_read.h"
 
 namespace sirl {
 
@@ -365,6 +366,8 @@ void write_results_file(const std::string& path, const RunInfo& info,
       f.set_attr("/", "engine_version", info.engine_version);
       if (!info.hyper_points.empty()) f.set_attr("/", "hyper_points", info.hyper_points);
       if (!info.missing_tasks.empty()) f.set_attr("/", "missing_tasks", info.missing_tasks);
+      if (!info.unverified_inputs.empty())
+        f.set_attr("/", "unverified_inputs", info.unverified_inputs);
       f.set_attr("/", "git_commit", info.git_commit);
       f.set_attr("/", "host", info.host);
       f.set_attr("/", "cpu_class", info.cpu_class);
@@ -435,7 +438,7 @@ void write_checksum(const std::string& path) {
   if (ec) throw H5Error(path + ".sum: cannot write the checksum: " + ec.message());
 }
 
-bool verify_checksum(const std::string& path) {
+bool verify_checksum(const std::string& path, bool* is_framed) {
   auto mismatch = [&](const std::string& what, const std::string& got, const std::string& want) {
     return H5Error(path + ": " + what + " mismatch (" + got + ", recorded " + want +
                    "): the file changed after it was written (corrupted?); restore it, or rerun "
@@ -462,6 +465,7 @@ bool verify_checksum(const std::string& path) {
   if (framed && !hdf5_after_frame && !head.starts_with("SIRLRESULTS"))
     throw H5Error(path + ": not an HDF5 file (neither a sirl results file nor a dataset file)");
   head.resize(std::min<size_t>(head.size(), kResultsFrameBytes));
+  if (is_framed) *is_framed = framed;
   if (framed) {
     const size_t d = kResultsMagic.size();
     const std::string want = head.size() > d + 32 ? head.substr(d, 32) : "";
@@ -511,8 +515,8 @@ int64_t check_results_schema(const H5File& f) {
   return v;
 }
 
-RunInfo read_run_info(const std::string& path) {
-  const bool verified = verify_checksum(path);
+namespace {
+RunInfo read_run_info_unsandboxed(const std::string& path, bool verified, bool framed) {
   H5File f = H5File::open_read(path);
   RunInfo i;
   i.verified = verified;
@@ -527,6 +531,8 @@ RunInfo read_run_info(const std::string& path) {
   if (f.has_attr("/", "kernel_paths")) i.kernel_paths = f.attr_string("/", "kernel_paths");
   if (f.has_attr("/", "hyper_points")) i.hyper_points = f.attr_string("/", "hyper_points");
   if (f.has_attr("/", "missing_tasks")) i.missing_tasks = f.attr_string("/", "missing_tasks");
+  if (f.has_attr("/", "unverified_inputs"))
+    i.unverified_inputs = f.attr_string("/", "unverified_inputs");
   if (f.has_attr("/", "roof_fp32_gflops_per_core"))
     i.roof_fp32_gflops = f.attr_double("/", "roof_fp32_gflops_per_core");
   if (f.has_attr("/", "roof_bf16_gflops_per_core"))
@@ -541,16 +547,37 @@ RunInfo read_run_info(const std::string& path) {
   i.tasks_done = f.attr_int("/", "tasks_done");
   i.wall_seconds = f.attr_double("/", "wall_seconds");
   i.complete = f.attr_int("/", "complete") != 0;
+  // Engines from 0.8.0 on frame every results file they write: one of theirs without a frame was
+  // rewritten (h5repack, h5py) or had its frame cut off, and nothing covers what it now holds.
+  if (!framed && i.schema_version >= 3)
+    throw H5Error(path + ": written by engine " + i.engine_version +
+                  ", which frames every results file, but it has no checksum frame: it was "
+                  "rewritten (h5repack, h5py) or its first 1024 bytes were cut off, so nothing "
+                  "vouches for its values; use the file as the engine wrote it");
   return i;
 }
 
-std::vector<TaskRecord> read_results_records(const std::string& path) {
-  verify_checksum(path);
+std::vector<TaskRecord> read_records_unsandboxed(const std::string& path) {
   H5File f = H5File::open_read(path);
   check_results_schema(f);
   std::vector<TaskRecord> out;
   for (const auto& k : f.read_strings("/runs_index")) out.push_back(read_record(f, "/runs/" + k));
   return out;
+}
+}  // namespace
+
+RunInfo read_run_info(const std::string& path) {
+  bool framed = false;
+  const bool verified = verify_checksum(path, &framed);
+  read_in_child_first(path, [&] { read_run_info_unsandboxed(path, verified, framed); });
+  return read_run_info_unsandboxed(path, verified, framed);
+}
+
+std::vector<TaskRecord> read_results_records(const std::string& path) {
+  bool framed = false;
+  verify_checksum(path, &framed);
+  read_in_child_first(path, [&] { read_records_unsandboxed(path); });
+  return read_records_unsandboxed(path);
 }
 
 void export_csv(const ResultTables& t, const std::string& dir) {

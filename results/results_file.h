@@ -61,6 +61,9 @@ struct RunInfo {
   // The keys of the plan's tasks a partial merge (`sirl merge --partial`) lacked, one per line;
   // "" otherwise (a partial run's missing tasks are those of its plan not in /runs_index).
   std::string missing_tasks;
+  // The inputs of a merge that no checksum verified (`sirl merge --accept-unverified`), one per
+  // line; "" otherwise.
+  std::string unverified_inputs;
   int64_t threads = 0, tasks_total = 0, tasks_done = 0;
   double wall_seconds = 0;
   bool complete = false;
@@ -123,8 +126,10 @@ struct RunDataset {
 void write_results_file(const std::string& path, const RunInfo& info,
                         const std::vector<RunDataset>& datasets,
                         const std::vector<TaskRecord>& records, const ResultTables& tables);
-// Both verify the file against its checksums before HDF5 reads a byte of it: a corrupted file is
-// one clear H5Error, not a crash inside the HDF5 library. RunInfo::verified says whether it could
+// Both verify the file against its checksums before HDF5 reads a byte of it, and read it in a
+// forked child first (results/isolated_read.h): a corrupted or crafted file is one clear H5Error,
+// never a crash inside the HDF5 library. A file of a framing engine (schema 3) without its frame
+// is refused. RunInfo::verified says whether it could
 // be verified at all (a file of engine ≤ 0.7.0 copied without its .sum cannot).
 RunInfo read_run_info(const std::string& path);
 std::vector<TaskRecord> read_results_records(const std::string& path);
@@ -135,7 +140,8 @@ std::vector<TaskRecord> read_results_records(const std::string& path);
 // damaged frame, and returns whether anything verified the file (false: an unframed file without
 // its .sum).
 void write_checksum(const std::string& path);
-bool verify_checksum(const std::string& path);
+// `framed`: whether the file starts with a frame (engines from 0.8.0 on frame what they write).
+bool verify_checksum(const std::string& path, bool* framed = nullptr);
 // One line for a file verify_checksum could not verify.
 std::string unverified_note(const std::string& path);
 

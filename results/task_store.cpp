@@ -139,15 +139,32 @@ std::string tmp_suffix() {
   return s;
 }
 
-bool abandoned_tmp(const std::string& name) {
+// Whether the file at `p` begins like something the store writes: a commit's frame, its
+// zero-filled userblock before the frame is written, an old engine's HDF5 commit, or nothing (a
+// writer that died before its first byte).
+bool store_bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  char head[8] = {};
+  in.read(head, sizeof head);
+  const std::string_view h(head, size_t(in.gcount()));
+  return h.empty() || h == "SIRLTASK" || h == std::string_view("\x89HDF\r\n\x1a\n", 8) ||
+         h == std::string_view("\0\0\0\0\0\0\0\0", 8);
+}
+
+// Whether a temporary file of the store may be removed: its writer, named in the file name, is a
+// dead process of this host. A name that only looks like ours (no host, a pid no process can
+// have) is left alone, as is an engine before 0.10.0's "<final>.tmp" unless its bytes are the
+// store's.
+bool abandoned_tmp(const fs::path& p, const std::string& name) {
+  if (name.size() == 23) return store_bytes(p);  // "<final>.tmp": no live writer uses that name
   const std::string stem = name.substr(0, name.size() - 4);  // without ".tmp"
   const size_t dot_pid = stem.rfind('.');
-  if (dot_pid == std::string::npos) return true;
+  if (dot_pid == std::string::npos) return false;
   const std::string pid = stem.substr(dot_pid + 1), rest = stem.substr(0, dot_pid);
   const size_t dot_host = rest.rfind('.');
-  if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos ||
+  if (pid.empty() || pid.size() > 9 || pid.find_first_not_of("0123456789") != std::string::npos ||
       dot_host == std::string::npos || !rest.substr(0, dot_host).ends_with(".h5"))
-    return true;  // an engine before 0.10.0's "<final>.tmp": no live writer uses that name
+    return false;                                              // not a name this store writes
   if (rest.substr(dot_host + 1) != this_host()) return false;  // another host's: not ours to judge
   return ::kill(pid_t(std::stol(pid)), 0) != 0 && errno == ESRCH;
 }
@@ -180,7 +197,7 @@ TaskStore::TaskStore(fs::path dir) : dir_(std::move(dir)) {
     const auto name = e.path().filename().string();
     if (e.is_symlink()) continue;  // never followed, never removed
     if (is_temporary_name(name)) {
-      if (abandoned_tmp(name)) fs::remove(e.path(), ec);
+      if (abandoned_tmp(e.path(), name)) fs::remove(e.path(), ec);
       continue;
     }
     if (!is_commit_name(name)) continue;  // not the store's: left alone

@@ -1,5 +1,6 @@
 // The task store: commits round-trip, torn commits are swept, corrupted commits refused.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -207,11 +208,22 @@ TEST(TaskStore, CommitsRoundTripAndTornCommitsAreSwept) {
     s.commit(r);
     EXPECT_TRUE(s.has(r.key));
   }
-  std::ofstream(dir / "0123456789abcdef.h5.tmp") << "torn";  // an interrupted commit
+  std::ofstream(dir / "0123456789abcdef.h5.tmp") << "SIRLTASK torn";  // an interrupted commit
+  // Names that only look like the store's temporaries are the user's, whatever their pid field
+  // holds (a 20-digit "pid" once ended every run with "stol"); an old-style name whose bytes are
+  // not the store's is left alone too.
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  const std::string long_pid =
+      "0123456789abcdef.h5." + std::string(host) + ".12345678901234567890.tmp";
+  std::ofstream(dir / long_pid) << "mine";
+  std::ofstream(dir / "fedcba9876543210.h5.tmp") << "my notes";
   TaskStore again(dir);
   EXPECT_EQ(again.keys(), std::vector<std::string>{r.key});
   EXPECT_EQ(again.load(r.key), r);
   EXPECT_FALSE(fs::exists(dir / "0123456789abcdef.h5.tmp"));
+  EXPECT_TRUE(fs::exists(dir / long_pid));
+  EXPECT_TRUE(fs::exists(dir / "fedcba9876543210.h5.tmp"));
 }
 
 }  // namespace

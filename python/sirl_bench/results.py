@@ -30,11 +30,15 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from collections.abc import Mapping
 
 import h5py
 import numpy as np
 import pandas as pd
+
+from . import untrusted
+from .errors import ResultsError  # re-exported: sirl_bench.ResultsError
 
 # Results-file schema versions this reader understands (results/results_file.h).
 SCHEMA_VERSIONS = (1, 2, 3)
@@ -51,10 +55,6 @@ FILLED = {"fpe": {"reference": False}, "tpa": {"protocol": "paper", "reference":
 # Integer-valued numbers of a record (the file stores a record's numbers as float64).
 INT_FIELDS = ("N", "M", "seed", "threads", "queries", "head", "epoch", "epochs", "max_epochs",
               "dim", "latent", "tasks_done", "tasks_total", "schema_version", "newton_iterations")
-
-
-class ResultsError(ValueError):
-    """A file this reader cannot read: not a results file, or a schema it does not know."""
 
 
 def _text(v):
@@ -138,6 +138,8 @@ class Results:
 
     def __init__(self, path):
         self.path = str(path)
+        # Checksums, links and a sandboxed read of its structures before h5py opens it here.
+        self.framed, self.verified = untrusted.check(self.path)
         try:
             self._f = h5py.File(self.path, "r")
         except OSError as e:
@@ -153,6 +155,12 @@ class Results:
             self._f.close()
             raise ResultsError(f"{self.path}: results schema version {v}; this reader reads "
                                f"versions {SCHEMA_VERSIONS[0]} to {SCHEMA_VERSIONS[-1]}")
+        if v >= 3 and not self.framed:
+            self._f.close()
+            raise ResultsError(f"{self.path}: a schema-{v} results file (engines from 0.8.0 frame "
+                               "every file they write) without its checksum frame: it was "
+                               "rewritten (h5repack, h5py) or its first 1024 bytes were cut off, "
+                               "so nothing vouches for its values")
         self.schema_version = v
         self.tables = _LazyTables(f)
         self._records = None
@@ -239,6 +247,7 @@ class Results:
         rows = {}
         for name, g in (self._f["methods"].items() if "methods" in self._f else []):
             rows[name] = {k: _attr(g.attrs[k]) for k in cols if k in g.attrs}
+            _check_method(self.path, name, rows[name])
         df = pd.DataFrame.from_dict(rows, orient="index", columns=cols)
         df.index.name = "variant"
         if not df.empty:
@@ -394,7 +403,39 @@ def _attr(v):
     return v
 
 
+_COLOUR = re.compile(r"#[0-9a-fA-F]{6}")
+_ROLES = {"sirl", "baseline", "reference", "external"}
+
+
+def _check_method(path, name, a):
+    """One /methods/<variant> group as the engine writes it, or ResultsError naming it: the
+    figures draw its label and colour, so nothing else reaches them."""
+    def bad(what):
+        raise ResultsError(f"{path}: /methods/{name[:60]!r}: {what} (not as the engine writes it)")
+    if len(name) > 100:
+        bad("a variant name longer than 100 characters")
+    for k in ("method", "label", "role", "queries", "selection", "selection_label", "dashes"):
+        if k in a and (not isinstance(a[k], str) or len(a[k]) > 200):
+            bad(f"{k} is not a short text")
+    for k in ("colour", "selection_colour"):
+        if k in a and not (isinstance(a[k], str) and _COLOUR.fullmatch(a[k])):
+            bad(f"{k} is not a colour #rrggbb")
+    for k in ("figure_order", "catalog_order", "selection_order", "vae", "best_frozen",
+              "accepts_vae"):
+        if k in a and not (isinstance(a[k], (int, np.integer, float, np.floating))
+                           and np.isfinite(a[k]) and abs(a[k]) < 1e6 and a[k] == int(a[k])):
+            bad(f"{k} is not a small integer")
+    if a.get("role", "sirl") not in _ROLES:
+        bad(f"role is not one of {sorted(_ROLES)}")
+    if "dashes" in a:
+        try:
+            [float(x) for x in a["dashes"].split()]
+        except ValueError:
+            bad("dashes is not a list of numbers")
+
+
 def _open_h5(path):
+    untrusted.check(path)
     try:
         return h5py.File(str(path), "r")
     except OSError as e:

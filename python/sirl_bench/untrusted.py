@@ -1,0 +1,176 @@
+"""A file someone else wrote is untrusted input (a shard, a colleague's results, a file that came
+with a paper). Before h5py reads a byte of it, this module checks what the engine checks:
+
+- the checksum frame (the first 1024 bytes: "SIRLRESULTS2\\nxxh3-128 <digest of the rest>") and
+  FILE.sum beside it (`xxh128sum -c` format);
+- that a file an engine from 0.8.0 on wrote (schema 3) still has its frame;
+- that no link leads to another file (an HDF5 external link pulls values no checksum covers);
+- that reading its HDF5 structures does not crash the HDF5 library: a checksum proves only that
+  nothing changed by accident (anyone can recompute XXH3 over crafted bytes), and crafted
+  metadata crashes libhdf5 below anything h5py can check. So the structures are read first in a
+  forked child; if it dies, the file is refused with one line.
+
+Every failure is a ResultsError with one line. Debian's python3-h5py and python3-xxhash only."""
+from __future__ import annotations
+
+import os
+import stat
+
+from .errors import ResultsError
+
+FRAME_BYTES = 1024
+MAGIC = b"SIRLRESULTS2\nxxh3-128 "
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+def _xxh3_128(path, offset=0):
+    try:
+        import xxhash
+    except ImportError:
+        raise ResultsError("python3-xxhash is missing (it verifies results files): "
+                           "./scripts/setup.sh installs it") from None
+    h = xxhash.xxh3_128()
+    with open(path, "rb") as fh:
+        fh.seek(offset)
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def verify(path) -> tuple[bool, bool]:
+    """(framed, verified): checks the frame and FILE.sum as the engine does; raises ResultsError
+    on any mismatch, a damaged frame, or a path that is not a regular file."""
+    path = str(path)
+    try:
+        st = os.stat(path)
+    except OSError as e:
+        raise ResultsError(f"{path}: {e.strerror}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise ResultsError(f"{path}: not a regular file (a pipe, socket, device or folder)")
+    with open(path, "rb") as fh:
+        head = fh.read(FRAME_BYTES + len(HDF5_SIGNATURE))
+    framed = not head.startswith(HDF5_SIGNATURE)
+    if framed:
+        if not head[FRAME_BYTES:].startswith(HDF5_SIGNATURE) and not head.startswith(b"SIRLRESULTS"):
+            raise ResultsError(f"{path}: not an HDF5 file (neither a sirl results file nor a "
+                               "dataset file)")
+        frame = head[:FRAME_BYTES]
+        want = frame[len(MAGIC):len(MAGIC) + 32]
+        expect = MAGIC + want + b"\n"
+        if (len(frame) != FRAME_BYTES or not frame.startswith(MAGIC) or len(want) != 32
+                or frame != expect + b"\0" * (FRAME_BYTES - len(expect))):
+            raise ResultsError(f"{path}: its checksum frame (the first {FRAME_BYTES} bytes) is "
+                               "damaged (corrupted or truncated), or it is not a sirl results file")
+        got = _xxh3_128(path, FRAME_BYTES)
+        if got != want.decode("ascii", "replace"):
+            raise ResultsError(f"{path}: checksum mismatch ({got}, recorded "
+                               f"{want.decode('ascii', 'replace')}): the file changed after it "
+                               "was written (corrupted?)")
+    try:
+        with open(path + ".sum") as fh:
+            words = fh.read(4096).split()
+    except (OSError, UnicodeDecodeError):
+        return framed, framed
+    want = words[0] if words else ""
+    if len(want) == 32:
+        got = _xxh3_128(path)
+        if got != want:
+            raise ResultsError(f"{path}: .sum checksum mismatch ({got}, recorded {want}): the "
+                               "file changed after it was written (corrupted?)")
+        return framed, True
+    if len(want) == 16:  # an engine up to 0.7.0's checksum: the engine verifies those
+        return framed, framed
+    raise ResultsError(f"{path}.sum: not a checksum file")
+
+
+def _walk(f, visit):
+    """Every object of file f by path, links examined without being followed: `visit(name,
+    obj)` for groups and datasets; raises ResultsError at a link to another file."""
+    import h5py
+    stack = [("", f)]
+    seen = 0
+    while stack:
+        prefix, g = stack.pop()
+        for k in g.keys():
+            name = f"{prefix}/{k}"
+            link = g.get(k, getlink=True)
+            if isinstance(link, h5py.ExternalLink) or not isinstance(link, (h5py.HardLink,
+                                                                            h5py.SoftLink)):
+                raise ResultsError(f"{f.filename}: {name} is a link to another file (an HDF5 "
+                                   "external link), which no checksum of this file covers; "
+                                   "sirl-bench reads no such file")
+            if isinstance(link, h5py.SoftLink):
+                continue
+            obj = g[k]
+            seen += 1
+            if seen > 2_000_000:
+                raise ResultsError(f"{f.filename}: more than 2,000,000 objects")
+            visit(name, obj)
+            if isinstance(obj, h5py.Group):
+                stack.append((name, obj))
+
+
+def _read_structures(path):
+    """Reads what a reader of the file will touch: every attribute, every string or compound
+    dataset whole, and one element of every other dataset (its metadata, filters and storage)."""
+    import h5py
+    import numpy as np
+    with h5py.File(path, "r") as f:
+        def touch(obj):
+            for k in obj.attrs.keys():
+                obj.attrs[k]
+        touch(f)
+
+        def visit(name, obj):
+            touch(obj)
+            if isinstance(obj, h5py.Dataset):
+                if obj.is_virtual or obj.external:
+                    raise ResultsError(f"{path}: {name} keeps its values outside the file "
+                                       "(external or virtual storage), which no checksum covers")
+                if obj.dtype.kind in "OSUV" or obj.dtype.names:
+                    obj[()]
+                elif obj.size:
+                    obj[tuple(np.zeros(obj.ndim, dtype=int))] if obj.ndim else obj[()]
+        _walk(f, visit)
+
+
+def check(path) -> tuple[bool, bool]:
+    """verify(path), then the file's structures read in a forked child (a crash there is one
+    ResultsError here). Returns (framed, verified)."""
+    framed, verified = verify(path)
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: read, report, and leave without running the parent's handlers
+        os.close(r)
+        try:
+            fd = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(fd, 2)
+            _read_structures(str(path))
+            code = 0
+        except ResultsError as e:
+            os.write(w, str(e).encode("utf-8", "replace")[:4000])
+            code = 3
+        except BaseException as e:  # noqa: BLE001 (h5py's and numpy's errors: all malformed)
+            os.write(w, f"{path}: malformed HDF5 ({type(e).__name__}: {e})".encode(
+                "utf-8", "replace")[:4000])
+            code = 3
+        os._exit(code)
+    os.close(w)
+    chunks = []
+    while True:
+        b = os.read(r, 4096)
+        if not b:
+            break
+        chunks.append(b)
+    os.close(r)
+    _, status = os.waitpid(pid, 0)
+    msg = b"".join(chunks).decode("utf-8", "replace").splitlines()
+    if os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0:
+        return framed, verified
+    if os.WIFEXITED(status) and os.WEXITSTATUS(status) == 3:
+        raise ResultsError(msg[0] if msg else f"{path}: malformed HDF5")
+    how = (f"signal {os.WTERMSIG(status)}" if os.WIFSIGNALED(status)
+           else f"exit {os.WEXITSTATUS(status)}")
+    raise ResultsError(f"{path}: its HDF5 structures are malformed (reading them crashed the HDF5 "
+                       f"library in a sandboxed read: {how}); the file was damaged or crafted "
+                       "after its checksum was computed, and cannot be read")

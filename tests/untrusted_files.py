@@ -1,0 +1,161 @@
+#!/usr/bin/python3
+"""A results file from someone else is untrusted input (issue 65). From the schema-1 fixture:
+
+- crafted HDF5 metadata behind a valid frame (a global-heap object claiming 1 TB, the class that
+  segfaulted `sirl export`/`merge`/`inspect` and h5py): a raw h5py read dies by a signal (the
+  file is hostile), while `sirl export`, `sirl merge` and `sirl_bench.open` end with one line and
+  a non-zero exit;
+- an HDF5 external link inside a framed file is refused by the engine and the reader;
+- a schema-3 file without its frame (rewritten, or its frame cut off) is refused by both;
+- `sirl merge` refuses an input no checksum verifies unless --accept-unverified, and records it;
+- the Python reader checks the frame as the engine does (a flipped byte behind it is refused).
+"""
+import os
+import shutil
+import struct
+import subprocess
+import sys
+import tempfile
+
+import h5py
+import xxhash
+
+SIRL = os.environ["SIRL"]
+SRC = os.environ["SIRL_SOURCE_DIR"]
+FIXTURE = os.path.join(SRC, "tests", "data", "results_v1.h5")
+PY = "/usr/bin/python3"
+READER = os.path.join(SRC, "python")
+
+
+def fail(msg):
+    print("untrusted_files: FAIL:", msg)
+    sys.exit(1)
+
+
+def framed(body: bytes) -> bytes:
+    """The engine's frame (results/results_file.cpp) in front of an HDF5 body."""
+    head = b"SIRLRESULTS2\nxxh3-128 " + xxhash.xxh3_128(body).hexdigest().encode() + b"\n"
+    return head + b"\0" * (1024 - len(head)) + body
+
+
+def write(path, data):
+    with open(path, "wb") as fh:
+        fh.write(data)
+    return path
+
+
+def sirl(*args):
+    return subprocess.run([SIRL, *args], capture_output=True, stdin=subprocess.DEVNULL, timeout=120)
+
+
+def reader(path):
+    """sirl_bench.open in a fresh interpreter: (returncode, stderr)."""
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); import sirl_bench\n"
+            "try:\n    r = sirl_bench.open(sys.argv[2]); r.tables['fpe']; r.records; r.methods\n"
+            "except sirl_bench.ResultsError as e:\n    print(e, file=sys.stderr); sys.exit(1)\n")
+    p = subprocess.run([PY, "-c", code, READER, path], capture_output=True, timeout=120)
+    return p.returncode, p.stderr
+
+
+def one_line_refusal(what, rc, err, path):
+    lines = err.decode("utf-8", "strict").strip().splitlines()
+    if rc <= 0 or len(lines) != 1 or path not in lines[0]:
+        fail(f"{what}: rc {rc}, stderr {err!r}")
+
+
+def main():
+    body = open(FIXTURE, "rb").read()
+    with tempfile.TemporaryDirectory() as tmp:
+        good = write(os.path.join(tmp, "good.h5"), framed(body))
+        p = sirl("export", good, "--csv", os.path.join(tmp, "csv_good"))
+        if p.returncode != 0:
+            fail(f"the framed fixture: {p.stderr!r}")
+        rc, err = reader(good)
+        if rc != 0:
+            fail(f"the reader on the framed fixture: {err!r}")
+
+        # Crafted metadata: the first global heap's first object claims 1 TB.
+        heap = body.index(b"GCOL")
+        b = bytearray(body)
+        struct.pack_into("<Q", b, heap + 24, 1 << 40)
+        bad = write(os.path.join(tmp, "crafted.h5"), framed(bytes(b)))
+        raw = subprocess.run([PY, "-c", "import h5py, sys\nf = h5py.File(sys.argv[1], 'r')\n"
+                              "[f.attrs[k] for k in f.attrs]\n"
+                              "f.visititems(lambda n, o: [o.attrs[k] for k in o.attrs] and None or "
+                              "(o[()] if isinstance(o, h5py.Dataset) else None))", bad],
+                             capture_output=True, timeout=120)
+        if raw.returncode >= 0:
+            fail(f"the crafted file does not crash a raw h5py read (rc {raw.returncode}): "
+                 "the fixture no longer tests the class")
+        for args in (["export", bad, "--csv", os.path.join(tmp, "csv_bad")],
+                     ["merge", "--partial", os.path.join(tmp, "m.h5"), bad, good]):
+            p = sirl(*args)
+            one_line_refusal(f"sirl {args[0]} on crafted metadata", p.returncode, p.stderr, bad)
+        one_line_refusal("the reader on crafted metadata", *reader(bad), bad)
+        print("ok: crafted HDF5 metadata behind a valid frame: one line, never a signal "
+              f"(a raw h5py read died with rc {raw.returncode})")
+
+        # An external link inside a framed file.
+        plain = shutil.copy(FIXTURE, os.path.join(tmp, "plain.h5"))
+        with h5py.File(plain, "r+") as f:
+            f["runs/elsewhere"] = h5py.ExternalLink(os.path.join(tmp, "other.h5"), "/x")
+        linked = write(os.path.join(tmp, "linked.h5"), framed(open(plain, "rb").read()))
+        p = sirl("export", linked, "--csv", os.path.join(tmp, "csv_link"))
+        one_line_refusal("sirl export with an external link", p.returncode, p.stderr, linked)
+        if b"link to another file" not in p.stderr:
+            fail(f"external link: {p.stderr!r}")
+        rc, err = reader(linked)
+        one_line_refusal("the reader with an external link", rc, err, linked)
+        print("ok: an external link is refused by the engine and the reader")
+
+        # A schema-3 file without its frame: laundered through h5py.
+        laundered = shutil.copy(FIXTURE, os.path.join(tmp, "laundered.h5"))
+        with h5py.File(laundered, "r+") as f:
+            f.attrs["schema_version"] = 3
+        p = sirl("export", laundered, "--csv", os.path.join(tmp, "csv_l"))
+        one_line_refusal("sirl export of an unframed schema-3 file", p.returncode, p.stderr, laundered)
+        if b"frame" not in p.stderr:
+            fail(f"unframed schema 3: {p.stderr!r}")
+        one_line_refusal("the reader on an unframed schema-3 file", *reader(laundered), laundered)
+        print("ok: a schema-3 file without its frame is refused")
+
+        # merge takes unverified inputs only when told, and says so in its output.
+        a, c = (shutil.copy(FIXTURE, os.path.join(tmp, n)) for n in ("a.h5", "c.h5"))
+        out = os.path.join(tmp, "merged.h5")
+        p = sirl("merge", "--partial", out, a, c)
+        if p.returncode != 2 or b"--accept-unverified" not in p.stderr or os.path.exists(out):
+            fail(f"merge of unverified inputs: rc {p.returncode}, {p.stderr!r}")
+        p = sirl("merge", "--partial", "--accept-unverified", out, a, c)
+        if p.returncode != 0:
+            fail(f"merge --accept-unverified: {p.stderr!r}")
+        with h5py.File(out, "r") as f:  # our own output, framed: h5py reads it at offset 1024
+            listed = f.attrs["unverified_inputs"]
+            listed = listed.decode() if isinstance(listed, bytes) else listed
+        if a not in listed or c not in listed:
+            fail(f"the merged file does not list its unverified inputs: {listed!r}")
+        print("ok: merge refuses unverified inputs unless --accept-unverified, and records them")
+
+        # A hostile /methods group (what the figures draw): refused with one line by the reader.
+        styled = shutil.copy(FIXTURE, os.path.join(tmp, "styled.h5"))
+        with h5py.File(styled, "r+") as f:
+            g = f.create_group("methods/sirl")
+            g.attrs["label"] = "$\\frac{SIRL"
+            g.attrs["colour"] = "not a colour"
+            g.attrs["figure_order"] = 1e400
+        styled_f = write(os.path.join(tmp, "styled_f.h5"), framed(open(styled, "rb").read()))
+        rc, err = reader(styled_f)
+        one_line_refusal("the reader on a hostile /methods", rc, err, styled_f)
+        print("ok: a hostile /methods group is one ResultsError")
+
+        # The reader checks the frame: one flipped byte behind it.
+        flipped = bytearray(open(good, "rb").read())
+        flipped[-100] ^= 0x01
+        flip = write(os.path.join(tmp, "flipped.h5"), bytes(flipped))
+        rc, err = reader(flip)
+        one_line_refusal("the reader on a flipped byte", rc, err, flip)
+        if b"checksum mismatch" not in err:
+            fail(f"flipped byte: {err!r}")
+        print("ok: the reader verifies the frame")
+
+
+main()
