@@ -8,6 +8,7 @@
 #include "app/commands.h"
 #include "jobs/memory_reuse.h"
 #include "jobs/stop_request.h"
+#include "results/file_lock.h"
 
 namespace {
 // An error message may quote bytes of a file someone else wrote (an attribute's name, a lock's
@@ -82,6 +83,9 @@ int main(int argc, char** argv) {
   try {
     return sirl::app::run_selected(app);
   } catch (const sirl::app::UsageError& e) {
+    std::fprintf(stderr, "sirl: error: %s\n", printable(e.what()).c_str());
+    return 2;
+  } catch (const sirl::FileBusy& e) {  // another process holds the output: every command's 2
     std::fprintf(stderr, "sirl: error: %s\n", printable(e.what()).c_str());
     return 2;
   } catch (const sirl::StopRequested&) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -111,6 +112,10 @@ double number(const std::string& v, const std::string& where, const char* what) 
 }
 
 std::string slurp(const std::string& path) {
+  // Only a regular file: a FIFO would block the open until a writer comes (never).
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    throw std::invalid_argument(path + ": not a regular file (a pipe, socket, device or folder)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::invalid_argument(path + ": cannot read");
   std::stringstream ss;

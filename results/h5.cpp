@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 
 namespace sirl {
 namespace {
@@ -203,6 +204,12 @@ H5File H5File::create(const std::string& path, uint64_t userblock_bytes) {
 
 H5File H5File::open_read(const std::string& path) {
   quiet();
+  {
+    // Opening a FIFO would block until a writer comes (never): only a regular file is read.
+    std::error_code ec;
+    if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+      throw H5Error(path + ": not a regular file (a pipe, socket, device or folder)");
+  }
   if (H5Fis_hdf5(path.c_str()) <= 0) {
     errno = 0;
     FILE* probe = std::fopen(path.c_str(), "rb");

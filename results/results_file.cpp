@@ -477,6 +477,11 @@ bool verify_checksum(const std::string& path, bool* is_framed) {
     const std::string got = digest_of(path, kResultsFrameBytes);
     if (got != want) throw mismatch("checksum", got, want);
   }
+  // A .sum that is not a regular file (a FIFO would block the open forever) is no checksum.
+  std::error_code sum_ec;
+  if (std::filesystem::exists(path + ".sum", sum_ec) &&
+      !std::filesystem::is_regular_file(path + ".sum", sum_ec))
+    throw H5Error(path + ".sum: not a regular file (a pipe, socket, device or folder)");
   std::ifstream sum(path + ".sum");
   if (!sum) return framed;  // a file of engine ≤ 0.7.0 without its .sum cannot be verified
   std::string want;

@@ -90,7 +90,8 @@ def main():
                          ["dataset", "--env", "grid", "--force", "--out", m],
                          ["study", "simulate", "--force", "--out", m, "--users", "2"]):
                 p = sirl(*args)
-                if p.returncode == 0 or "in use by sirl run (pid 4242)" not in p.stderr:
+                # Exit 2 as `sirl run` refuses a held output (a usage error, not a failure).
+                if p.returncode != 2 or "in use by sirl run (pid 4242)" not in p.stderr:
                     fail(f"sirl {' '.join(args[:2])} wrote while the lock was held: rc "
                          f"{p.returncode}, {p.stderr!r}")
                 if digest(m) != held or os.path.exists(m + ".partial"):
@@ -129,6 +130,20 @@ def main():
                 fail(f"sirl {' '.join(args[:2])} blocked on a FIFO")
             if p.returncode == 0 or "regular file" not in p.stderr or p.stderr.count("\n") != 1:
                 fail(f"sirl {' '.join(args[:2])} on a FIFO: rc {p.returncode}, {p.stderr!r}")
+        # FIFOs as a study file, an import's answers, and a results file's .sum.
+        real = shutil.copy(FIXTURE, os.path.join(cwd, "real.h5"))
+        os.mkfifo(real + ".sum")
+        os.mkfifo(os.path.join(cwd, "answers.csv"))
+        for args in (["study", "analyze", fifo], ["export", real, "--csv", os.path.join(cwd, "d")],
+                     ["study", "import", os.path.join(cwd, "answers.csv"), "--out",
+                      os.path.join(cwd, "st.h5"), "--env", "jaco2"]):
+            try:
+                p = subprocess.run([SIRL, *args], capture_output=True, text=True, cwd=cwd,
+                                   stdin=subprocess.DEVNULL, timeout=30)
+            except subprocess.TimeoutExpired:
+                fail(f"sirl {' '.join(args[:2])} blocked on a FIFO")
+            if p.returncode == 0 or "regular file" not in p.stderr:
+                fail(f"sirl {' '.join(args[:2])} beside a FIFO: rc {p.returncode}, {p.stderr!r}")
         # submit's --out is a folder: an existing file is refused before anything is calibrated.
         plain = os.path.join(cwd, "notes")
         open(plain, "w").write("mine\n")

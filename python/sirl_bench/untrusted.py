@@ -67,6 +67,12 @@ def verify(path) -> tuple[bool, bool]:
                                f"{want.decode('ascii', 'replace')}): the file changed after it "
                                "was written (corrupted?)")
     try:
+        sum_st = os.stat(path + ".sum")
+    except OSError:
+        return framed, framed
+    if not stat.S_ISREG(sum_st.st_mode):  # a FIFO would block the open forever
+        raise ResultsError(f"{path}.sum: not a regular file (a pipe, socket, device or folder)")
+    try:
         with open(path + ".sum") as fh:
             words = fh.read(4096).split()
     except (OSError, UnicodeDecodeError):
