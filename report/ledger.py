@@ -232,8 +232,11 @@ def _comparisons(s, env, fpe, tpa):
                 bb = _per_seed(table[table.variant == b], col, Nb, s.b_M or s.M)
             if a.empty or bb.empty:
                 continue
-            name = b if b != va else f"{va} (N = {Nb}, M {s.b_M or s.M})"
-            out.append(claims_stats.paired(name, a, bb))
+            c = claims_stats.paired(b, a, bb)
+            if b == va:  # a trend of one variant: what is compared is N or M, not a method
+                c["trend"] = (f"N = {Na} − N = {Nb}" if Na != Nb else
+                              f"M = {_nvalue(table.M, s.M)} − M = {_nvalue(table.M, s.b_M)}")
+            out.append(c)
     at = f"N = {Na}" + (f" vs {Nb}" if Nb != Na else "") if Na is not None else ""
     return out, at
 
@@ -464,10 +467,11 @@ def scale_lines(profile_text, fpe, tpa, envs):
     return L
 
 
-def lines(rows, scale_text):
+def lines(rows, scale_text, name_of=lambda v: v):
     """The report's section: counts, the scale of this run beside the paper's, then one row per
-    statement × environment."""
+    statement × environment (`name_of`: a variant's name as the figures show it)."""
     n = counts(rows)
+    label_of = lambda v: v if v == "chance" else name_of(v)  # noqa: E731
     order = ["confirmed", "contradicted", "undecided", "not run"]
     L = ["", "## Paper says, we find", "",
          "Every statement of the paper this file can check (the list and its tests: "
@@ -490,7 +494,12 @@ def lines(rows, scale_text):
         if c is None:
             L.append(f"| {r['id']} | {paper} | {env} | — | — | — | {r['verdict']} |")
             continue
-        label = c["name"] if r["kind"] != "study" else "SIRL − Random"
+        if r["kind"] == "study":
+            label = "SIRL − Random"
+        elif c.get("trend"):
+            label = f"{label_of(c['name'])}, {c['trend']}"
+        else:
+            label = f"vs {label_of(c['name'])}"
         if c.get("config"):
             label += f" ({c['config']})"
         if r["kind"] == "equivalent":
@@ -498,13 +507,13 @@ def lines(rows, scale_text):
             label += f", margin ±{MARGIN['fpe' if r.get('metric') == 'fpe' else 'tpa']}"
         else:
             p = c.get("p_holm", c.get("p"))
-        extra = f" {c['text']}" if c.get("text") else ""
-        where = f" at {r['at']}" if r["at"] else ""
+        extra = f" ({c['text']})" if c.get("text") else ""
+        where = f" at {r['at']}" if r["at"] and not c.get("trend") else ""
         verdict = r["verdict"]
         if verdict == "undecided" and r.get("seeds80"):
             verdict += f" ({r['seeds80']} seeds for 80 %)"
         note = f"; {r['note']}" if r["note"] else ""
-        L.append(f"| {r['id']} | {paper} | {env} | vs {label}{where}: "
+        L.append(f"| {r['id']} | {paper} | {env} | {label}{where}: "
                  f"{_fmt(c['diff'], '+.4f')} [{_fmt(c['lo'], '+.4f')}, {_fmt(c['hi'], '+.4f')}]"
                  f"{extra}{note} | {_fmt(p, '.3g')} | {c['n'] or '—'} | **{verdict}** |")
     L += ["", "*confirmed*: every comparison goes the paper's way (or, for “similarly”, lies "

@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 
 import claims as claims_stats
+from figures import STYLE
 import ledger
 import plot_beyond
 from hypotheses import detail_lines, fmt, hypotheses, summary_lines
@@ -172,7 +173,9 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
     except sirl_bench.ResultsError:
         study = None  # the profile ran no study
     book = ledger.ledger(fpe, tpa, envs, study)
-    L += ledger.lines(book, ledger.scale_lines(a.get("profile_text", ""), methods(fpe), methods(tpa), envs))
+    L += ledger.lines(book, ledger.scale_lines(a.get("profile_text", ""), methods(fpe), methods(tpa),
+                                               envs),
+                      lambda v: STYLE[v][1] if v in STYLE else v)
     L += ["", f"Engine {a.get('engine_version')} (commit {a.get('git_commit')}), host "
           f"{a.get('host')}, {a.get('threads')} threads; started {a.get('started')}, finished "
           f"{a.get('finished')}, wall time {float(a.get('wall_seconds', 0)):.0f} s; tasks: "

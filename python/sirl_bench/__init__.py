@@ -16,4 +16,4 @@ from .results import (FLAG_COLUMNS, PROTOCOLS, SCHEMA_VERSIONS, Results, Results
 __all__ = ["FLAG_COLUMNS", "PROTOCOLS", "SCHEMA_VERSIONS", "Results", "ResultsError", "claims",
            "datasets", "embedding_name", "filled", "open", "study_analysis", "typed",
            "write_embeddings"]
-__version__ = "0.19.0"
+__version__ = "0.20.0"
