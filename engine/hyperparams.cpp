@@ -236,6 +236,9 @@ void validate(const Hyper& h) {
     throw std::invalid_argument("hyper-parameter " + what);
   };
   auto widths = [&](const char* name, const std::vector<int>& w) {
+    if (w.size() > kMaxHiddenLayers)
+      fail(std::string(name) + ": at most " + std::to_string(kMaxHiddenLayers) +
+           " hidden layers, got " + std::to_string(w.size()));
     for (int x : w)
       if (x < 1) fail(std::string(name) + ": widths must be >= 1");
   };

@@ -17,6 +17,12 @@ struct TrainSchedule {
   AdamConfig adam;
 };
 
+// The most hidden layers a network may list, checked before anything is sized from it: far above
+// any network of the paper (two), far below a list that would exhaust memory in planning. (A
+// width is not bounded here: a network too big for one machine is still a valid profile, and
+// `sirl run` refuses it on a machine without the memory.)
+inline constexpr size_t kMaxHiddenLayers = 64;
+
 struct Hyper {
   // φ: input → hidden… → embedding_dim. The paper: ReLU after every hidden layer; its lineage
   // code leaves the embedding layer linear (our default), switchable with phi_relu_output.

@@ -282,6 +282,10 @@ HyperValue hyper_value(const Reader& r, const toml::node& n, const std::string& 
   if (n.is_floating_point()) return *n.value<double>();
   if (n.is_boolean()) return *n.value<bool>();
   if (n.is_string()) return *n.value<std::string>();
+  // Bounded before anything is built from it (a 10⁶-layer list once cost 1 GB in `sirl plan`).
+  if (n.as_array()->size() > kMaxHiddenLayers)
+    r.fail(&n, key + " lists " + std::to_string(n.as_array()->size()) + " hidden layers; at most " +
+                   std::to_string(kMaxHiddenLayers));
   std::vector<int> widths;
   for (auto&& e : *n.as_array()) {
     const std::optional<int64_t> w = e.is_integer() ? e.value<int64_t>() : std::nullopt;

@@ -89,6 +89,13 @@ TEST(Hyper, BadKeysAndValuesAreRejectedWithTheirName) {
   bad = Hyper{};
   bad.tpa.batch = 0;
   EXPECT_THROW(validate(bad), std::invalid_argument);
+  // A network's depth is bounded before anything is sized from it.
+  bad = Hyper{};
+  bad.phi_hidden.assign(kMaxHiddenLayers + 1, 8);
+  EXPECT_THROW(validate(bad), std::invalid_argument);
+  bad = Hyper{};
+  bad.tpa_hidden.assign(kMaxHiddenLayers, 8);  // at the bound: accepted
+  EXPECT_NO_THROW(validate(bad));
   for (double tol : {0.0, 1.0, -0.01}) {
     bad = Hyper{};
     bad.tpa_stop_frozen_rel_tol = tol;

@@ -39,11 +39,19 @@ TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
   const std::string grid =
       "[fpe]\nmethods = [\"sirl\"]\nN = [100]\n[tpa]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n";
   EXPECT_EQ(test::profile_error_of(base + grid), "no error");
+  std::string m0;
   // An unknown key, on line 4.
   EXPECT_EQ(test::profile_error_of(base + "sedes = [1]\n" + grid)
                 .rfind("bad.toml:4: unknown key 'sedes'", 0),
             0u)
       << test::profile_error_of(base + "sedes = [1]\n" + grid);
+  // A width list longer than any network: refused at its line, before it is expanded.
+  std::string layers = "[hyper.grid]\n\"phi.hidden\" = [";
+  for (int i = 0; i < 100000; ++i) layers += i ? ",8" : "8";
+  m0 = test::profile_error_of(base + grid + layers + "]\n");
+  EXPECT_NE(m0.find("bad.toml:12: phi.hidden lists 100000 hidden layers; at most 64"),
+            std::string::npos)
+      << m0;
   // A wrong type.
   EXPECT_NE(test::profile_error_of("name = \"x\"\nenvs = \"grid\"\nseeds = [0]\n" + grid)
                 .find("bad.toml:2: envs must be an array of strings"),
