@@ -232,6 +232,8 @@ def _comparisons(s, env, fpe, tpa):
                 bb = _per_seed(table[table.variant == b], col, Nb, s.b_M or s.M)
             if a.empty or bb.empty:
                 continue
+            if b == va and Na == Nb and not s.b_M:
+                continue  # a trend in N with one N in the profile: nothing to compare
             c = claims_stats.paired(b, a, bb)
             if b == va:  # a trend of one variant: what is compared is N or M, not a method
                 c["trend"] = (f"N = {Na} − N = {Nb}" if Na != Nb else

@@ -121,6 +121,13 @@ s17 = by[("S17", "grid")]
 assert {c["config"].split(",")[0] for c in s17["comparisons"]} == {"unfrozen"}, s17
 assert s17["after_data"] and s17["verdict"] == "confirmed"
 
+# --- one N in the profile: a trend in N has nothing to compare ("not run", never a crash) -------
+one_n = fpe[fpe.N.isna() | (fpe.N == 1000)]
+by1 = {(r["id"], r["env"]): r for r in ledger.ledger(one_n, tpa[tpa.N.isna() | (tpa.N == 1000)], ["grid"])}
+assert by1[("S09", "grid")]["verdict"] == "not run", by1[("S09", "grid")]
+assert by1[("S10", "grid")]["verdict"] == "not run", by1[("S10", "grid")]
+assert by1[("S01", "grid")]["verdict"] == "confirmed"
+
 # --- the study rows: the paper's tests on the analysis' arrays -------------------------------
 study = {"fpe_sirl": np.array([0.01, 0.012, 0.011]), "fpe_random": np.array([0.03, 0.028, 0.031]),
          "real_sirl": np.array([0.7, 0.72, 0.69, 0.71]), "real_random": np.array([0.7, 0.69, 0.72, 0.7])}
