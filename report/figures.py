@@ -260,16 +260,23 @@ def plot_fig5(tpa, envs, out, notes, protocol=PAPER):
                     ok = np.isfinite(cis)
                     ax.fill_between(np.array(Ms)[ok], (ms - cis)[ok], (ms + cis)[ok],
                                     color=colour, alpha=0.15)
-                else:  # two M points far apart: a line between them would invent a curve
-                    ax.errorbar(Ms, ms, yerr=np.nan_to_num(cis), fmt="o", color=colour,
-                                label=label, ms=4, capsize=3)
+                else:  # two M points far apart: a line between them would invent a curve;
+                    # the methods' markers are spread a little along M so that none hides another
+                    k = ORDER.index(v) if v in ORDER else 0
+                    dodge = (k - (len(ORDER) - 1) / 2) * 0.012 * (max(Ms) - min(Ms) or 1)
+                    ax.errorbar(np.array(Ms) + dodge, ms, yerr=np.nan_to_num(cis), fmt="o",
+                                color=colour, label=label, ms=4, capsize=3)
             for v, dv in reference_rows(refs, env):  # N-free: the same line in every panel
                 rMs = sorted(int(m) for m in dv.M.dropna().unique())
                 ms = np.array([mean_ci(dv[dv.M == m].tpa)[0] for m in rMs])
                 colour, label, ls = reference_style(v)
                 DRAWN.setdefault(key + "_references", {}).setdefault(env, {}).setdefault(
                     str(n), {})[v] = {str(m): float(x) for m, x in zip(rMs, ms) if np.isfinite(x)}
-                ax.plot(rMs, ms, color=colour, ls=ls, lw=1.6, label=label, zorder=1)
+                if len(rMs) >= 3:
+                    ax.plot(rMs, ms, color=colour, ls=ls, lw=1.6, label=label, zorder=1)
+                else:  # as the methods: markers, no line across the gap between two M values
+                    ax.plot(rMs, ms, color=colour, ls="none", marker="_", ms=14, mew=2,
+                            label=label, zorder=1)
             ax.set_title(f"{env_title(env)}, N = {n}")
             ax.set_ylim(0.35, 1.0)
             ax.set_xlabel("preference queries per test reward M")
