@@ -521,6 +521,17 @@ int64_t check_results_schema(const H5File& f) {
 }
 
 namespace {
+// Engines from 0.8.0 on (schema 3) frame every results file they write: one of theirs without a
+// frame was rewritten (h5repack, h5py) or had its frame cut off, and nothing covers what it holds.
+void refuse_unframed(const std::string& path, bool framed, int64_t schema_version) {
+  if (!framed && schema_version >= 3)
+    throw H5Error(
+        path + ": a schema-" + std::to_string(schema_version) +
+        " results file (engines from 0.8.0 frame every file they write) without its "
+        "checksum frame: it was rewritten (h5repack, h5py) or its first 1024 bytes were "
+        "cut off, so nothing vouches for its values; use the file as the engine wrote it");
+}
+
 RunInfo read_run_info_unsandboxed(const std::string& path, bool verified, bool framed) {
   H5File f = H5File::open_read(path);
   RunInfo i;
@@ -552,19 +563,13 @@ RunInfo read_run_info_unsandboxed(const std::string& path, bool verified, bool f
   i.tasks_done = f.attr_int("/", "tasks_done");
   i.wall_seconds = f.attr_double("/", "wall_seconds");
   i.complete = f.attr_int("/", "complete") != 0;
-  // Engines from 0.8.0 on frame every results file they write: one of theirs without a frame was
-  // rewritten (h5repack, h5py) or had its frame cut off, and nothing covers what it now holds.
-  if (!framed && i.schema_version >= 3)
-    throw H5Error(path + ": written by engine " + i.engine_version +
-                  ", which frames every results file, but it has no checksum frame: it was "
-                  "rewritten (h5repack, h5py) or its first 1024 bytes were cut off, so nothing "
-                  "vouches for its values; use the file as the engine wrote it");
+  refuse_unframed(path, framed, i.schema_version);
   return i;
 }
 
-std::vector<TaskRecord> read_records_unsandboxed(const std::string& path) {
+std::vector<TaskRecord> read_records_unsandboxed(const std::string& path, bool framed) {
   H5File f = H5File::open_read(path);
-  check_results_schema(f);
+  refuse_unframed(path, framed, check_results_schema(f));
   std::vector<TaskRecord> out;
   for (const auto& k : f.read_strings("/runs_index")) out.push_back(read_record(f, "/runs/" + k));
   return out;
@@ -581,8 +586,8 @@ RunInfo read_run_info(const std::string& path) {
 std::vector<TaskRecord> read_results_records(const std::string& path) {
   bool framed = false;
   verify_checksum(path, &framed);
-  read_in_child_first(path, [&] { read_records_unsandboxed(path); });
-  return read_records_unsandboxed(path);
+  read_in_child_first(path, [&] { read_records_unsandboxed(path, framed); });
+  return read_records_unsandboxed(path, framed);
 }
 
 void export_csv(const ResultTables& t, const std::string& dir) {
