@@ -167,13 +167,18 @@ TEST(TaskCache, OpeningSweepsAbandonedTemporaryFilesButNotALiveWritersOnes) {
                            std::to_string(::getpid()) + ".tmp",
                     dead = "0123456789abcdee.h5." + std::string(host) + ".999999999.tmp",
                     elsewhere = "0123456789abcded.h5.another-host.1.tmp",
-                    legacy = "0123456789abcdec.h5.tmp";
-  for (const auto& n : {live, dead, elsewhere, legacy}) std::ofstream(dir / n) << "partial";
+                    legacy = "0123456789abcdec.h5.tmp", users = "0123456789abcdeb.h5.tmp";
+  for (const auto& n : {live, dead, elsewhere}) std::ofstream(dir / n) << "partial";
+  // An engine before 0.10.0 named its temporaries "<final>.tmp": one that begins as a commit
+  // does is swept; the same name holding anything else is the user's and stays.
+  std::ofstream(dir / legacy) << "SIRLTASK partial";
+  std::ofstream(dir / users) << "my notes";
   TaskStore store(dir);
   EXPECT_TRUE(fs::exists(dir / live));
   EXPECT_FALSE(fs::exists(dir / dead));
   EXPECT_TRUE(fs::exists(dir / elsewhere));
   EXPECT_FALSE(fs::exists(dir / legacy));
+  EXPECT_TRUE(fs::exists(dir / users));
 }
 
 // A cache folder may hold the user's own files (a results file, notes): opening it, running and
