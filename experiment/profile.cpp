@@ -105,6 +105,8 @@ namespace {
 
 // The most values one list of a profile (seeds, N, M) may hold.
 constexpr size_t kMaxListValues = 1024;
+// The most hyper-parameter points (combinations of [hyper] axes' values) per environment.
+constexpr size_t kMaxHyperPoints = 256;
 
 // Reads a parsed TOML document, checking every key; errors carry "file:line: ".
 class Reader {
@@ -679,14 +681,19 @@ bool is_hyper_axis(const toml::node& v, const std::string& key) {
 // An axis's values; refuses an empty list and a repeated value.
 std::vector<HyperValue> hyper_axis_values(const Reader& r, const toml::node& v,
                                           const std::string& key) {
+  // An axis holds at most kMaxHyperPoints values (the product of all axes does too): refused
+  // before any value is read, so a pasted list of thousands costs nothing.
+  if (v.as_array()->size() > kMaxHyperPoints)
+    r.fail(&v, key + ": an axis of " + std::to_string(v.as_array()->size()) +
+                   " values; a profile runs at most " + std::to_string(kMaxHyperPoints) +
+                   " hyper-parameter points per environment");
   std::vector<HyperValue> out;
+  std::set<std::string> seen;
   for (auto&& e : *v.as_array()) {
     HyperValue value = hyper_value(r, e, key);  // fails with file:line itself
     // Two values are one when their texts are (1 and 1.0 for a number): a point's name is its text.
     const std::string text = hyper_value_text(value);
-    if (std::any_of(out.begin(), out.end(),
-                    [&](const HyperValue& o) { return hyper_value_text(o) == text; }))
-      r.fail(&e, key + ": the value " + text + " is listed twice");
+    if (!seen.insert(text).second) r.fail(&e, key + ": the value " + text + " is listed twice");
     out.push_back(std::move(value));
   }
   if (out.empty()) r.fail(&v, key + ": an axis needs at least one value");
@@ -740,6 +747,17 @@ HyperAxes read_hyper_tables(Reader& r, const toml::table& hy, Profile& p) {
 void expand_hyper_points(Reader& r, const HyperAxes& axes, Profile& p) {
   for (const auto& [env, env_axes] : axes) {
     if (env_axes.empty()) continue;
+    // The product is bounded before any point is built (each factor is ≤ kMaxHyperPoints, so the
+    // running product cannot overflow before it passes the bound).
+    size_t product = 1;
+    for (const HyperAxis& a : env_axes) {
+      product *= a.values.size();
+      if (product > kMaxHyperPoints)
+        r.fail(a.node, "[hyper." + env + "]: the axes up to '" + a.key + "' already make " +
+                           std::to_string(product) +
+                           " combinations of hyper-parameter values (at most " +
+                           std::to_string(kMaxHyperPoints) + ")");
+    }
     std::vector<std::vector<std::pair<std::string, HyperValue>>> points{{}};
     for (const HyperAxis& a : env_axes) {
       std::vector<std::vector<std::pair<std::string, HyperValue>>> next;
@@ -750,9 +768,6 @@ void expand_hyper_points(Reader& r, const HyperAxes& axes, Profile& p) {
         }
       points = std::move(next);
     }
-    if (points.size() > 256)
-      r.fail(env_axes.back().node, "[hyper." + env + "]: " + std::to_string(points.size()) +
-                                       " combinations of hyper-parameter values (at most 256)");
     const Hyper base = p.hyper[env];
     for (size_t i = 0; i < points.size(); ++i) {
       HyperPoint hp{"", base};

@@ -133,6 +133,13 @@ int add_task(Plan& plan, const Profile& p, Task t) {
     t.key.insert(at + 1, t.hyper + "/");
   }
   if (auto it = plan.index.find(t.key); it != plan.index.end()) return it->second;
+  // Refused as the plan grows, so a profile that expands to millions of tasks (a few axes'
+  // product, or a stored profile text from someone else's file) costs at most the cap's memory.
+  if (plan.tasks.size() >= kMaxPlanTasks)
+    throw std::invalid_argument("profile " + p.name + " expands to more than " +
+                                std::to_string(kMaxPlanTasks) +
+                                " tasks (the paper's whole protocol is about 6,200): split it "
+                                "into profiles with fewer hyper-parameter points, seeds or sizes");
   kind.cost(t, p);
   if (t.protocol_flops < t.flops) t.protocol_flops = t.flops;  // no early end expected
   const int i = int(plan.tasks.size());

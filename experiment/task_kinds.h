@@ -70,8 +70,12 @@ const std::vector<const TaskKindSpec*>& task_kinds();
 bool env_precision_is_bf16(const Task& t, const Profile& p);
 bool never_bf16(const Task& t, const Profile& p);
 
+// The most tasks a plan may hold: about 8 times the paper's whole protocol.
+inline constexpr size_t kMaxPlanTasks = 50000;
+
 // Adds t to the plan unless a task with its key is there (a task shared by several cells appears
 // once), after the inputs it reads; sets its key, deps and cost from its kind. Returns its index.
+// Throws std::invalid_argument past kMaxPlanTasks.
 int add_task(Plan& plan, const Profile& p, Task t);
 
 // The record fields every task carries: its environment and seed (a kind's `describe` for tasks

@@ -26,6 +26,7 @@ class ReadyQueue {
   // chain of work still ahead, in FLOPs.
   double longest_chain() const { return active_.empty() ? 0.0 : *active_.rbegin(); }
   double rank(int i) const { return rank_[size_t(i)]; }  // upward rank (FLOPs)
+  int top() const { return ready_.top(); }               // the next pop(), not removed
   int pop();                                             // the ready task of highest rank
   // Task i finished: returns how many tasks became ready.
   int finish(int i);

@@ -406,12 +406,15 @@ struct PlanExecution {
           std::fprintf(stderr, "sirl run: tasks per MPI worker: %s\n", per.c_str());
         }
       } else {
-        run_dag(plan, pending, threads, max_task_threads, [&](int i, int cores) {
-          run_one(i, cores);
-          std::lock_guard lock(users_mu);
-          for (int d : plan.tasks[size_t(i)].deps)
-            if (--users[d] == 0) ctx.release(plan.tasks[d].key);
-        });
+        run_dag(
+            plan, pending, threads, max_task_threads,
+            [&](int i, int cores) {
+              run_one(i, cores);
+              std::lock_guard lock(users_mu);
+              for (int d : plan.tasks[size_t(i)].deps)
+                if (--users[d] == 0) ctx.release(plan.tasks[d].key);
+            },
+            usable_memory_bytes());
       }
     } catch (...) {
       return std::current_exception();
@@ -443,16 +446,18 @@ std::vector<TaskRecord> finished_records(const Profile& p, const Plan& plan,
 }  // namespace
 
 // A task whose working set (its cost model's estimate: weights, gradient, Adam's moments, a
-// batch's activations) exceeds this machine's memory would fail deep inside its training, or
-// take the machine down with it: refused before anything runs, naming the task.
+// batch's activations) exceeds the memory this process may use (the machine's, or its cgroup's
+// limit) would fail deep inside its training, or take the machine down with it: refused before
+// anything runs, naming the task. (Tasks that fit alone but not together are the scheduler's:
+// run_dag starts a task only beside running ones it fits with.)
 void refuse_tasks_beyond_memory(const Plan& plan, const std::vector<char>& mine) {
-  const double ram = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+  const double ram = usable_memory_bytes();
   for (size_t i = 0; i < plan.tasks.size(); ++i)
     if (mine[i] && plan.tasks[i].bytes > ram)
       throw std::runtime_error(
           "task " + plan.tasks[i].key + " needs " +
           std::to_string(int64_t(plan.tasks[i].bytes / (1 << 30))) +
-          " GiB to train, this machine has " + std::to_string(int64_t(ram / (1 << 30))) +
+          " GiB to train, this process may use " + std::to_string(int64_t(ram / (1 << 30))) +
           " GiB (`sirl plan PROFILE --tasks` lists every task's working set in MiB)");
 }
 

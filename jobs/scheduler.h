@@ -50,9 +50,13 @@ int task_threads(const Task& t, const CoreOffer& o);
 // pending[i] = task i still has to run (a task whose dependency is not pending counts that
 // dependency as done). `work(i, cores)` runs task i on some worker thread with `cores` threads
 // for its kernels; it may throw, in which case no new task starts, running ones finish, and the
-// first error is rethrown. At most `threads` cores are in use at once.
+// first error is rethrown. At most `threads` cores are in use at once, and the running tasks'
+// working sets (Task::bytes) sum to at most `memory_bytes` (0: no limit): a task that does not
+// fit beside the running ones waits for them (and the tasks ranked after it wait too, so a big
+// task is not starved by small ones); a task alone is always started (`sirl run` refuses one
+// larger than the machine before anything runs).
 void run_dag(const Plan& plan, const std::vector<char>& pending, int threads, int max_task_threads,
-             const std::function<void(int, int)>& work);
+             const std::function<void(int, int)>& work, double memory_bytes = 0);
 // One core per task.
 void run_dag(const Plan& plan, const std::vector<char>& pending, int threads,
              const std::function<void(int)>& work);
@@ -60,6 +64,10 @@ void run_dag(const Plan& plan, const std::vector<char>& pending, int threads,
 // The cores this process may run threads on (its CPU affinity and cgroup limits, as oneTBB
 // counts them): run_dag never gets more working threads than this, whatever it is asked for.
 int usable_cores();
+
+// The memory this process may use: the machine's physical memory, or less where a cgroup (v2
+// memory.max, v1 memory.limit_in_bytes) limits it.
+double usable_memory_bytes();
 
 // oneTBB's version at run time, for provenance.
 std::string tbb_version();

@@ -84,6 +84,51 @@ TEST(HyperAxes, BadAxesAreRefusedWithTheirLine) {
   }
 }
 
+// A value list long enough to be a paste error, and axes whose product is, are refused before
+// any point is built: each costs a line, not gigabytes or minutes.
+TEST(HyperAxes, LongAxesAndLargeProductsAreRefusedBeforeExpansion) {
+  std::string many = "\"sirl.margin\" = [";
+  for (int i = 0; i < 20000; ++i) many += (i ? ", " : "") + std::to_string(1.0 + i * 1e-3);
+  std::string err = test::profile_error_of(small_with_hyper(many + "]"));
+  EXPECT_NE(err.find("an axis of 20000 values"), std::string::npos) << err;
+  EXPECT_NE(err.find("bad.toml:"), std::string::npos) << err;
+
+  const auto axis = [](const std::string& key, int n, int first) {
+    std::string s = "\"" + key + "\" = [";
+    for (int i = 0; i < n; ++i) s += (i ? ", " : "") + std::to_string(first + i);
+    return s + "]\n";
+  };
+  // 64 × 64 × 64 = 262,144 points: refused at the second axis (4,096 > 256).
+  err = test::profile_error_of(small_with_hyper(
+      axis("sirl.epochs", 64, 1) + axis("tpa.epochs", 64, 1) + axis("vae.epochs", 64, 1)));
+  EXPECT_NE(err.find("already make 4096 combinations"), std::string::npos) << err;
+  // 16 × 16 = 256 is the most a profile may ask for.
+  const Profile p =
+      parse_profile(small_with_hyper(axis("sirl.epochs", 16, 1) + axis("tpa.epochs", 16, 1)));
+  EXPECT_EQ(p.hyper_points.at("grid").size(), 256u);
+}
+
+// A profile within every per-list cap can still multiply into millions of tasks (a stored
+// profile text that `merge --partial` plans is anyone's): the plan stops at kMaxPlanTasks.
+TEST(HyperAxes, APlanOfMoreThanTheCapIsRefusedAsItGrows) {
+  std::string text = small_with_hyper("\"sirl.margin\" = [" + [] {
+    std::string v;
+    for (int i = 0; i < 200; ++i) v += (i ? ", " : "") + std::to_string(1 + i);
+    return v;
+  }() + "]");
+  std::string seeds = "seeds = [";
+  for (int i = 0; i < 1000; ++i) seeds += (i ? ", " : "") + std::to_string(i);
+  text.replace(text.find("seeds = [0, 1, 2]"), std::string("seeds = [0, 1, 2]").size(),
+               seeds + "]");
+  const Profile p = parse_profile(text);
+  try {
+    make_plan(p);
+    ADD_FAILURE() << "a plan of millions of tasks was built";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("more than 50000 tasks"), std::string::npos) << e.what();
+  }
+}
+
 TEST(HyperAxes, OnlyTheTasksAPointChangesGetAPointAndTheBaseKeepsItsKeysAndDigests) {
   const Profile plain = parse_profile(test::kSmallProfile);
   const Profile axis = parse_profile(small_with_hyper("\"tpa.epochs\" = [500, 40]"));

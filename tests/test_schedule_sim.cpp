@@ -2,10 +2,13 @@
 // and the cores-per-task rule shared with the thread scheduler.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "jobs/schedule_sim.h"
@@ -273,6 +276,50 @@ TEST(TaskThreads, TheSchedulerWidensACriticalChainAsTheSimulatorDoes) {
   std::vector<int> want(s.size(), 1);
   want[0] = 2;
   EXPECT_EQ(got, want);
+}
+
+TEST(TaskThreads, RunningTasksWorkingSetsStayWithinTheMemoryGiven) {
+  // One 6 GB task (the highest rank) and eight of 1 GB on 4 cores with 7.5 GB: at most the big
+  // one and one small one together, or four small ones; never the big one beside two.
+  std::vector<double> s(9, 1.0);
+  s[0] = 6;
+  Plan p = plan_of(s, std::vector<std::vector<int>>(9));
+  p.tasks[0].bytes = 6e9;
+  for (size_t i = 1; i < s.size(); ++i) p.tasks[i].bytes = 1e9;
+  std::mutex mu;
+  double now = 0, peak = 0;
+  int ran = 0;
+  run_dag(
+      p, std::vector<char>(s.size(), 1), 4, 1,
+      [&](int i, int) {
+        {
+          std::lock_guard lock(mu);
+          now += p.tasks[size_t(i)].bytes;
+          peak = std::max(peak, now);
+          ++ran;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));  // long enough to overlap
+        std::lock_guard lock(mu);
+        now -= p.tasks[size_t(i)].bytes;
+      },
+      7.5e9);
+  EXPECT_EQ(ran, 9);
+  EXPECT_LE(peak, 7.5e9);
+  // A task larger than the memory given still runs, alone.
+  p.tasks[0].bytes = 9e9;
+  ran = 0;
+  peak = now = 0;
+  run_dag(
+      p, std::vector<char>(s.size(), 1), 4, 1,
+      [&](int i, int) {
+        std::lock_guard lock(mu);
+        now += p.tasks[size_t(i)].bytes;
+        peak = std::max(peak, now);
+        ++ran;
+        now -= p.tasks[size_t(i)].bytes;
+      },
+      7.5e9);
+  EXPECT_EQ(ran, 9);
 }
 
 }  // namespace
