@@ -2,9 +2,11 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
@@ -18,19 +20,37 @@ namespace fs = std::filesystem;
 
 namespace {
 
-int open_lock_file(const fs::path& p) {
-  // O_NOFOLLOW: a planted link must not make a run lock (or gc delete) its target.
-  const int fd = ::open(p.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+// Whether fd is a regular file (a FIFO or device planted under a lock's name is not a lock: reading
+// one would wait forever for a writer).
+bool is_regular(int fd) {
+  struct stat st {};
+  return ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode);
+}
+
+// Opens (creating, unless !create) a lock file. O_NOFOLLOW: a planted link must not make a run
+// lock (or gc delete) its target; O_NONBLOCK: opening a planted FIFO must not hang. Returns -1
+// when !create and the file is absent.
+int open_lock_file(const fs::path& p, bool create = true) {
+  const int fd = ::open(
+      p.c_str(), O_RDWR | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK | (create ? O_CREAT : 0), 0644);
+  if (fd < 0 && !create && errno == ENOENT) return -1;
   if (fd < 0)
     throw std::runtime_error(p.string() + ": cannot open the lock file: " + std::strerror(errno));
+  if (!is_regular(fd)) {
+    ::close(fd);
+    throw std::runtime_error(p.string() +
+                             ": is not a regular file, so not a sirl lock; remove it if it is "
+                             "not yours");
+  }
   return fd;
 }
 
-// Whether another process holds an flock on `p` (false when the file is absent).
+// Whether another process holds an flock on `p` (false when the file is absent or is no regular
+// file, which no sirl process locks).
 bool held_elsewhere(const fs::path& p) {
-  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
   if (fd < 0) return false;
-  const bool held = ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+  const bool held = is_regular(fd) && ::flock(fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
   ::close(fd);
   return held;
 }
@@ -46,11 +66,21 @@ std::string host_name() {
 }
 
 // Takes the cache's gate (gc.lock, see task_cache.h) in mode `how` (LOCK_SH or LOCK_EX),
-// waiting for it; returns its descriptor (closing it releases the lock).
-int take_gate(const fs::path& dir, int how) {
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  const int fd = open_lock_file(dir / "gc.lock");
+// waiting for it, and saying so on stderr first (the holder may be a gc sweeping, a run starting,
+// or a process someone stopped with ^Z); returns its descriptor (closing it releases the lock).
+int take_gate(const fs::path& dir, int how, bool create = true) {
+  if (create) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+  }
+  const int fd = open_lock_file(dir / "gc.lock", create);
+  if (fd < 0) return fd;
+  if (::flock(fd, how | LOCK_NB) == 0) return fd;
+  if (errno == EWOULDBLOCK)
+    std::fprintf(stderr, "sirl: waiting for %s: %s\n", (dir / "gc.lock").c_str(),
+                 how == LOCK_EX
+                     ? "a run is opening this cache (or is stopped while opening it)"
+                     : "`sirl gc` is sweeping this cache (or is stopped while sweeping)");
   while (::flock(fd, how) != 0)
     if (errno != EINTR) {
       const int err = errno;
@@ -133,6 +163,12 @@ TaskCache::Claim TaskCache::claim(const std::string& digest,
 
 GcSummary collect_garbage(const fs::path& dir, const std::set<std::string>& keep, bool dry_run) {
   if (!fs::is_directory(dir)) throw std::runtime_error(dir.string() + ": no such cache folder");
+  // Every cache has its gate (a TaskCache creates it): a folder without one is not a cache, and
+  // gc neither sweeps it nor leaves a gc.lock in it.
+  if (!fs::is_regular_file(fs::symlink_status(dir / "gc.lock")))
+    throw std::runtime_error(dir.string() +
+                             " is not a task cache (it has no gc.lock): a cache is the folder "
+                             "of `sirl run --cache DIR`, or OUT.tasks beside a results file");
   // Exclusive: no run is between listing the cache and declaring its needs while this sweeps.
   // (A dry run of a folder it may not write proceeds without it: it removes nothing.)
   struct Gate {
@@ -142,7 +178,7 @@ GcSummary collect_garbage(const fs::path& dir, const std::set<std::string>& keep
     }
   } gate;
   try {
-    gate.fd = take_gate(dir, LOCK_EX);
+    gate.fd = take_gate(dir, LOCK_EX, false);
   } catch (const std::runtime_error&) {
     if (!dry_run) throw;
   }
@@ -151,12 +187,12 @@ GcSummary collect_garbage(const fs::path& dir, const std::set<std::string>& keep
   std::error_code ec;
   if (fs::is_directory(dir / "runs"))
     for (const auto& e : fs::directory_iterator(dir / "runs")) {
-      if (e.is_symlink()) continue;
+      if (e.is_symlink() || !e.is_regular_file()) continue;  // no run writes anything else
       if (!held_elsewhere(e.path())) {  // its process ended without removing it
         if (!dry_run) fs::remove(e.path(), ec);
         continue;
       }
-      std::ifstream in(e.path());
+      std::ifstream in(e.path());  // a regular file, held by a live run: its needs, one a line
       for (std::string line; std::getline(in, line);)
         if (is_digest(line)) held.insert(line);
     }
@@ -186,10 +222,11 @@ GcSummary collect_garbage(const fs::path& dir, const std::set<std::string>& keep
     for (const auto& e : fs::directory_iterator(dir / "locks")) {
       const std::string name = e.path().filename().string();
       const std::string digest = name.substr(0, name.find('.'));
-      if (e.is_symlink() || needed.count(digest) || held.count(digest)) continue;
-      const int fd = ::open(e.path().c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+      if (e.is_symlink() || !e.is_regular_file() || needed.count(digest) || held.count(digest))
+        continue;
+      const int fd = ::open(e.path().c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
       if (fd < 0) continue;
-      if (::flock(fd, LOCK_EX | LOCK_NB) == 0) fs::remove(e.path(), ec);
+      if (is_regular(fd) && ::flock(fd, LOCK_EX | LOCK_NB) == 0) fs::remove(e.path(), ec);
       ::close(fd);
     }
   return s;

@@ -3,12 +3,16 @@
 // abandoned temporary files swept but a live writer's kept; and which profile edits change which
 // tasks' digests.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <set>
 #include <string>
 #include <thread>
@@ -337,6 +341,71 @@ TEST(TaskDigest, AddingASeedChangesNoExistingTask) {
   EXPECT_TRUE(digest_changes(test::kSmallProfile, text).empty());
   EXPECT_GT(plan_digests_by_key(parse_profile(text)).size(),
             plan_digests_by_key(parse_profile(test::kSmallProfile)).size());
+}
+
+// Runs fn in a forked child and says whether it ended (exit 0) within `seconds`; a child that
+// hangs (a FIFO opened for reading) is killed, so the test fails instead of hanging.
+bool finishes_within(double seconds, const std::function<void()>& fn) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    try {
+      fn();
+    } catch (...) {
+      ::_exit(3);
+    }
+    ::_exit(0);
+  }
+  int status = 0;
+  for (int waited = 0; waited < int(seconds * 100); ++waited) {
+    if (::waitpid(pid, &status, WNOHANG) == pid)
+      return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ::kill(pid, SIGKILL);
+  ::waitpid(pid, &status, 0);
+  return false;
+}
+
+// FIFOs planted in runs/ and locks/ (issue 65: they hung gc and runs) are not locks: gc skips and
+// keeps them, and a claim of a task whose lock name is a FIFO ends with a line.
+TEST(TaskCache, FifosInRunsAndLocksNeitherHangNorAreRemoved) {
+  const test::ScratchDir scratch;
+  const fs::path dir = scratch.path() / "c";
+  { TaskCache cache(dir); }
+  ASSERT_EQ(::mkfifo((dir / "runs" / "host.123").c_str(), 0644), 0);
+  ASSERT_EQ(::mkfifo((dir / "locks" / (kDigestA + ".lock")).c_str(), 0644), 0);
+  EXPECT_TRUE(finishes_within(10, [&] { collect_garbage(dir, {}, true); }));
+  EXPECT_TRUE(finishes_within(10, [&] { collect_garbage(dir, {}, false); }));
+  EXPECT_TRUE(fs::is_fifo(dir / "runs" / "host.123"));
+  EXPECT_TRUE(fs::is_fifo(dir / "locks" / (kDigestA + ".lock")));
+  EXPECT_TRUE(finishes_within(10, [&] {
+    TaskCache cache(dir);
+    try {
+      cache.claim(kDigestA);
+    } catch (const std::runtime_error& e) {
+      if (std::string(e.what()).find("not a regular file") != std::string::npos) return;
+    }
+    throw std::logic_error("a FIFO was taken for a lock");
+  }));
+}
+
+// gc sweeps only a task cache: a folder without the cache's gate is refused, and a dry run
+// leaves no gc.lock behind in it (issue 65: it created one in any folder).
+TEST(TaskCache, GcRefusesAFolderThatIsNotACacheAndLeavesNothingInIt) {
+  const test::ScratchDir scratch;
+  const fs::path dir = scratch.path() / "not-a-cache";
+  fs::create_directories(dir);
+  std::ofstream(dir / "notes.txt") << "mine";
+  for (bool dry : {true, false}) {
+    try {
+      collect_garbage(dir, {}, dry);
+      ADD_FAILURE() << "gc swept a folder that is not a cache (dry run: " << dry << ")";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("is not a task cache"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_FALSE(fs::exists(dir / "gc.lock"));
+  EXPECT_TRUE(fs::exists(dir / "notes.txt"));
 }
 
 }  // namespace
