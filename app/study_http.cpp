@@ -73,13 +73,16 @@ void configure_study_http(httplib::Server& srv, StudyService& service, const fs:
     return httplib::Server::HandlerResponse::Handled;
   });
   // Slow or idle clients must not starve a participant: each connection holds a worker thread
-  // while it is read, so reads time out after 1 s of silence, keep-alive is short, and the pool
-  // is large enough that 64 trickling clients plus a crowd of idle ones leave threads free
-  // (study_server.py opens 64 slow and 200 idle connections and times a real request).
+  // while it is read, so reads time out after 1 s of silence, and the pool is large enough that
+  // 64 trickling clients plus a crowd of idle ones leave threads free (study_server.py opens 64
+  // slow and 200 idle connections and times a real request).
+  // One request per connection: cpp-httplib 0.11 keeps reading a connection after a handler
+  // answers "Connection: close", so the unread body of a refused request would be parsed as the
+  // next request. A local study page loses nothing measurable by reconnecting.
   srv.set_read_timeout(1, 0);
   srv.set_write_timeout(5, 0);
   srv.set_keep_alive_timeout(1);
-  srv.set_keep_alive_max_count(20);
+  srv.set_keep_alive_max_count(1);
   srv.new_task_queue = [] { return new httplib::ThreadPool(256); };
 
   const auto api = [&service](Reply (StudyService::*handler)(const RequestParams&)) {

@@ -12,6 +12,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import time
 import urllib.error
 import urllib.parse
 import urllib.request
@@ -256,6 +257,23 @@ with tempfile.TemporaryDirectory() as tmp:
     # 400 MB were sent at these paths: buffering any one of them would add 100 MB. The bound
     # leaves room for the worker threads' stacks and ThreadSanitizer's shadow memory.
     assert after - before < 32 * 1024, f"resident memory grew {after - before} KiB"
+    # A refused request's connection is closed: what the client sends after the refusal is never
+    # parsed as a request (cpp-httplib kept reading after answering "Connection: close").
+    for head in (b"POST /nope HTTP/1.1\r\nHost: x\r\nContent-Length: 3\r\n\r\n",
+                 b"POST /api/answer HTTP/1.1\r\nHost: x\r\n\r\n"):
+        c = socket.create_connection(("127.0.0.1", port), timeout=10)
+        c.sendall(head)
+        got = c.recv(65536)
+        assert got.startswith(b"HTTP/1.1 41"), got[:200]
+        time.sleep(0.1)
+        try:
+            c.sendall(b"GET /api/state HTTP/1.1\r\nHost: x\r\n\r\n")
+            while part := c.recv(65536):
+                got += part
+        except OSError:
+            pass  # closed: the second request never reached a parser
+        c.close()
+        assert got.count(b"HTTP/1.1 ") == 1, (head, got[:400])
     # A GET without a body is still served.
     st, _ = http("GET", f"{base}/api/state?p=alice&t={token}")
     assert st == 200, st
