@@ -16,6 +16,7 @@ from scipy import stats  # noqa: E402
 from run_tables import (ENV, PAPER, PROTOCOL_TEXT, env_title, main_tpa, methods,  # noqa: E402
                         of_protocol, reference_tpa, references)
 import sirl_bench  # noqa: E402  (on the path once run_tables is imported)
+from safe_output import save_figure  # noqa: E402
 
 # One colour and one label per variant, shared by every figure, as the engine declares each
 # method (engine/method_catalog.cpp) and the results file stores it (/methods/<variant>):
@@ -86,7 +87,7 @@ def mean_ci(values):
 
 def save(fig, out, name):
     for ext in ("png", "pdf"):
-        fig.savefig(os.path.join(out, f"{name}.{ext}"), dpi=150, bbox_inches="tight")
+        save_figure(fig, os.path.join(out, f"{name}.{ext}"), dpi=150, bbox_inches="tight")
     plt.close(fig)
 
 

@@ -18,6 +18,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import figures
+from safe_output import save_figure
 from run_tables import PAPER, methods, of_protocol
 
 # The query-selection variants of SIRL (uniform = the paper's) and the methods of the noisy-teacher
@@ -61,7 +62,7 @@ def mean_ci(v):
 
 def save(fig, out, name):
     for ext in ("png", "pdf"):
-        fig.savefig(os.path.join(out, f"{name}.{ext}"), dpi=150, bbox_inches="tight")
+        save_figure(fig, os.path.join(out, f"{name}.{ext}"), dpi=150, bbox_inches="tight")
     plt.close(fig)
 
 

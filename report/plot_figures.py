@@ -27,6 +27,7 @@ import plot_beyond  # noqa: E402
 import plot_hyper  # noqa: E402
 import report  # noqa: E402
 import run_tables  # noqa: E402
+from safe_output import write_text  # noqa: E402
 import sirl_bench  # noqa: E402  (run_tables puts it on the path)
 
 
@@ -80,8 +81,7 @@ def main():
                                             figures.mean_ci, figures.save, a.out,
                                             notes, figures.DRAWN)
     report.report(res, t, envs, a.out, notes, fig3_key, beyond)
-    with open(os.path.join(a.out, "figures.json"), "w") as fh:
-        json.dump(figures.DRAWN, fh, indent=1)
+    write_text(os.path.join(a.out, "figures.json"), json.dumps(figures.DRAWN, indent=1))
     print(f"plot_figures: wrote figures and report.md to {a.out}/")
 
 

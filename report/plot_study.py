@@ -26,6 +26,7 @@ SIRL, RANDOM = "#d62728", "#7f7f7f"
 # The reader package: installed by scripts/setup.sh, or beside this folder in a checkout.
 sys.path.insert(1, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
 import sirl_bench  # noqa: E402
+from safe_output import save_figure, write_text  # noqa: E402
 
 ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 ap.add_argument("analysis")
@@ -98,7 +99,7 @@ fig.suptitle(f"Fig. 6: study ({attrs.get('env')}, {len(g['participants'])} parti
              f"{attrs.get('triplets')} similarity answers); mean ± 95 % CI", fontsize=10)
 os.makedirs(a.out, exist_ok=True)
 for ext in ("png", "pdf"):
-    fig.savefig(os.path.join(a.out, f"fig6_study.{ext}"), dpi=150, bbox_inches="tight")
+    save_figure(fig, os.path.join(a.out, f"fig6_study.{ext}"), dpi=150, bbox_inches="tight")
 
 L = ["# User study analysis", "",
      f"- study file `{attrs.get('study_file')}` ({attrs.get('env')}): {len(g['participants'])} "
@@ -140,6 +141,5 @@ if "real_random_other" in v:
                  f"Random {MODE} {np.nanmean(v[f'{key}_random']):.3f})")
 L += ["", "Verdicts: *held* = the claimed direction with p < 0.05; *not held* = significant the "
       "other way; *inconclusive* otherwise.", ""]
-with open(os.path.join(a.out, "study_report.md"), "w") as fh:
-    fh.write("\n".join(L))
+write_text(os.path.join(a.out, "study_report.md"), "\n".join(L))
 print(f"plot_study: wrote fig6_study.png/pdf and study_report.md to {a.out}/")

@@ -17,6 +17,7 @@ import numpy as np  # noqa: E402
 # The reader package: installed by scripts/setup.sh, or beside this folder in a checkout.
 sys.path.insert(1, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
 import sirl_bench  # noqa: E402
+from safe_output import save_figure  # noqa: E402
 
 ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 ap.add_argument("file")
@@ -81,5 +82,5 @@ top.set_ylabel("y (m)")
 top.set_title("top view: laptop and human zones", fontsize=9)
 top.grid(alpha=0.3)
 fig.suptitle(f"JacoRobot ({a.env}): {len(ids)} of {T} trajectories from {a.file}", fontsize=10)
-fig.savefig(a.out, dpi=130, bbox_inches="tight")
+save_figure(fig, a.out, dpi=130, bbox_inches="tight")
 print(f"render_jaco: wrote {a.out}")

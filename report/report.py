@@ -14,6 +14,7 @@ import claims as claims_stats
 from figures import STYLE
 import ledger
 import plot_beyond
+from safe_output import write_text
 from hypotheses import detail_lines, fmt, hypotheses, summary_lines
 from run_tables import (ENV, PAPER, claim_trainings, env_title, main_tpa, methods, protocols_run,
                         sirl_bench)
@@ -207,17 +208,15 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
         L += fenced(prof.strip(), "toml")
     L.append("")
     text = "\n".join(L)
-    with open(os.path.join(out, "report.md"), "w") as fh:
-        fh.write(text)
-    with open(os.path.join(out, "report.html"), "w") as fh:
-        fh.write(report_html(title, "\n".join(L[2:])))
-    with open(os.path.join(out, "ledger.json"), "w") as fh:
-        json.dump(json_safe({"counts": ledger.counts(book),
-                             "statements": [{k: v for k, v in r.items() if k != "deciding"}
-                                            for r in book]}), fh, indent=1)
-    with open(os.path.join(out, "claims.json"), "w") as fh:
-        json.dump(json_safe([{k: v for k, v in h.items() if k != "deciding"} for h in H]), fh,
-                  indent=1)
+    write_text(os.path.join(out, "report.md"), text)
+    write_text(os.path.join(out, "report.html"), report_html(title, "\n".join(L[2:])))
+    write_text(os.path.join(out, "ledger.json"),
+               json.dumps(json_safe({"counts": ledger.counts(book),
+                                     "statements": [{k: v for k, v in r.items() if k != "deciding"}
+                                                    for r in book]}), indent=1))
+    write_text(os.path.join(out, "claims.json"),
+               json.dumps(json_safe([{k: v for k, v in h.items() if k != "deciding"} for h in H]),
+                          indent=1))
     return text
 
 

@@ -427,7 +427,22 @@ with tempfile.TemporaryDirectory() as tmp:
         f.write(f'extends = "{SMOKE}"\n[jaco]\nablation_M = [80]\n')
     ov = os.path.join(tmp, "override.h5")
     sh(SIRL, "run", over, "--out", ov, "--quiet")
+    # Links planted at the names the figures take (issue 65: savefig and open() wrote through
+    # them): each is replaced by the figure, its target left as it was.
+    os.makedirs(os.path.join(tmp, "ov"))
+    planted = ("report.md", "report.html", "figures.json", "claims.json", "fig4_fpe.png",
+               "fig7_ablation.pdf")
+    for name in planted:
+        with open(os.path.join(tmp, "victim-" + name), "w") as f:
+            f.write("the user's " + name)
+        os.symlink(os.path.join(tmp, "victim-" + name), os.path.join(tmp, "ov", name))
     sh("/usr/bin/python3", PLOT, ov, "--out", os.path.join(tmp, "ov"))
+    for name in planted:
+        assert open(os.path.join(tmp, "victim-" + name)).read() == "the user's " + name, name
+        assert not os.path.islink(os.path.join(tmp, "ov", name)), name
+        assert os.path.getsize(os.path.join(tmp, "ov", name)) > 100, name
+    assert not [n for n in os.listdir(os.path.join(tmp, "ov")) if n.endswith(".tmp")]
+    print("ok: links planted at six figure and report names are replaced, never written through")
     fig7 = json.load(open(os.path.join(tmp, "ov", "figures.json")))["fig7"]
     assert fig7["jaco"]["M"] == [80] and fig7["grid"]["M"] == [40], fig7
     for env in ("grid", "jaco"):
