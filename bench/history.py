@@ -68,17 +68,18 @@ CREATE INDEX IF NOT EXISTS science_by_night ON science(night);
 TABLES = ("nights", "speed", "science", "digests")
 
 # Rows of another kind than this tool files (a hand-made or damaged store): each would fail the
-# analysis or the dashboard later, so such a store is refused when opened. Seconds ≥ 0 as stores
-# filed before the checks below may hold zeros; NaN cannot be stored (NOT NULL), ±inf is refused.
+# analysis or the dashboard later, so such a store is refused when opened. Seconds ≥ 0, as
+# add_night files them; NaN cannot be stored (NOT NULL); ±inf and beyond ±1e100 are refused
+# (MAX_MAGNITUDE).
 CONTENT_CHECKS = {
     "nights": "typeof(label) != 'text' OR typeof(time) != 'text' OR typeof(git_commit) != 'text' "
               "OR typeof(host) != 'text' OR typeof(cpu_class) != 'text' OR typeof(cores) != 'integer'",
     "speed": "typeof(night) != 'integer' OR typeof(benchmark) != 'text' OR typeof(rep) != 'integer' "
-             "OR typeof(seconds) NOT IN ('real', 'integer') OR NOT (seconds >= 0 AND seconds < 9e999)",
+             "OR typeof(seconds) NOT IN ('real', 'integer') OR NOT (seconds BETWEEN 0 AND 1e100)",
     "science": "typeof(night) != 'integer' OR typeof(profile) != 'text' "
                "OR typeof(profile_digest) != 'text' OR typeof(metric) != 'text' "
                "OR typeof(seed) != 'integer' OR typeof(value) NOT IN ('real', 'integer') "
-               "OR NOT (value > -9e999 AND value < 9e999)",
+               "OR NOT (value BETWEEN -1e100 AND 1e100)",
     "digests": "typeof(night) != 'integer' OR typeof(profile) != 'text' "
                "OR typeof(profile_digest) != 'text' OR typeof(tbl) != 'text' OR typeof(digest) != 'text'",
 }
@@ -93,6 +94,8 @@ MAX_SERIES = 1000             # benchmarks, and science metrics, of one night
 MAX_ROWS = 100_000            # repetitions, science values, digests of one night (each)
 MAX_CORES = 1 << 20
 MAX_SEED = (1 << 63) - 1      # SQLite's INTEGER is signed 64-bit; a larger int overflows it
+MAX_MAGNITUDE = 1e100         # of seconds and science values: sums, squares and plot axes of
+                              # values near the largest double overflow (matplotlib fails on them)
 MAX_NIGHT_BYTES = 64 << 20    # a night file (bench/nightly's are well under a megabyte)
 META_TEXT = ("label", "time", "git_commit", "host", "cpu_class")
 
@@ -144,7 +147,8 @@ def _text(value, what):
         raise HistoryError(f"{what} {_quote(value)} is too long (at most {MAX_TEXT} characters)")
     for c in value:
         if unicodedata.category(c) in ("Cc", "Cs", "Zl", "Zp"):
-            raise HistoryError(f"{what} {_quote(value)} holds the control character {ascii(c)}")
+            raise HistoryError(f"{what} {_quote(value)} holds {ascii(c)}, a line break, control "
+                               "character or lone surrogate")
     return value
 
 
@@ -158,6 +162,8 @@ def _number(value, what, low=None):
         raise HistoryError(f"{what} is an integer too large for a number")
     if not math.isfinite(x):
         raise HistoryError(f"{what} is {x}, not a finite number")
+    if abs(x) > MAX_MAGNITUDE:
+        raise HistoryError(f"{what} is {x:g}, beyond ±{MAX_MAGNITUDE:g}")
     if low is not None and x < low:
         raise HistoryError(f"{what} is {x:g}, below {low:g}")
     return x
@@ -165,6 +171,8 @@ def _number(value, what, low=None):
 
 def _integer(value, what, low, high):
     """value as an int in [low, high] (SQLite's INTEGER overflows beyond 64 bits)."""
+    if isinstance(value, float):
+        raise HistoryError(f"{what} is {value!r}, not an integer")
     if isinstance(value, bool) or not isinstance(value, int):
         raise HistoryError(f"{what} is {_kind(value)}, not an integer")
     if not low <= value <= high:
@@ -185,16 +193,16 @@ def check_night(meta, speed, science=(), digests=()):
         raise HistoryError(f"the benchmarks are {_kind(speed)}, not an object")
     if len(speed) > MAX_SERIES:
         raise HistoryError(f"{len(speed)} benchmarks, at most {MAX_SERIES}")
-    rows = 0
+    n_reps = 0
     for name, reps in speed.items():
         _text(name, "benchmark name")
         where = f"benchmark {_quote(name)}"
-        if not isinstance(reps, (list, tuple)) or not reps:
-            raise HistoryError(f"{where}: its repetitions are {_kind(reps)}"
-                               + (" and empty" if isinstance(reps, (list, tuple)) else "")
-                               + ", not a list of seconds")
-        rows += len(reps)
-        if rows > MAX_ROWS:
+        if not isinstance(reps, (list, tuple)):
+            raise HistoryError(f"{where}: its repetitions are {_kind(reps)}, not a list of seconds")
+        if not reps:
+            raise HistoryError(f"{where}: no repetition")
+        n_reps += len(reps)
+        if n_reps > MAX_ROWS:
             raise HistoryError(f"more than {MAX_ROWS} repetitions")
         for i, s in enumerate(reps):
             _number(s, f"{where}: repetition {i} (seconds)", low=0)
@@ -243,6 +251,8 @@ def _schema_problem(con):
         shown = ", ".join(_show(t, 40) for t in tables[:5]) + (", …" if len(tables) > 5 else "")
         return f"its tables are {shown or 'none'}; a store's are {', '.join(TABLES)}"
     for kind, name, tbl in objects:  # views, triggers, an index on a table not ours
+        if name.startswith("sqlite_"):  # SQLite's own (sqlite_stat1 of an ANALYZE)
+            continue
         if kind not in ("table", "index") or tbl not in TABLES:
             return f"it holds the {kind} {_quote(name, 40)}"
     ref = _reference_columns()
@@ -280,7 +290,10 @@ def open_store(path):
         if problem is None:
             # One transaction: the schema is created whole or not at all.
             con.executescript("BEGIN; " + SCHEMA + " COMMIT;")
-    except sqlite3.DatabaseError as e:  # "file is not a database", a damaged file, a locked one
+    except sqlite3.OperationalError as e:  # locked past the timeout, an I/O error, read-only
+        con.close()
+        raise HistoryError(f"{_show(path, None)}: cannot read the store ({e})")
+    except sqlite3.DatabaseError as e:  # "file is not a database", a damaged file
         con.close()
         raise HistoryError(f"{_show(path, None)} is not a nightly history store ({e})")
     if problem is not None:
@@ -374,6 +387,7 @@ def night_from_json(night):
         if not isinstance(p, dict):
             continue
         where = _at("pipeline", prof)
+        _text(prof, "profile name")  # before it names a benchmark: pipeline/<name>
         for k in ("wall_seconds", "walls"):
             if k in p:
                 speed[f"pipeline/{prof}"] = list(p[k]) if isinstance(p[k], list) else [p[k]]
@@ -398,6 +412,14 @@ def night_from_json(night):
     return meta, speed, science, digests
 
 
+def _parse_int(digits):
+    # Python refuses integers of over 4300 digits with advice about sys.set_int_max_str_digits,
+    # and none of a night's needs 40.
+    if len(digits) > 40:
+        raise HistoryError(f"an integer of {len(digits)} digits")
+    return int(digits)
+
+
 def read_night(path):
     """The checked night (night_from_json) in the JSON file at `path`; HistoryError naming the
     file otherwise: not a regular file, too large, not UTF-8, not JSON, nested too deeply."""
@@ -419,10 +441,10 @@ def read_night(path):
         raise HistoryError(f"{_show(path, None)}: not UTF-8 (byte 0x{data[e.start]:02x} at "
                            f"offset {e.start})")
     try:
-        night = json.loads(text)
+        night = json.loads(text, parse_int=_parse_int)
     except RecursionError:
         raise HistoryError(f"{_show(path, None)}: JSON nested too deeply")
-    except ValueError as e:  # JSONDecodeError, and an integer beyond Python's 4300 digits
+    except (ValueError, HistoryError) as e:  # JSONDecodeError, or _parse_int's refusal
         raise HistoryError(f"{_show(path, None)}: not valid JSON ({_show(e, 200)})")
     try:
         return night_from_json(night)
@@ -441,7 +463,7 @@ def _short(text, limit=MAX_TEXT):
     that a name filed before names were bounded (a 100 kB metric) still draws."""
     text = str(text)
     cut = text[:limit] + "…" if len(text) > limit else text
-    return "".join(c if c.isprintable() or c == " " else ascii(c)[1:-1] for c in cut)
+    return "".join(c if c.isprintable() else ascii(c)[1:-1] for c in cut)
 
 
 # ----------------------------------------------------------------------------------- analysis
