@@ -3,9 +3,13 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
+#include <set>
 #include <string>
+#include <vector>
 
 #include "app/commands.h"
+#include "experiment/profile.h"
+#include "experiment/suggest.h"
 #include "jobs/memory_reuse.h"
 #include "jobs/stop_request.h"
 #include "results/file_lock.h"
@@ -36,6 +40,85 @@ std::string printable(const std::string& s) {
   }
   return out;
 }
+// " (did you mean …?)" for an unknown command: a command it is a typo of, or, for a profile's
+// name (`sirl quick`), the command that runs it.
+std::string suggestion(const std::string& typed, const std::vector<std::string>& commands) {
+  if (std::string s = sirl::did_you_mean(typed, commands); !s.empty()) return s;
+  std::string profile = sirl::closest_name(typed, sirl::bundled_profiles());
+  return profile.empty() ? "" : " (did you mean 'sirl reproduce " + profile + "'?)";
+}
+
+// A command's description cut to its first sentence (for a command the help's table misses).
+std::string first_sentence(std::string d) {
+  for (char& c : d)
+    if (c == '\n') c = ' ';
+  const size_t end = d.find(". ");
+  if (end != std::string::npos) d.resize(end);
+  if (!d.empty() && d.back() == '.') d.pop_back();
+  return d;
+}
+
+// The top-level help: what sirl is, where to start, and every command in a group with one line
+// (bare `sirl` and `sirl --help` print it; `sirl CMD --help` has the rest). A command the table
+// does not list still appears, under "More", with its description's first sentence.
+std::string short_help(CLI::App& app) {
+  struct Entry {
+    const char* name;
+    const char* line;
+  };
+  const std::vector<std::pair<std::string, std::vector<Entry>>> groups{
+      {"Reproduce the paper",
+       {{"reproduce", "run a profile, then draw every figure and write the report (the main job)"},
+        {"run", "run a profile's grid into an HDF5 results file (resumable, cached per task)"},
+        {"plan", "what a profile runs and how long it takes here, without running it"}}},
+      {"Your own representation",
+       {{"evaluate", "score an embeddings file of yours beside the paper's methods"},
+        {"dataset", "write an environment's trajectories and simulated answers to HDF5"}}},
+      {"Read a results file",
+       {{"export", "every table of a results file as CSV"},
+        {"inspect", "check and summarise a dataset file"},
+        {"render", "draw JacoRobot trajectories over the scene (PNG)"}}},
+      {"The user study", {{"study", "serve the study page; import, simulate and analyse answers"}}},
+      {"On a cluster",
+       {{"submit", "a Slurm batch script for a profile (job array or MPI), sized by `sirl plan`"},
+        {"status", "what became of a submission's shards"},
+        {"merge", "combine shard files into one results file"},
+        {"gc", "trim a task cache to what the given profiles need"}}},
+      {"This build",
+       {{"version", "the build, the CPU class results depend on, this core's roof"}}}};
+  std::string s =
+      std::string("sirl-bench ") + sirl::app::engine_version() +
+      ": the SIRL paper (Bobu, Liu et al., HRI 2023) as a fast, deterministic "
+      "benchmark.\n\n"
+      "Start here:\n"
+      "  sirl reproduce smoke    the whole pipeline in about a minute: results, "
+      "figures, report\n"
+      "  sirl reproduce quick    every figure of the paper at a reduced scale (about "
+      "15 min on 2 cores)\n"
+      "  sirl plan paper         what the full protocol costs here, without running it\n";
+  std::set<std::string> registered, listed;
+  for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
+    registered.insert(sub->get_name());
+  const auto line = [](const std::string& name, const std::string& text) {
+    return "  " + name + std::string(name.size() < 11 ? 11 - name.size() : 1, ' ') + text + "\n";
+  };
+  for (const auto& [title, entries] : groups) {
+    s += "\n" + title + ":\n";
+    for (const Entry& e : entries)
+      if (registered.count(e.name)) {
+        s += line(e.name, e.line);
+        listed.insert(e.name);
+      }
+  }
+  std::string more;
+  for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; }))
+    if (!listed.count(sub->get_name()))
+      more += line(sub->get_name(), first_sentence(sub->get_description()));
+  if (!more.empty()) s += "\nMore:\n" + more;
+  s += "\n`sirl CMD --help` lists a command's options; `sirl --version` prints the version.\n";
+  return s;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -53,17 +136,26 @@ int main(int argc, char** argv) {
                                         " (commit " + sirl::app::git_commit() +
                                         "; `sirl version` for the build and CPU)");
   sirl::app::register_all(app);
+  // Bare `sirl`, `sirl --help` and `sirl -h`: the short grouped help, exit 0.
+  if (argc == 1 ||
+      (argc == 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h"))) {
+    std::fputs(short_help(app).c_str(), stdout);
+    return 0;
+  }
   // An unknown first word is an unknown command, not "a subcommand is required".
   if (argc > 1 && argv[1][0] != '-') {
     bool known = false;
-    std::string names;
+    std::vector<std::string> names;
     for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
       known = known || sub->get_name() == argv[1];
-      names += (names.empty() ? "" : ", ") + sub->get_name();
+      names.push_back(sub->get_name());
     }
     if (!known) {
-      std::fprintf(stderr, "sirl: error: unknown command '%s' (commands: %s; see `sirl --help`)\n",
-                   argv[1], names.c_str());
+      std::string list;
+      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+      std::fprintf(stderr,
+                   "sirl: error: unknown command '%s'%s (commands: %s; see `sirl --help`)\n",
+                   printable(argv[1]).c_str(), suggestion(argv[1], names).c_str(), list.c_str());
       return 2;
     }
   }

@@ -1,4 +1,5 @@
 #include "experiment/profile.h"
+#include "experiment/suggest.h"
 
 #include "engine/method_catalog.h"
 
@@ -1001,19 +1002,37 @@ const std::string& precision_of(const Profile& p, const std::string& env) {
   return it == p.hyper.end() ? p.precision : it->second.precision;
 }
 
-std::string bundled_profile_names() {
-  namespace fs = std::filesystem;
+namespace {
+
+// The profile names (stems of *.toml) in a folder, sorted.
+std::vector<std::string> profile_names_in(const std::filesystem::path& dir) {
   std::vector<std::string> names;
   std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+    if (e.path().extension() == ".toml") names.push_back(e.path().stem().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+}  // namespace
+
+std::vector<std::string> bundled_profiles() {
+  try {
+    return profile_names_in(data_dir() / "configs");
+  } catch (const std::runtime_error&) {
+    return {};
+  }
+}
+
+std::string bundled_profile_names() {
+  namespace fs = std::filesystem;
   fs::path dir;
   try {
     dir = data_dir() / "configs";
   } catch (const std::runtime_error& e) {
     return std::string("none: ") + e.what();
   }
-  for (const auto& e : fs::directory_iterator(dir, ec))
-    if (e.path().extension() == ".toml") names.push_back(e.path().stem().string());
-  std::sort(names.begin(), names.end());
+  const std::vector<std::string> names = profile_names_in(dir);
   std::string s;
   for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
   return s.empty() ? "none found in " + dir.string() : s;
@@ -1174,7 +1193,12 @@ std::filesystem::path find_profile(const std::string& path_or_name,
                  (bundled.empty() ? std::string()
                                   : " and " + (bundled / path_or_name).string() + ".toml")
            : std::string()) +
-      ")" + (missing_data.empty() ? std::string() : "; " + missing_data));
+      ")" + (missing_data.empty() ? std::string() : "; " + missing_data) + [&] {
+        std::vector<std::string> known = profile_names_in("configs");
+        if (!bundled.empty())
+          for (auto& n : profile_names_in(bundled)) known.push_back(std::move(n));
+        return did_you_mean(path_or_name, known);
+      }());
 }
 
 }  // namespace

@@ -198,6 +198,8 @@ Profile load_profile(const std::string& path_or_name,
 
 // The names of the profiles shipped in configs/ ("beyond, jaco-fig5, paper, …"), for --help.
 std::string bundled_profile_names();
+// The same names as a list (empty when there is no data folder).
+std::vector<std::string> bundled_profiles();
 
 // The frozen settings a TPA cell of this variant runs with under `grid`.
 std::vector<bool> frozen_settings(const TpaGrid& grid, const Variant& v);

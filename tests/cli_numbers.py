@@ -25,7 +25,8 @@ def sirl(*args):
 
 def commands():
     """Every command path: `sirl X` and, for commands with their own subcommands, `sirl X Y`."""
-    top = re.findall(r"^\s{2}(\w+)\s", sirl("--help").stdout.split("Subcommands:")[1], re.M)
+    # The short help lists each command as "  NAME  one line", in groups.
+    top = re.findall(r"^ {2}([a-z]+) {2,}\S", sirl("--help").stdout, re.M)
     paths = []
     for c in top:
         paths.append([c])

@@ -40,7 +40,7 @@ def main():
 
     # sirl commands and their options.
     commands = set(re.findall(r"`?sirl ([a-z]+)\b", README))
-    known = set(re.findall(r"^\s{2}(\w+)\s", help_text().split("Subcommands:")[1], re.M))
+    known = set(re.findall(r"^ {2}([a-z]+) {2,}\S", help_text(), re.M))  # "  NAME  one line"
     checked = 0
     for line in re.findall(r"`(sirl [^`]+)`", README) + re.findall(r"^\s*(?:build/release/app/)?(sirl .+)$", README, re.M):
         words = line.split()
