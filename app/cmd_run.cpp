@@ -157,7 +157,7 @@ void print_schedule(const Plan& plan, const PlanEstimate& e, const PlanClusterOp
   const ClusterModel m = cluster_model(o);
   ClusterPrediction c;
   try {
-    c = predict_cluster(plan, e, m, std::vector<char>(plan.tasks.size(), 1));
+    c = predict_cluster(plan, e, m, e.pending);
   } catch (const std::invalid_argument& x) {
     throw UsageError(x.what());
   }
@@ -226,8 +226,9 @@ void print_task_list(const Plan& plan) {
   }
 }
 
-// The profile, its tasks and FLOPs per kind, and what a cache already holds of them.
-void print_plan_summary(const Profile& p, const Plan& plan, const std::string& cache) {
+// The profile, its tasks and FLOPs per kind, and what a cache already holds of them (returned;
+// `held` is empty without a cache).
+CacheHoldings print_plan_summary(const Profile& p, const Plan& plan, const std::string& cache) {
   std::printf("profile %s (%s): %s\n", p.name.c_str(), p.path.c_str(), p.description.c_str());
   std::printf("envs:");
   for (const auto& e : p.envs) std::printf(" %s", e.c_str());
@@ -257,7 +258,7 @@ void print_plan_summary(const Profile& p, const Plan& plan, const std::string& c
         total * 1e-15, protocol * 1e-15, 100 * total / protocol,
         heads_stop ? " and reward heads stopped by the profile's tpa.stop rules" : "");
   }
-  if (cache.empty()) return;
+  if (cache.empty()) return {};
   const CacheHoldings h = cache_holdings(plan, p, cache);
   std::printf("\ncache %s: %d of %zu tasks already computed on this CPU class (%.1f of %.1f GFLOP)",
               cache.c_str(), h.tasks, plan.tasks.size(), h.flops * 1e-9, total * 1e-9);
@@ -265,6 +266,10 @@ void print_plan_summary(const Profile& p, const Plan& plan, const std::string& c
     std::printf("; %d more on another class (%.1f GFLOP; sirl run --any-cpu-class reuses them)",
                 h.other_class, h.other_flops * 1e-9);
   std::printf("\n");
+  if (h.tasks > 0 && size_t(h.tasks) < plan.tasks.size())
+    std::printf("the prediction below is for the %zu tasks left\n",
+                plan.tasks.size() - size_t(h.tasks));
+  return h;
 }
 
 // The calibration's measured rates, the data's build times and the memory estimate.
@@ -345,13 +350,23 @@ void register_plan(CLI::App& app, Runner& run) {
     if (cluster && threads > 0)
       throw UsageError("--threads plans one machine; for a cluster give --cores-per-node");
     const int th = threads > 0 ? threads : default_threads();
-    print_plan_summary(p, plan, cache);
+    const CacheHoldings held = print_plan_summary(p, plan, cache);
+    std::vector<char> pending(plan.tasks.size(), 1);
+    for (size_t i = 0; i < held.held.size(); ++i) pending[i] = !held.held[i];
+    if (!held.held.empty() && size_t(held.tasks) == plan.tasks.size()) {
+      std::printf(
+          "nothing left to compute: `sirl run %s --cache %s` only writes the results file\n",
+          profile.c_str(), cache.c_str());
+      return 0;
+    }
     std::fflush(stdout);
     // Calibrating trains real tasks: one past this machine's memory is refused, as a run would.
     refuse_tasks_beyond_memory(plan, std::vector<char>(plan.tasks.size(), 1));
     std::fprintf(stderr, "calibrating on this machine...\n");
-    const PlanEstimate e = estimate_plan(plan, p, th);
+    const PlanEstimate e = estimate_plan(plan, p, th, pending);
     print_calibration(e);
+    if (const std::string busy = busy_machine_note(e, th); !busy.empty())
+      std::printf("note: %s\n", busy.c_str());
     PlanClusterOptions here = co;
     if (!cluster) here.cores_per_node = th;
     if (!cluster)

@@ -2,8 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
 #include <functional>
 #include <map>
+#include <string>
 
 #include "datasets/environments.h"
 #include "experiment/calibration.h"
@@ -16,10 +20,29 @@ namespace sirl {
 
 namespace {
 
+// This process's CPU time (every thread's), in seconds.
+double process_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+// Wall and CPU time over every timing of this calibration (its share of a core, below 1 when
+// other processes ran on the core it measured on).
+thread_local double g_wall = 0, g_cpu = 0;
+
+// The time f takes on an idle core: the process's CPU time, not the wall clock, so another job
+// on the machine does not slow the rates down (the calibration runs on one thread: its CPU time
+// is its wall time when it has a core to itself). Wall and CPU time are summed for cpu_share.
 double seconds_of(const std::function<double()>& f, double* flops) {
   const auto t0 = std::chrono::steady_clock::now();
+  const double c0 = process_cpu_seconds();
   *flops = f();
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double cpu = process_cpu_seconds() - c0;
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  g_wall += wall;
+  g_cpu += std::min(cpu, wall);
+  return cpu > 0 ? std::min(cpu, wall) : wall;
 }
 double seconds_of(const std::function<void()>& f) {
   double none = 0;
@@ -65,8 +88,8 @@ Dataset time_setup(const std::string& env, const Profile& p, PlanEstimate& e) {
 void calibrate_rates(const std::string& env, const Dataset& d, const Plan& plan, const Profile& p,
                      PlanEstimate& e) {
   std::map<std::string, const RateClass*> classes;  // by name: measured in a fixed order
-  for (const Task& t : plan.tasks)
-    if (t.env == env) {
+  for (size_t i = 0; i < plan.tasks.size(); ++i)
+    if (const Task& t = plan.tasks[i]; t.env == env && e.pending[i]) {
       const RateClass& c = t.kind.spec().rate(t);
       classes.emplace(c.name, &c);
     }
@@ -116,21 +139,26 @@ void time_tasks(const Plan& plan, int threads, PlanEstimate& e) {
     if (auto it = e.call_seconds.find(t.env + "/" + kind); it != e.call_seconds.end())
       once = it->second;
     secs[i] = t.flops / r + once;
+    if (!e.pending[i]) continue;
     e.seconds_one_thread += secs[i] + ClusterModel{}.commit_seconds;  // as the simulator counts
     sizes.push_back(t.bytes);
   }
   ClusterModel m;
   m.cores_per_node = std::max(1, threads);
   m.max_task_threads = m.cores_per_node;
-  e.seconds = simulate_schedule(plan, secs, std::vector<char>(plan.tasks.size(), 1), m).makespan;
+  e.seconds = simulate_schedule(plan, secs, e.pending, m).makespan;
   std::sort(sizes.rbegin(), sizes.rend());
   for (int k = 0; k < threads && k < int(sizes.size()); ++k) e.peak_bytes += sizes[k];
 }
 
 }  // namespace
 
-PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
+PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads,
+                           std::vector<char> pending) {
   PlanEstimate e;
+  g_wall = g_cpu = 0;
+  if (pending.empty()) pending.assign(plan.tasks.size(), 1);
+  e.pending = std::move(pending);
   // The grid's environments and the user study's (its tasks run on its own Ξ).
   std::vector<std::string> envs = p.envs;
   if (p.study.enabled && std::find(envs.begin(), envs.end(), p.study.cohort.env) == envs.end())
@@ -142,7 +170,24 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads) {
   }
   e.peak_bytes += e.data_bytes;
   time_tasks(plan, threads, e);
+  e.cpu_share = g_wall > 0 ? g_cpu / g_wall : 1;
+  if (double load[1]; getloadavg(load, 1) == 1) e.load_average = load[0];
   return e;
+}
+
+std::string busy_machine_note(const PlanEstimate& e, int threads) {
+  const bool busy_core = e.cpu_share < 0.9;
+  const bool loaded = e.load_average > 1.25 * double(std::max(1, threads));
+  if (!busy_core && !loaded) return "";
+  char buf[512];
+  std::snprintf(
+      buf, sizeof buf,
+      "the machine is busy (load average %.1f on %d core(s); the calibration got %.0f %% "
+      "of a core): the prediction is for idle cores, and while the load lasts a run "
+      "takes longer, about %.1fx if it stays this busy",
+      e.load_average, threads, 100 * e.cpu_share,
+      std::max(1 / std::max(e.cpu_share, 0.05), e.load_average / double(std::max(1, threads))));
+  return buf;
 }
 
 }  // namespace sirl

@@ -24,12 +24,25 @@ struct PlanEstimate {
   // the first task that reads it; under MPI every worker rank builds what its tasks read, and
   // rank 0 builds them for the results file beside the dispatching.
   std::map<std::string, double> dataset_seconds, bundle_seconds;
-  double setup_seconds = 0;  // Σ over environments of Ξ + its seeds' bundles, one core
+  double setup_seconds = 0;   // Σ over environments of Ξ + its seeds' bundles, one core
+  std::vector<char> pending;  // the tasks the times above count (the rest are in a cache)
+  // The calibration is timed in CPU time: the rates are an idle core's. cpu_share is the share of
+  // a core it got (CPU / wall time; well below 1 when the machine was busy), load_average the
+  // 1-minute load when it ended: a busy machine runs slower than predicted.
+  double cpu_share = 1;
+  double load_average = 0;
 };
+
+// One line on how busy the machine was while calibrating and what that means for the prediction
+// (for `threads` cores), or "" when it had the cores to itself.
+std::string busy_machine_note(const PlanEstimate& e, int threads);
 
 // Calibrates the rates (short runs of real training) and simulates the thread scheduler
 // on `threads` cores (a big task takes several cores when nothing else is ready or its chain is
-// critical, as `sirl run` does).
-PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads);
+// critical, as `sirl run` does). `pending` (empty: every task) marks the tasks still to run: only
+// their rate classes are calibrated, and seconds, seconds_one_thread and peak_bytes count only
+// them (a task a cache holds costs its run nothing); task_seconds covers every task.
+PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads,
+                           std::vector<char> pending = {});
 
 }  // namespace sirl

@@ -196,9 +196,11 @@ CacheHoldings cache_holdings(const Plan& plan, const Profile& p, const fs::path&
   for (const std::string& id : ids) digests.insert(id.substr(0, id.find('-')));
   const std::vector<std::string> dig = task_digests(plan, p);
   CacheHoldings h;
+  h.held.assign(plan.tasks.size(), 0);
   for (size_t i = 0; i < plan.tasks.size(); ++i) {
     const Task& t = plan.tasks[i];
     if (have.count(TaskCache::id(dig[i], task_cpu_class(t, p)))) {
+      h.held[i] = 1;
       ++h.tasks;
       h.flops += t.flops;
     } else if (digests.count(dig[i])) {

@@ -62,6 +62,7 @@ struct CacheHoldings {
   int tasks = 0;        // results of this CPU class
   int other_class = 0;  // results only another class computed (reusable with --any-cpu-class)
   double flops = 0, other_flops = 0;  // their planned FLOPs
+  std::vector<char> held;             // per plan task: its result (of this class) is there
 };
 CacheHoldings cache_holdings(const Plan& plan, const Profile& p, const std::filesystem::path& dir);
 

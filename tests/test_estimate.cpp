@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <string>
+#include <vector>
 
 #include "experiment/plan.h"
 #include "experiment/profile.h"
@@ -37,6 +38,24 @@ TEST(Estimate, AddsEachTasksFlopsOverItsKindsRate) {
   EXPECT_GE(e.seconds, total / 2 - 1e-9);
   EXPECT_LE(e.seconds, total + 1e-9);
   EXPECT_GT(e.peak_bytes, 0);
+}
+
+// `sirl plan --cache`: tasks a cache holds cost the run nothing. With every task but the FPE
+// cells held, the one-thread total is the FPE cells' alone, and only their rate is calibrated.
+TEST(Estimate, CountsOnlyThePendingTasks) {
+  const Profile p = parse_profile(test::kSmallProfile, "t.toml");
+  const Plan plan = make_plan(p);
+  std::vector<char> pending(plan.tasks.size(), 0);
+  for (size_t i = 0; i < plan.tasks.size(); ++i) pending[i] = plan.tasks[i].kind == fpe_kind();
+  const PlanEstimate e = estimate_plan(plan, p, 2, pending);
+  double total = 0;
+  for (size_t i = 0; i < plan.tasks.size(); ++i)
+    if (pending[i]) total += e.task_seconds[i] + 0.002;  // + one commit each
+  EXPECT_NEAR(e.seconds_one_thread, total, 1e-9 * total);
+  EXPECT_LE(e.seconds, total + 1e-9);
+  EXPECT_TRUE(e.gflops_per_s.count("grid/fpe"));
+  EXPECT_FALSE(e.gflops_per_s.count("grid/rep_sirl")) << "calibrated a class no pending task has";
+  EXPECT_FALSE(e.gflops_per_s.count("grid/tpa_frozen"));
 }
 
 TEST(Estimate, CostModelCountsTheFlopsByHand) {
