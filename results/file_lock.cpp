@@ -29,15 +29,19 @@ std::string printable(const std::string& text) {
 }
 }  // namespace
 
-FileLock::FileLock(const std::string& file, const std::string& holder, const std::string& advice)
-    : path_(file + ".lock") {
+// One attempt: opens (creating) path_, checks it is a sirl lock, takes the flock. Returns false
+// when the file it locked is no longer at path_ (its holder removed it meanwhile): try again.
+bool FileLock::try_lock(const std::string& file, const std::string& holder,
+                        const std::string& advice) {
   // Created exclusively; an existing file is opened only to check that it is a sirl lock (a
   // Cargo.lock or yarn.lock beside `sirl merge Cargo …` is the user's and is never truncated).
   // O_NOFOLLOW: a link planted at OUT.lock must not make us write our pid into its target.
   fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0644);
   const bool created = fd_ >= 0;
-  if (!created && errno == EEXIST)
+  if (!created && errno == EEXIST) {
     fd_ = ::open(path_.c_str(), O_RDWR | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
+    if (fd_ < 0 && errno == ENOENT) return false;  // its holder removed it meanwhile
+  }
   if (fd_ < 0 && errno == ELOOP)
     throw std::runtime_error(path_ +
                              " is a symbolic link; sirl creates this file itself and does "
@@ -76,13 +80,43 @@ FileLock::FileLock(const std::string& file, const std::string& holder, const std
     }
     throw std::runtime_error(path_ + ": cannot lock: " + std::strerror(err));
   }
+  // Locked; but the holder may have removed the file between our open and our flock, and a third
+  // process may have created a new one at the name: only the file at path_ counts.
+  struct stat mine {
+  }, named{};
+  if (::fstat(fd_, &mine) != 0 || ::lstat(path_.c_str(), &named) != 0 ||
+      mine.st_dev != named.st_dev || mine.st_ino != named.st_ino) {
+    ::close(fd_);
+    fd_ = -1;
+    return false;
+  }
   const std::string me = std::to_string(::getpid()) + " " + holder;
   if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, me.data(), me.size(), 0) < 0) {
     // the lock holds without the note; a second writer just cannot name us
   }
+  return true;
+}
+
+FileLock::FileLock(const std::string& file, const std::string& holder, const std::string& advice)
+    : path_(file + ".lock") {
+  // Each retry follows a holder's removal of the file; a few in a row mean something else keeps
+  // replacing it.
+  for (int attempt = 0; attempt < 100; ++attempt)
+    if (try_lock(file, holder, advice)) return;
+  throw std::runtime_error(path_ +
+                           ": the lock file keeps being replaced; is another program "
+                           "removing it?");
 }
 
 FileLock::~FileLock() {
+  if (fd_ < 0) return;
+  // Removed while still held (a taker that opened it before checks that it is still at the path,
+  // and starts over), and only when the path still names our file.
+  struct stat mine {
+  }, named{};
+  if (::fstat(fd_, &mine) == 0 && ::lstat(path_.c_str(), &named) == 0 &&
+      mine.st_dev == named.st_dev && mine.st_ino == named.st_ino)
+    ::unlink(path_.c_str());
   ::close(fd_);
 }
 

@@ -1,7 +1,10 @@
 // One writer per file: an exclusive flock on FILE.lock, held for the holder's life and released
 // by the kernel if the process dies. The holder writes "<pid> <command>" into the lock file so a
-// second writer can name it. (The lock file stays: unlinking it would let two later writers lock
-// two different inodes.) Used by `sirl run` for its --out and by `sirl study serve` for its study.
+// second writer can name it, and removes the file when it is done (a lock left by a process that
+// died is taken over by the next). Removing it while others may have it open is safe because a
+// taker checks, once it holds the flock, that the path still names the file it locked, and
+// starts over if not: two writers can never hold two different inodes of one name.
+// Used by every command that writes a results, dataset or study file.
 #pragma once
 #include <stdexcept>
 #include <string>
@@ -25,6 +28,7 @@ class FileLock {
   FileLock& operator=(const FileLock&) = delete;
 
  private:
+  bool try_lock(const std::string& file, const std::string& holder, const std::string& advice);
   std::string path_;
   int fd_ = -1;
 };
