@@ -37,6 +37,29 @@ int default_threads() {
   return std::max(1, int(std::thread::hardware_concurrency()));
 }
 
+namespace {
+
+// Σ sizes of the regular files under dir (0 when absent).
+uint64_t folder_bytes(const std::filesystem::path& dir) {
+  uint64_t total = 0;
+  std::error_code ec;
+  for (auto it = std::filesystem::recursive_directory_iterator(dir, ec);
+       !ec && it != std::filesystem::recursive_directory_iterator(); it.increment(ec))
+    if (it->is_regular_file(ec)) total += it->file_size(ec);
+  return total;
+}
+
+std::string format_bytes(uint64_t b) {
+  char buf[32];
+  if (b >= (uint64_t(1) << 30))
+    std::snprintf(buf, sizeof buf, "%.1f GiB", double(b) / double(uint64_t(1) << 30));
+  else
+    std::snprintf(buf, sizeof buf, "%.0f MiB", double(b) / double(1 << 20));
+  return buf;
+}
+
+}  // namespace
+
 int run_command(const std::string& profile_name, const std::string& out, int threads, bool force,
                 const std::string& shard, bool quiet, bool skip_study, double checkpoint_minutes,
                 int max_task_threads) {
@@ -80,6 +103,15 @@ int run_loaded_profile(Profile p, const std::string& out, int threads, bool forc
               s.ran,
               s.elsewhere ? (", " + std::to_string(s.elsewhere) + " by another run").c_str() : "",
               format_duration(s.seconds).c_str(), out.c_str());
+  // The cache is most of what a run leaves on disk: say where it is and how to trim it.
+  if (!quiet) {
+    const std::filesystem::path cache = cache_dir(o);
+    std::printf(
+        "task cache: %s (%s; it makes reruns and edited profiles fast; `sirl gc %s %s` keeps "
+        "only what this profile needs, `--all` empties it)\n",
+        cache.c_str(), format_bytes(folder_bytes(cache)).c_str(), cache.c_str(),
+        std::ranges::count(bundled_profiles(), p.name) ? p.name.c_str() : p.path.c_str());
+  }
   return 0;
 }
 
