@@ -6,12 +6,20 @@
 #include <httplib.h>
 #include <netinet/in.h>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <atomic>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <thread>
 
 #include "app/commands.h"
 #include "app/study_http.h"
@@ -72,8 +80,10 @@ bool check_host(const std::string& host, std::string& url_host) {
 }
 
 // One server (or import) per study file: each rewrites the whole file from its memory, so two
-// at once would lose each other's answers. Held for the process's life.
+// at once would lose each other's answers. Held for the process's life. The file's folder is
+// created first, as every other writer does.
 void lock_study(std::optional<FileLock>& lock, const std::string& out) {
+  if (const fs::path dir = fs::path(out).parent_path(); !dir.empty()) fs::create_directories(dir);
   try {
     lock.emplace(out, "sirl study serve/import",
                  "one process per study file: stop the other first (participants take turns)");
@@ -81,6 +91,9 @@ void lock_study(std::optional<FileLock>& lock, const std::string& out) {
     throw UsageError(e.what());
   }
 }
+
+// The self-pipe through which a stop signal reaches the server (see run_serve).
+int g_stop_pipe[2] = {-1, -1};
 
 int run_serve() {
   const ServeArgs& a = g_serve;
@@ -133,6 +146,29 @@ int run_serve() {
   StudyService service(s, std::make_shared<const Dataset>(study_dataset(s)), a.participant,
                        a.practice, [path](const Study& st) { write_study(path, st); });
   configure_study_http(srv, service, data_dir() / "app" / "study_web");
+  // Ctrl-C and SIGTERM stop the server between requests (each answer is already in the file),
+  // then a line says what was saved. The handler (any thread may take the signal) only writes
+  // the signal's number into a pipe; a thread of ours reads it and stops the server.
+  if (::pipe2(g_stop_pipe, O_CLOEXEC) != 0)
+    throw std::runtime_error(std::string("cannot create a pipe: ") + std::strerror(errno));
+  struct sigaction sa {};
+  sa.sa_handler = [](int sig) {
+    const unsigned char b = static_cast<unsigned char>(sig);
+    [[maybe_unused]] const ssize_t n = ::write(g_stop_pipe[1], &b, 1);
+  };
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  std::atomic<int> stopped_by{0};
+  std::thread stopper([&] {
+    unsigned char b = 0;
+    while (::read(g_stop_pipe[0], &b, 1) < 0 && errno == EINTR) {
+    }
+    if (b != 0) {
+      stopped_by = b;
+      srv.stop();
+    }
+  });
   std::printf(
       "sirl study serve: participant %s on %s; answers go to %s\n"
       "open: http://%s:%d/?p=%s&t=%s\n",
@@ -140,6 +176,21 @@ int run_serve() {
       a.participant.c_str(), token.c_str());
   std::fflush(stdout);
   srv.listen_after_bind();
+  const unsigned char done = 0;  // the server ended on its own: end the thread
+  [[maybe_unused]] const ssize_t n = ::write(g_stop_pipe[1], &done, 1);
+  stopper.join();
+  const int by = stopped_by.load();
+  const StudyParticipant p = service.participant();
+  std::fprintf(stderr,
+               "sirl study serve: stopped%s; %s answered %lld of %lld similarity and %lld of %lld "
+               "preference queries, all saved in %s (serve again to continue)\n",
+               stopped_by == SIGINT    ? " (Ctrl-C)"
+               : stopped_by == SIGTERM ? " (SIGTERM)"
+                                       : "",
+               a.participant.c_str(), static_cast<long long>(p.similarity_done()),
+               static_cast<long long>(p.similarity_count()),
+               static_cast<long long>(p.preference_done()),
+               static_cast<long long>(p.preference_count()), a.out.c_str());
   return 0;
 }
 

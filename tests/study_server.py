@@ -415,6 +415,11 @@ with tempfile.TemporaryDirectory() as tmp:
     assert not broken and min(seen) >= 2 and max(seen) <= 5, (broken[:2], set(seen))
     sim, pref, _, _ = answers(full, "erin")
     assert sim == [1, 2, 0] and pref == [1.0, 0.5], (sim, pref)
+    # SIGTERM stops the server with a line saying what was saved, and its lock goes with it.
+    err = srv_e.stderr.read()
+    assert srv_e.returncode == 0 and "stopped (SIGTERM); erin answered 3 of 3 similarity and 2 " \
+        "of 2 preference queries" in err, (srv_e.returncode, err)
+    assert not os.path.exists(full + ".lock"), os.listdir(os.path.dirname(full))
     print(f"ok: {len(seen)} state reads by 4 threads while 3 answers were written: each whole, "
           f"progress monotone ({sorted(set(seen))})")
 
