@@ -214,6 +214,10 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
                json.dumps(json_safe({"counts": ledger.counts(book),
                                      "statements": [{k: v for k, v in r.items() if k != "deciding"}
                                                     for r in book]}), indent=1))
+    write_text(os.path.join(out, "claims.csv"), comparisons_csv(H, ["env", "claim", "protocol", "main"]))
+    write_text(os.path.join(out, "ledger.csv"),
+               comparisons_csv(book, ["id", "section", "env", "kind", "metric", "at", "family",
+                                      "after_data"]))
     write_text(os.path.join(out, "claims.json"),
                json.dumps(json_safe([{k: v for k, v in h.items() if k != "deciding"} for h in H]),
                           indent=1))
@@ -267,6 +271,26 @@ def external_lines(fpe, tpa, envs):
                          f"{fmt(b.mean())} | {fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, "
                          f"{fmt(c['hi'], '+.4f')}] | {fmt(c['p'], '.3g')} | {c['n']} |")
     return L
+
+
+def comparisons_csv(rows, keys):
+    """One CSV row per (claim, comparison): the claim's `keys`, its verdict, then the comparison
+    (against, n, Δ with its 95 % CI, p, Holm-adjusted p, effect size, test); a claim without
+    comparisons gets one row with those empty. For pandas: pd.read_csv(...)."""
+    cols = keys + ["verdict", "better", "against", "n", "diff", "lo", "hi", "p", "p_holm", "dz",
+                   "test", "power", "seeds80"]
+    out = []
+    for r in rows:
+        base = {k: r.get(k) for k in keys + ["verdict", "better", "power", "seeds80"]}
+        for c in r.get("comparisons") or [{}]:
+            row = dict(base)
+            row.update({k: c.get(k) for k in ("n", "diff", "lo", "hi", "p", "p_holm", "dz", "test")})
+            row["against"] = c.get("name")
+            out.append(json_safe(row))
+    df = pd.DataFrame(out, columns=cols)
+    for c in ("n", "seeds80"):
+        df[c] = pd.to_numeric(df[c]).round().astype("Int64")
+    return df.to_csv(index=False)
 
 
 def json_safe(x):

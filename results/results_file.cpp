@@ -3,6 +3,7 @@
 #include <unistd.h>
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -620,12 +621,34 @@ void export_csv(const ResultTables& t, const std::string& dir) {
     };
     for (size_t k = 0; k < tab.columns.size(); ++k) line += (k ? "," : "") + tab.columns[k].name;
     put(line + "\n");
+    // A value the cell does not have is an empty field (what pandas, R and spreadsheets read as
+    // missing), as the Python reader makes it <NA>: N and M of 0 (a method without queries, an
+    // FPE cell without M), a seed of -1 (a task with no seed), `frozen` where there is no M, and
+    // NaN.
+    const H5Table::Column* m_col = nullptr;
+    for (const auto& c : tab.columns)
+      if (c.name == "M") m_col = &c;
+    const auto number = [](const H5Table::Column& c, size_t r) {
+      return c.type == H5Table::Column::Int ? double(c.ints[r]) : c.doubles[r];
+    };
+    const auto missing = [&](const H5Table::Column& c, size_t r) {
+      if (c.type == H5Table::Column::String) return false;
+      const double v = number(c, r);
+      if (std::isnan(v)) return true;
+      if (c.name == "N" || c.name == "M") return v == 0;
+      if (c.name == "seed") return v < 0;
+      if (c.name == "frozen" && m_col && m_col->type != H5Table::Column::String)
+        return number(*m_col, r) == 0;
+      return false;
+    };
     for (size_t r = 0; r < tab.rows(); ++r) {
       line.clear();
       for (size_t k = 0; k < tab.columns.size(); ++k) {
         const auto& c = tab.columns[k];
         if (k) line += ',';
-        if (c.type == H5Table::Column::Int) {
+        if (missing(c, r)) {
+          continue;
+        } else if (c.type == H5Table::Column::Int) {
           line += std::to_string(c.ints[r]);
         } else if (c.type == H5Table::Column::Double) {
           std::snprintf(num, sizeof num, "%.17g", c.doubles[r]);

@@ -32,7 +32,7 @@ SMOKE = os.path.join(SRC, "tests", "data", "engine-test.toml")  # smoke's plan, 
 PLOT = os.path.join(SRC, "report", "plot_figures.py")
 FILES = [f"{n}.{e}" for n in ("fig3_grid_similar", "fig4_fpe", "fig5_tpa", "fig7_ablation",
                                "fig_learning_curves")
-         for e in ("png", "pdf")] + ["report.md", "report.html", "figures.json"]
+         for e in ("png", "pdf")] + ["report.md", "report.html", "figures.json", "claims.csv", "ledger.csv"]
 
 
 def sh(*cmd):
@@ -170,6 +170,14 @@ def check_outputs(d):
         p = os.path.join(d, f)
         if not os.path.exists(p) or os.path.getsize(p) < 200:
             sys.exit(f"FAIL: {p} missing or empty")
+    # claims.csv: one row per (claim, comparison) of claims.json, the same verdicts and p's.
+    claims = json.load(open(os.path.join(d, "claims.json")))
+    rows = pd.read_csv(os.path.join(d, "claims.csv"))
+    want = [(h["claim"], h["verdict"], c.get("p")) for h in claims for c in (h["comparisons"] or [{}])]
+    got = list(zip(rows["claim"], rows["verdict"], rows["p"]))
+    assert len(got) == len(want) and all(
+        a[:2] == b[:2] and (b[2] is None and pd.isna(a[2]) or abs(a[2] - b[2]) <= 1e-12 * abs(b[2]))
+        for a, b in zip(got, want)), (got[:3], want[:3])
     return open(os.path.join(d, "report.md")).read()
 
 
