@@ -186,6 +186,7 @@ void register_all(CLI::App& app) {
   register_gc(app, runners()["gc"]);
   register_submit(app, runners()["submit"]);
   register_status(app, runners()["status"]);
+  register_show(app, runners()["show"]);
   enforce_decimal_numbers(app);
 }
 

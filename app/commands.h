@@ -39,6 +39,7 @@ void register_merge(CLI::App& app, Runner& run);
 void register_gc(CLI::App& app, Runner& run);
 void register_submit(CLI::App& app, Runner& run);
 void register_status(CLI::App& app, Runner& run);
+void register_show(CLI::App& app, Runner& run);
 void register_evaluate(CLI::App& app, Runner& run);
 
 // The `--set KEY=VALUE` overrides of the command being run (experiment/profile.h, load_profile),

@@ -428,6 +428,26 @@ with tempfile.TemporaryDirectory() as tmp:
     sh(SIRL, "run", SMOKE, "--out", full, "--quiet")
     check_smoke(full, tmp)
 
+    # `sirl show`: the file summarised, its verdicts those of the report beside it.
+    os.symlink(os.path.join(tmp, "full"), os.path.join(tmp, "smoke-figures"))
+    shown = json.loads(subprocess.run([SIRL, "show", full, "--json"], capture_output=True,
+                                      text=True, check=True).stdout)
+    import sirl_bench
+    with sirl_bench.open(full) as res:  # the reader's records: an independent count
+        kinds = {k: int(n) for k, n in res.records["kind"].value_counts().items()}
+    assert shown["profile"] == "smoke" and shown["verified"], shown
+    assert shown["tasks"] == {"done": sum(kinds.values()), "total": sum(kinds.values()),
+                              "complete": True}, (shown["tasks"], kinds)
+    assert shown["task_kinds"] == kinds, (shown["task_kinds"], kinds)
+    assert shown["environments"] == ["grid", "grid2", "jaco"], shown["environments"]
+    claims = json.load(open(os.path.join(tmp, "full", "claims.json")))
+    assert [(v["env"], v["verdict"]) for v in shown["verdicts"]] == [
+        (h["env"], h["verdict"]) for h in claims if h["main"]], shown["verdicts"]
+    text = subprocess.run([SIRL, "show", full], capture_output=True, text=True, check=True).stdout
+    assert "main claims" in text and f"{sum(kinds.values())} of {sum(kinds.values())} done" in text
+    print(f"ok: sirl show summarises the file ({sum(kinds.values())} tasks, "
+          f"{len(shown['verdicts'])} main verdicts from the report beside it)")
+
     # JacoRobot runs its ablation at another M than the top-level [ablation]: Fig. 7 must draw
     # the cells the file holds (16 + 4 bars: four methods × 4 configurations, VAE and Random × 2).
     over = os.path.join(tmp, "override.toml")
