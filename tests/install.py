@@ -83,13 +83,18 @@ def main():
             fail("the figure scripts did not run under $SIRL_PYTHON")
         print("ok: the installed, moved sirl ran smoke and drew its figures with $SIRL_PYTHON")
 
-        code = f"import sirl_bench; print(len(sirl_bench.open({out!r}).tables['tpa']))"
-        p = subprocess.run(["/usr/bin/python3", "-c", code], capture_output=True, text=True,
-                           env=dict(os.environ, PYTHONPATH=os.path.join(moved, "share", "sirl-bench",
-                                                                       "python")), cwd=work)
-        if p.returncode or int(p.stdout) < 1:
-            fail(f"the installed reader: {p.stderr}")
-        print("ok: the installed reader opens the results file")
+        code = (f"import sirl_bench; assert sirl_bench.__file__.startswith({moved!r}), "
+                f"sirl_bench.__file__; print(len(sirl_bench.open({out!r}).tables['tpa']))")
+        site = os.path.join(moved, "lib", "python%d.%d" % sys.version_info[:2], "dist-packages")
+        for path in (os.path.join(moved, "share", "sirl-bench", "python"), site):
+            # -s and an empty HOME: no user site-packages, no .pth file of a checkout.
+            p = subprocess.run(["/usr/bin/python3", "-s", "-c", code], capture_output=True,
+                               text=True, cwd=work,
+                               env=dict(os.environ, PYTHONPATH=path, HOME=work))
+            if p.returncode or int(p.stdout) < 1:
+                fail(f"the installed reader from {path}: {p.stderr}")
+        print("ok: the installed reader (PREFIX/lib/python3.X/dist-packages, and the share folder) "
+              "opens the results file with nothing in the home folder")
 
         shutil.rmtree(os.path.join(moved, "share"))
         p = subprocess.run([sirl, "reproduce", "--profile", "smoke", "--out", out], capture_output=True,
