@@ -78,6 +78,36 @@ TEST(CliHelp, BareSirlAndHelpPrintTheShortHelpWithEveryCommand) {
   }
 }
 
+// scripts/sirl-completion.bash completes every command the binary has (its list is written out,
+// so a new command must be added there), and a profile where one goes.
+TEST(CliHelp, BashCompletionKnowsEveryCommandAndTheProfiles) {
+  std::string err;
+  run_sirl("no-such-command", err);
+  const size_t from = err.find("(commands: ");
+  ASSERT_NE(from, std::string::npos) << err;
+  const std::string script = std::string(SIRL_SOURCE_DIR) + "/scripts/sirl-completion.bash";
+  const std::string bin = std::string(SIRL_BINARY);
+  const auto complete = [&](const std::string& words) {
+    const std::string cmd =
+        "bash -c 'source " + script + "; COMP_WORDS=(" + bin + " " + words +
+        "); COMP_CWORD=$((${#COMP_WORDS[@]}-1)); _sirl; echo \" ${COMPREPLY[*]} \"'";
+    std::string out;
+    FILE* p = ::popen(cmd.c_str(), "r");
+    char buf[4096];
+    for (size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
+    ::pclose(p);
+    return out;
+  };
+  const std::string all = complete("\"\"");
+  std::stringstream names(err.substr(from + 11, err.find(';', from) - from - 11));
+  for (std::string name; std::getline(names, name, ',');) {
+    name.erase(0, name.find_first_not_of(' '));
+    EXPECT_NE(all.find(" " + name + " "), std::string::npos) << name << " not completed: " << all;
+  }
+  EXPECT_NE(complete("reproduce qui").find(" quick "), std::string::npos);
+  EXPECT_NE(complete("run --sha").find(" --shard "), std::string::npos);
+}
+
 TEST(CliHelp, MistypedCommandsAndProfilesGetASuggestion) {
   std::string out;
   EXPECT_EQ(run_sirl("reprodce", out), 2);
