@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 
@@ -316,6 +317,67 @@ void print_calibration(const PlanEstimate& e) {
   std::printf("\nmemory estimate: %.1f MiB\n", e.peak_bytes / (1024.0 * 1024.0));
 }
 
+// `sirl plan --json`: what print_plan_summary, print_calibration and print_schedule say, as one
+// JSON object on stdout.
+int print_plan_json(const Profile& p, const Plan& plan, const std::string& cache, int th,
+                    const PlanClusterOptions& co, bool cluster) {
+  nlohmann::json j;
+  j["profile"] = p.name;
+  j["path"] = p.path;
+  j["description"] = p.description;
+  j["environments"] = p.envs;
+  double total = 0, protocol = 0;
+  for (const auto& t : plan.tasks) total += t.flops, protocol += t.protocol_flops;
+  for (const TaskKindSpec* ks : task_kinds())
+    if (plan.count(*ks) > 0)
+      j["kinds"][ks->name] = {{"tasks", plan.count(*ks)}, {"gflop", plan.flops(*ks) * 1e-9}};
+  j["tasks"] = plan.tasks.size();
+  j["gflop"] = total * 1e-9;
+  j["protocol_gflop"] = protocol * 1e-9;
+  std::vector<char> pending(plan.tasks.size(), 1);
+  if (!cache.empty()) {
+    const CacheHoldings h = cache_holdings(plan, p, cache);
+    for (size_t i = 0; i < pending.size(); ++i) pending[i] = !h.held[i];
+    j["cache"] = {{"path", cache},
+                  {"tasks_held", h.tasks},
+                  {"gflop_held", h.flops * 1e-9},
+                  {"tasks_other_cpu_class", h.other_class}};
+  }
+  if (std::find(pending.begin(), pending.end(), 1) == pending.end()) {
+    j["prediction"] = nullptr;  // nothing left to compute
+  } else {
+    refuse_tasks_beyond_memory(plan, pending);
+    std::fprintf(stderr, "calibrating on this machine...\n");
+    const PlanEstimate e = estimate_plan(plan, p, th, pending);
+    PlanClusterOptions here = co;
+    if (!cluster) here.cores_per_node = th;
+    const ClusterModel m = cluster_model(here);
+    ClusterPrediction c;
+    try {
+      c = predict_cluster(plan, e, m, e.pending);
+    } catch (const std::invalid_argument& x) {
+      throw UsageError(x.what());
+    }
+    nlohmann::json path = nlohmann::json::array();
+    for (int i : c.schedule.critical_path) path.push_back(plan.tasks[size_t(i)].key);
+    j["prediction"] = {{"nodes", m.nodes},
+                       {"cores_per_node", m.cores_per_node},
+                       {"mpi", m.mpi},
+                       {"wall_seconds", c.wall_seconds},
+                       {"outside_seconds", c.outside_seconds},
+                       {"one_thread_seconds", e.seconds_one_thread},
+                       {"cores_busy", c.schedule.utilisation},
+                       {"memory_mib_per_node", c.memory_bytes_per_node / (1024.0 * 1024.0)},
+                       {"critical_path", path},
+                       {"critical_path_seconds", c.schedule.critical_path_seconds},
+                       {"calibration_cpu_share", e.cpu_share},
+                       {"load_average", e.load_average},
+                       {"busy_note", busy_machine_note(e, th)}};
+  }
+  std::printf("%s\n", j.dump(1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+  return 0;
+}
+
 void register_plan(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "plan",
@@ -358,6 +420,10 @@ void register_plan(CLI::App& app, Runner& run) {
                 "Amdahl serial fraction of one task on several cores")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
+  static bool as_json = false;
+  cmd->add_flag("--json", as_json,
+                "Print one JSON object instead: tasks and GFLOP per kind, what the cache holds, "
+                "the prediction and its critical path (the calibration's messages go to stderr)");
   cmd->add_flag("--resolved", resolved,
                 "Print the effective profile instead (after `extends` and --set): the TOML a run "
                 "records in its results file");
@@ -382,6 +448,7 @@ void register_plan(CLI::App& app, Runner& run) {
     if (cluster && threads > 0)
       throw UsageError("--threads plans one machine; for a cluster give --cores-per-node");
     const int th = threads > 0 ? threads : default_threads();
+    if (as_json) return print_plan_json(p, plan, cache, th, co, cluster);
     const CacheHoldings held = print_plan_summary(p, plan, cache);
     std::vector<char> pending(plan.tasks.size(), 1);
     for (size_t i = 0; i < held.held.size(); ++i) pending[i] = !held.held[i];

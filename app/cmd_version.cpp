@@ -1,6 +1,7 @@
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 
 #include "app/commands.h"
 #include "build_info.h"
@@ -20,10 +21,30 @@ const char* git_commit() {
 }
 
 void register_version(CLI::App& app, Runner& run) {
-  app.add_subcommand("version",
-                     "Print the version, git commit, compiler and flags of this build, the CPU "
-                     "class results depend on and this core's measured fp32 roof");
+  auto* cmd = app.add_subcommand("version",
+                                 "Print the version, git commit, compiler and flags of this "
+                                 "build, the CPU class results depend on and this core's measured "
+                                 "fp32 roof");
+  static bool as_json = false;
+  cmd->add_flag("--json", as_json, "Print one JSON object instead (for nightly scripts)");
   run = [] {
+    if (as_json) {
+      nlohmann::json j;
+      j["version"] = SIRL_VERSION;
+      j["commit"] = SIRL_GIT_COMMIT;
+      j["results_schema"] = kResultsSchemaVersion;
+      j["build"] = SIRL_BUILD_TYPE;
+      j["compiler"] = SIRL_CXX_COMPILER;
+      j["flags"] = SIRL_CXX_FLAGS;
+      for (const auto& [name, version] : library_versions()) j["libraries"][name] = version;
+      j["cpu_class"] = cpu_class();
+      j["kernels"] = kernel_paths();
+      j["bf16"] = bf16_backend();
+      j["fp32_roof_gflops_per_core"] = fp32_roof_gflops_per_core();
+      j["bf16_roof_gflops_per_core"] = bf16_roof_gflops_per_core();
+      std::printf("%s\n", j.dump(1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+      return 0;
+    }
     std::printf("sirl-bench %s\n", SIRL_VERSION);
     std::printf("commit:    %s\n", SIRL_GIT_COMMIT);
     std::printf("results:   schema version %lld (reads 1 to %lld)\n",

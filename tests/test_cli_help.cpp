@@ -5,6 +5,8 @@
 #include <sys/wait.h>
 
 #include <cstdio>
+#include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -40,9 +42,10 @@ TEST(Suggest, OnlyAClearlyClosestNameIsSuggested) {
   EXPECT_EQ(did_you_mean("zzzzz", profiles), "");
 }
 
-// Runs `sirl ARGS`, returning its exit code and stdout + stderr.
-int run_sirl(const std::string& args, std::string& out) {
-  const std::string cmd = std::string(SIRL_BINARY) + " " + args + " 2>&1";
+// Runs `sirl ARGS`, returning its exit code and stdout + stderr (stdout alone: with_stderr false).
+int run_sirl(const std::string& args, std::string& out, bool with_stderr = true) {
+  const std::string cmd =
+      std::string(SIRL_BINARY) + " " + args + (with_stderr ? " 2>&1" : " 2>/dev/null");
   FILE* p = ::popen(cmd.c_str(), "r");
   out.clear();
   char buf[4096];
@@ -106,6 +109,34 @@ TEST(CliHelp, BashCompletionKnowsEveryCommandAndTheProfiles) {
   }
   EXPECT_NE(complete("reproduce qui").find(" quick "), std::string::npos);
   EXPECT_NE(complete("run --sha").find(" --shard "), std::string::npos);
+}
+
+// --json on the read-only commands: `sirl plan` agrees with its own --tasks list, `sirl version`
+// with its text.
+TEST(CliHelp, PlanAndVersionSpeakJson) {
+  const std::string micro = std::string(SIRL_SOURCE_DIR) + "/tests/data/micro.toml";
+  std::string out, tasks;
+  ASSERT_EQ(run_sirl("plan " + micro + " --json", out, false), 0) << out;
+  ASSERT_EQ(run_sirl("plan " + micro + " --tasks", tasks), 0) << tasks;
+  const nlohmann::json j = nlohmann::json::parse(out);
+  std::set<std::string> keys;
+  std::stringstream lines(tasks);
+  for (std::string line; std::getline(lines, line);)
+    if (!line.empty()) keys.insert(line.substr(0, line.find(' ')));
+  EXPECT_EQ(j["tasks"].get<size_t>(), keys.size());
+  size_t by_kind = 0;
+  for (const auto& [kind, v] : j["kinds"].items()) by_kind += v["tasks"].get<size_t>();
+  EXPECT_EQ(by_kind, keys.size());
+  EXPECT_GT(j["prediction"]["wall_seconds"].get<double>(), 0);
+  for (const auto& k : j["prediction"]["critical_path"])
+    EXPECT_TRUE(keys.count(k.get<std::string>())) << k;
+  std::string text, json_text;
+  ASSERT_EQ(run_sirl("version", text), 0);
+  ASSERT_EQ(run_sirl("version --json", json_text, false), 0);
+  const nlohmann::json v = nlohmann::json::parse(json_text);
+  EXPECT_NE(text.find("cpu class: " + v["cpu_class"].get<std::string>() + "\n"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("commit:    " + v["commit"].get<std::string>()), std::string::npos);
 }
 
 TEST(CliHelp, MistypedCommandsAndProfilesGetASuggestion) {
