@@ -59,6 +59,28 @@ bool is_digest(const std::string& s) {
   return s.size() == 32 && s.find_first_not_of("0123456789abcdef") == std::string::npos;
 }
 
+// Whether a file in runs/ is a needs file a run wrote: named "<host>.<pid>" (a pid of at most
+// 9 digits) and holding task digests, one per line. Anything else there is not ours.
+bool is_needs_file(const fs::path& p) {
+  const std::string name = p.filename().string();
+  const size_t dot = name.rfind('.');
+  if (dot == std::string::npos || dot == 0 || name.size() - dot - 1 > 9 || dot + 1 == name.size() ||
+      name.find_first_not_of("0123456789", dot + 1) != std::string::npos)
+    return false;
+  std::ifstream in(p);
+  for (std::string line; std::getline(in, line);)
+    if (!is_digest(line)) return false;
+  return true;
+}
+
+// Whether a file in locks/ is a task lock: "<digest>.lock", empty (a claim never writes it).
+bool is_task_lock(const fs::directory_entry& e) {
+  const std::string name = e.path().filename().string();
+  std::error_code ec;
+  return name.size() == 37 && name.ends_with(".lock") && is_digest(name.substr(0, 32)) &&
+         e.file_size(ec) == 0 && !ec;
+}
+
 std::string host_name() {
   char buf[256] = {};
   gethostname(buf, sizeof buf - 1);
@@ -187,7 +209,8 @@ GcSummary collect_garbage(const fs::path& dir, const std::set<std::string>& keep
   std::error_code ec;
   if (fs::is_directory(dir / "runs"))
     for (const auto& e : fs::directory_iterator(dir / "runs")) {
-      if (e.is_symlink() || !e.is_regular_file()) continue;  // no run writes anything else
+      if (e.is_symlink() || !e.is_regular_file() || !is_needs_file(e.path()))
+        continue;                       // no run writes anything else
       if (!held_elsewhere(e.path())) {  // its process ended without removing it
         if (!dry_run) fs::remove(e.path(), ec);
         continue;
@@ -222,7 +245,8 @@ GcSummary collect_garbage(const fs::path& dir, const std::set<std::string>& keep
     for (const auto& e : fs::directory_iterator(dir / "locks")) {
       const std::string name = e.path().filename().string();
       const std::string digest = name.substr(0, name.find('.'));
-      if (e.is_symlink() || !e.is_regular_file() || needed.count(digest) || held.count(digest))
+      if (e.is_symlink() || !e.is_regular_file() || !is_task_lock(e) || needed.count(digest) ||
+          held.count(digest))
         continue;
       const int fd = ::open(e.path().c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
       if (fd < 0) continue;

@@ -43,9 +43,9 @@ bool FileLock::try_lock(const std::string& file, const std::string& holder,
     if (fd_ < 0 && errno == ENOENT) return false;  // its holder removed it meanwhile
   }
   if (fd_ < 0 && errno == ELOOP)
-    throw std::runtime_error(path_ +
-                             " is a symbolic link; sirl creates this file itself and does "
-                             "not write through links: remove it");
+    throw FileBusy(path_ +
+                   " is a symbolic link; sirl creates this file itself and does "
+                   "not write through links: remove it");
   if (fd_ < 0)
     throw std::runtime_error(path_ + ": cannot create the lock file: " + std::strerror(errno));
   char buf[256] = {};
@@ -56,10 +56,11 @@ bool FileLock::try_lock(const std::string& file, const std::string& holder,
     if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode) || !is_sirl_lock_text(text)) {
       ::close(fd_);
       fd_ = -1;
-      throw std::runtime_error(path_ +
-                               " exists and is not a sirl lock file (it is not \"<pid> "
-                               "sirl <command>\"); sirl never overwrites it: choose another "
-                               "output name, or remove it if it is a stale lock");
+      // Exit 2 as a held lock: the output's name is taken, by something that is not ours.
+      throw FileBusy(path_ +
+                     " exists and is not a sirl lock file (it is not \"<pid> "
+                     "sirl <command>\"); sirl never overwrites it: choose another "
+                     "output name, or remove it if it is a stale lock");
     }
   }
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {

@@ -44,8 +44,16 @@ std::string frame_text(std::string_view magic, const std::string& checksum,
   return head;
 }
 
+// Whether p is a regular file (not a link, FIFO, device or folder): the only thing the store
+// writes, and the only thing it opens (a FIFO at a commit's name would block a reader forever).
+bool regular_file(const fs::path& p) {
+  std::error_code ec;
+  return fs::is_regular_file(fs::symlink_status(p, ec));
+}
+
 // Throws H5Error if the file is neither a framed commit nor plain HDF5.
 Frame read_frame(const fs::path& p) {
+  if (!regular_file(p)) throw H5Error(p.string() + ": not a task commit (not a regular file)");
   std::ifstream in(p, std::ios::binary);
   std::string head(kFrameBytes, '\0');
   in.read(head.data(), std::streamsize(head.size()));
@@ -143,6 +151,7 @@ std::string tmp_suffix() {
 // zero-filled userblock before the frame is written, an old engine's HDF5 commit, or nothing (a
 // writer that died before its first byte).
 bool store_bytes(const fs::path& p) {
+  if (!regular_file(p)) return false;
   std::ifstream in(p, std::ios::binary);
   char head[8] = {};
   in.read(head, sizeof head);
@@ -152,11 +161,12 @@ bool store_bytes(const fs::path& p) {
 }
 
 // Whether a temporary file of the store may be removed: its writer, named in the file name, is a
-// dead process of this host. A name that only looks like ours (no host, a pid no process can
-// have) is left alone, as is an engine before 0.10.0's "<final>.tmp" unless its bytes are the
-// store's.
+// dead process of this host, and its bytes begin as the store's do. A name that only looks like
+// ours (no host, a pid no process can have), bytes that are not the store's (a user's notes), and
+// an engine before 0.10.0's "<final>.tmp" (no writer named: nothing says it is ours) are left
+// alone.
 bool abandoned_tmp(const fs::path& p, const std::string& name) {
-  if (name.size() == 23) return store_bytes(p);  // "<final>.tmp": no live writer uses that name
+  if (name.size() == 23) return false;                       // "<final>.tmp"
   const std::string stem = name.substr(0, name.size() - 4);  // without ".tmp"
   const size_t dot_pid = stem.rfind('.');
   if (dot_pid == std::string::npos) return false;
@@ -166,7 +176,7 @@ bool abandoned_tmp(const fs::path& p, const std::string& name) {
       dot_host == std::string::npos || !rest.substr(0, dot_host).ends_with(".h5"))
     return false;                                              // not a name this store writes
   if (rest.substr(dot_host + 1) != this_host()) return false;  // another host's: not ours to judge
-  return ::kill(pid_t(std::stol(pid)), 0) != 0 && errno == ESRCH;
+  return ::kill(pid_t(std::stol(pid)), 0) != 0 && errno == ESRCH && store_bytes(p);
 }
 
 // The id a commit file is filed under (its frame's, or an engine 0.2.0 file's task key).
@@ -195,7 +205,7 @@ TaskStore::TaskStore(fs::path dir) : dir_(std::move(dir)) {
   if (ec) throw H5Error(dir_.string() + ": cannot create the task directory: " + ec.message());
   for (const auto& e : fs::directory_iterator(dir_)) {
     const auto name = e.path().filename().string();
-    if (e.is_symlink()) continue;  // never followed, never removed
+    if (!regular_file(e.path())) continue;  // links, FIFOs, folders: never opened, never removed
     if (is_temporary_name(name)) {
       if (abandoned_tmp(e.path(), name)) fs::remove(e.path(), ec);
       continue;
@@ -204,12 +214,9 @@ TaskStore::TaskStore(fs::path dir) : dir_(std::move(dir)) {
     try {
       index_[commit_id(e.path())] = e.path();
     } catch (const H5Error&) {
-      // A damaged commit (its frame's magic says the store wrote it) is removed: a rerun computes
-      // the task again. A file that only has a commit's name is the user's: left alone.
-      std::ifstream in(e.path(), std::ios::binary);
-      char magic[8] = {};
-      in.read(magic, sizeof magic);
-      if (std::string_view(magic, size_t(in.gcount())) == "SIRLTASK") fs::remove(e.path(), ec);
+      // A file with a commit's name that does not read as one is left alone and not indexed:
+      // its bytes may be anyone's (a damaged commit of ours is recomputed when its task is next
+      // needed, and its new commit replaces it under the same name).
     }
   }
 }
@@ -219,7 +226,7 @@ std::vector<std::string> TaskStore::ids_in(const fs::path& dir) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) return ids;
   for (const auto& e : fs::directory_iterator(dir, ec)) {
-    if (e.is_symlink() || !is_commit_name(e.path().filename().string())) continue;
+    if (!regular_file(e.path()) || !is_commit_name(e.path().filename().string())) continue;
     try {
       ids.push_back(commit_id(e.path()));
     } catch (const H5Error&) {

@@ -40,7 +40,7 @@ TEST(FileLock, IsRemovedWhenItsHolderIsDoneAndAStaleOneIsTakenOver) {
   EXPECT_FALSE(fs::exists(out + ".lock"));
   // Not a sirl lock: refused, left as it was.
   std::ofstream(out + ".lock") << "[[package]]\nname = \"x\"\n";
-  EXPECT_THROW(FileLock(out, "sirl merge", "wait"), std::runtime_error);
+  EXPECT_THROW(FileLock(out, "sirl merge", "wait"), FileBusy);  // exit 2, as a held one
   EXPECT_EQ(read(out + ".lock"), "[[package]]\nname = \"x\"\n");
 }
 

@@ -170,18 +170,22 @@ TEST(TaskCache, OpeningSweepsAbandonedTemporaryFilesButNotALiveWritersOnes) {
   const std::string live = "0123456789abcdef.h5." + std::string(host) + "." +
                            std::to_string(::getpid()) + ".tmp",
                     dead = "0123456789abcdee.h5." + std::string(host) + ".999999999.tmp",
+                    dead_users = "0123456789abcdea.h5." + std::string(host) + ".999999998.tmp",
                     elsewhere = "0123456789abcded.h5.another-host.1.tmp",
                     legacy = "0123456789abcdec.h5.tmp", users = "0123456789abcdeb.h5.tmp";
-  for (const auto& n : {live, dead, elsewhere}) std::ofstream(dir / n) << "partial";
-  // An engine before 0.10.0 named its temporaries "<final>.tmp": one that begins as a commit
-  // does is swept; the same name holding anything else is the user's and stays.
+  for (const auto& n : {live, dead, elsewhere}) std::ofstream(dir / n) << "SIRLTASK partial";
+  // A dead writer's name on bytes that are not the store's: the user's (issue 65: swept before).
+  std::ofstream(dir / dead_users) << "my notes";
+  // An engine before 0.10.0 named its temporaries "<final>.tmp": no writer is named, so nothing
+  // says the file is ours, whatever its bytes (issue 65: swept when they began as a commit).
   std::ofstream(dir / legacy) << "SIRLTASK partial";
   std::ofstream(dir / users) << "my notes";
   TaskStore store(dir);
   EXPECT_TRUE(fs::exists(dir / live));
   EXPECT_FALSE(fs::exists(dir / dead));
+  EXPECT_TRUE(fs::exists(dir / dead_users));
   EXPECT_TRUE(fs::exists(dir / elsewhere));
-  EXPECT_FALSE(fs::exists(dir / legacy));
+  EXPECT_TRUE(fs::exists(dir / legacy));
   EXPECT_TRUE(fs::exists(dir / users));
 }
 
@@ -201,12 +205,21 @@ TEST(TaskCache, NothingTheCacheDidNotWriteIsEverRemoved) {
                                       "0123456789ABCDEF.h5",
                                       "0123456789abcdef.h5.bak"};
   for (const auto& n : mine) std::ofstream(dir / n) << "the user's " << n;
+  // Bytes that begin as a commit's, at a commit's name, that do not read as one: nothing says
+  // they are the store's (issue 65: removed when the store opened).
+  std::ofstream(dir / "4123456789abcdef.h5") << "SIRLTASK2 the user's";
   std::ofstream(elsewhere / "thesis.h5") << "not the cache's";
   std::ofstream(elsewhere / "0123456789abcdef.h5") << "named like a commit, but not the cache's";
   {
     TaskCache cache(dir);
     cache.store().commit(cache_record("k"), TaskCache::id(kDigestA, "zen5"));
   }
+  // In runs/ and locks/, files no run writes: a needs file is "<host>.<pid>" of digests, a task
+  // lock "<digest>.lock" and empty (issue 65: gc removed anything unheld there).
+  const std::vector<fs::path> theirs{
+      dir / "runs" / "notes.txt", dir / "runs" / "vm.99999999999999999999", dir / "runs" / "vm.123",
+      dir / "locks" / "notes.txt", dir / "locks" / (kDigestB + ".lock")};
+  for (const auto& p : theirs) std::ofstream(p) << "the user's";
   fs::create_directory_symlink(elsewhere, dir / "checkpoints");
   EXPECT_THROW(CheckpointStore(dir / "checkpoints", 0), std::runtime_error);
   TaskStore reopened(dir);
@@ -221,6 +234,8 @@ TEST(TaskCache, NothingTheCacheDidNotWriteIsEverRemoved) {
   }
   EXPECT_TRUE(fs::exists(elsewhere / "thesis.h5"));
   EXPECT_TRUE(fs::exists(elsewhere / "0123456789abcdef.h5"));
+  EXPECT_TRUE(fs::exists(dir / "4123456789abcdef.h5"));
+  for (const auto& p : theirs) EXPECT_TRUE(fs::exists(p)) << p << " was removed";
 }
 
 TEST(TaskCache, VerifyNamesAndRemovesADamagedResult) {
@@ -374,6 +389,21 @@ TEST(TaskCache, FifosInRunsAndLocksNeitherHangNorAreRemoved) {
   { TaskCache cache(dir); }
   ASSERT_EQ(::mkfifo((dir / "runs" / "host.123").c_str(), 0644), 0);
   ASSERT_EQ(::mkfifo((dir / "locks" / (kDigestA + ".lock")).c_str(), 0644), 0);
+  // At a commit's name, a dead writer's temporary name and in checkpoints/ too.
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  fs::create_directories(dir / "checkpoints");
+  for (const fs::path& p : {dir / "0123456789abcdef.h5",
+                            dir / ("0123456789abcdee.h5." + std::string(host) + ".999999999.tmp"),
+                            dir / "checkpoints" / "0123456789abcdef.h5"})
+    ASSERT_EQ(::mkfifo(p.c_str(), 0644), 0) << p;
+  EXPECT_TRUE(finishes_within(10, [&] {
+    TaskStore store(dir);
+    TaskStore::ids_in(dir);
+    TaskStore::ids_in(dir / "checkpoints");
+    TaskStore checkpoints(dir / "checkpoints");
+  }));
+  EXPECT_TRUE(fs::is_fifo(dir / "0123456789abcdef.h5"));
   EXPECT_TRUE(finishes_within(10, [&] { collect_garbage(dir, {}, true); }));
   EXPECT_TRUE(finishes_within(10, [&] { collect_garbage(dir, {}, false); }));
   EXPECT_TRUE(fs::is_fifo(dir / "runs" / "host.123"));

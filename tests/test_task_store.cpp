@@ -208,12 +208,14 @@ TEST(TaskStore, CommitsRoundTripAndTornCommitsAreSwept) {
     s.commit(r);
     EXPECT_TRUE(s.has(r.key));
   }
-  std::ofstream(dir / "0123456789abcdef.h5.tmp") << "SIRLTASK torn";  // an interrupted commit
-  // Names that only look like the store's temporaries are the user's, whatever their pid field
-  // holds (a 20-digit "pid" once ended every run with "stol"); an old-style name whose bytes are
-  // not the store's is left alone too.
   char host[256] = {};
   gethostname(host, sizeof host - 1);
+  // An interrupted commit: a dead writer of this host named, the store's bytes.
+  const std::string torn = "0123456789abcdef.h5." + std::string(host) + ".999999999.tmp";
+  std::ofstream(dir / torn) << "SIRLTASK torn";
+  // Names that only look like the store's temporaries are the user's, whatever their pid field
+  // holds (a 20-digit "pid" once ended every run with "stol"); an old-style name names no writer
+  // and is left alone too.
   const std::string long_pid =
       "0123456789abcdef.h5." + std::string(host) + ".12345678901234567890.tmp";
   std::ofstream(dir / long_pid) << "mine";
@@ -221,7 +223,7 @@ TEST(TaskStore, CommitsRoundTripAndTornCommitsAreSwept) {
   TaskStore again(dir);
   EXPECT_EQ(again.keys(), std::vector<std::string>{r.key});
   EXPECT_EQ(again.load(r.key), r);
-  EXPECT_FALSE(fs::exists(dir / "0123456789abcdef.h5.tmp"));
+  EXPECT_FALSE(fs::exists(dir / torn));
   EXPECT_TRUE(fs::exists(dir / long_pid));
   EXPECT_TRUE(fs::exists(dir / "fedcba9876543210.h5.tmp"));
 }
