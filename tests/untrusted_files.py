@@ -108,6 +108,18 @@ def main():
         one_line_refusal("the reader with an external link", rc, err, linked)
         print("ok: an external link is refused by the engine and the reader")
 
+        # Links within the file, which the engine never writes: a group linked into itself (a
+        # walk that follows it never ends) and a table soft-linked to another (issue 65: the
+        # reader hung on the first and the figures gave a traceback on the second).
+        for name, make in (("cycle", lambda f: f.__setitem__("runs/loop", f["runs"])),
+                           ("soft", lambda f: f.__setitem__("runs/alias", h5py.SoftLink("/runs")))):
+            plain = shutil.copy(FIXTURE, os.path.join(tmp, name + "_plain.h5"))
+            with h5py.File(plain, "r+") as f:
+                make(f)
+            linked = write(os.path.join(tmp, name + ".h5"), framed(open(plain, "rb").read()))
+            one_line_refusal(f"the reader on a {name} link", *reader(linked), linked)
+        print("ok: a hard-link cycle and a soft link are refused by the reader, promptly")
+
         # A schema-3 file without its frame: laundered through h5py.
         laundered = shutil.copy(FIXTURE, os.path.join(tmp, "laundered.h5"))
         with h5py.File(laundered, "r+") as f:

@@ -91,10 +91,13 @@ def verify(path) -> tuple[bool, bool]:
 
 def _walk(f, visit):
     """Every object of file f by path, links examined without being followed: `visit(name,
-    obj)` for groups and datasets; raises ResultsError at a link to another file."""
+    obj)` for groups and datasets. The engine writes a tree: each object under one name, no
+    links. Raises ResultsError at a link to another file, a link within it (a soft link makes one
+    table read as another), and an object reached under two names (hard links; a group linked
+    into itself would make the walk endless)."""
     import h5py
     stack = [("", f)]
-    seen = 0
+    seen = {h5py.h5o.get_info(f.id).addr}
     while stack:
         prefix, g = stack.pop()
         for k in g.keys():
@@ -106,10 +109,16 @@ def _walk(f, visit):
                                    "external link), which no checksum of this file covers; "
                                    "sirl-bench reads no such file")
             if isinstance(link, h5py.SoftLink):
-                continue
+                raise ResultsError(f"{f.filename}: {name} is a link within the file (an HDF5 "
+                                   "soft link), which the engine never writes")
             obj = g[k]
-            seen += 1
-            if seen > 2_000_000:
+            addr = h5py.h5o.get_info(obj.id).addr
+            if addr in seen:
+                raise ResultsError(f"{f.filename}: {name} is an object the file also holds under "
+                                   "another name (an HDF5 hard link), which the engine never "
+                                   "writes")
+            seen.add(addr)
+            if len(seen) > 2_000_000:
                 raise ResultsError(f"{f.filename}: more than 2,000,000 objects")
             visit(name, obj)
             if isinstance(obj, h5py.Group):
@@ -140,6 +149,20 @@ def _read_structures(path):
         _walk(f, visit)
 
 
+def _die_with_parent():
+    """The forked reader is killed when its parent dies (Linux PR_SET_PDEATHSIG): a reader killed
+    by `timeout` or Ctrl-C leaves no child reading on."""
+    try:
+        import ctypes
+        import signal
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
+        if os.getppid() == 1:  # the parent died before the request: do not read on
+            os._exit(3)
+    except (OSError, AttributeError):
+        pass  # not Linux: the child still ends when its reading does
+
+
 def check(path) -> tuple[bool, bool]:
     """verify(path), then the file's structures read in a forked child (a crash there is one
     ResultsError here). Returns (framed, verified)."""
@@ -148,6 +171,7 @@ def check(path) -> tuple[bool, bool]:
     pid = os.fork()
     if pid == 0:  # the child: read, report, and leave without running the parent's handlers
         os.close(r)
+        _die_with_parent()
         try:
             fd = os.open(os.devnull, os.O_WRONLY)
             os.dup2(fd, 2)
