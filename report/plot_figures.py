@@ -85,5 +85,22 @@ def main():
     print(f"plot_figures: wrote figures and report.md to {a.out}/")
 
 
+def run():
+    """main(), with whatever a file the engine did not write can still make go wrong (a table
+    whose columns are not the engine's, values no figure expects) as one line and exit 1, never
+    a traceback. SIRL_DEBUG=1 shows the traceback (for a file the engine did write: a bug)."""
+    try:
+        main()
+    except sirl_bench.ResultsError as e:
+        sys.exit(f"plot_figures: {e}")
+    except Exception as e:  # noqa: BLE001 (any failure on untrusted input is one line)
+        if os.environ.get("SIRL_DEBUG"):
+            raise
+        what = " ".join(str(e).split())[:300]
+        sys.exit(f"plot_figures: {' '.join(sys.argv[1:2])}: cannot draw its figures "
+                 f"({type(e).__name__}: {what}); if the engine wrote this file, this is a bug: "
+                 "SIRL_DEBUG=1 shows the traceback")
+
+
 if __name__ == "__main__":
-    main()
+    run()
