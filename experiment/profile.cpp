@@ -108,6 +108,10 @@ namespace {
 constexpr size_t kMaxListValues = 1024;
 // The most hyper-parameter points (combinations of [hyper] axes' values) per environment.
 constexpr size_t kMaxHyperPoints = 256;
+// A profile's size (its file, or the resolved text a results file stores) and its description's:
+// far above any real one, far below what would make `sirl plan` or the report a flood.
+constexpr size_t kMaxProfileBytes = 1 << 20;
+constexpr size_t kMaxDescriptionBytes = 4000;
 
 // Reads a parsed TOML document, checking every key; errors carry "file:line: ".
 class Reader {
@@ -879,6 +883,9 @@ Profile parse_profile_table(const toml::table& root, const std::string& text,
 }  // namespace
 
 Profile parse_profile(const std::string& text, const std::string& path) {
+  if (text.size() > kMaxProfileBytes)  // a stored profile text is anyone's
+    throw ProfileError(path + ": a profile text of " + std::to_string(text.size()) +
+                       " bytes; a profile is at most " + std::to_string(kMaxProfileBytes));
   const toml::table root = parse_toml(text, path);
   if (root.contains("extends"))
     throw ProfileError(path +
@@ -903,6 +910,11 @@ Profile parse_profile_table(const toml::table& root, const std::string& text,
   p.text = text;
   p.name = r.string(root, "name", "", true);
   p.description = r.string(root, "description", "");
+  if (p.description.size() > kMaxDescriptionBytes)
+    r.fail(root.get("description"), "description: " + std::to_string(p.description.size()) +
+                                        " characters; at most " +
+                                        std::to_string(kMaxDescriptionBytes) +
+                                        " (a few lines: it heads `sirl plan` and the report)");
   p.envs = r.string_list(root, "envs", true);
   for (const auto& e : p.envs) {
     try {
@@ -1086,6 +1098,9 @@ toml::table resolve_profile(const std::filesystem::path& file, ResolveState& st)
   chain.push_back(id);
   if (std::error_code ec; !fs::is_regular_file(file, ec))  // a FIFO would block the read forever
     throw ProfileError(file.string() + ": not a regular file");
+  if (std::error_code ec; fs::file_size(file, ec) > kMaxProfileBytes)
+    throw ProfileError(file.string() + ": " + std::to_string(fs::file_size(file, ec)) +
+                       " bytes; a profile is at most " + std::to_string(kMaxProfileBytes));
   std::ifstream in(file);
   std::stringstream ss;
   ss << in.rdbuf();

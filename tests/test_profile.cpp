@@ -143,6 +143,20 @@ TEST(Profile, MalformedProfilesAreRejectedWithFileLineAndExpectation) {
 
 // A φ of 10^8 × 10^8 weights needs ~149 million GiB to train: the run names the task and both
 // sizes before it allocates anything or writes a file.
+// A profile text from someone else's results file, or a pasted description, is bounded before
+// it is parsed or printed (issue 65: a 50 MB description went to stdout whole).
+TEST(Profile, OversizedTextsAndDescriptionsAreRefused) {
+  std::string text = test::kSmallProfile;
+  text.insert(text.find("envs"), "description = \"" + std::string(5000, 'x') + "\"\n");
+  std::string err = test::profile_error_of(text);
+  EXPECT_NE(err.find("description: 5000 characters; at most 4000"), std::string::npos) << err;
+  EXPECT_NE(err.find("bad.toml:"), std::string::npos) << err;
+  std::string huge = test::kSmallProfile;
+  huge += "# " + std::string(2 << 20, 'x') + "\n";
+  err = test::profile_error_of(huge);
+  EXPECT_NE(err.find("a profile is at most 1048576"), std::string::npos) << err;
+}
+
 TEST(Profile, ARunRefusesATaskBeyondThisMachinesMemory) {
   const Profile p = parse_profile(
       "name = \"huge\"\nenvs = [\"grid\"]\nseeds = [0]\n[fpe]\nmethods = [\"sirl\"]\nN = [100]\n"
@@ -159,7 +173,7 @@ TEST(Profile, ARunRefusesATaskBeyondThisMachinesMemory) {
   } catch (const std::runtime_error& e) {
     const std::string m = e.what();
     EXPECT_NE(m.find("task grid/s0/sirl/N100/rep needs "), std::string::npos) << m;
-    EXPECT_NE(m.find(" GiB to train, this machine has "), std::string::npos) << m;
+    EXPECT_NE(m.find(" GiB to train, this process may use "), std::string::npos) << m;
   }
   EXPECT_FALSE(std::filesystem::exists(o.out));
   EXPECT_FALSE(std::filesystem::exists(o.out + ".tasks"));
