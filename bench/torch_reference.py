@@ -382,36 +382,39 @@ def main():
         torch.set_flush_denormal(True)
     if args.config == "no-mkldnn":
         torch.backends.mkldnn.enabled = False
-    torch.manual_seed(0)
+    # Each case is built only when it is timed (after a fresh torch.manual_seed(0)), so a run of a
+    # few --cases neither builds nor holds the others' networks (the 20 Jaco copies of φ alone are
+    # ~340 MB), and a case's weights do not depend on which other cases run.
     cases = {
-        "sirl_step_grid": sirl_step_case([19, 128, 128, 6]),
-        "sirl_step_jaco": sirl_step_case([2037, 1024, 1024, 6]),
-        "sirl_step_grid_stacked": sirl_step_case([19, 128, 128, 6], stacked=True),
-        "sirl_step_jaco_stacked": sirl_step_case([2037, 1024, 1024, 6], stacked=True),
-        "tpa_heads_grid": tpa_heads_case(128),
-        "tpa_heads_grid_batched": tpa_heads_batched_case(128),
-        "tpa_heads_jaco": tpa_heads_case(1024),
-        "tpa_heads_jaco_batched": tpa_heads_batched_case(1024),
-        "tpa_unfrozen_jaco": tpa_unfrozen_case(2037, 1024),
-        "tpa_unfrozen_jaco_batched": tpa_unfrozen_batched_case(2037, 1024),
+        "sirl_step_grid": lambda: sirl_step_case([19, 128, 128, 6]),
+        "sirl_step_jaco": lambda: sirl_step_case([2037, 1024, 1024, 6]),
+        "sirl_step_grid_stacked": lambda: sirl_step_case([19, 128, 128, 6], stacked=True),
+        "sirl_step_jaco_stacked": lambda: sirl_step_case([2037, 1024, 1024, 6], stacked=True),
+        "tpa_heads_grid": lambda: tpa_heads_case(128),
+        "tpa_heads_grid_batched": lambda: tpa_heads_batched_case(128),
+        "tpa_heads_jaco": lambda: tpa_heads_case(1024),
+        "tpa_heads_jaco_batched": lambda: tpa_heads_batched_case(1024),
+        "tpa_unfrozen_jaco": lambda: tpa_unfrozen_case(2037, 1024),
+        "tpa_unfrozen_jaco_batched": lambda: tpa_unfrozen_batched_case(2037, 1024),
     }
     runs = {}  # whole units, timed end to end: the same units as bench_pipeline.cpp
     if args.runs or args.cases:
         runs = {
-            "sirl_run_grid": sirl_run_case([19, 128, 128, 6], N=1000, epochs=10, T=1960),
-            "sirl_run_jaco": sirl_run_case([2037, 1024, 1024, 6], N=200, epochs=2, T=2000),
-            "tpa_cell_grid": tpa_cell_case([19, 128, 128, 6], 128, epochs=20, T=1960),
-            "tpa_cell_jaco": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=2, T=2000, l2=1.0),
+            "sirl_run_grid": lambda: sirl_run_case([19, 128, 128, 6], N=1000, epochs=10, T=1960),
+            "sirl_run_jaco": lambda: sirl_run_case([2037, 1024, 1024, 6], N=200, epochs=2, T=2000),
+            "tpa_cell_grid": lambda: tpa_cell_case([19, 128, 128, 6], 128, epochs=20, T=1960),
+            "tpa_cell_jaco": lambda: tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=2, T=2000,
+                                                   l2=1.0),
             # quick's smallest JacoRobot cells (BM_TpaSmallCell): M = 10, 15 epochs
-            "tpa_small_cell_jaco_frozen": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=15,
-                                                        T=2000, M=10, l2=1.0),
-            "tpa_small_cell_jaco_unfrozen": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=15,
-                                                          T=2000, M=10, l2=1.0, frozen=False),
+            "tpa_small_cell_jaco_frozen": lambda: tpa_cell_case(
+                [2037, 1024, 1024, 6], 1024, epochs=15, T=2000, M=10, l2=1.0),
+            "tpa_small_cell_jaco_unfrozen": lambda: tpa_cell_case(
+                [2037, 1024, 1024, 6], 1024, epochs=15, T=2000, M=10, l2=1.0, frozen=False),
             # quick's largest JacoRobot cells (BM_TpaQuickCell): M = 100, 15 epochs
-            "tpa_quick_cell_jaco_frozen": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=15,
-                                                        T=2000, M=100, l2=1.0),
-            "tpa_quick_cell_jaco_unfrozen": tpa_cell_case([2037, 1024, 1024, 6], 1024, epochs=15,
-                                                          T=2000, M=100, l2=1.0, frozen=False),
+            "tpa_quick_cell_jaco_frozen": lambda: tpa_cell_case(
+                [2037, 1024, 1024, 6], 1024, epochs=15, T=2000, M=100, l2=1.0),
+            "tpa_quick_cell_jaco_unfrozen": lambda: tpa_cell_case(
+                [2037, 1024, 1024, 6], 1024, epochs=15, T=2000, M=100, l2=1.0, frozen=False),
         }
         # Each unit again as a PyTorch user who cares writes it: a triplet's or a pair's members
         # in one forward pass (triplet_embeddings, pair_rewards).
@@ -431,7 +434,7 @@ def main():
                                              dict(epochs=15, T=2000, M=100, l2=1.0, frozen=False)),
         }
         for name, (make, a, kw) in stacked.items():
-            runs[name + "_stacked"] = make(*a, **kw, stacked=True)
+            runs[name + "_stacked"] = lambda make=make, a=a, kw=kw: make(*a, **kw, stacked=True)
         cases.update(runs)
     if args.cases:
         wanted = args.cases.split(",")
@@ -442,7 +445,9 @@ def main():
     out = {"torch": torch.__version__, "threads": args.threads,
            "baseline": baseline_config(args.config, args.threads)}
     refused = []
-    for name, (step, fl) in cases.items():
+    for name, build in cases.items():
+        torch.manual_seed(0)
+        step, fl = build()
         c0, w0 = cpu_seconds(), time.perf_counter()
         s = time_run(step, args.repeats) if name in runs else time_case(step, args.min_time, args.repeats)
         cpu = 100 * (cpu_seconds() - c0) / (time.perf_counter() - w0)
