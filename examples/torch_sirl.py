@@ -28,15 +28,6 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import sirl_bench  # noqa: E402
 
 
-def hyper_of(env_attrs):
-    """The engine's hyper-parameters of an environment ("key = value" lines) as a dict."""
-    h = {}
-    for line in env_attrs["hyper"].splitlines():
-        key, _, value = line.partition(" = ")
-        h[key.strip()] = value.strip()
-    return h
-
-
 def mlp(widths, relu_output):
     layers = []
     for i in range(len(widths) - 1):
@@ -56,14 +47,15 @@ def symmetric_triplet_loss(e1, e2, en, margin):
 
 
 def train_sirl(X, triplets, h, seed, epochs):
-    """φ trained on `triplets` [N, 3] (positive 1, positive 2, negative rows of X); returns φ(X)."""
+    """φ trained on `triplets` [N, 3] (positive 1, positive 2, negative rows of X), with the
+    engine's hyper-parameters h (the file's @hyper, typed: widths a list, flags bool); returns
+    φ(X)."""
     torch.manual_seed(seed)
-    widths = [X.shape[1]] + [int(w) for w in h["phi.hidden"].split(",")] + \
-        [int(h["phi.embedding_dim"])]
-    phi = mlp(widths, h["phi.relu_output"] == "true")
-    opt = torch.optim.Adam(phi.parameters(), lr=float(h["sirl.lr"]))
-    decay = torch.optim.lr_scheduler.ExponentialLR(opt, gamma=float(h["sirl.lr_decay"]))
-    batch, margin = int(h["sirl.batch"]), float(h["sirl.margin"])
+    widths = [X.shape[1]] + h["phi.hidden"] + [h["phi.embedding_dim"]]
+    phi = mlp(widths, h["phi.relu_output"])
+    opt = torch.optim.Adam(phi.parameters(), lr=h["sirl.lr"])
+    decay = torch.optim.lr_scheduler.ExponentialLR(opt, gamma=h["sirl.lr_decay"])
+    batch, margin = h["sirl.batch"], h["sirl.margin"]
     Xt, T = torch.from_numpy(X), torch.from_numpy(triplets.astype(np.int64))
     g = torch.Generator().manual_seed(seed)
     for _ in range(epochs):
@@ -91,28 +83,24 @@ def main():
     ap.add_argument("--threads", type=int, default=os.cpu_count())
     a = ap.parse_args()
     torch.set_num_threads(a.threads)
-    data = sirl_bench.datasets(a.train)
-    envs = [e for e in a.envs.split(",") if e] or list(data)
+    try:
+        data = sirl_bench.datasets(a.train)
+        # Every (env, seed, N) `sirl evaluate` asks for: the profile's seeds × evaluate_N.
+        wanted = sirl_bench.embedding_keys(data, [e for e in a.envs.split(",") if e] or None)
+    except sirl_bench.ResultsError as e:
+        sys.exit(f"torch_sirl: {e}")
     embeddings = {}
-    for env in envs:
-        if env not in data:
-            sys.exit(f"{a.train}: no environment {env!r} (it has {', '.join(data)})")
+    for env, seed, N in wanted:
         g = data[env]
-        if "seeds" not in g:
-            sys.exit(f"{a.train}: /datasets/{env} has no seeds: write it with "
-                     "`sirl dataset --profile`")
-        h = hyper_of(g["attrs"])
-        epochs = a.epochs or int(h["sirl.epochs"])
-        X = g["inputs"].astype(np.float32)
-        for seed in g["attrs"]["seeds"]:
-            similarity = g["seeds"][f"s{seed}"]["queries"]["similarity"]
-            for N in g["attrs"]["evaluate_N"]:
-                t0 = time.perf_counter()
-                # φ's initialisation and batch order: PyTorch's streams, from (seed, N).
-                embeddings[(env, int(seed), int(N))] = train_sirl(
-                    X, similarity[:int(N)], h, 1000 * int(seed) + int(N), epochs)
-                print(f"{env} seed {seed} N {N}: {epochs} epochs in "
-                      f"{time.perf_counter() - t0:.1f} s", file=sys.stderr)
+        h = g["attrs"]["hyper"]  # {"phi.hidden": [128, 128], "sirl.lr": 0.004, ...}
+        epochs = a.epochs or h["sirl.epochs"]
+        X = np.asarray(g["inputs"], dtype=np.float32)  # read once per environment, then kept
+        similarity = g["seeds"][f"s{seed}"]["queries"]["similarity"]
+        t0 = time.perf_counter()
+        # φ's initialisation and batch order: PyTorch's streams, from (seed, N).
+        embeddings[(env, seed, N)] = train_sirl(X, similarity[:N], h, 1000 * seed + N, epochs)
+        print(f"{env} seed {seed} N {N}: {epochs} epochs in {time.perf_counter() - t0:.1f} s",
+              file=sys.stderr)
     sirl_bench.write_embeddings(a.out, embeddings, method="SIRL in PyTorch (examples/torch_sirl.py)")
     print(f"wrote {a.out}: {len(embeddings)} embeddings of Ξ")
 

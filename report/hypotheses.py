@@ -1,10 +1,13 @@
 """The paper's claims decided from a results file's tables (claims.py's paired tests, Holm,
-power), and their lines in the report: the summary table and the details."""
+power), and their lines in the report: the main claims' table that opens it, the table of every
+claim and the details."""
 import math
+import re
 
 import claims as claims_stats
 import figures
 from figures import STYLE
+import ledger
 from run_tables import (ENV, PAPER, PROTOCOL_TEXT, PROTOCOLS, env_title, main_tpa, methods,
                         of_protocol)
 
@@ -208,11 +211,13 @@ def protocol_cell(h, scale=None):
     return f"{p} (secondary)"
 
 
-def summary_lines(H, missing=None, scale=None):
-    """The report's first table: one row per claim × environment × TPA protocol (an FPE claim has
-    one, protocol "—"), in H's order (the paper's protocol first). `missing`: environment → the
-    number of its tasks a partial merge lacks; those environments' verdicts are marked ⧗.
-    `scale`: environment → the paper protocol's head as this run trained it."""
+def summary_lines(H, missing=None, scale=None, study=None):
+    """The table of every claim: one row per claim × environment × TPA protocol (an FPE claim has
+    one, protocol "—"), in H's order. `missing`: environment → the number of its tasks a partial
+    merge lacks; those environments' verdicts are marked ⧗. `scale`: environment → the paper
+    protocol's head as this run trained it. `study`: the ledger's rows of the user study (H3,
+    H4), listed after H's claims; None: the report says nothing of a study (an empty list: the
+    profile ran none)."""
     missing = missing or {}
     L = ["| claim | environment | protocol | verdict | deciding comparison: Δ [95 % CI] | Holm p | "
          "seeds | power | seeds for 80 % | trainings converged |",
@@ -237,6 +242,7 @@ def summary_lines(H, missing=None, scale=None):
                  f"{fmt(c.get('p_holm'), '.3g')} | {c['n']} | {fmt(100 * pw, '.0f') + ' %' if pw == pw else '—'} | "
                  f"{s80 if s80 else f'> {claims_stats.MAX_SEEDS}' if pw == pw else '—'} | "
                  f"{conv_text} |")
+    L += [study_summary_row(r) for r in study or []]
     L += ["", f"Verdicts: *held* = every comparison goes the claimed way with Holm-adjusted p < "
           f"{ALPHA} (paired t-tests over seeds, Holm's correction within each claim); *not held* = "
           f"at least one goes the other way with adjusted p < {ALPHA}; *inconclusive* otherwise. "
@@ -264,12 +270,204 @@ def summary_lines(H, missing=None, scale=None):
           + " *—* = an FPE claim (the linear probe of the true features). *not run* = the file "
           "has no cells of that protocol. The references (truth φ\*, the ceiling; the raw "
           "input, the floor) are drawn in Figs. 4 and 5 and never counted as baselines."]
+    if study is not None:
+        L += ["", study_note(bool(study))]
     if missing:
         L += ["", "⧗ **Partial merge**: the results lack "
               + ", ".join(f"{n} {env_title(e)} task(s)" for e, n in sorted(missing.items()))
               + " (a shard failed or had not finished; the file's `missing_tasks` lists them). "
               "Verdicts marked ⧗ rest on the cells that exist: fewer seeds or M values than the "
               "profile asks, and figures show gaps where cells are missing."]
+    return L
+
+
+# The user study's claims (§5.3, Fig. 6) as the ledger decides them (its U01–U04: the study
+# analysis's own tests, one per statement); claims.json keeps the results tables' claims only.
+STUDY_CLAIMS = {
+    "U01": "H3: SIRL's FPE is lower than Random's",
+    "U02": "H4: SIRL's TPA is higher than Random's, own answers (the paper's Real: each "
+           "participant's own preferences)",
+    "U03": "H4: SIRL's TPA is higher than Random's, Held-out (SIRL without the participant's "
+           "similarity answers)",
+    "U04": "H4: SIRL's TPA is higher than Random's, Simulated (perfect answers for random "
+           "rewards)",
+}
+# The ledger's words for the same rule (one comparison: the claimed way with p < α, the other
+# way with p < α, neither) in the claims' words.
+CLAIM_VERDICT = {v: k for k, v in ledger.VERDICT.items()}
+
+
+def study_summary_row(r):
+    """One row of the claims table for a user-study statement of the ledger (kind "study")."""
+    claim = f"Secondary (user study, Fig. 6) — {STUDY_CLAIMS.get(r['id'], r['paper'])}"
+    where = "user study (simulated cohort)"
+    c = r["deciding"]
+    if c is None:
+        return f"| {claim} | {where} | — | {r['verdict']} | — | — | — | — | — | — |"
+    return (f"| {claim} | {where} | — | **{CLAIM_VERDICT.get(r['verdict'], r['verdict'])}** | "
+            f"SIRL − Random: {fmt(c['diff'], '+.4f')} ({c.get('text', '')}) | "
+            f"{fmt(c.get('p'), '.3g')} | — | — | — | — |")
+
+
+def study_note(ran):
+    """What the study's rows are, or that the profile ran no study."""
+    if not ran:
+        return ("*H3, H4* (the user study, Fig. 6): this profile ran no study, so the report has "
+                "no study claims.")
+    return ("*H3, H4* (the user study, §5.3, Fig. 6): the study pipeline on the profile's "
+            "simulated cohort, not the paper's participants, decided with the paper's tests "
+            "(H3: two-sided Welch t over training seeds; H4: one-way ANOVA with the method as the "
+            "factor). Each row is one test: its *Holm p* is that test's p, not adjusted. They are "
+            "the ledger's U01–U04 below. Fig. 6 and the study's subsets (participants whose "
+            "preference involves every feature; Random in its other mode) are in "
+            "study/study_report.md beside this report when `sirl reproduce` drew it "
+            "(`report/plot_study.py RESULTS.h5 --out DIR` draws it from this file).")
+
+
+def table_order(H):
+    """H for the claims table: the main claims first, then each claim with its environments and
+    protocols together (a claim's linear row right after its paper twin). H itself keeps the
+    order the claims were decided in (claims.json, claims.csv)."""
+    groups, envs = {}, {}
+    for h in H:
+        groups.setdefault(main_family(h) if h["main"] else h["claim"], len(groups))
+        envs.setdefault(h["env"], len(envs))
+    rank = {None: 0, PAPER: 1, **{p: 2 + i for i, p in enumerate(PROTOCOLS) if p != PAPER}}
+
+    def key(h):
+        return (not h["main"], groups[main_family(h) if h["main"] else h["claim"]],
+                envs[h["env"]], rank.get(h.get("protocol"), len(rank)))
+    return sorted(H, key=key)
+
+
+# The main claims: their name (the first word of their text), what they claim in words, and the
+# ledger's statement of the paper that they test (its words and section, for "the paper").
+MAIN_CLAIMS = {
+    "H1": ("SIRL's FPE is lower than every baseline's", "S01"),
+    "H2": ("SIRL's TPA (mean over M) is higher than every baseline's", "S15"),
+}
+
+
+def main_family(h):
+    """"H1" or "H2": the name a main claim's text starts with."""
+    return h["claim"].split(" ", 1)[0]
+
+
+def main_columns(H):
+    """The main claims table's columns, (environment, protocol): the paper's protocol first (its
+    columns also hold H1, FPE having one protocol), then each other protocol that decided a main
+    claim somewhere in this file; environments in H's order."""
+    mains = [h for h in H if h["main"]]
+    envs = list(dict.fromkeys(h["env"] for h in mains))
+    protocols = [PAPER] + [p for p in PROTOCOLS if p != PAPER and any(
+        h["protocol"] == p and h["verdict"] != "not run" for h in mains)]
+    return [(env, p) for p in protocols for env in envs]
+
+
+def md_cell(text):
+    """Text from a file as one Markdown table cell: on one line, its pipes escaped."""
+    return " ".join(str(text).split()).replace("|", "\\|")
+
+
+def method_label(name):
+    return STYLE[name][1] if name in STYLE else name
+
+
+def verdict_sentence(h):
+    """A main claim's verdict in one sentence: the comparison it rests on, in words (for *held*
+    the least clear baseline, for *not held* the one clearly better than SIRL, for
+    *inconclusive* the one that kept it undecided)."""
+    c = h["deciding"]
+    if c is None:
+        return ("the file has no cells of this protocol" if h["verdict"] == "not run"
+                else "no data")
+    metric = "FPE" if h.get("protocol") is None else "TPA"
+    label, d = md_cell(method_label(c["name"])), c["diff"]
+    if d is None or not math.isfinite(d):
+        return f"too few seeds to compare SIRL with {label}"
+    by, p = fmt(abs(d), ".2g"), fmt(c.get("p_holm"), ".2g")
+    if h["verdict"] == "held":
+        way = "lower" if h["better"] == "<" else "higher"
+        return (f"SIRL's {metric} is {way} than every baseline's, least clearly {label}'s, by "
+                f"{by} (Holm p {p})")
+    if h["verdict"] == "not held":
+        return f"{label}'s {metric} is {by} {'lower' if d > 0 else 'higher'} than SIRL's (Holm p {p})"
+    than = (f"equals {label}'s" if d == 0 else
+            f"is {by} {'lower' if d < 0 else 'higher'} than {label}'s")
+    if c.get("p_holm") is None or not math.isfinite(c["p_holm"]):
+        return f"SIRL's {metric} {than}, untested: {c['n']} seed{'s' * (c['n'] != 1)} (a test needs 2)"
+    return f"SIRL's {metric} {than}, not significantly (Holm p {p}, {c['n']} seeds)"
+
+
+def main_cell(h, missing):
+    """One cell of the main claims table: the verdict in bold (report.html colours the cell by it),
+    ⚠ (unconverged trainings), ⧗ (a partial merge), then the sentence."""
+    if h is None:
+        return "—"
+    conv = h.get("converged")
+    marks = (" ⚠" if conv and conv[0] < conv[1] else "") + (" ⧗" if missing.get(h["env"]) else "")
+    return f"**{h['verdict']}**{marks}: {verdict_sentence(h)}"
+
+
+def paper_expectation(family):
+    """The paper's column: what it reports for the claim, in its words."""
+    s = next(s for s in ledger.STATEMENTS if s.id == MAIN_CLAIMS[family][1])
+    return (f"held in both environments at N = 1000: “{s.paper}” ({s.section})"
+            + ("; under the paper's protocol (linear evaluation is not the paper's)"
+               if family == "H2" else ""))
+
+
+def main_row_label(family, hs):
+    """A main claim's row label, with the N its claims are decided at (the largest N each
+    environment ran: one number when they agree)."""
+    Ns = sorted({m.group(1) for h in hs if (m := re.search(r"at N = (\d+)", h["claim"]))}, key=int)
+    at = (f"at N = {Ns[0]}" if len(Ns) == 1 else "at each environment's largest N" +
+          (f" ({', '.join(Ns)})" if Ns else ""))
+    return f"**{family}** — {MAIN_CLAIMS[family][0]} {at}"
+
+
+def main_claims_lines(H, missing=None):
+    """The table that opens the report: the two main claims (rows) × environment and TPA protocol
+    (columns), each cell the verdict and one sentence, the paper's expectation beside them; then
+    the legend of the verdicts and of ⚠ (⧗ when a merge was partial) and the metrics spelled
+    out. Empty without main claims."""
+    missing = missing or {}
+    cols = main_columns(H)
+    if not cols:
+        return []
+    head = [f"{md_cell(env_title(env))}, " + ("paper protocol" if p == PAPER else f"{p} (secondary)")
+            for env, p in cols]
+    L = ["| main claim | " + " | ".join(head) + " | the paper |",
+         "|---|" + "---|" * (len(cols) + 1)]
+    for family in MAIN_CLAIMS:
+        hs = [h for h in H if h["main"] and main_family(h) == family]
+        if not hs:
+            continue
+        cells = []
+        for env, p in cols:
+            if family == "H1" and p != PAPER:
+                cells.append("(FPE has one protocol)")
+                continue
+            want = None if family == "H1" else p
+            cells.append(main_cell(next((h for h in hs if h["env"] == env and
+                                         h.get("protocol") == want), None), missing))
+        L.append(f"| {main_row_label(family, hs)} | " + " | ".join(cells) +
+                 f" | {paper_expectation(family)} |")
+    L += ["", f"*held*: SIRL beat every baseline, each paired comparison over seeds significant "
+          f"after Holm's correction (p < {ALPHA}); *not held*: a baseline beat SIRL significantly; "
+          f"*inconclusive*: neither, at this run's seeds. **⚠**: some of the trainings the verdict "
+          f"rests on had not converged (their loss still changing over the last 10 % of the epochs; "
+          f"counts under *trainings converged* below), so the verdict is provisional: longer training may "
+          f"change it." + (" **⧗**: a partial merge, some of the environment's cells are missing."
+                           if missing else "")]
+    L += ["", "**FPE** (feature prediction error): the held-out mean squared error of a "
+          "least-squares linear probe from a method's representation φ(ξ) of a trajectory ξ to "
+          "its true features φ\\*(ξ), normalised; lower is better. **TPA** (test preference "
+          "accuracy): for each of 20 test rewards, a reward head trained on φ from M preference "
+          "pairs, scored by the share of held-out pairs it orders as the true reward does (mean "
+          "over the rewards); higher is better. **N**: the queries φ is trained on (similarity "
+          "triplets for SIRL, preference pairs for the preference baselines; VAE and Random use "
+          "none). **M**: the preference pairs each test reward's head is trained on."]
     return L
 
 

@@ -445,6 +445,19 @@ def head_scale(profile_text, envs):
     return out
 
 
+def _env_scale(profile_text, fpe, tpa, env):
+    """One environment's scale as this run has it: the paper's (PAPER_SCALE), the run's head and
+    epochs (_hyper), its seeds and the N and M values of its cells."""
+    p, h = PAPER_SCALE[env], _hyper(profile_text, env)
+    f = fpe[fpe.env == env] if not fpe.empty else fpe
+    t = tpa[tpa.env == env] if not tpa.empty else tpa
+    seeds = len(pd.unique(pd.concat([f.get("seed", pd.Series(dtype=int)),
+                                     t.get("seed", pd.Series(dtype=int))])))
+    Ns = sorted(int(x) for x in pd.unique(f.N.dropna())) if "N" in f else []
+    Ms = sorted(int(x) for x in pd.unique(t.M.dropna())) if "M" in t else []
+    return p, h, seeds, Ns, Ms
+
+
 def scale_lines(profile_text, fpe, tpa, envs):
     """This run's scale beside the paper's, per environment: the head's width and epochs, SIRL's
     epochs, seeds, N and M."""
@@ -453,20 +466,37 @@ def scale_lines(profile_text, fpe, tpa, envs):
     for env in envs:
         if env not in PAPER_SCALE:
             continue
-        p, h = PAPER_SCALE[env], _hyper(profile_text, env)
+        p, h, seeds, Ns, Ms = _env_scale(profile_text, fpe, tpa, env)
         arch = ("the paper's architecture" if h["head"] == p["head"] else
                 f"{h['head']} (paper: {p['head']})")
-        f = fpe[fpe.env == env] if not fpe.empty else fpe
-        t = tpa[tpa.env == env] if not tpa.empty else tpa
-        seeds = len(pd.unique(pd.concat([f.get("seed", pd.Series(dtype=int)),
-                                         t.get("seed", pd.Series(dtype=int))])))
-        Ns = sorted(int(x) for x in pd.unique(f.N.dropna())) if "N" in f else []
-        Ms = sorted(int(x) for x in pd.unique(t.M.dropna())) if "M" in t else []
         L.append(f"| {env_title(env)} | {arch}, {h['tpa.epochs']} of {p['tpa_epochs']} "
                  f"epochs | {h['sirl.epochs']} of {p['sirl_epochs']} | {seeds} (paper: "
                  f"not stated) | {', '.join(map(str, Ns)) or '—'} (paper: {p['N']}) | "
                  f"{', '.join(map(str, Ms)) or '—'} (paper: {p['M']}) |")
     return L
+
+
+def _span(values):
+    """"100–1000", "200" or "—": the range of a list of N or M values."""
+    if not values:
+        return "—"
+    return str(values[0]) if values[0] == values[-1] else f"{values[0]}–{values[-1]}"
+
+
+def scale_phrases(profile_text, fpe, tpa, envs):
+    """Per environment, this run's scale in one phrase with the paper's values in parentheses
+    ("GridRobot: 2 seeds, N 100–200 (100–1000), …"): the report's opening sentence, so a reader
+    knows before any verdict how far the run is from the paper's scale."""
+    out = []
+    for env in envs:
+        if env not in PAPER_SCALE:
+            continue
+        p, h, seeds, Ns, Ms = _env_scale(profile_text, fpe, tpa, env)
+        head = "" if h["head"] == p["head"] else f", reward head {h['head']} ({p['head']})"
+        out.append(f"{env_title(env)}: {seeds} seeds, N {_span(Ns)} ({p['N']}), M {_span(Ms)} "
+                   f"({p['M']}), SIRL {h['sirl.epochs']} epochs ({p['sirl_epochs']}), reward "
+                   f"heads {h['tpa.epochs']} epochs ({p['tpa_epochs']}){head}")
+    return out
 
 
 def lines(rows, scale_text, name_of=lambda v: v):

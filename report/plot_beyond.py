@@ -126,8 +126,9 @@ def plot_active(fpe, tpa, out, notes, drawn):
     envs = active_envs(fpe)
     if not envs:
         return []
-    fig, axes = plt.subplots(2, len(envs), figsize=(5.2 * len(envs), 7.0), squeeze=False,
-                             constrained_layout=True)
+    fig, axes = plt.subplots(2, len(envs), figsize=(min(5.2 * len(envs), 14), 7.0),
+                             squeeze=False, constrained_layout=True)
+    n_styles = {}
     for c, env in enumerate(envs):
         ax = axes[0][c]
         d = fpe[fpe.env == env]
@@ -146,10 +147,9 @@ def plot_active(fpe, tpa, out, notes, drawn):
                             alpha=0.15)
         ax.set_title(env)
         ax.set_xlabel("similarity queries N")
-        ax.set_ylabel("FPE (test MSE)")
+        ax.set_ylabel(f"FPE (test MSE)\n({figures.better_note('fpe')})", fontsize=9)
         ax.set_ylim(bottom=0)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
         ax = axes[1][c]
         t = tpa[(tpa.env == env) & tpa.frozen] if not tpa.empty else tpa
         Ms = sorted(int(m) for m in t.M.dropna().unique()) if not t.empty else []
@@ -171,15 +171,20 @@ def plot_active(fpe, tpa, out, notes, drawn):
                 shift = 0.015 * max(Ms) * (list(SELECTION).index(v) - 1)  # side by side
                 ax.errorbar(np.array(Ms) + shift, ms,
                             yerr=np.where(np.isfinite(cis), cis, 0), color=colour,
-                            ls=styles[i % len(styles)], marker="o", ms=4, capsize=2,
-                            label=f"{label}, N = {int(n)}")
+                            ls=styles[i % len(styles)], marker="o", ms=4, capsize=2)
+            n_styles[f"N = {int(n)}"] = styles[i % len(styles)]
         ax.set_xlabel("preference queries per test reward M")
         if len(Ms) == 1:
             ax.set_xlim(0.8 * Ms[0], 1.2 * Ms[0])
         ax.set_ylim(0.4, 1.0)
-        ax.set_ylabel("TPA (SIRL frozen)")
+        figures.chance_line(ax)
+        ax.set_ylabel(f"TPA (SIRL frozen)\n({figures.better_note('tpa')})", fontsize=9)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+    # One legend below the panels: the selection rules' colours (the FPE row), the line style of
+    # each N (the TPA row), chance.
+    for lab, ls in n_styles.items():
+        axes[-1][0].plot([], [], color="black", ls=ls, marker="o", ms=4, label=f"TPA at {lab}")
+    figures.legend_below(fig, axes.flat)
     fig.suptitle("Active vs uniform similarity queries (mean ± 95 % CI over seeds)", fontsize=11)
     save(fig, out, "fig_active")
     return envs
@@ -286,7 +291,7 @@ def plot_robustness(fpe, tpa, rfpe, rtpa, out, notes, drawn):
     for env in envs:
         metrics = [m for m in ("fpe", "tpa") if m in F and (F[m].env == env).any()]
         fig, axs = plt.subplots(len(metrics), len(axes_present),
-                                figsize=(4.4 * len(axes_present), 3.4 * len(metrics)),
+                                figsize=(min(4.4 * len(axes_present), 14), 3.4 * len(metrics)),
                                 squeeze=False, constrained_layout=True)
         for r, metric in enumerate(metrics):
             d = F[metric][F[metric].env == env]
@@ -309,17 +314,21 @@ def plot_robustness(fpe, tpa, rfpe, rtpa, out, notes, drawn):
                     xs = np.arange(len(ticks))
                     drawn.setdefault("fig_robustness", {}).setdefault(env, {}).setdefault(
                         metric, {}).setdefault(axis, {})[v] = {t: m for t, m in zip(ticks, ms)}
-                    ax.plot(xs, ms, "o-", color=colour, label=label, ms=4)
+                    marker, ls = figures.line_style(v)
+                    ax.plot(xs, ms, marker=marker, ls=ls, color=colour, label=label, ms=4)
                     ok = np.isfinite(cis)
                     ax.fill_between(xs[ok], (ms - cis)[ok], (ms + cis)[ok], color=colour, alpha=0.12)
                 ax.set_xticks(range(len(ticks)))
                 ax.set_xticklabels([f"{t}\n{100 * e:.0f} %" for t, e in zip(ticks, errs)],
                                    fontsize=8)
                 ax.set_xlabel(f"{AXES[axis][0]} (below: share of answers wrong)", fontsize=8)
+                if metric == "tpa":
+                    figures.chance_line(ax)
                 if c == 0:
-                    ax.set_ylabel("FPE (test MSE)" if metric == "fpe" else "TPA (held-out)")
+                    ax.set_ylabel(("FPE (test MSE)" if metric == "fpe" else "TPA (held-out)")
+                                  + f"\n({figures.better_note(metric)})", fontsize=9)
                 ax.grid(alpha=0.3)
-        axs[-1][-1].legend(fontsize=7)  # the TPA row holds every method
+        figures.legend_below(fig, axs.flat)  # one legend below: it hides no curve
         fig.suptitle(f"{env}: robustness to noisy teachers (FPE at N = {int(F['fpe'].N.max()) if 'fpe' in F else '—'}"
                      f"; TPA at M = {int(F['tpa'].M.max()) if 'tpa' in F else '—'}; mean ± 95 % CI)",
                      fontsize=11)

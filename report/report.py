@@ -1,6 +1,7 @@
-"""report.md, report.html and claims.json: the claims first, then the figures, learning curves
-and their convergence, the claims in detail, compute against the roofs, diagnostics, notes and
-the profile."""
+"""report.md, report.html and claims.json: the main claims first (a small table, its legend and
+the metrics spelled out), then every claim, the ledger, the figures, learning curves and their
+convergence, the claims in detail, compute against the roofs, diagnostics, notes and the
+profile."""
 import html
 import json
 import math
@@ -15,7 +16,8 @@ from figures import STYLE
 import ledger
 import plot_beyond
 from safe_output import write_text
-from hypotheses import detail_lines, fmt, hypotheses, summary_lines
+from hypotheses import (detail_lines, fmt, hypotheses, main_claims_lines, summary_lines,
+                        table_order)
 from run_tables import (ENV, PAPER, claim_trainings, env_title, main_tpa, methods, protocols_run,
                         sirl_bench)
 
@@ -152,10 +154,31 @@ FIGURES = [("fig3_grid_similar", "Fig. 3"), ("fig4_fpe", "Fig. 4"), ("fig5_tpa",
            ("fig5_tpa_linear", "Fig. 5, linear protocol"), ("fig7_ablation", "Fig. 7")]
 
 
+def profile_description(profile_text):
+    """The profile's `description` (its TOML's), on one line; "" without one."""
+    import tomllib
+    try:
+        d = tomllib.loads(profile_text or "").get("description", "")
+    except (tomllib.TOMLDecodeError, AttributeError):
+        return ""
+    return " ".join(d.split()) if isinstance(d, str) else ""
+
+
+def run_sentence(a, scale):
+    """The report's opening sentence: the profile, how many of its tasks the file holds, and its
+    scale per environment beside the paper's (`scale`: ledger.scale_phrases)."""
+    desc = profile_description(a.get("profile_text", ""))
+    done = (f"{a.get('tasks_done')} of {a.get('tasks_total')} tasks done"
+            + ("" if a.get("complete") else " (a **partial run**: figures show gaps)"))
+    return (f"This run: profile `{a.get('profile_name')}`" + (f" (“{desc}”)" if desc else "")
+            + f", {done}" + ("; its scale, the paper's in parentheses: " + "; ".join(scale)
+                             if scale else "") + ".")
+
+
 def report(res, t, envs, out, notes, fig3_key, beyond=None):
-    """report.md and report.html: the summary table of claims first, then the figures, the
-    learning curves with their convergence table, the claims in detail, compute, diagnostics,
-    notes, and the profile's text last."""
+    """report.md and report.html: the main claims first (after the title and a sentence on the
+    run), then every claim, the ledger, the figures, the learning curves with their convergence
+    table, the claims in detail, compute, diagnostics, notes, and the profile's text last."""
     fpe, tpa, tim = t["fpe"], t["tpa"], t["timings"]
     beyond = beyond or {}
     envs = [e for e in envs if ENV.get(e, {}).get("in_claims", 1)]  # e.g. Fig. 3's own env
@@ -168,14 +191,19 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
         # registration names the key's prefix (the key itself is never taken apart).
         env = next((e for e in ENV if key.startswith(e + "/")), "other")
         missing[env] = missing.get(env, 0) + 1
-    L = [f"# {title}", ""] + summary_lines(H, missing, ledger.head_scale(a.get("profile_text", ""), envs))
     try:
         study = sirl_bench.study_analysis(res.path)
     except sirl_bench.ResultsError:
         study = None  # the profile ran no study
     book = ledger.ledger(fpe, tpa, envs, study)
-    L += ledger.lines(book, ledger.scale_lines(a.get("profile_text", ""), methods(fpe), methods(tpa),
-                                               envs),
+    prof_text = a.get("profile_text", "")
+    L = [f"# {title}", "",
+         run_sentence(a, ledger.scale_phrases(prof_text, methods(fpe), methods(tpa), envs)), ""]
+    L += main_claims_lines(H, missing)
+    L += ["", "## Every claim: main and secondary, in numbers", ""]
+    L += summary_lines(table_order(H), missing, ledger.head_scale(prof_text, envs),
+                       [r for r in book if r["kind"] == "study"])
+    L += ledger.lines(book, ledger.scale_lines(prof_text, methods(fpe), methods(tpa), envs),
                       lambda v: STYLE[v][1] if v in STYLE else v)
     L += ["", f"Engine {a.get('engine_version')} (commit {a.get('git_commit')}), host "
           f"{a.get('host')}, {a.get('threads')} threads; started {a.get('started')}, finished "
@@ -307,17 +335,72 @@ def json_safe(x):
 
 
 CSS = ("body{font-family:system-ui,sans-serif;max-width:1200px;margin:1em auto;padding:0 1em}"
+       "h1{font-size:1.5em}"
        "table{border-collapse:collapse;margin:0.5em 0 1em}th,td{border:1px solid #bbb;"
        "padding:3px 7px;font-size:0.9em;vertical-align:top}th{background:#eee}"
-       "caption{font-size:1.4em;font-weight:bold;text-align:left;padding:0.3em 0}"
-       "img{max-width:100%}pre{background:#f6f6f6;padding:0.6em;overflow-x:auto}")
+       "caption{font-size:1.2em;font-weight:bold;text-align:left;padding:0.3em 0}"
+       "td.v-held{background:#d6f0d6}td.v-not-held{background:#f7d4d4}"
+       "td.v-inconclusive{background:#fbedc4}td.v-none{background:#ececec;color:#444}"
+       "#main-claims td{min-width:8em}#contents{margin:1em 0;padding:0.3em 1em;"
+       "background:#f6f6f6}#contents ul{columns:2;margin:0.3em 0}"
+       # A figure may be as wide as the window, not only the text column: Figs. 4, 5 (linear), 7
+       # and the learning curves are 2000+ pixels wide and unreadable at 1200.
+       "p.figure{width:calc(100vw - 4em);margin-left:calc(50% - 50vw + 2em);text-align:center}"
+       "img{max-width:100%;height:auto}pre{background:#f6f6f6;padding:0.6em;overflow-x:auto}")
+
+# A verdict in bold at the start of a table cell → the cell's class (the claims' words and the
+# ledger's): the colour repeats the word, it never replaces it.
+VERDICT_CLASS = {"held": "v-held", "confirmed": "v-held", "not held": "v-not-held",
+                 "contradicted": "v-not-held", "inconclusive": "v-inconclusive",
+                 "undecided": "v-inconclusive", "not run": "v-none", "not evaluated": "v-none"}
+VERDICT_CELL = re.compile(r"<td>(\s*<strong>(" + "|".join(sorted(VERDICT_CLASS, key=len,
+                                                                  reverse=True)) + r")\b)")
+
+
+def coloured_verdicts(body):
+    """Every table cell that opens with a verdict in bold gets its verdict's class (held green,
+    not held red, inconclusive amber, not run grey). Only the converter's own <strong> can match:
+    a file's text reaches the page escaped."""
+    return VERDICT_CELL.sub(lambda m: f'<td class="{VERDICT_CLASS[m.group(2)]}">{m.group(1)}',
+                            body)
+
+
+def named_tables(body):
+    """The main claims' table (#main-claims, captioned) and the table of every claim (#summary),
+    found by their first header cells, which the report writes."""
+    body = re.sub(r"<table>(\s*<thead>\s*<tr>\s*<th>main claim</th>)",
+                  r'<table id="main-claims"><caption>Main claims</caption>\1', body, count=1)
+    return re.sub(r"<table>(\s*<thead>\s*<tr>\s*<th>claim</th>\s*<th>environment</th>)",
+                  r'<table id="summary">\1', body, count=1)
+
+
+def contents(body):
+    """A list of links to every ## section, before the first of them (so after the main claims):
+    the page is long and a reader looks for one part. The ids are the converter's (toc
+    extension); the titles are the headings' text as the converter escaped it, tags dropped."""
+    heads = re.findall(r'<h2 id="([^"]+)">(.*?)</h2>', body)
+    if not heads:
+        return body
+    items = "".join(f'<li><a href="#{i}">{re.sub(r"<[^>]*>", "", t)}</a></li>' for i, t in heads)
+    at = body.index("<h2")
+    return body[:at] + f'<nav id="contents"><strong>Contents</strong><ul>{items}</ul></nav>\n' + body[at:]
+
+
+def openable_figures(body):
+    """A figure alone in its paragraph links to its file (a click shows it at full size) and may
+    span the window (CSS p.figure). The src is the converter's, already escaped and checked."""
+    return re.sub(r'<p>(<img [^>]*?src="([^"]*)"[^>]*>)</p>',
+                  r'<p class="figure"><a href="\2">\1</a></p>', body)
 
 
 def report_html(title, body_md):
-    """The report's Markdown as HTML (Debian's python3-markdown, tables + fenced code). The
-    first element of the page is the summary table, its caption the report's title."""
+    """The report's Markdown as HTML (Debian's python3-markdown, tables + fenced code + ids on
+    headings): the title, the run's sentence, the main claims' table with its cells coloured by
+    verdict, a table of contents, then the rest; figures open full size on a click."""
     import markdown
-    md = markdown.Markdown(extensions=["tables", "fenced_code"])
+    # toc: ids on the headings for the contents; its "[TOC]" marker off (a file's text is text).
+    md = markdown.Markdown(extensions=["tables", "fenced_code", "toc"],
+                           extension_configs={"toc": {"marker": ""}})
     # Every value in the report comes from a results file or a profile, which anyone may have
     # written: raw HTML in them is shown as text, never passed through (no stored script).
     md.preprocessors.deregister("html_block")
@@ -326,7 +409,7 @@ def report_html(title, body_md):
     # Links and images with a script URL from a file's text ([x](javascript:…)) go nowhere.
     body = re.sub(r'(href|src)="\s*(?:javascript|vbscript|data):[^"]*"', r'\1="#"', body,
                   flags=re.IGNORECASE)
+    body = openable_figures(contents(named_tables(coloured_verdicts(body))))
     t = html.escape(title.replace("`", ""))
-    body = body.replace("<table>", f'<table id="summary"><caption>{t}</caption>', 1)
     return (f"<!doctype html><html><head><meta charset='utf-8'><title>{t}</title>"
-            f"<style>{CSS}</style></head><body>{body}</body></html>\n")
+            f"<style>{CSS}</style></head><body><h1>{t}</h1>\n{body}</body></html>\n")

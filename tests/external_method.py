@@ -74,10 +74,12 @@ def check_training_data(d, results):
                 fail(f"{env}: evaluate_N {g['attrs']['evaluate_N']} != the cells' N {sorted(Ns)}")
             hyper = rec[(rec.kind == "rep") & (rec.env == env) & (rec.variant == "sirl")]
             # The rep states the hyper-parameters it read (φ's, SIRL's, precision): each as the
-            # dataset's full set has it.
-            said = set(r.record(hyper.key.iloc[0])["hyper"].splitlines()) if not hyper.empty else set()
-            if not said or not said <= set(g["attrs"]["hyper"].splitlines()) \
-                    or not any(ln.startswith("sirl.epochs") for ln in said):
+            # dataset's full set has it (both typed by the reader, and both as written).
+            said = r.record(hyper.key.iloc[0])["hyper"] if not hyper.empty else {}
+            full = g["attrs"]["hyper"]
+            if not said or any(k not in full or full[k] != v for k, v in said.items()) \
+                    or "sirl.epochs" not in said \
+                    or not set(said.text.splitlines()) <= set(full.text.splitlines()):
                 fail(f"{env}: the rep record's hyper-parameters are not the dataset's")
 
 

@@ -9,8 +9,15 @@ TPA protocols and references (issue 56), first on synthetic tables, then on the 
 is drawn per protocol (fig5_tpa from the paper's rows only, fig5_tpa_linear from the linear
 ones), Figs. 4 and 5 draw the references (truth φ*, raw input) as reference lines, never as
 methods; adding linear and reference rows changes no paper figure; a file with one protocol
-draws it and notes the other as not run; the report's summary has one row per claim ×
-environment × protocol, the paper's first."""
+draws it and notes the other as not run; the report's table of every claim has one row per
+claim × environment × protocol, a claim's linear row right after its paper twin.
+
+The report's first screen: the title, a sentence on the run, then the main claims' table (one
+column per environment × protocol of the file, each cell's verdict claims.json's), the legend of
+⚠ and the metrics spelled out; report.html colours the verdict cells and has a table of contents
+whose links land; the user study's H3/H4 are in the table of every claim, their verdicts those of
+plot_study.py's study report."""
+import re
 import json
 import os
 import shutil
@@ -226,6 +233,137 @@ def without_new_rows(src, dst):
     reframe(dst)  # that engine framed what it wrote
 
 
+def report_section(rep, title):
+    """The text of the report's section whose heading starts with `title`, to the next one."""
+    return rep.split("\n## " + title, 1)[1].split("\n## ", 1)[0]
+
+
+def md_table(text, header):
+    """The Markdown table of `text` whose header line starts with `header`: its header cells
+    and its rows' cells."""
+    lines = text.splitlines()
+    i = next(k for k, ln in enumerate(lines) if ln.startswith(header))
+    split = lambda ln: [c.strip() for c in ln.strip()[1:-1].split(" | ")]  # noqa: E731
+    body = []
+    for ln in lines[i + 2:]:
+        if not ln.startswith("| "):
+            break
+        body.append(split(ln))
+    return split(lines[i]), body
+
+
+VERDICT_CLASS = {"held": "v-held", "not held": "v-not-held", "inconclusive": "v-inconclusive",
+                 "not run": "v-none", "not evaluated": "v-none"}
+
+
+def check_first_screen(rep, page, claims, titles):
+    """The report opens with the title, the run's sentence and the main claims' table: one column
+    per environment × protocol of the file (the paper's first; H1 in its columns, FPE having one
+    protocol), each cell's verdict (and ⚠) claims.json's; then the legend of the verdicts and of
+    ⚠, and FPE, TPA, N and M spelled out. In report.html every verdict cell carries its verdict's
+    class and a table of contents after the main claims links every section."""
+    lines = rep.splitlines()
+    assert lines[0].startswith("# sirl-bench report: profile") and lines[1] == "", lines[:2]
+    assert lines[2].startswith("This run: profile `") and "tasks done" in lines[2], lines[2]
+    assert lines[3] == "" and lines[4].startswith("| main claim |"), lines[3:5]
+    mains = [h for h in claims if h["main"]]
+    envs = list(dict.fromkeys(h["env"] for h in mains))
+    protocols = ["paper"] + [p for p in ("linear",) if any(
+        h["protocol"] == p and h["verdict"] != "not run" for h in mains)]
+    cols = [(e, p) for p in protocols for e in envs]
+    head, rows = md_table(rep, "| main claim |")
+    assert head == ["main claim"] + [f"{titles[e]}, paper protocol" if p == "paper" else
+                                     f"{titles[e]}, {p} (secondary)" for e, p in cols] + \
+        ["the paper"], head
+    assert [re.match(r"\*\*(H[12])\*\* — ", r[0]).group(1) for r in rows] == ["H1", "H2"], rows
+    verdicts = []
+    for r in rows:
+        family = r[0][2:4]
+        assert r[-1].startswith("held in both environments at N = 1000: “"), r[-1]
+        for (env, p), cell in zip(cols, r[1:-1]):
+            if family == "H1" and p != "paper":
+                assert cell == "(FPE has one protocol)", cell
+                continue
+            h = next(h for h in mains if h["env"] == env and h["claim"][:2] == family
+                     and h["protocol"] == (None if family == "H1" else p))
+            m = re.match(r"\*\*([^*]+)\*\*( ⚠)?: \S", cell)
+            assert m and m.group(1) == h["verdict"], (env, p, family, cell, h["verdict"])
+            conv = h.get("converged")
+            assert bool(m.group(2)) == bool(conv and conv[0] < conv[1]), (cell, conv)
+            verdicts.append(h["verdict"])
+    opening = rep[:rep.index("\n## ")]
+    for text in ("*held*: SIRL beat every baseline", "*inconclusive*: neither",
+                 "**⚠**: some of the trainings the verdict rests on had not converged",
+                 "the verdict is provisional", "**FPE** (feature prediction error):",
+                 "lower is better", "**TPA** (test preference accuracy):", "higher is better",
+                 "**N**: the queries φ is trained on", "**M**: the preference pairs"):
+        assert text in opening, f"the first screen lacks {text!r}"
+    assert rep.index("| main claim |") < rep.index("## Every claim") < rep.index(
+        "| claim | environment | protocol | verdict") < rep.index("## Paper says, we find") < \
+        rep.index("## Figures") < rep.index("## Configuration"), \
+        "report order: main claims, every claim, ledger, figures, …, profile"
+
+    # report.html: the page opens with the title, the sentence and #main-claims; its verdict
+    # cells carry their verdict's class; the contents sit between it and the first section.
+    body = page[page.index("<body>") + 6:]
+    assert re.match(r"<h1>[^<]*</h1>\s*<p>This run: profile .*?</p>\s*<table id=\"main-claims\">",
+                    body, re.S), body[:500]
+    table = body[body.index('<table id="main-claims">'):body.index("</table>")]
+    got = re.findall(r'<td class="([^"]*)"><strong>([^<]*)</strong>', table)
+    assert [v for _, v in got] == verdicts and all(VERDICT_CLASS[v] == c for c, v in got), \
+        (got, verdicts)
+    summary = body[body.index('<table id="summary">'):]
+    summary = summary[:summary.index("</table>")]
+    assert len(re.findall(r'<td class="v-[a-z-]+"><strong>', summary)) >= len(claims), summary[:400]
+    nav = body[body.index('<nav id="contents">'):body.index("</nav>")]
+    links = re.findall(r'<a href="#([^"]+)">', nav)
+    h2 = re.findall(r'<h2 id="([^"]+)">', body)
+    ids = set(re.findall(r' id="([^"]+)"', body))
+    assert links == h2 and set(links) <= ids and len(links) >= 8, (links, h2)
+    assert body.index('<table id="main-claims">') < body.index('<nav id="contents">') < \
+        body.index("<h2"), "the contents are not between the main claims and the first section"
+    figs = re.findall(r'<p class="figure"><a href="([^"]+)"><img [^>]*src="([^"]+)"', body)
+    assert figs and all(a == b for a, b in figs), figs
+    print(f"ok: the first screen: the main claims ({len(rows)} × {len(cols)} cells, verdicts and ⚠ "
+          f"those of claims.json, coloured by verdict), the legend, FPE, TPA, N and M spelled "
+          f"out; report.html's contents link its {len(links)} sections; figures open full size")
+
+
+STUDY_ROWS = {"U01": "H3:", "U02": "own answers", "U03": "Held-out", "U04": "Simulated"}
+LEDGER_TO_CLAIM = {"confirmed": "held", "contradicted": "not held", "undecided": "inconclusive",
+                   "not run": "not run"}
+
+
+def check_study_claims(rep, full, tmp):
+    """The user study's H3 and H4 are rows of the table of every claim, their verdicts the
+    ledger's U01–U04 in the claims' words and those of plot_study.py's study report (all
+    participants) drawn from the same file."""
+    book = json.load(open(os.path.join(tmp, "full", "ledger.json")))["statements"]
+    study = {r["id"]: r for r in book if r["env"] == "study"}
+    _, rows = md_table(report_section(rep, "Every claim"), "| claim | environment | protocol | verdict")
+    rows = [r for r in rows if r[1] == "user study (simulated cohort)"]
+    if not study:
+        assert not rows and "this profile ran no study" in rep, rows
+        return
+    sh("/usr/bin/python3", os.path.join(SRC, "report", "plot_study.py"), full, "--out",
+       os.path.join(tmp, "study"))
+    theirs = open(os.path.join(tmp, "study", "study_report.md")).read()
+    # Its H3 line, then its H4 lines over all participants: Real (own answers), Held-out,
+    # Simulated, in that order.
+    h3 = re.findall(r"\*\*H3 — [^*]*: ([a-z ]+)\*\*", theirs)
+    h4 = re.findall(r"\*\*H4 — [^*]*, all participants: ([a-z ]+)\*\*", theirs)
+    assert len(h3) == 1 and len(h4) == 3, (h3, h4)
+    want = dict(zip(("U01", "U02", "U03", "U04"), h3 + h4))
+    assert len(rows) == len(study) == 4, (rows, sorted(study))
+    for sid, r in study.items():
+        row = next(x for x in rows if STUDY_ROWS[sid] in x[0])
+        verdict = row[3].strip("*")
+        assert verdict == LEDGER_TO_CLAIM[r["verdict"]], (sid, row, r["verdict"])
+        assert r["verdict"] == "not run" or verdict == want[sid], (sid, verdict, want[sid])
+    print("ok: the user study's H3 and H4 are in the claims table, their verdicts the ledger's and "
+          "plot_study.py's")
+
+
 def check_smoke(full, tmp):
     """The figures and the report of a smoke results file."""
     sh("/usr/bin/python3", PLOT, full, "--out", os.path.join(tmp, "full"))
@@ -233,10 +371,17 @@ def check_smoke(full, tmp):
     for claim in ("H1", "H2", "SIRL is better frozen", "Random beats preference"):
         assert claim in rep, f"report lacks {claim}"
     assert "paired t-test" in rep and "p = " in rep and "Holm p" in rep
-    # The summary table opens the report, before the figures; the profile's text closes it.
-    assert rep.index("| claim | environment | protocol | verdict") < rep.index("## Figures") < rep.index(
-        "## Configuration"), "report order: summary, figures, …, profile"
-    # The page a reader opens, in chromium: summary table first, real tables, every image loaded.
+    # The main claims open the report; the table of every claim, the ledger and the figures
+    # follow; the profile's text closes it.
+    sys.path.insert(0, os.path.join(SRC, "python"))
+    import sirl_bench
+    with sirl_bench.open(full) as r:
+        titles = {e: g["attrs"].get("title", e) for e, g in r.datasets.items()}
+    check_first_screen(rep, open(os.path.join(tmp, "full", "report.html")).read(),
+                       json.load(open(os.path.join(tmp, "full", "claims.json"))), titles)
+    check_study_claims(rep, full, tmp)
+    # The page a reader opens, in chromium: the main claims first, coloured, the contents' links
+    # land, real tables, every image loaded.
     p = subprocess.run(["node", os.path.join(SRC, "tests", "report_browser.mjs"),
                         os.path.join(tmp, "full", "report.html")], cwd=os.path.join(SRC, "app", "study_web"),
                        capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
@@ -341,19 +486,26 @@ def check_smoke(full, tmp):
                     assert abs(c["p_holm"] - q) < 1e-9, (env, protocol, c, q)
     names = {c["name"] for h in claims for c in h["comparisons"]}
     assert not names & {"truth", "raw"}, names
-    rows = [ln for ln in rep.split("\n## ", 1)[0].splitlines() if ln.startswith("| ") and
-            not ln.startswith("| claim")]
+    _, rows = md_table(report_section(rep, "Every claim"), "| claim | environment | protocol | verdict")
     # The protocol column: "paper (primary; its head as run against the paper's)", "linear
     # (secondary)", "—" for FPE claims.
-    cells = [ln.split(" | ")[2].split(" (")[0] for ln in rows]
+    cells = [r[2].split(" (")[0] for r in rows]
     assert {"—", "paper"} <= set(cells) <= {"—", "paper", "linear"}, cells
-    full_cells = [ln.split(" | ")[2] for ln in rows]
+    full_cells = [r[2] for r in rows]
     assert all(("primary;" in c and "epochs" in c) for c in full_cells if c.startswith("paper")), full_cells
     assert all(c == "linear (secondary)" for c in full_cells if c.startswith("linear")), full_cells
-    if "linear" in cells:
-        assert cells.index("linear") > max(i for i, c in enumerate(cells) if c != "linear"), cells
+    # The main claims first; a claim's linear row right after its paper twin (same claim, same
+    # environment), so the two protocols of a claim are read together.
+    main = [r[0].startswith("**") for r in rows]
+    assert main == sorted(main, reverse=True) and sum(main) == sum(h["main"] for h in claims), main
+    for i, c in enumerate(cells):
+        if c == "linear":
+            prev = rows[i - 1]
+            assert cells[i - 1] == "paper" and prev[1] == rows[i][1] and (
+                prev[0] == rows[i][0] or prev[0][:4] == rows[i][0][:4] == "**H2"), (prev, rows[i])
     print(f"ok: H1's and H2's verdicts and Holm p's ({', '.join(protocols)} protocol) equal a "
-          "recomputation from the tables; the summary lists the paper's protocol first")
+          "recomputation from the tables; the claims table lists the main claims first, each "
+          "claim's linear row after its paper twin")
 
     # H1's "trainings converged" counts, recomputed from /tables/training's columns: the φ of
     # SIRL and of each preference baseline at the largest N, and every VAE of the environment.
@@ -411,6 +563,10 @@ def check_smoke(full, tmp):
         assert drawn.get(key) == was_drawn.get(key), key
     assert "fig4_references" not in was_drawn and was_drawn["fig5_protocols"]["linear"] == "not run"
     assert all(h["verdict"] == "not run" for h in was if h["protocol"] == "linear")
+    # Its main claims' table: the paper protocol's columns only (no protocol ran the others).
+    was_head, _ = md_table(open(os.path.join(tmp, "old", "report.md")).read(), "| main claim |")
+    assert was_head[1:-1] == [c for c in md_table(rep, "| main claim |")[0][1:-1]
+                              if c.endswith("paper protocol")], was_head
     print(f"ok: the {len(paper)} FPE and paper-protocol claims and Figs. 4, 5, 7 equal those of "
           "the file without the linear and reference rows (an older engine's)")
 
@@ -435,7 +591,8 @@ with tempfile.TemporaryDirectory() as tmp:
     import sirl_bench
     with sirl_bench.open(full) as res:  # the reader's records: an independent count
         kinds = {k: int(n) for k, n in res.records["kind"].value_counts().items()}
-    assert shown["profile"] == "smoke" and shown["verified"], shown
+    # The run's profile is SMOKE's (engine-test: smoke's plan with narrow networks).
+    assert shown["profile"] == "engine-test" and shown["verified"], shown
     assert shown["tasks"] == {"done": sum(kinds.values()), "total": sum(kinds.values()),
                               "complete": True}, (shown["tasks"], kinds)
     assert shown["task_kinds"] == kinds, (shown["task_kinds"], kinds)

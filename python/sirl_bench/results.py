@@ -25,6 +25,10 @@ Types, the same in every table:
   protocol    the TPA tables only: how a cell's reward heads were fit. "paper" (the paper's head
               φ→1024→1024→1 trained by Adam) or "linear" (a Bradley–Terry linear head on the
               frozen φ, fit to convergence by Newton's method). Missing in an older file: "paper".
+
+Attributes (provenance, the "attrs" of /datasets, a record's hyper-parameters) are typed by the
+tables of attributes.py: @seeds [0, 1], @in_claims True, @teacher_beta inf, @hyper a dict.
+/datasets is read on demand (lazy.py): its attributes without its arrays.
 """
 from __future__ import annotations
 
@@ -38,7 +42,10 @@ import numpy as np
 import pandas as pd
 
 from . import untrusted
+from .attributes import as_stored, typed_attrs
+from .attributes import typed as typed_attr
 from .errors import ResultsError  # re-exported: sirl_bench.ResultsError
+from .lazy import Datasets, Group
 
 # Results-file schema versions this reader understands (results/results_file.h).
 SCHEMA_VERSIONS = (1, 2, 3)
@@ -150,7 +157,12 @@ class Results:
             self._f.close()
             raise ResultsError(f"{self.path}: {kind} (no /runs or engine_version); "
                                f"a results file is what `sirl run --out` writes")
-        v = int(f.attrs.get("schema_version", 1))  # version 1 files carry no number
+        try:  # version 1 files carry no number
+            v = typed_attr("provenance", "schema_version", f.attrs.get("schema_version", 1),
+                           f"{self.path}: /")
+        except ResultsError:
+            self._f.close()
+            raise
         if v not in SCHEMA_VERSIONS:
             self._f.close()
             raise ResultsError(f"{self.path}: results schema version {v}; this reader reads "
@@ -165,6 +177,7 @@ class Results:
         self.tables = _LazyTables(f)
         self._records = None
         self._curves = None
+        self._datasets = None
 
     # --- context manager ---
     def __enter__(self):
@@ -198,14 +211,9 @@ class Results:
     def provenance(self) -> dict:
         """The run's root attributes: engine version, git commit, CPU class, kernel paths,
         libraries, host, threads, profile name and text, start and finish times, wall seconds,
-        tasks done and total."""
-        out = {}
-        for k, v in self._f.attrs.items():
-            v = _text(v)
-            if isinstance(v, np.generic):
-                v = v.item()
-            out[k] = v
-        return out
+        tasks done and total, typed (attributes.ATTRIBUTE_TYPES["provenance"]: schema_version,
+        threads and tasks_* int, wall_seconds and the roofs float, complete bool)."""
+        return typed_attrs("provenance", self._f.attrs, f"{self.path}: /")
 
     @property
     def hyper_points(self) -> dict:
@@ -246,7 +254,7 @@ class Results:
                 "selection_colour", "selection_order", "dashes"]
         rows = {}
         for name, g in (self._f["methods"].items() if "methods" in self._f else []):
-            rows[name] = {k: _attr(g.attrs[k]) for k in cols if k in g.attrs}
+            rows[name] = {k: as_stored(g.attrs[k]) for k in cols if k in g.attrs}
             _check_method(self.path, name, rows[name])
         df = pd.DataFrame.from_dict(rows, orient="index", columns=cols)
         df.index.name = "variant"
@@ -274,12 +282,13 @@ class Results:
         return _texts(self._f["runs_index"][:]) if "runs_index" in self._f else []
 
     def record(self, key) -> dict:
-        """A task record's scalar fields (numbers and texts) and the names of its arrays."""
+        """A task record's scalar fields (numbers and texts) and the names of its arrays; "hyper"
+        (the hyper-parameters the task read) as a Hyper dict, its text as written in .text."""
         g = self._f["runs/" + key]
         a = g.attrs
         out = {"key": key, "kind": _text(a.get("task_kind", ""))}
         for k in _texts(a.get("record_texts", [])):
-            out[k] = _text(a[k])
+            out[k] = typed_attr("records", k, a[k], f"{self.path}: /runs/{key}")
         for k in _texts(a.get("record_numbers", [])):
             out[k] = float(a[k])
         out["arrays"] = _texts(a.get("record_arrays", []))
@@ -368,39 +377,15 @@ class Results:
 
     # --- datasets ---
     @property
-    def datasets(self) -> dict:
+    def datasets(self) -> Datasets:
         """Per environment: {"attrs": its registration (title, trajectories, teacher, ...),
         "inputs": Ξ [T, input_dim], "features": the true features [T, F], "queries": {...},
-        "rewards": {...}, ...}; every array of /datasets/<env>, nested as stored."""
-        out = {}
-        if "datasets" not in self._f:
-            return out
-        for env, g in self._f["datasets"].items():
-            out[env] = _group_dict(g)
-        return out
-
-
-def _group_dict(g):
-    """A group as a dict: its arrays and subgroups by name, and "attrs": the group's attributes
-    plus each array's own, as "<array>.<attribute>" (e.g. "features.feature_names")."""
-    d = {"attrs": {k: _attr(v) for k, v in g.attrs.items()}}
-    for name, o in g.items():
-        if isinstance(o, h5py.Group):
-            d[name] = _group_dict(o)
-        else:
-            d[name] = o[:]
-            for k, v in o.attrs.items():
-                d["attrs"][f"{name}.{k}"] = _attr(v)
-    return d
-
-
-def _attr(v):
-    v = _text(v)
-    if isinstance(v, np.ndarray) and v.dtype == object:
-        return _texts(v)
-    if isinstance(v, np.generic):
-        return v.item()
-    return v
+        "rewards": {...}, ...}; every array of /datasets/<env>, nested as stored. Read on demand
+        (lazy.py): "attrs" (typed: attributes.py) reads no array; an array is read on first
+        access, while the file is open, and kept."""
+        if self._datasets is None:
+            self._datasets = Datasets(self._f, self.path, owns_file=False)
+        return self._datasets
 
 
 _COLOUR = re.compile(r"#[0-9a-fA-F]{6}")
@@ -442,13 +427,48 @@ def _open_h5(path):
         raise ResultsError(f"{path}: cannot open as HDF5 ({e})") from None
 
 
-def datasets(path) -> dict:
+def datasets(path) -> Datasets:
     """/datasets of any sirl-bench file (a results file or `sirl dataset --out`), as
-    Results.datasets: {env: {"attrs": ..., "inputs": Ξ, ...}}."""
-    with _open_h5(path) as f:
-        if "datasets" not in f:
-            raise ResultsError(f"{path}: no /datasets (not a sirl-bench results or dataset file)")
-        return {env: _group_dict(g) for env, g in f["datasets"].items()}
+    Results.datasets: {env: {"attrs": ..., "inputs": Ξ, ...}}, read on demand ("attrs" reads no
+    array; an array is read on first access). The file stays open while the mapping or a group
+    of it is in use: `with sirl_bench.datasets(path) as d:` closes it at the end of the block,
+    and `.to_dict()` reads everything at once."""
+    f = _open_h5(path)
+    if "datasets" not in f:
+        f.close()
+        raise ResultsError(f"{path}: no /datasets (not a sirl-bench results or dataset file)")
+    return Datasets(f, path, owns_file=True)
+
+
+def embedding_keys(source, envs=None) -> dict:
+    """What `sirl evaluate` reads from an embeddings file, from the file `sirl dataset --profile
+    P --out F` wrote (its path, or what sirl_bench.datasets(F) returned): {(env, seed, N): the
+    array's HDF5 path "/<env>/s<seed>/N<N>"}, for every environment of the file (or of `envs`,
+    as `sirl evaluate --envs` takes them) × its @seeds × its @evaluate_N, in the file's order.
+    Reads attributes only; its keys are the keys write_embeddings takes."""
+    if isinstance(source, Datasets):
+        return _embedding_keys(source, envs)
+    with datasets(source) as d:
+        return _embedding_keys(d, envs)
+
+
+def _embedding_keys(d, envs):
+    envs = [envs] if isinstance(envs, str) else list(d) if envs is None else list(envs)
+    out = {}
+    for env in envs:
+        if env not in d:
+            raise ResultsError(f"{d.path}: no /datasets/{env} (it has: {', '.join(d)})")
+        a = d[env]["attrs"]
+        lacks = [f"@{k}" for k in ("seeds", "evaluate_N") if k not in a]
+        if lacks:
+            raise ResultsError(f"{d.path}: /datasets/{env} has no {' or '.join(lacks)}: the file "
+                               "`sirl dataset --profile P --out FILE` writes lists what `sirl "
+                               "evaluate` asks for (a results file or a `sirl dataset --env` "
+                               "file does not)")
+        for seed in a["seeds"]:
+            for N in a["evaluate_N"]:
+                out[(env, seed, N)] = embedding_name(env, seed, N)
+    return out
 
 
 def embedding_name(env, seed, N) -> str:
@@ -484,10 +504,10 @@ def study_analysis(path) -> dict:
     row per value, rebuilt into the same arrays)."""
     with _open_h5(path) as f:
         if "study_analysis" in f:
-            return _group_dict(f["study_analysis"])
+            return Group(f["study_analysis"], "study_analysis", str(path), f).to_dict()
         if "tables" in f and "study" in f["tables"]:
             return _study_from_table(typed(pd.DataFrame(f["tables/study"][:])), str(path),
-                                     _attr(f.attrs.get("profile_name", "")))
+                                     as_stored(f.attrs.get("profile_name", "")))
     raise ResultsError(f"{path}: not a study analysis (no /study_analysis), nor a results file "
                        f"whose profile ran the study (no /tables/study; an engine before 0.14.0 "
                        f"wrote none: rerunning `sirl run` on its profile adds it, reusing the rest)")
