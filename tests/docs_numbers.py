@@ -58,6 +58,11 @@ def main():
     if bib != cff:
         sys.exit(f"FAIL: docs/citing.md cites version {bib}, CITATION.cff {cff}")
     print(f"ok: docs/citing.md cites version {bib}, as CITATION.cff")
+    init = open(os.path.join(SRC, "python", "sirl_bench", "__init__.py")).read()
+    reader = re.search(r'^__version__ = "([^"]+)"', init, re.M)[1]
+    if reader != cff:
+        sys.exit(f"FAIL: the reader says version {reader}, CITATION.cff {cff}")
+    print(f"ok: the reader's version is {reader}")
     print("PASS")
 
 
