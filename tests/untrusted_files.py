@@ -18,6 +18,7 @@ import sys
 import tempfile
 
 import h5py
+import numpy as np
 import xxhash
 
 SIRL = os.environ["SIRL"]
@@ -119,6 +120,27 @@ def main():
             linked = write(os.path.join(tmp, name + ".h5"), framed(open(plain, "rb").read()))
             one_line_refusal(f"the reader on a {name} link", *reader(linked), linked)
         print("ok: a hard-link cycle and a soft link are refused by the reader, promptly")
+
+        # A record that names a field it lacks (a flipped byte in a heap string does this): the
+        # reader refuses it in one line (issue 65: a KeyError traceback in records and figures).
+        named = shutil.copy(FIXTURE, os.path.join(tmp, "named_plain.h5"))
+        with h5py.File(named, "r+") as f:
+            groups = []
+            f["runs"].visititems(lambda n, o: groups.append(o) if "record_numbers" in o.attrs
+                                 else None)
+            g = groups[0]
+            names = [n.decode() if isinstance(n, bytes) else str(n)
+                     for n in g.attrs["record_numbers"]] + ["flopsrged"]
+            g.attrs["record_numbers"] = np.array(names, dtype=h5py.string_dtype())
+        named_f = write(os.path.join(tmp, "named.h5"), framed(open(named, "rb").read()))
+        code = ("import sys; sys.path.insert(0, sys.argv[2]); import sirl_bench\n"
+                "sirl_bench.open(sys.argv[1]).records")
+        p = subprocess.run([PY, "-c", code, named_f, os.path.join(SRC, "python")],
+                           capture_output=True, timeout=120)
+        lines = p.stderr.decode().strip().splitlines()
+        if p.returncode == 0 or "ResultsError" not in lines[-1] or "not a record" not in lines[-1]:
+            fail(f"the reader on a record naming a missing field: {p.stderr[-600:]!r}")
+        print("ok: a record naming a field it lacks is one ResultsError")
 
         # A schema-3 file without its frame: laundered through h5py.
         laundered = shutil.copy(FIXTURE, os.path.join(tmp, "laundered.h5"))

@@ -284,14 +284,20 @@ class Results:
     def record(self, key) -> dict:
         """A task record's scalar fields (numbers and texts) and the names of its arrays; "hyper"
         (the hyper-parameters the task read) as a Hyper dict, its text as written in .text."""
-        g = self._f["runs/" + key]
-        a = g.attrs
-        out = {"key": key, "kind": _text(a.get("task_kind", ""))}
-        for k in _texts(a.get("record_texts", [])):
-            out[k] = typed_attr("records", k, a[k], f"{self.path}: /runs/{key}")
-        for k in _texts(a.get("record_numbers", [])):
-            out[k] = float(a[k])
-        out["arrays"] = _texts(a.get("record_arrays", []))
+        where = f"{self.path}: /runs/{key}"
+        try:
+            a = self._f["runs/" + key].attrs
+            out = {"key": key, "kind": _text(a.get("task_kind", ""))}
+            for k in _texts(a.get("record_texts", [])):
+                out[k] = typed_attr("records", k, a[k], where)
+            for k in _texts(a.get("record_numbers", [])):
+                out[k] = float(a[k])
+            out["arrays"] = _texts(a.get("record_arrays", []))
+        except (KeyError, TypeError, ValueError) as e:
+            # A record names a field it lacks, or one that is not a number: the engine writes
+            # neither (a crafted or damaged file that passed its checksum).
+            raise ResultsError(f"{where}: not a record as the engine writes it "
+                               f"({' '.join(str(e).split())[:200]})") from None
         return out
 
     @property
