@@ -393,6 +393,17 @@ def openable_figures(body):
                   r'<p class="figure"><a href="\2">\1</a></p>', body)
 
 
+def safe_url(m):
+    """An href or src as the converter wrote it, kept only if it is an anchor, a relative path or
+    an http(s) URL; anything else (javascript:, data:, …) goes nowhere. Judged on the value a
+    browser would see: entities decoded (&#106;avascript:) and the characters it drops (spaces,
+    control characters) removed."""
+    seen = re.sub(r"[\x00-\x20\x7f]", "", html.unescape(m.group(2))).lower()
+    scheme = re.match(r"([a-z][a-z0-9+.-]*):", seen)
+    ok = scheme is None or scheme.group(1) in ("http", "https")
+    return f'{m.group(1)}="{m.group(2) if ok else "#"}"'
+
+
 def report_html(title, body_md):
     """The report's Markdown as HTML (Debian's python3-markdown, tables + fenced code + ids on
     headings): the title, the run's sentence, the main claims' table with its cells coloured by
@@ -406,9 +417,7 @@ def report_html(title, body_md):
     md.preprocessors.deregister("html_block")
     md.inlinePatterns.deregister("html")
     body = md.convert(body_md)
-    # Links and images with a script URL from a file's text ([x](javascript:…)) go nowhere.
-    body = re.sub(r'(href|src)="\s*(?:javascript|vbscript|data):[^"]*"', r'\1="#"', body,
-                  flags=re.IGNORECASE)
+    body = re.sub(r'(href|src)="([^"]*)"', safe_url, body, flags=re.IGNORECASE)
     body = openable_figures(contents(named_tables(coloured_verdicts(body))))
     t = html.escape(title.replace("`", ""))
     return (f"<!doctype html><html><head><meta charset='utf-8'><title>{t}</title>"

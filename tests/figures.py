@@ -17,9 +17,9 @@ column per environment × protocol of the file, each cell's verdict claims.json'
 ⚠ and the metrics spelled out; report.html colours the verdict cells and has a table of contents
 whose links land; the user study's H3/H4 are in the table of every claim, their verdicts those of
 plot_study.py's study report."""
-import re
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys

@@ -15,6 +15,8 @@ import report  # noqa: E402
 
 hostile = ("label <script>alert(1)</script> <img src=x onerror=alert(2)>\n\n"
            "[click](javascript:alert(3)) ![i](JaVaScRiPt:alert(4))\n\n"
+           # entity-encoded and tab-split schemes, which a browser decodes (issue 65's probe)
+           "[e](&#106;avascript:alert(12)) [t](java&#x09;script:alert(13))\n\n"
            "| method | value |\n|---|---|\n| <b onmouseover=alert(5)>x</b> | 1 |\n")
 
 
@@ -28,7 +30,9 @@ class Markup(HTMLParser):
         if tag in ("script", "iframe", "object", "embed"):
             self.bad.append(tag)
         for k, v in attrs:
-            if k.lower().startswith("on") or re.match(r"\s*(javascript|vbscript|data):", v or "", re.I):
+            # as a browser reads it: entities decoded (the parser does), spaces and controls dropped
+            seen = re.sub(r"[\x00-\x20\x7f]", "", v or "")
+            if k.lower().startswith("on") or re.match(r"(javascript|vbscript|data):", seen, re.I):
                 self.bad.append(f"{tag} {k}={v}")
 
 
