@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 
@@ -184,13 +185,35 @@ int run_profile_dataset(const std::string& profile, const std::string& out, bool
   return 0;
 }
 
-int run_inspect(const std::string& file, const std::string& env) {
+int run_inspect(const std::string& file, const std::string& env, bool as_json) {
   // A results file carries a checksum (a dataset file has none: nothing to check): verified
   // before HDF5 reads a byte, as every other reader of results files does.
   verify_checksum(file);
   const H5File f = H5File::open_read(file);
   const StoredDataset s = read_dataset(f, env);
   const Dataset& d = s.data;
+  if (as_json) {
+    const auto& q = s.queries;
+    nlohmann::json j{{"file", file},
+                     {"env", env},
+                     {"engine_version", s.engine_version},
+                     {"query_seed", q.seed},
+                     {"trajectories", d.count},
+                     {"input_dim", d.input_dim},
+                     {"similarity", q.similarity.count},
+                     {"singlepref", q.singlepref.count},
+                     {"multipref10", q.multipref10.count},
+                     {"multipref50", q.multipref50.count},
+                     {"tpa_rewards", q.tpa.size()},
+                     {"tpa_pairs", q.config.tpa_pairs},
+                     {"fpe_train", q.fpe.train.size()},
+                     {"fpe_test", q.fpe.test.size()}};
+    for (int k = 0; k < d.feature_count(); ++k)
+      j["features"].push_back(
+          {{"name", d.feature_names[k]}, {"min", d.feature_min[k]}, {"max", d.feature_max[k]}});
+    std::printf("%s\n", j.dump(1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+    return 0;
+  }
   std::printf("%s /datasets/%s (engine %s, seed %llu)\n", file.c_str(), env.c_str(),
               s.engine_version.c_str(), (unsigned long long)s.queries.seed);
   std::printf("  trajectories %lld x %d inputs\n", (long long)d.count, d.input_dim);
@@ -367,7 +390,9 @@ void register_inspect(CLI::App& app, Runner& run) {
   cmd->add_option("--env", env, "Environment group to read")
       ->check(CLI::IsMember(env_choices()))
       ->capture_default_str();
-  run = [] { return run_inspect(file, env); };
+  static bool as_json = false;
+  cmd->add_flag("--json", as_json, "Print one JSON object instead");
+  run = [] { return run_inspect(file, env, as_json); };
 }
 
 }  // namespace sirl::app

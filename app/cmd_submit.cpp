@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 #include <string>
@@ -321,6 +322,47 @@ int rerun_failed(const SubmitOptions& o) {
   return 0;
 }
 
+// A shard's state as print_status names it: complete, a phase (with its exit code when it failed
+// or stopped), or lost (its log says running, the queue has no job of it).
+std::string shard_state_name(const ShardReport& r, bool known) {
+  std::string state = r.complete ? "complete" : phase_name(r.state.phase);
+  if (!r.complete &&
+      (r.state.phase == ShardState::kFailed || r.state.phase == ShardState::kStopped))
+    state += " (" + std::to_string(r.state.exit_code) + ")";
+  if (!r.complete && known && r.queue.empty() && r.state.phase == ShardState::kRunning)
+    state = "lost";
+  return state;
+}
+
+// `sirl status --json`: the table below as one JSON object.
+void print_status_json(const SlurmSubmission& s, const std::vector<ShardReport>& reports,
+                       bool known) {
+  nlohmann::json j{{"dir", s.dir.string()},
+                   {"profile", s.profile},
+                   {"mpi", s.mpi},
+                   {"jobs", s.jobs},
+                   {"queue_known", known}};
+  j["shards"] = nlohmann::json::array();
+  for (const ShardReport& r : reports) {
+    nlohmann::json open = nlohmann::json::array();
+    for (const auto& [key, started] : r.open)
+      open.push_back({{"key", key}, {"checkpoint", started}});
+    j["shards"].push_back({{"state", shard_state_name(r, known)},
+                           {"complete", r.complete},
+                           {"tasks", r.tasks},
+                           {"committed", r.committed},
+                           {"checkpoints", r.checkpoints},
+                           {"starts", r.state.starts},
+                           {"queue", r.queue},
+                           {"job", r.state.job},
+                           {"host", r.state.host},
+                           {"when", r.state.when},
+                           {"open_tasks", open}});
+  }
+  j["rerun"] = shards_to_rerun(reports);
+  std::printf("%s\n", j.dump(1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+}
+
 void print_status(const SlurmSubmission& s, const std::vector<ShardReport>& reports, bool known) {
   std::printf("submission %s: profile %s, %s, jobs %s\n", s.dir.c_str(), s.profile.c_str(),
               s.mpi ? "one MPI run" : (std::to_string(s.shards) + " shards").c_str(),
@@ -334,14 +376,9 @@ void print_status(const SlurmSubmission& s, const std::vector<ShardReport>& repo
   int complete = 0;
   for (size_t i = 0; i < reports.size(); ++i) {
     const ShardReport& r = reports[i];
-    std::string state = r.complete ? "complete" : phase_name(r.state.phase);
-    if (!r.complete &&
-        (r.state.phase == ShardState::kFailed || r.state.phase == ShardState::kStopped))
-      state += " (" + std::to_string(r.state.exit_code) + ")";
     // A log that says "running" with no job in the queue: the job died without a word
     // (killed, node lost).
-    if (!r.complete && known && r.queue.empty() && r.state.phase == ShardState::kRunning)
-      state = "lost";
+    const std::string state = shard_state_name(r, known);
     complete += r.complete;
     char tasks[32];
     std::snprintf(tasks, sizeof tasks, "%d/%d", r.committed, r.tasks);
@@ -456,6 +493,8 @@ void register_status(CLI::App& app, Runner& run) {
   cmd->add_flag("--tasks", tasks,
                 "Also list each incomplete shard's tasks not committed yet, marking those whose "
                 "training saved a checkpoint (in progress, or stopped mid-way)");
+  static bool as_json = false;
+  cmd->add_flag("--json", as_json, "Print one JSON object instead (every shard, its open tasks)");
   run = [] {
     SlurmSubmission s;
     try {
@@ -465,6 +504,10 @@ void register_status(CLI::App& app, Runner& run) {
     }
     bool known = false;
     const std::vector<ShardReport> reports = shard_reports(s, known);
+    if (as_json) {
+      print_status_json(s, reports, known);
+      return 0;
+    }
     print_status(s, reports, known);
     if (tasks)
       for (size_t i = 0; i < reports.size(); ++i) {

@@ -2,6 +2,7 @@
 """`sirl submit` and `sirl status` without a cluster: the script and manifest it writes, that
 `sirl plan --nodes N` and `sirl submit --nodes N` predict the same memory and (up to their two
 calibrations) the same time, and one clear line with exit 2 for every wrong use."""
+import json
 import os
 import re
 import subprocess
@@ -53,7 +54,13 @@ with tempfile.TemporaryDirectory() as tmp:
     for i, n in enumerate(counts):
         assert f"shard {i}: {n} task(s) not committed" in listed, listed
     assert "grid/s0/sirl/N100/rep" in listed and "(checkpoint saved)" not in listed, listed
-    print(f"ok: an array of 3 shards written (--mem={mem}M); status: 3 not started")
+    # --json: the same shards, states and open tasks.
+    js = json.loads(sirl("status", str(sub), "--json").stdout)
+    assert [sh["state"] for sh in js["shards"]] == ["not started"] * 3, js["shards"]
+    assert [sh["tasks"] for sh in js["shards"]] == counts, (js["shards"], counts)
+    assert [len(sh["open_tasks"]) for sh in js["shards"]] == counts
+    assert js["profile"] == "smoke" and js["queue_known"] is False, js
+    print(f"ok: an array of 3 shards written (--mem={mem}M); status: 3 not started (text and --json)")
 
     plan = sirl("plan", "smoke", "--nodes", "2", "--cores-per-node", "4").stdout
     mpi = sirl("submit", "smoke", "--nodes", "2", "--cores-per-node", "4", "--out",

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "datasets/grid_robot.h"
 #include "results/dataset_store.h"
@@ -43,6 +44,11 @@ TEST(DatasetCli, WriteInspectAndRefuseCorruptFiles) {
       << out;
   EXPECT_EQ(run(sirl + " inspect " + path.string(), &out), 0) << out;
   EXPECT_NE(out.find("similarity 200"), std::string::npos) << out;
+  ASSERT_EQ(run(sirl + " inspect " + path.string() + " --json", &out), 0) << out;
+  const nlohmann::json j = nlohmann::json::parse(out);
+  EXPECT_EQ(j["similarity"].get<int64_t>(), 200);
+  EXPECT_EQ(j["env"], "grid");
+  EXPECT_EQ(j["features"].size(), 4u);  // GridRobot's four
   fs::resize_file(path, fs::file_size(path) / 3);
   const int rc = run(sirl + " inspect " + path.string(), &out);
   EXPECT_EQ(rc, 1) << out;
