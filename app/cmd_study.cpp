@@ -7,8 +7,10 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "app/commands.h"
 #include "app/study_server.h"
@@ -232,21 +234,108 @@ CLI::App* register_study_analyze(CLI::App& study) {
   return ana;
 }
 
+// Two records of one participant are the same when every query, answer and timing is.
+bool same_participant(const StudyParticipant& a, const StudyParticipant& b) {
+  return a.token == b.token && a.scenario == b.scenario &&
+         a.scenario_features == b.scenario_features && a.reward == b.reward &&
+         a.similarity == b.similarity && a.preference == b.preference &&
+         a.similarity_answer == b.similarity_answer && a.preference_answer == b.preference_answer &&
+         a.similarity_ms == b.similarity_ms && a.preference_ms == b.preference_ms &&
+         a.similarity_time == b.similarity_time && a.preference_time == b.preference_time;
+}
+
+std::string m_out;
+std::vector<std::string> m_inputs;
+bool m_force = false;
+
+// `sirl study merge OUT IN...`: the participants of several study files (one server per
+// participant, on one machine or several) in one file. The files must describe one study (the
+// same environment, trajectory space and data seed); a participant in two files must be the same
+// record in both (merge never chooses between two sets of answers).
+int study_merge() {
+  Study merged;
+  std::map<std::string, std::string> from;  // participant id → the file it came from
+  for (size_t i = 0; i < m_inputs.size(); ++i) {
+    const std::string& in = m_inputs[i];
+    std::error_code ec;
+    if (std::filesystem::equivalent(in, m_out, ec))
+      throw UsageError(m_out + " is also one of the inputs; merge writes a new file");
+    const Study s = read_study(in);
+    if (i == 0) {
+      merged.env = s.env;
+      merged.trajectories = s.trajectories;
+      merged.data_seed = s.data_seed;
+    } else if (s.env != merged.env || s.trajectories != merged.trajectories ||
+               s.data_seed != merged.data_seed) {
+      throw UsageError(in + " is a study on " + s.env + " (" + std::to_string(s.trajectories) +
+                       " trajectories, data seed " + std::to_string(s.data_seed) + "), " +
+                       m_inputs.front() + " on " + merged.env + " (" +
+                       std::to_string(merged.trajectories) + ", " +
+                       std::to_string(merged.data_seed) + "): not one study");
+    }
+    for (const StudyParticipant& p : s.participants) {
+      if (const StudyParticipant* seen = merged.find(p.id)) {
+        if (!same_participant(*seen, p))
+          throw UsageError("participant " + p.id + " is in " + from[p.id] + " and " + in +
+                           " with different queries or answers: merge does not choose; keep "
+                           "one of the files' copy (e.g. leave the other file out)");
+        continue;
+      }
+      from[p.id] = in;
+      merged.participants.push_back(p);
+    }
+  }
+  std::error_code ec;
+  if (std::filesystem::exists(m_out, ec) && !m_force)
+    throw UsageError(m_out +
+                     " already exists; merge writes a new file: choose another name, or "
+                     "--force to replace it");
+  check_replaceable(m_out, "study", m_force);
+  if (const auto dir = std::filesystem::path(m_out).parent_path(); !dir.empty())
+    std::filesystem::create_directories(dir);
+  const FileLock lock(m_out, "sirl study merge", "wait for it to finish, or choose another OUT");
+  write_study(m_out, merged);
+  int64_t sim = 0, pref = 0;
+  for (const auto& p : merged.participants) sim += p.similarity_done(), pref += p.preference_done();
+  std::printf(
+      "wrote %s: %zu participants from %zu files on %s, %lld similarity and %lld preference "
+      "answers\n",
+      m_out.c_str(), merged.participants.size(), m_inputs.size(), merged.env.c_str(),
+      static_cast<long long>(sim), static_cast<long long>(pref));
+  return 0;
+}
+
+CLI::App* register_study_merge(CLI::App& study) {
+  auto* m = study.add_subcommand(
+      "merge",
+      "Combine study files of one study (one `sirl study serve` per participant, here or on other "
+      "machines) into one file: the same environment, trajectories and data seed; a participant "
+      "in two files must be the same there");
+  m->add_option("out", m_out, "The merged study file (a new file: see --force)")->required();
+  m->add_option("inputs", m_inputs, "Study files")->required()->check(CLI::ExistingFile);
+  m->add_flag("--force", m_force, "Replace OUT if it exists (never one of the inputs)");
+  m->callback([] {});
+  return m;
+}
+
 }  // namespace
 
 void register_study(CLI::App& app, Runner& run) {
   auto* study = app.add_subcommand(
       "study",
       "The user study (paper §5): collect answers in a browser (serve), import answers collected\n"
-      "elsewhere (import), simulate a cohort (simulate), and analyse a study file (analyze).");
+      "elsewhere (import), simulate a cohort (simulate), combine study files (merge), and analyse\n"
+      "a study file (analyze).");
   study->require_subcommand(1);
 
   CLI::App* sim = register_study_simulate(*study);
   CLI::App* ana = register_study_analyze(*study);
   register_study_serve(*study);
   register_study_import(*study);
+  CLI::App* merge = register_study_merge(*study);
 
-  run = [sim, ana] {
+  run = [sim, ana, merge] {
+    if (merge->parsed()) return study_merge();
     if (sim->parsed())
       return study_simulate(s_env, s_traj, s_users, s_sim, s_pref, s_beta, s_mistake, s_seed, s_out,
                             s_force);

@@ -13,7 +13,7 @@ _sirl() {
     return
   fi
   if [ "$cmd" = study ] && [ "$COMP_CWORD" -eq 2 ]; then
-    COMPREPLY=($(compgen -W "serve import simulate analyze" -- "$cur"))
+    COMPREPLY=($(compgen -W "serve import simulate analyze merge" -- "$cur"))
     return
   fi
   if [[ "$cur" == -* ]]; then
