@@ -40,16 +40,6 @@ int default_threads() {
 
 namespace {
 
-// Σ sizes of the regular files under dir (0 when absent).
-uint64_t folder_bytes(const std::filesystem::path& dir) {
-  uint64_t total = 0;
-  std::error_code ec;
-  for (auto it = std::filesystem::recursive_directory_iterator(dir, ec);
-       !ec && it != std::filesystem::recursive_directory_iterator(); it.increment(ec))
-    if (it->is_regular_file(ec)) total += it->file_size(ec);
-  return total;
-}
-
 std::string format_bytes(uint64_t b) {
   char buf[32];
   if (b >= (uint64_t(1) << 30))

@@ -21,16 +21,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-// Σ sizes of the regular files under dir.
-uint64_t tree_bytes(const fs::path& dir) {
-  uint64_t total = 0;
-  std::error_code ec;
-  for (auto it = fs::recursive_directory_iterator(dir, ec);
-       !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
-    if (it->is_regular_file(ec)) total += it->file_size(ec);
-  return total;
-}
-
 // The main claims' verdicts from claims.json in the figures folder beside the file (what
 // `sirl reproduce` writes), or null when there is none or it is not what the report writes.
 json main_verdicts(const fs::path& claims) {
@@ -53,7 +43,8 @@ json main_verdicts(const fs::path& claims) {
 }
 
 json describe(const std::string& file) {
-  const RunInfo info = read_run_info(file);
+  const ResultsSummary summary = read_results_summary(file);
+  const RunInfo& info = summary.info;
   json j;
   j["file"] = file;
   j["verified"] = info.verified;
@@ -79,16 +70,14 @@ json describe(const std::string& file) {
   j["shard"] = info.shard;
   j["tasks"] = {
       {"done", info.tasks_done}, {"total", info.tasks_total}, {"complete", info.complete}};
-  std::map<std::string, int64_t> kinds;
-  for (const TaskRecord& r : read_results_records(file)) ++kinds[r.kind];
-  j["task_kinds"] = kinds;
+  j["task_kinds"] = summary.records_by_kind;
   const fs::path path(file);
   const fs::path figures = path.parent_path() / (path.stem().string() + "-figures");
   json beside = json::object();
   std::error_code ec;
   if (fs::is_regular_file(file + ".sum", ec)) beside["checksum"] = file + ".sum";
   if (fs::is_directory(file + ".tasks", ec))
-    beside["task_cache"] = {{"path", file + ".tasks"}, {"bytes", tree_bytes(file + ".tasks")}};
+    beside["task_cache"] = {{"path", file + ".tasks"}, {"bytes", folder_bytes(file + ".tasks")}};
   if (fs::is_directory(figures, ec)) {
     beside["figures"] = figures.string();
     if (fs::is_regular_file(figures / "report.md", ec))

@@ -219,6 +219,15 @@ void check_replaceable(const std::string& out, const std::string& kind, bool for
                    " file; choose another --out, or --force to replace it");
 }
 
+uint64_t folder_bytes(const std::filesystem::path& dir) {
+  uint64_t total = 0;
+  std::error_code ec;
+  for (auto it = std::filesystem::recursive_directory_iterator(dir, ec);
+       !ec && it != std::filesystem::recursive_directory_iterator(); it.increment(ec))
+    if (it->is_regular_file(ec) && !it->is_symlink(ec)) total += it->file_size(ec);
+  return total;
+}
+
 std::string sh_quote(const std::string& s) {
   return shell_quoted(s);
 }

@@ -2,6 +2,7 @@
 // adds its CLI11 subcommand and sets `callback` (run after a successful parse).
 #pragma once
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -49,6 +50,8 @@ void add_set_option(CLI::App* cmd);
 
 // Single-quotes a string for /bin/sh (the plotting scripts are run through std::system).
 std::string sh_quote(const std::string& s);
+// Σ sizes of the regular files under dir, links not followed (0 when absent): a task cache's size.
+uint64_t folder_bytes(const std::filesystem::path& dir);
 
 // Before a command replaces `out`: an existing file must be one this command writes (`kind`:
 // "dataset" has /datasets and no /runs_index or /study; "study" has /study), else it is refused

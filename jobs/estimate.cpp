@@ -27,26 +27,24 @@ double process_cpu_seconds() {
   return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
-// Wall and CPU time over every timing of this calibration (its share of a core, below 1 when
-// other processes ran on the core it measured on).
-thread_local double g_wall = 0, g_cpu = 0;
-
 // The time f takes on an idle core: the process's CPU time, not the wall clock, so another job
 // on the machine does not slow the rates down (the calibration runs on one thread: its CPU time
-// is its wall time when it has a core to itself). Wall and CPU time are summed for cpu_share.
-double seconds_of(const std::function<double()>& f, double* flops) {
+// is its wall time when it has a core to itself). Wall and CPU time are summed into e for
+// cpu_share.
+double seconds_of(PlanEstimate& e, const std::function<double()>& f, double* flops) {
   const auto t0 = std::chrono::steady_clock::now();
   const double c0 = process_cpu_seconds();
   *flops = f();
   const double cpu = process_cpu_seconds() - c0;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  g_wall += wall;
-  g_cpu += std::min(cpu, wall);
+  e.calibration_wall_seconds += wall;
+  e.calibration_cpu_seconds += std::min(cpu, wall);
   return cpu > 0 ? std::min(cpu, wall) : wall;
 }
-double seconds_of(const std::function<void()>& f) {
+double seconds_of(PlanEstimate& e, const std::function<void()>& f) {
   double none = 0;
   return seconds_of(
+      e,
       [&] {
         f();
         return 0.0;
@@ -67,13 +65,13 @@ Dataset time_setup(const std::string& env, const Profile& p, PlanEstimate& e) {
   const EnvSpec& spec = env_spec(env);
   if (spec.set_sample) spec.set_sample(small, kSmall, 0);
   Dataset d;
-  const double made = seconds_of([&] { d = spec.make(small); });
+  const double made = seconds_of(e, [&] { d = spec.make(small); });
   // A sampled Ξ costs per trajectory (each one sampled, solved and featurised on its own).
   const double gen =
       spec.set_sample ? made * double(spec.trajectories(p.data)) / double(kSmall) : made;
   QueryBundleConfig full = p.queries;
   full.fpe_trajectories = std::min<int64_t>(full.fpe_trajectories, d.count);
-  const double bundle = seconds_of([&] { make_query_bundle(d, full, 1); });
+  const double bundle = seconds_of(e, [&] { make_query_bundle(d, full, 1); });
   const auto axes = p.axes.find(env);
   const double seeds = axes != p.axes.end() ? double(axes->second.seeds.size()) : 1.0;
   e.dataset_seconds[env] = gen;
@@ -101,7 +99,8 @@ void calibrate_rates(const std::string& env, const Dataset& d, const Plan& plan,
     const std::string key = env + "/" + named.first;
     if (c->one_length) {
       double f = 0;
-      const double s = seconds_of([&] { return c->train(sample, 1); }, &f);
+      const double s = seconds_of(
+          e, [&] { return c->train(sample, 1); }, &f);
       e.gflops_per_s[key] = s > 0 ? f / s * 1e-9 : 1;
       e.call_seconds[key] = 0;
       continue;
@@ -111,8 +110,10 @@ void calibrate_rates(const std::string& env, const Dataset& d, const Plan& plan,
     // At least 3 pairs (2 when a pair takes over a second), more while the class has cost < 0.5 s.
     double f1 = 0, f3 = 0, s1 = 1e300, s3 = 1e300, spent = 0;
     for (int pair = 0; pair < 9; ++pair) {
-      const double a = seconds_of([&] { return c->train(sample, 1); }, &f1);
-      const double b = seconds_of([&] { return c->train(sample, 3); }, &f3);
+      const double a = seconds_of(
+          e, [&] { return c->train(sample, 1); }, &f1);
+      const double b = seconds_of(
+          e, [&] { return c->train(sample, 3); }, &f3);
       s1 = std::min(s1, a);
       s3 = std::min(s3, b);
       spent += a + b;
@@ -156,7 +157,6 @@ void time_tasks(const Plan& plan, int threads, PlanEstimate& e) {
 PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads,
                            std::vector<char> pending) {
   PlanEstimate e;
-  g_wall = g_cpu = 0;
   if (pending.empty()) pending.assign(plan.tasks.size(), 1);
   e.pending = std::move(pending);
   // The grid's environments and the user study's (its tasks run on its own Ξ).
@@ -170,7 +170,8 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads,
   }
   e.peak_bytes += e.data_bytes;
   time_tasks(plan, threads, e);
-  e.cpu_share = g_wall > 0 ? g_cpu / g_wall : 1;
+  e.cpu_share =
+      e.calibration_wall_seconds > 0 ? e.calibration_cpu_seconds / e.calibration_wall_seconds : 1;
   if (double load[1]; getloadavg(load, 1) == 1) e.load_average = load[0];
   return e;
 }

@@ -31,6 +31,7 @@ struct PlanEstimate {
   // 1-minute load when it ended: a busy machine runs slower than predicted.
   double cpu_share = 1;
   double load_average = 0;
+  double calibration_wall_seconds = 0, calibration_cpu_seconds = 0;  // Σ over its timings
 };
 
 // One line on how busy the machine was while calibrating and what that means for the prediction

@@ -568,6 +568,14 @@ RunInfo read_run_info_unsandboxed(const std::string& path, bool verified, bool f
   return i;
 }
 
+std::map<std::string, int64_t> read_kinds_unsandboxed(const std::string& path) {
+  H5File f = H5File::open_read(path);
+  std::map<std::string, int64_t> kinds;
+  for (const auto& k : f.read_strings("/runs_index"))
+    ++kinds[f.attr_string("/runs/" + k, "task_kind")];
+  return kinds;
+}
+
 std::vector<TaskRecord> read_records_unsandboxed(const std::string& path, bool framed) {
   H5File f = H5File::open_read(path);
   refuse_unframed(path, framed, check_results_schema(f));
@@ -582,6 +590,18 @@ RunInfo read_run_info(const std::string& path) {
   const bool verified = verify_checksum(path, &framed);
   read_in_child_first(path, [&] { read_run_info_unsandboxed(path, verified, framed); });
   return read_run_info_unsandboxed(path, verified, framed);
+}
+
+ResultsSummary read_results_summary(const std::string& path) {
+  bool framed = false;
+  const bool verified = verify_checksum(path, &framed);
+  const auto read = [&] {
+    ResultsSummary s{read_run_info_unsandboxed(path, verified, framed), {}};
+    s.records_by_kind = read_kinds_unsandboxed(path);
+    return s;
+  };
+  read_in_child_first(path, [&] { read(); });
+  return read();
 }
 
 std::vector<TaskRecord> read_results_records(const std::string& path) {

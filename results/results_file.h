@@ -14,6 +14,7 @@
 //                        train_accuracy, epochs, max_epochs, stopped, stop, final_loss, phi_drift
 // Written atomically (a .partial file renamed into place), so the file on disk is always whole.
 #pragma once
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -133,6 +134,13 @@ void write_results_file(const std::string& path, const RunInfo& info,
 // be verified at all (a file of engine ≤ 0.7.0 copied without its .sum cannot).
 RunInfo read_run_info(const std::string& path);
 std::vector<TaskRecord> read_results_records(const std::string& path);
+// read_run_info, and how many task records of each kind the file holds: verified and read in a
+// child once, each record's kind attribute only (no arrays), for a summary (`sirl show`).
+struct ResultsSummary {
+  RunInfo info;
+  std::map<std::string, int64_t> records_by_kind;
+};
+ResultsSummary read_results_summary(const std::string& path);
 
 // A results file carries its digest in its first 1024 bytes (an HDF5 userblock; engines from 0.8.0
 // on); FILE.sum beside it holds the whole file's (`xxh128sum -c FILE.sum` checks it; a 16-digit
