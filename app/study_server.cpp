@@ -13,6 +13,7 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -160,13 +161,20 @@ int run_serve() {
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
   std::atomic<int> stopped_by{0};
+  std::atomic<bool> listening_over{false};
   std::thread stopper([&] {
     unsigned char b = 0;
     while (::read(g_stop_pipe[0], &b, 1) < 0 && errno == EINTR) {
     }
     if (b != 0) {
       stopped_by = b;
-      srv.stop();
+      // httplib's stop() does nothing until listen has begun: a signal that arrives between
+      // the "open:" line and listen_after_bind() would otherwise be lost and the server would
+      // run on. Repeat until the listen loop has returned.
+      while (!listening_over.load()) {
+        srv.stop();
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      }
     }
   });
   std::printf(
@@ -176,6 +184,7 @@ int run_serve() {
       a.participant.c_str(), token.c_str());
   std::fflush(stdout);
   srv.listen_after_bind();
+  listening_over = true;
   const unsigned char done = 0;  // the server ended on its own: end the thread
   [[maybe_unused]] const ssize_t n = ::write(g_stop_pipe[1], &done, 1);
   stopper.join();

@@ -337,6 +337,24 @@ with tempfile.TemporaryDirectory() as tmp:
     assert re.match(r"open: http://127\.0\.0\.1:[1-9]\d*/\?p=dan&t=", line), line
     assert "WARNING" in err and "not a loopback address" in err, err
     print("ok: bad --host values refused before writing; 0.0.0.0 warns and prints a working URL")
+    # A SIGTERM sent the moment the URL is printed (before the listen loop has begun) still
+    # stops the server: repeated, since the window is short.
+    for i in range(12):
+        pq = subprocess.Popen([SIRL, "study", "serve", "--env", "grid", "--participant", "dan",
+                               "--scenario", "x", "--out", fresh, "--port", "0"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              stdin=subprocess.DEVNULL)
+        for _ in range(2):
+            if pq.stdout.readline().startswith("open: "):
+                break
+        pq.terminate()
+        try:
+            err = pq.communicate(timeout=15)[1]
+        except subprocess.TimeoutExpired:
+            pq.kill()
+            raise AssertionError(f"try {i}: a SIGTERM right after the URL did not stop the server")
+        assert "stopped (SIGTERM)" in err, err
+    print("ok: a SIGTERM right after the URL is printed stops the server (12 of 12)")
     st, body = http("GET", f"{base}/api/trajectory?p=alice&t={token}&id=5")
     assert st == 200, body
     # GridRobot: 9 cells of a corner-to-corner path of unit moves, and an end angle in 30° steps.
