@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "app/cluster_options.h"
@@ -14,6 +16,7 @@
 #include "jobs/mpi_run.h"
 #include "jobs/progress.h"
 #include "jobs/run.h"
+#include "results/results_file.h"
 #include "results/study_store.h"
 
 namespace sirl::app {
@@ -27,6 +30,23 @@ void draw_figures(const std::string& results, const std::string& figures) {
   std::fprintf(stderr, "sirl: drawing figures: %s\n", command.c_str());
   const int status = std::system(command.c_str());
   if (status != 0) throw std::runtime_error("the plotting script failed (" + command + ")");
+}
+
+// The verdicts the report decided (FIGURES/claims.json) kept in the results file itself
+// (/verdicts: `sirl show`, sirl_bench's Results.verdicts()), so the file carries its verdicts
+// wherever it is copied. A claims.json that is not the report's list is refused.
+void store_report_verdicts(const std::string& results, const std::string& figures) {
+  const std::filesystem::path claims = std::filesystem::path(figures) / "claims.json";
+  std::ifstream in(claims);
+  if (!in) throw std::runtime_error(claims.string() + ": the report wrote no verdicts");
+  const nlohmann::json all = nlohmann::json::parse(in, nullptr, false);
+  if (!all.is_array())
+    throw std::runtime_error(claims.string() + ": not the report's list of verdicts");
+  store_verdicts(
+      results, all.dump(),
+      "report/plot_figures.py (sirl reproduce, engine " + std::string(engine_version()) + ")");
+  std::fprintf(stderr, "sirl reproduce: %zu verdicts stored in %s (/verdicts)\n", all.size(),
+               results.c_str());
 }
 
 // Before a run of a profile with a budget (budget_minutes): what `sirl plan` predicts on this
@@ -111,6 +131,7 @@ void register_reproduce(CLI::App& app, Runner& run) {
     if (rc != 0 || mpi_rank_from_env() > 0) return rc;  // MPI workers do not plot
     const auto t1 = std::chrono::steady_clock::now();
     draw_figures(out, figures);
+    store_report_verdicts(out, figures);
     // The user-study pipeline on a simulated cohort (Fig. 6), when the profile asks for it.
     std::string study_line;
     if (p.study.enabled && !no_study) {

@@ -1,7 +1,8 @@
 // `sirl show FILE.h5 [--json]`: what a results file holds, in one screen: the profile and its
 // scale, the engine, CPU class and machine that wrote it, how much of the plan is done, its
-// environments and task kinds, the claims' verdicts (from the report beside it), and the files
-// beside it. Read-only; the file is untrusted input (read as every command reads it).
+// environments and task kinds, the claims' verdicts (stored in the file, or from the report beside
+// it), and the files beside it. Read-only; the file is untrusted input (read as every command reads
+// it).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
@@ -21,12 +22,9 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-// The main claims' verdicts from claims.json in the figures folder beside the file (what
-// `sirl reproduce` writes), or null when there is none or it is not what the report writes.
-json main_verdicts(const fs::path& claims) {
-  std::ifstream in(claims);
-  if (!in) return nullptr;
-  const json all = json::parse(in, nullptr, false);
+// The main claims' verdicts of a list the report writes (claims.json, or /verdicts@claims in
+// the results file), or null when it is not such a list.
+json main_verdicts(const json& all) {
   if (!all.is_array()) return nullptr;
   json out = json::array();
   for (const json& h : all) {
@@ -84,8 +82,18 @@ json describe(const std::string& file) {
       beside["report"] = (figures / "report.md").string();
   }
   j["beside"] = beside;
-  j["verdicts"] = main_verdicts(figures / "claims.json");
-  if (!j["verdicts"].is_null()) j["verdicts_from"] = (figures / "claims.json").string();
+  // The verdicts stored in the file (`sirl reproduce` stores them), else those of a report
+  // beside it (report/plot_figures.py run by hand).
+  j["verdicts"] = nullptr;
+  if (!summary.verdicts.empty()) {
+    j["verdicts"] = main_verdicts(json::parse(summary.verdicts, nullptr, false));
+    if (!j["verdicts"].is_null()) j["verdicts_from"] = file + " (/verdicts)";
+  }
+  if (j["verdicts"].is_null()) {
+    std::ifstream in(figures / "claims.json");
+    if (in) j["verdicts"] = main_verdicts(json::parse(in, nullptr, false));
+    if (!j["verdicts"].is_null()) j["verdicts_from"] = (figures / "claims.json").string();
+  }
   return j;
 }
 
@@ -149,7 +157,8 @@ void register_show(CLI::App& app, Runner& run) {
   auto* cmd = app.add_subcommand(
       "show",
       "Summarise a results file: its profile and scale, the engine, CPU class and machine that "
-      "wrote it, the tasks done, the main claims' verdicts (from the report beside it) and the "
+      "wrote it, the tasks done, the main claims' verdicts (stored in the file by sirl reproduce, "
+      "or from the report beside it) and the "
       "files beside it. --json for scripts.");
   static std::string file;
   static bool as_json = false;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -15,6 +16,7 @@
 
 #include "results/dataset_store.h"
 #include "results/durable.h"
+#include "results/file_lock.h"
 #include "results/isolated_read.h"
 
 namespace sirl {
@@ -596,12 +598,67 @@ ResultsSummary read_results_summary(const std::string& path) {
   bool framed = false;
   const bool verified = verify_checksum(path, &framed);
   const auto read = [&] {
-    ResultsSummary s{read_run_info_unsandboxed(path, verified, framed), {}};
+    ResultsSummary s{read_run_info_unsandboxed(path, verified, framed), {}, {}};
     s.records_by_kind = read_kinds_unsandboxed(path);
+    const H5File f = H5File::open_read(path);
+    if (f.exists("/verdicts") && f.has_attr("/verdicts", "claims"))
+      s.verdicts = f.attr_string("/verdicts", "claims");
     return s;
   };
   read_in_child_first(path, [&] { read(); });
   return read();
+}
+
+namespace {
+std::string utc_now_iso() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+}  // namespace
+
+void store_verdicts(const std::string& path, const std::string& claims_json,
+                    const std::string& writer) {
+  const FileLock lock(path, "sirl reproduce (storing verdicts)",
+                      "wait for it to finish, or choose another --out");
+  const std::string partial = path + ".partial";
+  try {
+    refuse_symlink(partial);
+    if (!fs::is_regular_file(path)) throw H5Error(path + ": not a regular file");
+    fs::copy_file(path, partial, fs::copy_options::overwrite_existing);
+    // The copy is what gets a new digest, so the copy is what must verify by its own frame (a
+    // .sum beside the original could vouch for bytes that changed since).
+    bool framed = false;
+    verify_checksum(partial, &framed);
+    if (!framed)
+      throw H5Error(path +
+                    ": no checksum frame (an engine before 0.8.0 wrote it, or it was "
+                    "altered): verdicts are stored only in a file whose digest verifies");
+    read_in_child_first(partial, [&] { read_run_info_unsandboxed(partial, true, true); });
+    {
+      H5File f = H5File::open_rw(partial);
+      if (!f.exists("/verdicts")) f.group("/verdicts");
+      f.set_attr("/verdicts", "claims", claims_json);
+      f.set_attr("/verdicts", "written", utc_now_iso());
+      f.set_attr("/verdicts", "writer", writer);
+      f.flush();
+    }
+    write_frame(partial);
+  } catch (const std::exception& e) {
+    std::error_code ec;
+    fs::remove(partial, ec);
+    throw H5Error(path + ": the verdicts could not be stored: " + e.what());
+  }
+  fsync_path(partial);
+  std::error_code ec;
+  fs::remove(path + ".sum", ec);
+  fs::rename(partial, path, ec);
+  if (ec) throw H5Error(path + ": cannot move the file into place: " + ec.message());
+  fsync_path(fs::path(path).parent_path().empty() ? "." : fs::path(path).parent_path().string());
+  write_checksum(path);
 }
 
 std::vector<TaskRecord> read_results_records(const std::string& path) {

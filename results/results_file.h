@@ -139,6 +139,7 @@ std::vector<TaskRecord> read_results_records(const std::string& path);
 struct ResultsSummary {
   RunInfo info;
   std::map<std::string, int64_t> records_by_kind;
+  std::string verdicts;  // /verdicts@claims (store_verdicts), "" when the file has none
 };
 ResultsSummary read_results_summary(const std::string& path);
 
@@ -152,6 +153,16 @@ void write_checksum(const std::string& path);
 bool verify_checksum(const std::string& path, bool* framed = nullptr);
 // One line for a file verify_checksum could not verify.
 std::string unverified_note(const std::string& path);
+
+// The report's verdicts kept in the results file itself: /verdicts with attributes `claims` (the
+// JSON list the report writes as claims.json: one object per claim × environment × protocol),
+// `written` (ISO 8601 UTC) and `writer` (what wrote them). The file is rewritten as every write
+// here is: a copy with the group (replacing one stored before) framed with its new digest, renamed
+// into place, its .sum rewritten, under the file's lock. A file whose frame does not verify is
+// refused (H5Error): storing would give a file no checksum vouches for a valid digest. A run that
+// rewrites the file drops them (they describe the file the report read).
+void store_verdicts(const std::string& path, const std::string& claims_json,
+                    const std::string& writer);
 
 // One CSV per table (<name>.csv: fpe.csv, tpa.csv, timings.csv, training.csv, …) in dir.
 void export_csv(const ResultTables& t, const std::string& dir);

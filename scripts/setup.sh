@@ -27,6 +27,7 @@ packages=(
   python3 python3-h5py python3-matplotlib python3-numpy python3-pandas python3-scipy python3-torch
   python3-markdown  # report.html's tables
   python3-xxhash    # the Python reader verifies results files' XXH3-128 checksums
+  python3-xarray    # optional: sirl_bench's to_xarray() (tested when present)
   libopenblas0-pthread
   # the user study: web server, browser-side packages from npm, the browser for its e2e test
   libcpp-httplib-dev nodejs chromium

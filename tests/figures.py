@@ -602,6 +602,14 @@ with tempfile.TemporaryDirectory() as tmp:
         (h["env"], h["verdict"]) for h in claims if h["main"]], shown["verdicts"]
     text = subprocess.run([SIRL, "show", full], capture_output=True, text=True, check=True).stdout
     assert "main claims" in text and f"{sum(kinds.values())} of {sum(kinds.values())} done" in text
+    # Verdicts are stored by `sirl reproduce` only (reproduce_prediction checks them): the file
+    # of `sirl run` has none, and the reader says so in one line rather than returning nothing.
+    try:
+        sirl_bench.claims(full)
+        raise AssertionError("claims() of a file without stored verdicts returned")
+    except sirl_bench.ResultsError as e:
+        assert "no verdicts stored" in str(e) and "\n" not in str(e), e
+    assert len(sirl_bench.claims(os.path.join(tmp, "full"))) == len(claims)
     print(f"ok: sirl show summarises the file ({sum(kinds.values())} tasks, "
           f"{len(shown['verdicts'])} main verdicts from the report beside it)")
 

@@ -463,6 +463,53 @@ def check_malformed(tmp, ds, smoke):
           f"(e.g. {msg})")
 
 
+def check_xarray(smoke):
+    """to_xarray puts every row of a long table at its cell's coordinates (checked row by row
+    against the DataFrame), NaN elsewhere; a curve's losses are the record's array; rows the
+    dims do not tell apart are refused naming the column; without xarray, one ImportError."""
+    try:
+        import xarray  # noqa: F401
+    except ImportError:
+        print("skipped: to_xarray (python3-xarray not installed; scripts/setup.sh installs it)")
+        return
+    import pandas as pd
+    from sirl_bench import xarray_view
+    with sirl_bench.open(smoke) as r:
+        for name in ("fpe", "tpa", "vae_latents"):
+            df, ds = r.tables[name], r.to_xarray(name)
+            dims = xarray_view.DEFAULT_DIMS[name]
+            value = {"fpe": "fpe", "tpa": "tpa", "vae_latents": "kl"}[name]
+            for _, row in df.iterrows():
+                at = {d: (-1 if pd.isna(row[d]) else row[d]) for d in dims}
+                got = float(ds[value].sel(at).values)
+                if got != float(row[value]):
+                    fail(f"to_xarray({name}) at {at}: {got}, the table's row: {row[value]}")
+            if int(ds[value].notnull().sum()) != len(df):
+                fail(f"to_xarray({name}) holds {int(ds[value].notnull().sum())} values for "
+                     f"{len(df)} rows")
+        c = r.to_xarray("curves")
+        key = r.records[r.records.kind == "rep"].key.iloc[0]
+        want = r.array(key, "loss_curve").astype(float)
+        got = c.loss.sel(key=key, head=-1).values[:len(want)]
+        if not np.array_equal(got, want):
+            fail(f"to_xarray(curves) of {key}: {got[:4]}…, the record's {want[:4]}…")
+        two = pd.concat([r.tables["fpe"], r.tables["fpe"].assign(teacher="noisy")])
+        try:
+            xarray_view.frame_to_xarray(two, xarray_view.DEFAULT_DIMS["fpe"], "fpe")
+            fail("two teachers' rows on one grid were accepted")
+        except sirl_bench.ResultsError as e:
+            if "teacher" not in str(e) or "\n" in str(e):
+                fail(f"the refusal does not name the teacher column in one line: {e}")
+    p = subprocess.run(["/usr/bin/python3", "-c",
+                        "import sys; sys.modules['xarray'] = None; sys.path.insert(0, sys.argv[2]);"
+                        " import sirl_bench; sirl_bench.open(sys.argv[1]).to_xarray('fpe')",
+                        smoke, os.path.join(SRC, "python")], capture_output=True, text=True)
+    if p.returncode == 0 or "python3-xarray" not in p.stderr.splitlines()[-1]:
+        fail(f"without xarray: rc {p.returncode}, {p.stderr[-300:]}")
+    print("ok: to_xarray puts every fpe, tpa and vae_latents row at its cell (NaN elsewhere), a "
+          "curve at its key; two teachers refused naming the column; no xarray: one ImportError")
+
+
 def main():
     with tempfile.TemporaryDirectory() as tmp:
         smoke, ds = os.path.join(tmp, "smoke.h5"), os.path.join(tmp, "ds.h5")
@@ -474,6 +521,7 @@ def main():
         check_embedding_keys(tmp, d, axes, ds, smoke)
         check_lazy(ds, smoke)
         check_malformed(tmp, ds, smoke)
+        check_xarray(smoke)
     print("reader_typed: OK")
 
 

@@ -44,6 +44,26 @@ def main():
         if os.path.exists(os.path.join(tmp, "out")):
             fail("reproduce --out wrote into ./out/")
         print(f"ok: predicted {m.group(1)}, warned (over a 0.06 s budget); figures beside --out")
+        # The report's verdicts are kept in the results file: the reader gives the report's
+        # claims.json row for row, and `sirl show` finds them with the figures folder gone.
+        sys.path.insert(0, os.path.join(SRC, "python"))
+        import json
+        import sirl_bench
+        with open(os.path.join(figs, "claims.json")) as fh:
+            written = json.load(fh)
+        stored = sirl_bench.claims(out)
+        if stored[["env", "claim", "protocol", "verdict"]].to_dict("records") != [
+                {k: h[k] for k in ("env", "claim", "protocol", "verdict")} for h in written]:
+            fail(f"the stored verdicts differ from the report's:\n{stored}")
+        os.rename(figs, figs + ".moved")
+        shown = json.loads(subprocess.run([SIRL, "show", out, "--json"], capture_output=True,
+                                          text=True, check=True).stdout)
+        if shown.get("verdicts_from") != out + " (/verdicts)" or [
+                v["verdict"] for v in shown["verdicts"]] != [
+                h["verdict"] for h in written if h["main"]]:
+            fail(f"sirl show did not read the verdicts stored in the file: {shown}")
+        print(f"ok: {len(written)} verdicts stored in the results file; the reader and sirl show "
+              "read them without the figures folder")
         p = subprocess.run([SIRL, "reproduce", "--profile", SMOKE, "--out",
                             os.path.join(tmp, "smoke.h5"), "--no-study"], capture_output=True,
                            text=True, cwd=tmp, stdin=subprocess.DEVNULL, timeout=900)

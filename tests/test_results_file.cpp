@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <stdexcept>
 
@@ -160,6 +161,59 @@ TEST(ResultsFile, AFlippedBitInTheFramesMagicIsRefusedNotReadUnverified) {
     EXPECT_NO_THROW(read_run_info(p)) << "byte " << at;
   }
   fs::remove(p);
+}
+
+// The report's verdicts kept in the file: stored, read back by the summary, replaced by a second
+// store, the file still verifying by its frame and its .sum; a file that does not verify (one
+// flipped byte) or has no frame (engine 0.1.0's) is refused and left byte for byte as it was.
+TEST(ResultsFile, VerdictsAreStoredInAVerifiedFileAndNeverLaunderAnUnverifiedOne) {
+  const std::string p = temp_copy("verdicts.h5");
+  const auto records = read_results_records(kFixture);
+  write_results_file(p, read_run_info(kFixture), {}, records, result_tables(records));
+  EXPECT_EQ(read_results_summary(p).verdicts, "");
+  const std::string first = R"([{"env":"grid","claim":"H1","verdict":"held"}])";
+  store_verdicts(p, first, "test");
+  EXPECT_EQ(read_results_summary(p).verdicts, first);
+  EXPECT_TRUE(verify_checksum(p));
+  EXPECT_EQ(read_results_records(p).size(), records.size());
+  const std::string second = R"([{"env":"grid","claim":"H1","verdict":"not held"}])";
+  store_verdicts(p, second, "test");
+  EXPECT_EQ(read_results_summary(p).verdicts, second);
+  fs::remove(p + ".sum");
+  EXPECT_TRUE(verify_checksum(p)) << "the frame alone vouches for the rewritten file";
+  EXPECT_FALSE(fs::exists(p + ".partial"));
+
+  const auto bytes = [](const std::string& f) {
+    std::ifstream in(f, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  {
+    std::fstream f(p, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(std::streamoff(fs::file_size(p) / 2));
+    char c = 0;
+    f.read(&c, 1);
+    f.seekp(std::streamoff(fs::file_size(p) / 2));
+    c = char(c ^ 0x04);
+    f.write(&c, 1);
+  }
+  const std::string corrupted = bytes(p);
+  EXPECT_THROW(store_verdicts(p, first, "test"), H5Error);
+  EXPECT_EQ(bytes(p), corrupted) << "a file that does not verify was rewritten";
+  EXPECT_FALSE(fs::exists(p + ".sum")) << "a corrupted file was given a checksum";
+  EXPECT_FALSE(fs::exists(p + ".partial"));
+
+  const std::string old = temp_copy("unframed.h5");  // engine 0.1.0's: no frame, no .sum
+  const std::string before = bytes(old);
+  try {
+    store_verdicts(old, first, "test");
+    ADD_FAILURE() << "verdicts stored in an unframed file";
+  } catch (const H5Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no checksum frame"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(bytes(old), before);
+  EXPECT_FALSE(fs::exists(old + ".sum"));
+  fs::remove(p);
+  fs::remove(old);
 }
 
 TaskRecord fpe_record(const std::string& key, double fpe) {

@@ -206,6 +206,15 @@ class Results:
                 df[c] = df[c].map(_text)
         return df
 
+    def verdicts(self) -> pd.DataFrame | None:
+        """The report's verdicts stored in the file (/verdicts, written by `sirl reproduce`),
+        one row per hypothesis × environment × TPA protocol, as claims() gives them; None when
+        the file holds none (a run's file before its report, or rewritten by a later run)."""
+        g = self._f.get("verdicts")
+        if not isinstance(g, h5py.Group) or "claims" not in g.attrs:
+            return None
+        return _claims_frame(_text(g.attrs["claims"]), f"{self.path}: /verdicts@claims")
+
     # --- provenance ---
     @property
     def provenance(self) -> dict:
@@ -381,6 +390,22 @@ class Results:
             self._curves = self.curves_of()
         return self._curves
 
+    def to_xarray(self, name="tpa", dims=None):
+        """A table (`fpe`, `tpa`, `tpa_heads`, `vae_latents`, ...) or "curves" as an
+        xarray.Dataset: one dimension per cell field in `dims` (default
+        xarray_view.DEFAULT_DIMS[name]), one data variable per other column, NaN where the grid
+        has no cell; a missing cell field (N of VAE, head of a one-curve training) is −1.
+        Needs xarray (python3-xarray). Rows the dims do not tell apart (two teachers,
+        hyper-parameter points) are refused naming the column to add."""
+        from . import xarray_view
+        if dims is None:
+            if name not in xarray_view.DEFAULT_DIMS:
+                raise ResultsError(f"to_xarray: no default dimensions for '{name}': pass dims "
+                                   f"(defaults exist for {', '.join(xarray_view.DEFAULT_DIMS)})")
+            dims = xarray_view.DEFAULT_DIMS[name]
+        df = self.curves if name == "curves" else self.tables[name]
+        return xarray_view.frame_to_xarray(df, dims, f"{self.path}: {name}")
+
     # --- datasets ---
     @property
     def datasets(self) -> Datasets:
@@ -548,12 +573,32 @@ def open(path) -> Results:  # noqa: A001 (the package's entry point: sirl_bench.
     return Results(path)
 
 
-def claims(figures_dir) -> pd.DataFrame:
+def _claims_frame(text, where) -> pd.DataFrame:
+    try:
+        rows = json.loads(text)
+    except ValueError as e:
+        raise ResultsError(f"{where}: not JSON ({e})") from None
+    if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
+        raise ResultsError(f"{where}: not the report's list of verdicts")
+    return pd.DataFrame(rows)
+
+
+def claims(source) -> pd.DataFrame:
     """The report's verdicts, one row per hypothesis × environment × TPA protocol (env, claim,
     protocol: "paper" or "linear" for a TPA claim, None for an FPE claim; verdict, including
-    "not run" for a protocol the file lacks; comparisons, power, ...), from claims.json in the
-    folder `sirl reproduce --figures` (or report/plot_figures.py) wrote."""
+    "not run" for a protocol the file lacks; comparisons, power, ...). `source` is a results file
+    (the verdicts `sirl reproduce` stored in it: ResultsError if it holds none) or the folder
+    `sirl reproduce --figures` (or report/plot_figures.py) wrote (its claims.json)."""
     import builtins
     import os
-    with builtins.open(os.path.join(figures_dir, "claims.json")) as fh:
-        return pd.DataFrame(json.load(fh))
+    if os.path.isdir(source):
+        path = os.path.join(source, "claims.json")
+        with builtins.open(path, encoding="utf-8") as fh:
+            return _claims_frame(fh.read(), path)
+    with Results(source) as r:
+        v = r.verdicts()
+    if v is None:
+        raise ResultsError(f"{source}: no verdicts stored (`sirl reproduce` stores them after "
+                           "the report; a later `sirl run` drops them): run the report, or pass "
+                           "its figures folder")
+    return v
