@@ -193,9 +193,9 @@ int run_serve() {
   std::fprintf(stderr,
                "sirl study serve: stopped%s; %s answered %lld of %lld similarity and %lld of %lld "
                "preference queries, all saved in %s (serve again to continue)\n",
-               stopped_by == SIGINT    ? " (Ctrl-C)"
-               : stopped_by == SIGTERM ? " (SIGTERM)"
-                                       : "",
+               by == SIGINT    ? " (Ctrl-C)"
+               : by == SIGTERM ? " (SIGTERM)"
+                               : "",
                a.participant.c_str(), static_cast<long long>(p.similarity_done()),
                static_cast<long long>(p.similarity_count()),
                static_cast<long long>(p.preference_done()),

@@ -28,6 +28,10 @@ struct Dataset {
   std::vector<float> paths;
   int path_len = 0, path_dofs = 0;
   std::string model_text;
+  // What a figure draws of each trajectory, for an environment read from a file: points
+  // [T, point_len, point_dim] (point_dim 2 or 3), in the file's units; empty if none.
+  std::vector<float> points;
+  int point_len = 0, point_dim = 0;
 
   int feature_count() const { return int(feature_names.size()); }
   const float* input(int64_t i) const { return inputs.data() + i * input_dim; }

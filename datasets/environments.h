@@ -6,6 +6,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -73,16 +74,28 @@ struct EnvSpec {
   bool vae_weak_claim = false;  // the paper's "VAE severely underperforms" is checked on it
   bool in_study = false;        // the user study may run on it
   std::string study_features;   // the study page's one-line gloss of its features
-  Dataset (*make)(const EnvConfig& cfg) = nullptr;
-  int64_t (*trajectories)(const EnvConfig& cfg) = nullptr;  // |Ξ| without building it
-  int (*input_dim)(const EnvConfig& cfg) = nullptr;         // floats per trajectory
+  // Functions rather than plain pointers: an environment read from a file (experiment/
+  // file_environments.h) carries its data with it.
+  std::function<Dataset(const EnvConfig& cfg)> make;
+  std::function<int64_t(const EnvConfig& cfg)> trajectories;  // |Ξ| without building it
+  std::function<int(const EnvConfig& cfg)> input_dim;         // floats per trajectory
   // Ξ's settings as canonical text (datasets/exact_text.h): the data half of a task's digest, so
-  // every field Ξ depends on must be in it. Null: Ξ has no settings.
-  std::string (*describe_data)(const EnvConfig& cfg) = nullptr;
+  // every field Ξ depends on must be in it. Empty: Ξ has no settings.
+  std::function<std::string(const EnvConfig& cfg)> describe_data;
   // A sampled Ξ's size and data seed set in cfg (the user study's Ξ, or the small Ξ `sirl plan`
-  // calibrates on); null for an enumerated Ξ.
-  void (*set_sample)(EnvConfig& cfg, int64_t trajectories, uint64_t data_seed) = nullptr;
-  TrajectoryView (*draw)(const Dataset& d, int64_t row) = nullptr;
+  // calibrates on); empty for an enumerated Ξ.
+  std::function<void(EnvConfig& cfg, int64_t trajectories, uint64_t data_seed)> set_sample;
+  std::function<TrajectoryView(const Dataset& d, int64_t row)> draw;
+  // The name its random streams are keyed by (queries, initialisations: task_seed); empty: its
+  // own name. An environment read from a file exported from a built-in one names that one, so
+  // the two give the same cells.
+  std::string streams;
+  // Read from a file a profile declared ([environments.<name>]), not built into the engine.
+  bool from_file = false;
+  // Not one of the paper's environments (a file's, or one from other work): the paper made no
+  // statement about it, so the report marks the claims decided on it "beyond the paper".
+  bool beyond_paper = false;
+  const std::string& stream_name() const { return streams.empty() ? name : streams; }
 };
 
 // Every registered environment, in registration order (the built-in four first).

@@ -1,4 +1,6 @@
 #include "experiment/profile.h"
+
+#include "experiment/file_environments.h"
 #include "experiment/suggest.h"
 
 #include "engine/method_catalog.h"
@@ -615,6 +617,47 @@ void parse_external(Reader& r, const toml::table& root, Profile& p) {
   }
 }
 
+// [environments.<name>]: environments read from files (experiment/file_environments.h), each
+// registered before `envs` and the environments' own tables are read.
+void parse_file_environments(Reader& r, const toml::table& root, const std::string& path) {
+  const auto* envs = r.table(root, "environments", false);
+  if (!envs) return;
+  namespace fs = std::filesystem;
+  const fs::path base =
+      path.empty() || path[0] == '<' ? fs::current_path() : fs::absolute(path).parent_path();
+  for (auto&& [k, node] : *envs) {
+    FileEnvironment e;
+    e.name = std::string(k.str());
+    if (!node.is_table()) r.fail(&node, "[environments." + e.name + "] must be a table");
+    const toml::table& t = *node.as_table();
+    const std::string where = "[environments." + e.name + "]";
+    r.only_keys(t, where, {"file", "xxh3", "dataset", "title", "description", "streams"});
+    e.path = r.string(t, "file", "", true);
+    if (e.path.empty()) r.fail(t.get("file"), "file must name an environment file");
+    e.path = (base / e.path).lexically_normal().string();
+    e.xxh3 = r.string(t, "xxh3", "", true);
+    if (e.xxh3.size() != 32 || e.xxh3.find_first_not_of("0123456789abcdef") != std::string::npos)
+      r.fail(t.get("xxh3"),
+             "xxh3 must be the file's XXH3-128 as 32 lowercase hex digits (`xxh128sum " + e.path +
+                 "` prints it)");
+    e.group = r.string(t, "dataset", "");
+    e.title = r.string(t, "title", "");
+    e.description = r.string(t, "description", "");
+    e.streams = r.string(t, "streams", "");
+    for (const std::string* text : {&e.group, &e.title, &e.description})
+      for (char c : *text)
+        if ((c >= 0 && c < 0x20) || c == 0x7f)
+          r.fail(&node, where + ": dataset, title and description are one line of printable text");
+    if (e.title.size() > 64 || e.description.size() > 400 || e.group.size() > 256)
+      r.fail(&node, where + ": title ≤ 64, description ≤ 400, dataset ≤ 256 characters");
+    try {
+      declare_file_environment(e);
+    } catch (const std::invalid_argument& err) {
+      r.fail(&node, err.what());
+    }
+  }
+}
+
 // Per environment: the top-level axes unless its own table overrides them.
 void parse_env_axes(Reader& r, const toml::table& root, Profile& p) {
   for (const auto& env : p.envs) {
@@ -899,10 +942,11 @@ namespace {
 Profile parse_profile_table(const toml::table& root, const std::string& text,
                             const std::string& path) {
   Reader r(root, path);
-  std::set<std::string> top{"name",       "description",   "envs",   "seeds",     "queries",
-                            "teacher",    "fpe",           "tpa",    "ablation",  "hyper",
-                            "study",      "robustness",    "active", "precision", "external",
-                            "references", "budget_minutes"};
+  std::set<std::string> top{
+      "name",   "description", "envs",     "seeds",      "queries",        "teacher",
+      "fpe",    "tpa",         "ablation", "hyper",      "study",          "robustness",
+      "active", "precision",   "external", "references", "budget_minutes", "environments"};
+  parse_file_environments(r, root, path);
   for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
   r.only_keys(root, "the profile", top);
   Profile p;

@@ -12,7 +12,7 @@
 namespace sirl {
 
 uint64_t task_seed(const std::string& env, int64_t seed, const char* stream) {
-  return seed_from_key(env + "/s" + std::to_string(seed) + "/" + stream);
+  return seed_from_key(env_spec(env).stream_name() + "/s" + std::to_string(seed) + "/" + stream);
 }
 
 RunContext::RunContext(const Profile& p, std::function<TaskRecord(const std::string&)> load)

@@ -69,7 +69,8 @@ class RunContext {
   std::once_flag& once(const std::string& key);
 };
 
-// The seed every task of (env, seed) derives its streams from: all methods of one seed start
+// The seed every task of (env, seed) derives its streams from (keyed by the environment's
+// stream_name(): its own name unless it reproduces another): all methods of one seed start
 // from the same φ initialisation and the same TPA heads (common random numbers).
 uint64_t task_seed(const std::string& env, int64_t seed, const char* stream);
 

@@ -8,8 +8,8 @@ import claims as claims_stats
 import figures
 from figures import STYLE
 import ledger
-from run_tables import (ENV, PAPER, PROTOCOL_TEXT, PROTOCOLS, env_title, main_tpa, methods,
-                        of_protocol)
+from run_tables import (ENV, PAPER, PROTOCOL_TEXT, PROTOCOLS, beyond_paper, claim_env_title,
+                        env_title, main_tpa, methods, of_protocol)
 
 ALPHA = claims_stats.ALPHA
 
@@ -226,7 +226,7 @@ def summary_lines(H, missing=None, scale=None, study=None):
         c = h["deciding"]
         if c is None:
             verdict = h["verdict"] if h["verdict"] == "not run" else "not evaluated (no data)"
-            L.append(f"| {h['claim']} | {env_title(h['env'])} | {protocol_cell(h, scale)} | {verdict} | "
+            L.append(f"| {h['claim']} | {claim_env_title(h['env'])} | {protocol_cell(h, scale)} | {verdict} | "
                      f"— | — | — | — | — | — |")
             continue
         conv = h.get("converged")
@@ -236,7 +236,7 @@ def summary_lines(H, missing=None, scale=None, study=None):
         pw = h.get("power", math.nan)
         claim_text = f"**{h['claim']}**" if h["main"] else h["claim"]
         partial = " ⧗" if missing.get(h["env"]) else ""
-        L.append(f"| {claim_text} | {env_title(h['env'])} | {protocol_cell(h, scale)} | "
+        L.append(f"| {claim_text} | {claim_env_title(h['env'])} | {protocol_cell(h, scale)} | "
                  f"**{h['verdict']}**{partial} | {label}: "
                  f"{fmt(c['diff'], '+.4f')} [{fmt(c['lo'], '+.4f')}, {fmt(c['hi'], '+.4f')}] | "
                  f"{fmt(c.get('p_holm'), '.3g')} | {c['n']} | {fmt(100 * pw, '.0f') + ' %' if pw == pw else '—'} | "
@@ -435,7 +435,7 @@ def main_claims_lines(H, missing=None):
     cols = main_columns(H)
     if not cols:
         return []
-    head = [f"{md_cell(env_title(env))}, " + ("paper protocol" if p == PAPER else f"{p} (secondary)")
+    head = [f"{md_cell(claim_env_title(env))}, " + ("paper protocol" if p == PAPER else f"{p} (secondary)")
             for env, p in cols]
     L = ["| main claim | " + " | ".join(head) + " | the paper |",
          "|---|" + "---|" * (len(cols) + 1)]
@@ -459,7 +459,11 @@ def main_claims_lines(H, missing=None):
           f"rests on had not converged (their loss still changing over the last 10 % of the epochs; "
           f"counts under *trainings converged* below), so the verdict is provisional: longer training may "
           f"change it." + (" **⧗**: a partial merge, some of the environment's cells are missing."
-                           if missing else "")]
+                           if missing else "")
+          + (" *Beyond the paper*: not one of the paper's environments (one read from a file, "
+             "or from other work); the paper made no statement about it, so its verdicts are "
+             "this benchmark's findings, neither confirming nor contradicting the paper."
+             if any(beyond_paper(env) for env, _ in cols) else "")]
     L += ["", "**FPE** (feature prediction error): the held-out mean squared error of a "
           "least-squares linear probe from a method's representation φ(ξ) of a trajectory ξ to "
           "its true features φ\\*(ξ), normalised; lower is better. **TPA** (test preference "

@@ -18,7 +18,7 @@ import plot_beyond
 from safe_output import write_text
 from hypotheses import (detail_lines, fmt, hypotheses, main_claims_lines, summary_lines,
                         table_order)
-from run_tables import (ENV, PAPER, claim_trainings, env_title, main_tpa, methods, protocols_run,
+from run_tables import (ENV, PAPER, beyond_paper, claim_trainings, env_title, main_tpa, methods, protocols_run,
                         sirl_bench)
 
 
@@ -184,6 +184,8 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
     envs = [e for e in envs if ENV.get(e, {}).get("in_claims", 1)]  # e.g. Fig. 3's own env
     a = res.provenance
     H = hypotheses(fpe, tpa, envs, claim_trainings(t))
+    for h in H:  # a claim decided on an environment from a file: not the paper's own
+        h["beyond_paper"] = beyond_paper(h["env"])
     title = f"sirl-bench report: profile `{a.get('profile_name')}`"
     missing = {}
     for key in res.missing_tasks:

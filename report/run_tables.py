@@ -24,11 +24,23 @@ def load_envs(res):
         a = g["attrs"]
         ENV[name] = {"title": a.get("title", name), "in_claims": int(a.get("in_claims", 1)),
                      "fig3_rank": int(a.get("fig3_rank", 0)),
-                     "vae_weak_claim": int(a.get("vae_weak_claim", 0))}
+                     "vae_weak_claim": int(a.get("vae_weak_claim", 0)),
+                     "beyond_paper": bool(a.get("beyond_paper", False))}
 
 
 def env_title(env):
     return ENV.get(env, {}).get("title", env)
+
+
+def beyond_paper(env):
+    """Not one of the paper's environments (read from a file, or from other work): the paper
+    made no statement about it, so the claims decided on it are this benchmark's findings."""
+    return ENV.get(env, {}).get("beyond_paper", False)
+
+
+def claim_env_title(env):
+    """The environment's title where a claim's verdict is shown, marked when beyond the paper."""
+    return env_title(env) + (" (beyond the paper)" if beyond_paper(env) else "")
 
 
 TABLES = ("fpe", "tpa", "timings", "training", "vae_latents", "robust_fpe", "robust_tpa")

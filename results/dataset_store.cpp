@@ -75,6 +75,8 @@ void write_env_attrs(H5File& f, const std::string& g, const Dataset& d, const Qu
   f.set_attr(g, "in_claims", int64_t(e.in_claims));
   f.set_attr(g, "fig3_rank", int64_t(e.fig3_rank));
   f.set_attr(g, "vae_weak_claim", int64_t(e.vae_weak_claim));
+  f.set_attr(g, "from_file", int64_t(e.from_file));
+  f.set_attr(g, "beyond_paper", int64_t(e.beyond_paper));
   f.set_attr(g, "engine_version", version);
   f.set_attr(g, "generator_seed", int64_t(d.seed));
   f.set_attr(g, "query_seed", int64_t(q.seed));
@@ -122,6 +124,12 @@ void write_trajectory_space(H5File& f, const std::string& g, const Dataset& d) {
         "configuration-space paths behind the inputs [T,waypoints,dofs] (joint angles, rad)");
   }
   if (!d.model_text.empty()) f.set_attr(g, "model_mjcf", d.model_text);
+  if (!d.points.empty()) {
+    f.write(g + "/points", d.points.data(), {T, u64(d.point_len), u64(d.point_dim)});
+    f.set_attr(g + "/points", "description",
+               "what a figure draws of each trajectory [T,points," + std::to_string(d.point_dim) +
+                   "] (from the environment file)");
+  }
 }
 
 // The reward sets and every query set of the bundle.
@@ -185,6 +193,11 @@ void read_trajectory_space(const H5File& f, const std::string& g, StoredDataset&
     d.path_len = int(dims[1]);
     d.path_dofs = int(dims[2]);
     d.model_text = f.attr_string(g, "model_mjcf");
+  }
+  if (f.exists(g + "/points")) {
+    d.points = f.read_f32(g + "/points", {d.count, -1, -1}, &dims);
+    d.point_len = int(dims[1]);
+    d.point_dim = int(dims[2]);
   }
 }
 

@@ -11,8 +11,10 @@ file `sirl evaluate` scores.
     d["grid"]["seeds"]["s0"]["queries"]["similarity"]
     sirl_bench.embedding_keys("train.h5")        # {("grid", 0, 100): "/grid/s0/N100", ...}
     sirl_bench.write_embeddings("emb.h5", {("grid", 0, 100): Z})   # Z [T, d]
+    sirl_bench.write_environment("mine.h5", X, PHI, names=[...], name="mine")  # → its xxh3
 """
 from .attributes import ATTRIBUTE_TYPES, HYPER_TYPES, Hyper, parse_hyper  # noqa: F401
+from .environment_file import write_environment  # noqa: F401
 from .lazy import Datasets, Group  # noqa: F401
 from .results import (FLAG_COLUMNS, PROTOCOLS, SCHEMA_VERSIONS, Results, ResultsError,  # noqa: F401
                       claims, datasets, embedding_keys, embedding_name, filled, open,
@@ -21,5 +23,5 @@ from .results import (FLAG_COLUMNS, PROTOCOLS, SCHEMA_VERSIONS, Results, Results
 __all__ = ["ATTRIBUTE_TYPES", "Datasets", "FLAG_COLUMNS", "Group", "HYPER_TYPES", "Hyper",
            "PROTOCOLS", "Results", "ResultsError", "SCHEMA_VERSIONS", "claims",
            "datasets", "embedding_keys", "embedding_name", "filled", "open", "parse_hyper",
-           "study_analysis", "typed", "write_embeddings"]
+           "study_analysis", "typed", "write_embeddings", "write_environment"]
 __version__ = "0.22.0"

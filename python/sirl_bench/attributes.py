@@ -48,6 +48,8 @@ ATTRIBUTE_TYPES = {
         "env": TEXT, "title": TEXT, "description": TEXT, "view": TEXT, "model_mjcf": TEXT,
         "in_claims": FLAG,        # its cells decide the paper's claims H1/H2
         "vae_weak_claim": FLAG,   # the paper's "VAE severely underperforms" is checked on it
+        "from_file": FLAG,        # read from an environment file a profile declared
+        "beyond_paper": FLAG,     # not one of the paper's environments: its claims are marked so
         "fig3_rank": INT,         # > 0: Fig. 3 may be drawn on it; the highest rank present wins
         # provenance and the simulated teacher
         "engine_version": TEXT, "generator_seed": SEED, "query_seed": SEED, "trajectories": INT,

@@ -1,0 +1,61 @@
+#include "experiment/file_environments.h"
+
+#include <memory>
+#include <stdexcept>
+
+#include "datasets/environments.h"
+#include "datasets/exact_text.h"
+#include "results/environment_file.h"
+
+namespace sirl {
+
+namespace {
+
+// The data half of every task digest on this environment: the file's content (not its path: a
+// copy elsewhere is the same environment), the group read and the streams drawn from.
+std::string describe(const FileEnvironment& e, const std::string& group) {
+  return "file xxh3=" + e.xxh3 + " group=" + group + " streams=" + e.streams + "\n";
+}
+
+}  // namespace
+
+void declare_file_environment(const FileEnvironment& e) {
+  const std::string group = e.group.empty() ? e.name : e.group;
+  for (const EnvSpec& s : environments()) {
+    if (s.name != e.name) continue;
+    if (!s.from_file)
+      throw std::invalid_argument("[environments." + e.name +
+                                  "]: a built-in environment's name; choose another");
+    if (s.describe_data(EnvConfig{}) != describe(e, group))
+      throw std::invalid_argument("[environments." + e.name +
+                                  "]: declared twice with different files, groups or streams");
+    return;
+  }
+  if (!e.streams.empty()) env_spec(e.streams);  // throws naming the known environments
+  auto data = std::make_shared<const Dataset>(
+      read_environment_file(EnvironmentFileSpec{e.name, e.path, e.xxh3, group}));
+  EnvSpec spec;
+  spec.name = e.name;
+  spec.title = e.title.empty() ? e.name : e.title;
+  spec.description = e.description.empty() ? "read from " + e.path : e.description;
+  spec.from_file = true;
+  spec.beyond_paper = true;
+  spec.streams = e.streams;
+  spec.view = data->point_dim == 3 ? EnvView::arm : EnvView::plane;
+  spec.make = [data](const EnvConfig&) { return *data; };
+  spec.trajectories = [T = data->count](const EnvConfig&) { return T; };
+  spec.input_dim = [D = data->input_dim](const EnvConfig&) { return D; };
+  spec.describe_data = [text = describe(e, group)](const EnvConfig&) { return text; };
+  // The file's points as they are (2-D points on the plane, 3-D ones in space); none: no path.
+  spec.draw = [](const Dataset& d, int64_t row) {
+    TrajectoryView v;
+    for (int i = 0; i < d.point_len; ++i) {
+      const float* p = d.points.data() + (row * d.point_len + i) * d.point_dim;
+      v.points.push_back({p[0], p[1], d.point_dim == 3 ? p[2] : 0.f});
+    }
+    return v;
+  };
+  register_environment(std::move(spec));
+}
+
+}  // namespace sirl
