@@ -29,6 +29,7 @@ TrajectoryView grid_draw(const Dataset& d, int64_t row) {
 // size here updated): a setting the digest does not see would let a stale task be reused.
 static_assert(sizeof(GridConfig) == 28, "describe the new GridConfig field in grid_settings");
 static_assert(sizeof(JacoConfig) == 104, "describe the new JacoConfig field in jaco_settings");
+static_assert(sizeof(DriverConfig) == 16, "describe the new DriverConfig field in driver_settings");
 
 std::string grid_settings(const EnvConfig& c) {
   const GridConfig& g = c.grid;
@@ -81,8 +82,13 @@ TrajectoryView jaco_draw(const Dataset& d, int64_t row) {
   return v;
 }
 
+std::string driver_settings(const EnvConfig& c) {
+  return "driver trajectories=" + exact_number(double(c.driver.trajectories)) +
+         " seed=" + exact_number(double(c.driver.seed)) + "\n";
+}
+
 std::vector<EnvSpec> built_in() {
-  std::vector<EnvSpec> all(4);
+  std::vector<EnvSpec> all(5);
   EnvSpec& grid = all[0];
   grid.name = "grid";
   grid.title = "GridRobot";
@@ -150,6 +156,31 @@ std::vector<EnvSpec> built_in() {
   jaco2.in_study = true;  // the paper's study environment
   jaco2.study_features = "the hand's height above the table, and how close it passes to the laptop";
   jaco2.make = [](const EnvConfig& c) { return jaco_with(c, false); };
+
+  // Beyond the paper: the driving environment of active preference-based reward learning
+  // (datasets/driver.h), with the engine's (GridRobot's) hyper-parameters.
+  EnvSpec& driver = all[4];
+  driver.name = "driver";
+  driver.title = "Driver";
+  driver.description =
+      "a car on a three-lane road beside another (Biyik & Sadigh, CoRL 2018); 4 features";
+  driver.sampled = true;
+  driver.data_table = "driver";
+  driver.data_keys = {"trajectories", "data_seed"};
+  driver.read_data = [](const DataTableReader& r, EnvConfig& c) {
+    c.driver.trajectories = r.integer("trajectories", 2000, 3, 10'000'000);
+    c.driver.seed = uint64_t(r.integer("data_seed", 0, 0, 1'000'000'000));
+  };
+  driver.beyond_paper = true;
+  driver.make = [](const EnvConfig& c) { return make_driver_dataset(c.driver); };
+  driver.trajectories = [](const EnvConfig& c) { return c.driver.trajectories; };
+  driver.input_dim = [](const EnvConfig&) { return kDriverInputDim; };
+  driver.describe_data = driver_settings;
+  driver.set_sample = [](EnvConfig& c, int64_t trajectories, uint64_t data_seed) {
+    c.driver.trajectories = trajectories;
+    c.driver.seed = data_seed;
+  };
+  driver.draw = draw_points;  // the car's path: its start, then the 50 states
   return all;
 }
 
@@ -159,6 +190,15 @@ std::vector<EnvSpec>& registry() {
 }
 
 }  // namespace
+
+TrajectoryView draw_points(const Dataset& d, int64_t row) {
+  TrajectoryView v;
+  for (int i = 0; i < d.point_len; ++i) {
+    const float* p = d.points.data() + (row * d.point_len + i) * d.point_dim;
+    v.points.push_back({p[0], p[1], d.point_dim == 3 ? p[2] : 0.f});
+  }
+  return v;
+}
 
 const std::vector<EnvSpec>& environments() {
   return registry();

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "datasets/dataset.h"
+#include "datasets/driver.h"
 #include "datasets/grid_robot.h"
 #include "datasets/hyper_value.h"
 #include "datasets/jaco_robot.h"
@@ -20,7 +21,8 @@ namespace sirl {
 // What a profile or the command line may set about Ξ; each environment reads its own part.
 struct EnvConfig {
   GridConfig grid;
-  JacoConfig jaco;  // trajectories, data seed, deformation size, object positions
+  JacoConfig jaco;      // trajectories, data seed, deformation size, object positions
+  DriverConfig driver;  // trajectories, data seed
 };
 
 // One trajectory as a figure or the study page draws it: a path of points (2-D cell coordinates
@@ -98,11 +100,14 @@ struct EnvSpec {
   const std::string& stream_name() const { return streams.empty() ? name : streams; }
 };
 
-// Every registered environment, in registration order (the built-in four first).
+// One trajectory's Dataset::points as a view (2-D points on the plane, 3-D ones in space).
+TrajectoryView draw_points(const Dataset& d, int64_t row);
+
+// Every registered environment, in registration order (the built-in five first).
 const std::vector<EnvSpec>& environments();
 // Throws std::invalid_argument naming the known environments.
 const EnvSpec& env_spec(const std::string& name);
-// "grid, grid2, jaco, jaco2".
+// "grid, grid2, jaco, jaco2, driver".
 std::string env_names();
 // Adds an environment (an extension, or a test's toy environment). Throws std::invalid_argument
 // for a taken or malformed name or a missing function. Not thread-safe: register before running.

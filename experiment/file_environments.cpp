@@ -46,15 +46,7 @@ void declare_file_environment(const FileEnvironment& e) {
   spec.trajectories = [T = data->count](const EnvConfig&) { return T; };
   spec.input_dim = [D = data->input_dim](const EnvConfig&) { return D; };
   spec.describe_data = [text = describe(e, group)](const EnvConfig&) { return text; };
-  // The file's points as they are (2-D points on the plane, 3-D ones in space); none: no path.
-  spec.draw = [](const Dataset& d, int64_t row) {
-    TrajectoryView v;
-    for (int i = 0; i < d.point_len; ++i) {
-      const float* p = d.points.data() + (row * d.point_len + i) * d.point_dim;
-      v.points.push_back({p[0], p[1], d.point_dim == 3 ? p[2] : 0.f});
-    }
-    return v;
-  };
+  spec.draw = draw_points;  // the file's points as they are; none: no path
   register_environment(std::move(spec));
 }
 
