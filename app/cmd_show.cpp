@@ -28,14 +28,19 @@ json main_verdicts(const json& all) {
   if (!all.is_array()) return nullptr;
   json out = json::array();
   for (const json& h : all) {
-    if (!h.is_object() || !h.value("main", false)) continue;
+    // Fields of another type than the report writes are read as absent, never thrown on.
+    const auto flag = [&](const char* k) {
+      return h.contains(k) && h[k].is_boolean() && h[k].get<bool>();
+    };
+    if (!h.is_object() || !flag("main")) continue;
     const auto text = [&](const char* k) {
       return h.contains(k) && h[k].is_string() ? h[k].get<std::string>() : std::string();
     };
     out.push_back({{"env", text("env")},
                    {"claim", text("claim")},
                    {"protocol", text("protocol")},
-                   {"verdict", text("verdict")}});
+                   {"verdict", text("verdict")},
+                   {"beyond_paper", flag("beyond_paper")}});
   }
   return out;
 }
@@ -136,9 +141,10 @@ void print_text(const json& j) {
   if (j["verdicts"].is_array()) {
     std::printf("main claims (%s):\n", str(j, "verdicts_from").c_str());
     for (const json& v : j["verdicts"])
-      std::printf("  %-5s %-7s %-13s %s\n", str(v, "env").c_str(),
+      std::printf("  %-5s %-7s %-13s %s%s\n", str(v, "env").c_str(),
                   str(v, "protocol").empty() ? "-" : str(v, "protocol").c_str(),
-                  str(v, "verdict").c_str(), str(v, "claim").c_str());
+                  str(v, "verdict").c_str(), str(v, "claim").c_str(),
+                  v["beyond_paper"].get<bool>() ? "  (beyond the paper)" : "");
   } else {
     std::printf(
         "main claims: no report beside it (`sirl reproduce`, or report/plot_figures.py "

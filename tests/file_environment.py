@@ -138,6 +138,12 @@ def own_environment(tmp):
     report = open(os.path.join(figs, "report.md")).read()
     if "Toy robot (beyond the paper), paper protocol" not in report:
         fail("the report's main claims do not mark the environment beyond the paper")
+    os.rename(figs, os.path.join(tmp, "mine-run-figures"))  # where `sirl show` looks
+    shown = json.loads(run("show", "mine-run.h5", "--json", cwd=tmp).stdout)
+    if not shown["verdicts"] or not all(v["beyond_paper"] for v in shown["verdicts"]):
+        fail(f"sirl show does not mark the verdicts beyond the paper: {shown['verdicts']}")
+    if "(beyond the paper)" not in run("show", "mine-run.h5", cwd=tmp).stdout:
+        fail("sirl show's text does not mark the verdicts beyond the paper")
     # The same bytes in another folder: the same environment, every task from the cache.
     os.mkdir(os.path.join(tmp, "elsewhere"))
     shutil.copy(os.path.join(tmp, "mine.h5"), os.path.join(tmp, "elsewhere", "copy.h5"))
