@@ -34,7 +34,7 @@ struct DatasetArgs {
   double beta = std::numeric_limits<double>::infinity(), mistake = 0, skip = 0, equal = 0;
   std::vector<std::string> features;
   std::vector<int> obstacle1{1, 3}, obstacle2{3, 1}, laptop{2, 2};
-  int64_t trajectories = 10000;
+  int64_t trajectories = 0;  // a sampled environment's Ξ size; 0: the environment's default
   std::vector<double> jaco_laptop{0.0, -0.8, 0.0}, jaco_human{-0.2, -0.5, 0.6};
   int threads = 0;
   bool force = false;
@@ -72,12 +72,14 @@ int run_dataset(const DatasetArgs& a) {
     c.grid.obstacle1 = {a.obstacle1[0], a.obstacle1[1]};
     c.grid.obstacle2 = {a.obstacle2[0], a.obstacle2[1]};
     c.grid.laptop = {a.laptop[0], a.laptop[1]};
-    c.jaco.trajectories = a.trajectories;
-    c.jaco.seed = a.seed;
     c.jaco.threads = a.threads;
     for (int k = 0; k < 3; ++k)
       c.jaco.laptop[k] = a.jaco_laptop[k], c.jaco.human[k] = a.jaco_human[k];
-    d = env_spec(a.env).make(c);
+    // A sampled Ξ (JacoRobot, Driver): --trajectories or its own default size, drawn from --seed.
+    const EnvSpec& spec = env_spec(a.env);
+    if (spec.set_sample)
+      spec.set_sample(c, a.trajectories > 0 ? a.trajectories : spec.trajectories(c), a.seed);
+    d = spec.make(c);
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
@@ -230,12 +232,12 @@ int run_inspect(const std::string& file, const std::string& env, bool as_json) {
   return 0;
 }
 
-// JacoRobot's trajectory space: its size, where the laptop and the person stand, threads.
+// A sampled trajectory space's size; JacoRobot's: where the laptop and the person stand, threads.
 void add_jaco_options(CLI::App* cmd, DatasetArgs& a) {
   cmd->add_option("--trajectories", a.trajectories,
-                  "JacoRobot: start-goal pairs (one deformed trajectory each)")
-      ->check(CLI::Range(int64_t(10), int64_t(10000000)))
-      ->capture_default_str();
+                  "A sampled environment's trajectories (default: JacoRobot 10000 start-goal "
+                  "pairs, one deformed trajectory each; Driver 2000 control sequences)")
+      ->check(CLI::Range(int64_t(10), int64_t(10000000)));
   cmd->add_option("--jaco-laptop", a.jaco_laptop, "JacoRobot laptop position x,y,z (m, base frame)")
       ->delimiter(',')
       ->expected(3)
