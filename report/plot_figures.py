@@ -5,12 +5,13 @@
 
 Writes fig3_grid_similar.{png,pdf}, fig4_fpe.{png,pdf}, fig5_tpa.{png,pdf} (the paper's TPA
 protocol), fig5_tpa_linear.{png,pdf} (the linear protocol, when the file has it),
-fig7_ablation.{png,pdf}, fig_learning_curves.{png,pdf} and report.md (+ report.html). Reads only
-the file: /tables/*, /runs/... and /datasets/... . Every figure plots what the file holds (which
-cells belong to Fig. 5 or Fig. 7, which protocol fit them and which rows are references are
-columns of /tables/tpa), never a re-reading of the profile. A partial file (an interrupted run)
-plots with gaps and notes, never zeros; a protocol or reference the file lacks is noted as not
-run.
+fig7_ablation.{png,pdf}, fig_learning_curves.{png,pdf}, fig_paths_<env>.{png,pdf} (the
+trajectories seen from above, for an environment whose file stores 2-D points) and report.md
+(+ report.html). Reads only the file: /tables/*, /runs/... and /datasets/... . Every figure plots
+what the file holds (which cells belong to Fig. 5 or Fig. 7, which protocol fit them and which
+rows are references are columns of /tables/tpa), never a re-reading of the profile. A partial
+file (an interrupted run) plots with gaps and notes, never zeros; a protocol or reference the file
+lacks is noted as not run.
 
 The work is in four modules beside it: run_tables.py (the file's tables and environments),
 figures.py (the figures), hypotheses.py (the claims decided) and report.py (the report).
@@ -25,6 +26,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import figures  # noqa: E402
 import plot_beyond  # noqa: E402
 import plot_hyper  # noqa: E402
+import plot_paths  # noqa: E402
 import report  # noqa: E402
 import run_tables  # noqa: E402
 from safe_output import write_text  # noqa: E402
@@ -80,6 +82,7 @@ def main():
                                             res.hyper_points, figures.STYLE, figures.ORDER,
                                             figures.mean_ci, figures.save, a.out,
                                             notes, figures.DRAWN)
+    beyond["paths"] = plot_paths.plot_paths(res.datasets, a.out, figures.DRAWN)
     report.report(res, t, envs, a.out, notes, fig3_key, beyond)
     write_text(os.path.join(a.out, "figures.json"), json.dumps(figures.DRAWN, indent=1))
     print(f"plot_figures: wrote figures and report.md to {a.out}/")

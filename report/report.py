@@ -154,6 +154,18 @@ FIGURES = [("fig3_grid_similar", "Fig. 3"), ("fig4_fpe", "Fig. 4"), ("fig5_tpa",
            ("fig5_tpa_linear", "Fig. 5, linear protocol"), ("fig7_ablation", "Fig. 7")]
 
 
+def paths_lines(envs, out):
+    """Each environment's top-down view (plot_paths.py: fig_paths_<env>) that was drawn, with its
+    caption (the environment's title as text: no bracket of it can end the image's markup)."""
+    L = []
+    for env in envs:
+        if os.path.exists(os.path.join(out, f"fig_paths_{env}.png")):
+            title = re.sub(r"[\[\]\\]", "", " ".join(env_title(env).split()))
+            L += [f"![{title}: the first trajectories seen from above, coloured by each true "
+                  f"feature](fig_paths_{env}.png)", ""]
+    return L
+
+
 def profile_description(profile_text):
     """The profile's `description` (its TOML's), on one line; "" without one."""
     import tomllib
@@ -216,6 +228,7 @@ def report(res, t, envs, out, notes, fig3_key, beyond=None):
     for name, cap in FIGURES:
         if os.path.exists(os.path.join(out, name + ".png")):
             L += [f"![{cap}]({name}.png)", ""]
+    L += paths_lines(beyond.get("paths", []), out)
     L += plot_beyond.active_lines(fpe, tim, beyond.get("active", []))
     L += plot_beyond.robustness_lines(fpe, tpa, t["robust_fpe"], t["robust_tpa"],
                                       beyond.get("robustness", []))

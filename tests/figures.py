@@ -3,7 +3,8 @@
 (tests/data/engine-test.toml) (ctest): every figure and the report exist;
 Fig. 7 draws the cells the file holds even when an environment overrides the ablation's M;
 Fig. 3 is drawn on the simplified GridRobot; a partial file (one shard of two) still plots, with
-the missing cells reported as gaps.
+the missing cells reported as gaps. The top-down view (fig_paths_<env>) is drawn for 2-D points
+only, never for GridRobot or JacoRobot.
 
 TPA protocols and references (issue 56), first on synthetic tables, then on the smoke file: Fig. 5
 is drawn per protocol (fig5_tpa from the paper's rows only, fig5_tpa_linear from the linear
@@ -170,6 +171,31 @@ def check_synthetic(tmp):
     print("ok: synthetic tables: Fig. 5 per protocol from its own rows, truth and raw drawn as "
           "reference lines only; the paper's figures unchanged by the new rows; one protocol "
           "or no references: noted as not run")
+
+
+def check_paths(tmp):
+    """The top-down view (plot_paths.py) on synthetic /datasets groups: one figure per
+    environment with 2-D points, one panel per true feature (four at most), the first 40
+    trajectories, the unit on the colour bar; 3-D points and no points draw nothing; the report
+    embeds each figure drawn."""
+    sys.path.insert(0, os.path.join(SRC, "report"))
+    import plot_paths
+    import report
+    rng = np.random.default_rng(3)
+    flat = rng.random((50, 51, 2)).astype(np.float32)
+    attrs = {"title": "Flat", "features_raw.feature_names": list("abcde"),
+             "features_raw.units": ["", "m", "", "", ""]}
+    ds = {"flat": {"attrs": attrs, "points": flat, "features_raw": rng.random((50, 5))},
+          "solid": {"attrs": {}, "points": rng.random((50, 9, 3)), "features_raw": rng.random((50, 2))},
+          "none": {"attrs": {}, "features_raw": rng.random((50, 2))}}
+    out, drawn = os.path.join(tmp, "paths"), {}
+    os.makedirs(out)
+    assert plot_paths.plot_paths(ds, out, drawn) == ["flat"], drawn
+    assert drawn["fig_paths"] == {"flat": {"file": "fig_paths_flat", "trajectories": 40,
+                                           "features": ["a", "b [m]", "c", "d"]}}, drawn
+    assert sorted(f for f in os.listdir(out)) == ["fig_paths_flat.pdf", "fig_paths_flat.png"]
+    assert report.paths_lines(["flat"], out)[0].endswith("(fig_paths_flat.png)")
+    print("ok: top-down view drawn for 2-D points only (4 panels, 40 trajectories), in the report")
 
 
 def check_outputs(d):
@@ -392,6 +418,9 @@ def check_smoke(full, tmp):
         assert section in rep, f"report lacks {section}"
     drawn = json.load(open(os.path.join(tmp, "full", "figures.json")))
     assert drawn["fig3"]["env"] == "grid2", drawn["fig3"]
+    # GridRobot and JacoRobot store no points: no top-down view.
+    assert "fig_paths" not in drawn and "fig_paths_" not in rep
+    assert not [f for f in os.listdir(os.path.join(tmp, "full")) if f.startswith("fig_paths_")]
     print("ok: every figure and the report from the smoke run; Fig. 3 on grid2")
 
     # What Figs. 4 and 5 drew equals the seed means computed here from the tables (a plot of the
@@ -574,12 +603,14 @@ def check_smoke(full, tmp):
 if __name__ == "__main__" and len(sys.argv) > 1:  # a results file given: its checks only
     with tempfile.TemporaryDirectory() as tmp:
         check_synthetic(tmp)
+        check_paths(tmp)
         check_smoke(sys.argv[1], tmp)
     print("PASS")
     sys.exit(0)
 
 with tempfile.TemporaryDirectory() as tmp:
     check_synthetic(tmp)
+    check_paths(tmp)
     full = os.path.join(tmp, "smoke.h5")
     sh(SIRL, "run", SMOKE, "--out", full, "--quiet")
     check_smoke(full, tmp)
