@@ -619,7 +619,8 @@ void parse_external(Reader& r, const toml::table& root, Profile& p) {
 
 // [environments.<name>]: environments read from files (experiment/file_environments.h), each
 // registered before `envs` and the environments' own tables are read.
-void parse_file_environments(Reader& r, const toml::table& root, const std::string& path) {
+void parse_file_environments(Reader& r, const toml::table& root, const std::string& path,
+                             const std::set<std::string>& sections) {
   const auto* envs = r.table(root, "environments", false);
   if (!envs) return;
   namespace fs = std::filesystem;
@@ -631,6 +632,10 @@ void parse_file_environments(Reader& r, const toml::table& root, const std::stri
     if (!node.is_table()) r.fail(&node, "[environments." + e.name + "] must be a table");
     const toml::table& t = *node.as_table();
     const std::string where = "[environments." + e.name + "]";
+    // An environment's own table is [<name>] and its hyper-parameters [hyper.<name>]: a name
+    // that is a profile section, or [hyper.all], would be read as the wrong table.
+    if (sections.count(e.name) || e.name == "all")
+      r.fail(&node, where + ": '" + e.name + "' names a profile section; choose another name");
     r.only_keys(t, where, {"file", "xxh3", "dataset", "title", "description", "streams"});
     e.path = r.string(t, "file", "", true);
     if (e.path.empty()) r.fail(t.get("file"), "file must name an environment file");
@@ -946,7 +951,7 @@ Profile parse_profile_table(const toml::table& root, const std::string& text,
       "name",   "description", "envs",     "seeds",      "queries",        "teacher",
       "fpe",    "tpa",         "ablation", "hyper",      "study",          "robustness",
       "active", "precision",   "external", "references", "budget_minutes", "environments"};
-  parse_file_environments(r, root, path);
+  parse_file_environments(r, root, path, top);
   for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
   r.only_keys(root, "the profile", top);
   Profile p;

@@ -229,6 +229,8 @@ def bad_files(tmp, prof):
         "unknown streams": (prof.replace('title = "Toy robot"', 'streams = "nowhere"'),
                             "unknown environment 'nowhere'"),
         "unknown key": (prof.replace('title = "Toy robot"', 'colour = "red"'), "colour"),
+        "a section's name": (prof.replace("[environments.mine]", "[environments.fpe]")
+                             .replace('envs = ["mine"]', 'envs = ["fpe"]'), "profile section"),
     }
     for what, (text, says) in declarations.items():
         with open(os.path.join(tmp, "bad.toml"), "w") as f:
