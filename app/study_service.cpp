@@ -99,7 +99,8 @@ std::string StudyService::state_json() const {
   json o;
   o["participant"] = p.id;
   o["env"] = study_.env;
-  o["view"] = view_ == EnvView::plane ? "plane" : "arm";
+  o["view"] = view_name(view_);
+  o["title"] = env_spec(study_.env).title;
   o["features_gloss"] = env_spec(study_.env).study_features;
   o["features"] = data_->feature_names;
   o["scenario"] = p.scenario;

@@ -172,6 +172,11 @@ std::vector<EnvSpec> built_in() {
     c.driver.seed = uint64_t(r.integer("data_seed", 0, 0, 1'000'000'000));
   };
   driver.beyond_paper = true;
+  driver.view = EnvView::path;
+  driver.in_study = true;
+  driver.study_features =
+      "how well it keeps to a lane, how far its speed is from the target, how straight it heads "
+      "along the road, and how close it comes to the other car";
   driver.make = [](const EnvConfig& c) { return make_driver_dataset(c.driver); };
   driver.trajectories = [](const EnvConfig& c) { return c.driver.trajectories; };
   driver.input_dim = [](const EnvConfig&) { return kDriverInputDim; };
@@ -190,6 +195,10 @@ std::vector<EnvSpec>& registry() {
 }
 
 }  // namespace
+
+const char* view_name(EnvView v) {
+  return v == EnvView::plane ? "plane" : v == EnvView::arm ? "arm" : "path";
+}
 
 TrajectoryView draw_points(const Dataset& d, int64_t row) {
   TrajectoryView v;

@@ -36,7 +36,12 @@ struct TrajectoryView {
   std::vector<std::vector<std::array<float, 3>>> links;
 };
 
-enum class EnvView { plane, arm };
+// How a figure or the study page draws a trajectory: `plane`, GridRobot's cells and end angle;
+// `arm`, an arm's 3-D path and poses; `path`, a path of 2-D points in the environment's own
+// units, drawn to fit (Driver, a file's 2-D points).
+enum class EnvView { plane, arm, path };
+// "plane", "arm" or "path" (the results file's /datasets/<env>@view, the study page's view).
+const char* view_name(EnvView v);
 
 // A hyper-parameter default that differs from the engine's (GridRobot's) values, as the profile
 // key and value `[hyper.<env>]` takes.

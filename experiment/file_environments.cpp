@@ -41,7 +41,7 @@ void declare_file_environment(const FileEnvironment& e) {
   spec.from_file = true;
   spec.beyond_paper = true;
   spec.streams = e.streams;
-  spec.view = data->point_dim == 3 ? EnvView::arm : EnvView::plane;
+  spec.view = data->point_dim == 3 ? EnvView::arm : EnvView::path;
   spec.make = [data](const EnvConfig&) { return *data; };
   spec.trajectories = [T = data->count](const EnvConfig&) { return T; };
   spec.input_dim = [D = data->input_dim](const EnvConfig&) { return D; };

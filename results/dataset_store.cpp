@@ -71,7 +71,7 @@ void write_env_attrs(H5File& f, const std::string& g, const Dataset& d, const Qu
   const EnvSpec& e = env_spec(d.env);
   f.set_attr(g, "title", e.title);
   f.set_attr(g, "description", e.description);
-  f.set_attr(g, "view", std::string(e.view == EnvView::plane ? "plane" : "arm"));
+  f.set_attr(g, "view", std::string(view_name(e.view)));
   f.set_attr(g, "in_claims", int64_t(e.in_claims));
   f.set_attr(g, "fig3_rank", int64_t(e.fig3_rank));
   f.set_attr(g, "vae_weak_claim", int64_t(e.vae_weak_claim));

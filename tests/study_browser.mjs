@@ -1,5 +1,5 @@
 // Drives the study page in Debian's chromium (playwright-core, no downloaded browser): practice,
-// then every remaining recorded query. Usage: node study_browser.mjs URL [arm]
+// then every remaining recorded query. Usage: node study_browser.mjs URL [arm|path]
 // With "arm" (a JacoRobot study) it also checks the 3-D page's controls on the first three-panel
 // screen: every panel draws the arm (7 links); the Top view button and a drag on one panel move
 // the one shared camera, so every panel's picture changes; Replay all (key r) moves the arms;
@@ -11,7 +11,7 @@ import { createRequire } from "node:module";
 // runs with that directory as its working directory.
 const { chromium } = createRequire(process.cwd() + "/")("playwright-core");
 
-const url = process.argv[2], arm = process.argv[3] === "arm";
+const url = process.argv[2], arm = process.argv[3] === "arm", path = process.argv[3] === "path";
 const browser = await chromium.launch({ executablePath: "/usr/bin/chromium", args: ["--no-sandbox", "--use-gl=swiftshader", "--enable-unsafe-swiftshader"] });
 const page = await browser.newPage({ viewport: { width: 1280, height: 800 } });  // a laptop screen
 const errors = [];
@@ -54,6 +54,21 @@ async function checkArmControls() {
   console.log("ok: 3 panels draw the arm; Top, a drag and key s move the shared camera of all; r replays all");
 }
 
+// With "path" (a Driver study): each of the three panels draws its trajectory (its pixels differ
+// from a blank canvas's and from the other panels'), with no camera bar.
+async function checkPaths() {
+  const drawn = await page.$$eval("#views canvas", (cs) => {
+    const blank = document.createElement("canvas");
+    blank.width = cs[0].width; blank.height = cs[0].height;
+    return cs.map((c) => c.toDataURL() !== blank.toDataURL());
+  });
+  const shots = await snap();
+  if (drawn.length !== 3 || drawn.some((d) => !d)) await fail(`path panels drawn: ${drawn}`);
+  if (new Set(shots).size !== 3) await fail("two path panels show the same picture");
+  if (await page.locator("#viewbar").isVisible()) await fail("a camera bar on a path view");
+  console.log("ok: 3 panels each draw a road path, no camera bar");
+}
+
 let answered = 0, checked = false, byKey = 0;
 for (let i = 0; i < 60; i++) {
   await page.waitForSelector("#buttons button, h2:has-text('Thank you')", { timeout: 20000 });
@@ -61,8 +76,8 @@ for (let i = 0; i < 60; i++) {
   const first = page.locator("#buttons button").first();
   const key = await first.getAttribute("data-key");
   const recorded = (await page.locator("#text").innerText()).startsWith("Question");
-  if (arm && !checked && (await page.locator("#views canvas").count()) === 3) {
-    await checkArmControls();
+  if ((arm || path) && !checked && (await page.locator("#views canvas").count()) === 3) {
+    await (arm ? checkArmControls() : checkPaths());
     checked = true;
   }
   const bar = await page.locator("#bar").evaluate((b) => b.value);
@@ -82,7 +97,7 @@ for (let i = 0; i < 60; i++) {
 }
 const done = await page.locator("h2:has-text('Thank you')").count();
 await browser.close();
-if (!done || errors.length || (arm && !checked)) {
+if (!done || errors.length || ((arm || path) && !checked)) {
   console.error(`not finished after ${answered} answers (checked: ${checked}); page errors: ${errors.join("; ")}`);
   process.exit(1);
 }

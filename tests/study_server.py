@@ -476,5 +476,29 @@ with tempfile.TemporaryDirectory() as tmp:
             assert len(g["similarity_answer"]) == 2 and len(g["preference_answer"]) == 1
         print(p.stdout.strip())
         print("ok: the JacoRobot page (3-D arm views, shared camera, keys) ran to the end in chromium")
+        # Driver's page draws each trajectory as a path of road points (view "path").
+        drv = os.path.join(tmp, "driver.h5")
+        pd_ = subprocess.Popen([SIRL, "study", "serve", "--env", "driver", "--trajectories", "200",
+                                "--participant", "dora", "--similarity", "2", "--preference", "1",
+                                "--practice", "1", "--scenario", "Keep to your lane.",
+                                "--out", drv, "--port", "0"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               stdin=subprocess.DEVNULL)
+        line = ""
+        while not line.startswith("open: "):
+            line = pd_.stdout.readline()
+            if not line:
+                sys.exit(f"FAIL: driver server did not start: {pd_.stderr.read()}")
+        p = subprocess.run(["node", os.path.join(SRC, "tests", "study_browser.mjs"),
+                            line.split("open: ")[1].strip(), "path"], cwd=web,
+                           capture_output=True, text=True, timeout=300)
+        pd_.kill()
+        if p.returncode != 0:
+            sys.exit(f"FAIL: driver browser test\n{p.stdout}\n{p.stderr}")
+        with h5py.File(drv, "r") as f:
+            g = f["study/participants/dora"]
+            assert len(g["similarity_answer"]) == 2 and len(g["preference_answer"]) == 1
+        print(p.stdout.strip())
+        print("ok: the Driver page (road paths drawn to fit) ran to the end in chromium")
     srv.kill()
 print("PASS")

@@ -9,6 +9,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "datasets/driver.h"
 #include "datasets/study.h"
 
 namespace sirl::app {
@@ -176,6 +177,32 @@ TEST_F(StudyRequests, TrajectoryChecksItsRowAndDrawsTheGridPath) {
   ASSERT_FALSE(t["points"].empty());
   EXPECT_EQ(t["points"][0].size(), 2u) << "a plane view draws 2-D cells";
   EXPECT_EQ(t["objects"].size(), data->object_names.size());
+}
+
+// Driver on the study page: a "path" view (2-D points in road units, drawn to fit), its title for
+// the welcome text, and each trajectory's start and 50 states with no end angle.
+TEST(StudyService, DriverIsServedAsAPathOfRoadPoints) {
+  Study study;
+  study.env = "driver";
+  study.trajectories = 60;
+  auto data = std::make_shared<const Dataset>(study_dataset(study));
+  StudyParticipant p = plan_participant(*data, "cy", 2, 1, 5);
+  p.token = "tok";
+  study.participants.push_back(std::move(p));
+  StudyService service(study, data, "cy", 1, [](const Study&) {});
+  const Reply st = service.state({{"p", "cy"}, {"t", "tok"}});
+  ASSERT_EQ(st.status, 200) << st.body;
+  const json state = json::parse(st.body);
+  EXPECT_EQ(state["view"], "path");
+  EXPECT_EQ(state["title"], "Driver");
+  const Reply r = service.trajectory({{"p", "cy"}, {"t", "tok"}, {"id", "7"}});
+  ASSERT_EQ(r.status, 200) << r.body;
+  const json t = json::parse(r.body);
+  ASSERT_EQ(t["points"].size(), size_t(kDriverSteps + 1));
+  EXPECT_EQ(t["points"][0], json({0.f, -0.3f}));  // every car starts at (0, −0.3)
+  for (int i = 0; i < kDriverSteps; ++i)          // then the (x, y) of each state of its input row
+    EXPECT_EQ(t["points"][i + 1], json({data->input(7)[4 * i], data->input(7)[4 * i + 1]})) << i;
+  EXPECT_FALSE(t.contains("angle"));
 }
 
 }  // namespace

@@ -188,16 +188,45 @@ function drawJaco2D(canvas, t, color) {  // fallback: top view
   ctx.stroke();
 }
 
+// Text from the server shown as text, never as markup.
+const esc = (v) => String(v).replace(/[&<>"']/g, (c) => `&#${c.charCodeAt(0)};`);
+
+// A path of 2-D points in the environment's own units (view "path"), drawn to fit `box` (the
+// bounds of every trajectory shown together, so the panels share one scale); a dot marks its start.
+function drawPath(canvas, t, color, box) {
+  const ctx = canvas.getContext("2d"), pad = 12;
+  const w = Math.max(box.x1 - box.x0, 1e-9), h = Math.max(box.y1 - box.y0, 1e-9);
+  const sc = Math.min((canvas.width - 2 * pad) / w, (canvas.height - 2 * pad) / h);
+  const X = (x) => pad + (x - box.x0) * sc, Y = (y) => canvas.height - pad - (y - box.y0) * sc;
+  ctx.clearRect(0, 0, canvas.width, canvas.height);
+  ctx.strokeStyle = color; ctx.lineWidth = 3; ctx.beginPath();
+  t.points.forEach(([x, y], i) => (i ? ctx.lineTo(X(x), Y(y)) : ctx.moveTo(X(x), Y(y))));
+  ctx.stroke();
+  if (t.points.length) {
+    ctx.fillStyle = "#333"; ctx.beginPath();
+    ctx.arc(X(t.points[0][0]), Y(t.points[0][1]), 4, 0, 2 * Math.PI); ctx.fill();
+  }
+}
+
+function pathBox(ts) {
+  const pts = ts.flatMap((t) => t.points);
+  const xs = pts.map((p) => p[0]), ys = pts.map((p) => p[1]);
+  return { x0: Math.min(...xs), x1: Math.max(...xs), y0: Math.min(...ys), y1: Math.max(...ys) };
+}
+
 async function showOptions(view, ids) {
   const views = $("views");
   views.innerHTML = "";
   animators.length = 0;
   for (const p of shared.panels) { p.controls.dispose(); p.renderer.dispose(); }
   shared.panels.length = 0;
-  const arm = view !== "plane" && THREE;
+  const arm = view === "arm" && THREE;
   $("viewbar").hidden = !arm;
+  const all = [];
+  for (const id of ids) all.push(await trajectory(id));
+  const box = view === "path" ? pathBox(all) : null;
   for (let i = 0; i < ids.length; i++) {
-    const t = await trajectory(ids[i]);
+    const t = all[i];
     const div = document.createElement("div");
     div.className = "view";
     div.innerHTML = `<div><b>Trajectory ${i + 1}</b></div>`;
@@ -205,6 +234,9 @@ async function showOptions(view, ids) {
     if (view === "plane") {
       const c = document.createElement("canvas"); c.width = c.height = 250; div.appendChild(c);
       drawGrid(c, t, COLORS[i]);
+    } else if (view === "path") {
+      const c = document.createElement("canvas"); c.width = c.height = 250; div.appendChild(c);
+      drawPath(c, t, COLORS[i], box);
     } else if (THREE) {
       const replay = drawJaco3D(div, t, COLORS[i]);
       const b = document.createElement("button");
@@ -276,7 +308,10 @@ async function run() {
   progress(s);
   const feats = s.features.join(" and ");
   if (s.stage === "similarity" && s.similarity.done === 0) {
-    text(`<h2>Welcome</h2><p>A robot arm carries objects over a table. Each picture shows the path of its hand. People care about how a trajectory relates to: <b>${feats}</b> (${s.features_gloss}).</p><p>First you will see groups of three trajectories and tell us which two are <b>most similar</b>.${s.view === "plane" ? "" : " All three views share one camera: drag any of them to turn it, or pick the top or side view (keys t, s; f for the default). Replay (key r) shows the arm moving."} Answer with the buttons or the keys shown on them. A few practice questions come first.</p>`);
+    const scene = s.view === "path"
+      ? `Each picture shows one trajectory of ${esc(s.title)}, seen from above; the dot marks where it starts.`
+      : "A robot arm carries objects over a table. Each picture shows the path of its hand.";
+    text(`<h2>Welcome</h2><p>${scene} People care about how a trajectory relates to: <b>${feats}</b> (${s.features_gloss}).</p><p>First you will see groups of three trajectories and tell us which two are <b>most similar</b>.${s.view === "arm" ? " All three views share one camera: drag any of them to turn it, or pick the top or side view (keys t, s; f for the default). Replay (key r) shows the arm moving." : ""} Answer with the buttons or the keys shown on them. A few practice questions come first.</p>`);
     $("views").innerHTML = "";
     await continueButton("Start practice");
     await practice(s.view, s.practice.similarity, "similarity");
