@@ -345,12 +345,27 @@ std::string digest_of(const std::string& path, uint64_t offset = 0) {
   }
 }
 
+// A finished, framed `partial` made the file at `path`: fsynced, renamed over it, the folder
+// fsynced, its .sum rewritten. The old checksum goes first: a crash from here on leaves a file
+// without one (read as unverified), never a file with another file's checksum.
+void move_into_place(const std::string& partial, const std::string& path);
+
 void write_frame(const std::string& path) {
   try {
     overwrite_head(path, results_frame(digest_of(path, kResultsFrameBytes)));
   } catch (const std::runtime_error& e) {
     throw H5Error(e.what());
   }
+}
+
+void move_into_place(const std::string& partial, const std::string& path) {
+  fsync_path(partial);
+  std::error_code ec;
+  fs::remove(path + ".sum", ec);
+  fs::rename(partial, path, ec);
+  if (ec) throw H5Error(path + ": cannot move the finished file into place: " + ec.message());
+  fsync_path(fs::path(path).parent_path().empty() ? "." : fs::path(path).parent_path().string());
+  write_checksum(path);
 }
 
 }  // namespace
@@ -411,15 +426,7 @@ void write_results_file(const std::string& path, const RunInfo& info,
     fs::remove(partial, ec);
     throw H5Error(path + ": the results file could not be written: " + e.what());
   }
-  fsync_path(partial);
-  // The old checksum goes first: a crash from here on leaves a file without one (read as
-  // unverified), never a file with another file's checksum.
-  std::error_code ec;
-  fs::remove(path + ".sum", ec);
-  fs::rename(partial, path, ec);
-  if (ec) throw H5Error(path + ": cannot move the finished file into place: " + ec.message());
-  fsync_path(fs::path(path).parent_path().empty() ? "." : fs::path(path).parent_path().string());
-  write_checksum(path);
+  move_into_place(partial, path);
 }
 
 // The sidecar FILE.sum: the whole file's digest, in the format `xxh128sum -c` checks.
@@ -652,13 +659,7 @@ void store_verdicts(const std::string& path, const std::string& claims_json,
     fs::remove(partial, ec);
     throw H5Error(path + ": the verdicts could not be stored: " + e.what());
   }
-  fsync_path(partial);
-  std::error_code ec;
-  fs::remove(path + ".sum", ec);
-  fs::rename(partial, path, ec);
-  if (ec) throw H5Error(path + ": cannot move the file into place: " + ec.message());
-  fsync_path(fs::path(path).parent_path().empty() ? "." : fs::path(path).parent_path().string());
-  write_checksum(path);
+  move_into_place(partial, path);
 }
 
 std::vector<TaskRecord> read_results_records(const std::string& path) {
