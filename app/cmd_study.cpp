@@ -38,7 +38,7 @@ int study_simulate(const std::string& env, int64_t trajectories, int users, int6
   // Checked before the file: a bad teacher or environment is a usage error that touches nothing.
   int64_t count = 0;
   try {
-    const Dataset d = study_dataset(Study{env, trajectories, seed, {}});
+    const Dataset d = study_dataset(new_study(env, trajectories, seed));
     count = d.count;
     Teacher t;
     t.beta = beta;
@@ -67,7 +67,12 @@ int study_simulate(const std::string& env, int64_t trajectories, int users, int6
 int study_analyze(const std::string& file, const std::string& out, int seeds, int splits,
                   int epochs, int tpa_epochs, int threads, bool random_frozen) {
   const Study s = read_study(file);
-  const Dataset d = study_dataset(s);
+  Dataset d;
+  try {
+    d = study_dataset(s);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(file + ": " + e.what());
+  }
   StudyAnalysisConfig c;
   c.hyper = paper_hyper(s.env);
   if (epochs > 0) c.hyper.sirl.epochs = epochs;
@@ -155,7 +160,7 @@ void plot_study(const std::string& analysis, const std::string& out,
 namespace {
 
 // `sirl study simulate`'s options.
-std::string s_env = "jaco2", s_out;
+std::string s_env = "jaco2", s_out, s_profile;
 int64_t s_traj = 1000, s_sim = 100, s_pref = 100;
 int s_users = 10;
 double s_beta = 20, s_mistake = 0.05;
@@ -163,7 +168,7 @@ uint64_t s_seed = 0;
 bool s_force = false;
 
 // `sirl study analyze`'s options.
-std::string a_file, a_out;
+std::string a_file, a_out, a_profile;
 int a_seeds = 5, a_splits = 50, a_epochs = 0, a_tpa_epochs = 0, a_threads = 1;
 std::string a_random = "unfrozen";
 
@@ -173,9 +178,9 @@ CLI::App* register_study_simulate(CLI::App& study) {
       "Write a study file answered by simulated novices: noisy teachers (Boltzmann beta on the\n"
       "normalised features, mistakes), each with its own preference scenario (3 in 5 care\n"
       "about every feature).");
-  sim->add_option("--env", s_env, "Environment: " + study_env_names() + " (jaco2 is the paper's)")
-      ->check(CLI::IsMember(study_env_choices()))
-      ->capture_default_str();
+  sim->add_option("--env", s_env, study_env_help())->capture_default_str();
+  sim->add_option("--profile", s_profile,
+                  "A profile whose [environments.<name>] files --env may name");
   sim->add_option("--trajectories", s_traj, "JacoRobot trajectory space size")
       ->check(CLI::Range(int64_t(10), int64_t(1000000)))
       ->capture_default_str();
@@ -211,6 +216,8 @@ CLI::App* register_study_analyze(CLI::App& study) {
       "Random unfrozen (the paper's best baseline; --random frozen to swap), and the report\n"
       "shows Random in the other mode beside it. Writes Fig. 6 and study_report.md (H3, H4).");
   ana->add_option("file", a_file, "Study file")->required()->check(CLI::ExistingFile);
+  ana->add_option("--profile", a_profile,
+                  "The profile that declares the study's environment, if it is read from a file");
   ana->add_option("--out", a_out, "Output directory (default: <file>-analysis)");
   ana->add_option("--seeds", a_seeds, "Training seeds for FPE")
       ->check(CLI::Range(2, 100))
@@ -336,10 +343,13 @@ void register_study(CLI::App& app, Runner& run) {
 
   run = [sim, ana, merge] {
     if (merge->parsed()) return study_merge();
-    if (sim->parsed())
+    if (sim->parsed()) {
+      declare_profile_environments(s_profile);
       return study_simulate(s_env, s_traj, s_users, s_sim, s_pref, s_beta, s_mistake, s_seed, s_out,
                             s_force);
+    }
     if (ana->parsed()) {
+      declare_profile_environments(a_profile);
       const std::string out = a_out.empty() ? a_file + "-analysis" : a_out;
       return study_analyze(a_file, out, a_seeds, a_splits, a_epochs, a_tpa_epochs, a_threads,
                            a_random == "frozen");

@@ -5,6 +5,8 @@
 #include <set>
 
 #include "datasets/environments.h"
+#include "datasets/study.h"
+#include "experiment/profile.h"
 
 #include <filesystem>
 
@@ -238,11 +240,18 @@ std::vector<std::string> env_choices() {
   return v;
 }
 
-std::vector<std::string> study_env_choices() {
-  std::vector<std::string> v;
-  for (const auto& e : environments())
-    if (e.in_study) v.push_back(e.name);
-  return v;
+std::string study_env_help() {
+  return "Environment: " + study_env_names() +
+         " (jaco2 is the paper's), or one --profile declares from a file with 2-D points";
+}
+
+void declare_profile_environments(const std::string& profile) {
+  if (profile.empty()) return;
+  try {
+    load_profile(profile, {});
+  } catch (const ProfileError& e) {
+    throw UsageError(e.what());
+  }
 }
 
 }  // namespace sirl::app

@@ -73,7 +73,11 @@ CLI::Validator non_negative_number();
 
 // Environment names for `--env` choices: every registered one, or those the study may use.
 std::vector<std::string> env_choices();
-std::vector<std::string> study_env_choices();
+// The study commands' --env help: the built-in study environments, and a profile's from files.
+std::string study_env_help();
+// `sirl study … --profile P`: reads P so the environments it declares from files
+// ([environments.<name>]) are registered and a study can run on them. Nothing for "".
+void declare_profile_environments(const std::string& profile);
 
 // This build's version and git commit (recorded in every results file).
 const char* engine_version();

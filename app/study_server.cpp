@@ -40,7 +40,7 @@ namespace {
 namespace fs = std::filesystem;
 
 struct ServeArgs {
-  std::string env = "jaco2", participant, scenario, out, host = "127.0.0.1";
+  std::string env = "jaco2", participant, scenario, out, host = "127.0.0.1", profile;
   std::vector<std::string> scenario_features;
   int64_t similarity = 100, preference = 100, trajectories = 1000;
   int port = 8080, practice = 3;
@@ -48,7 +48,7 @@ struct ServeArgs {
 } g_serve;
 
 struct ImportArgs {
-  std::string file, out, env = "jaco2", format = "auto";
+  std::string file, out, env = "jaco2", format = "auto", profile;
   int64_t trajectories = 1000;
   uint64_t seed = 0;
 } g_import;
@@ -99,6 +99,7 @@ int g_stop_pipe[2] = {-1, -1};
 int run_serve() {
   const ServeArgs& a = g_serve;
   validate_participant_id(a.participant);
+  declare_profile_environments(a.profile);
   std::string url_host;
   if (!check_host(a.host, url_host))
     std::fprintf(stderr,
@@ -114,9 +115,7 @@ int run_serve() {
       throw UsageError(a.out + " is a " + s.env + " study over " + std::to_string(s.trajectories) +
                        " trajectories; --env/--trajectories differ");
   } else {
-    s.env = a.env;
-    s.trajectories = a.trajectories;
-    s.data_seed = a.seed;
+    s = new_study(a.env, a.trajectories, a.seed);
   }
   // The port before the file: a server that cannot listen writes nothing.
   httplib::Server srv;
@@ -205,6 +204,7 @@ int run_serve() {
 
 int run_import() {
   const ImportArgs& a = g_import;
+  declare_profile_environments(a.profile);
   std::optional<FileLock> lock;
   lock_study(lock, a.out);
   Study s;
@@ -212,9 +212,7 @@ int run_import() {
     s = read_study(a.out);  // add to an existing study (its env and trajectory space)
     if (s.env != a.env) throw UsageError(a.out + " is a " + s.env + " study; --env says " + a.env);
   } else {
-    s.env = a.env;
-    s.trajectories = a.trajectories;
-    s.data_seed = a.seed;
+    s = new_study(a.env, a.trajectories, a.seed);
   }
   const Dataset d = study_dataset(s);
   const size_t before = s.participants.size();
@@ -248,9 +246,9 @@ void register_study_serve(CLI::App& study) {
       "Serve the study page for one participant (local web server) and record every answer in\n"
       "the study file the moment it arrives. Restarting resumes at the next unanswered query.");
   ServeArgs& a = g_serve;
-  c->add_option("--env", a.env, "Environment: " + study_env_names() + " (jaco2 is the paper's)")
-      ->check(CLI::IsMember(study_env_choices()))
-      ->capture_default_str();
+  c->add_option("--env", a.env, study_env_help())->capture_default_str();
+  c->add_option("--profile", a.profile,
+                "A profile whose [environments.<name>] files --env may name (checked first)");
   c->add_option("--participant", a.participant, "Participant id (A-Z a-z 0-9 _ -)")->required();
   c->add_option("--similarity", a.similarity, "Recorded similarity queries")
       ->check(CLI::Range(int64_t(1), int64_t(10000)))
@@ -300,9 +298,9 @@ void register_study_import(CLI::App& study) {
       ->check(CLI::IsMember({"auto", "csv", "json"}))
       ->capture_default_str();
   c->add_option("--out", a.out, "Study file to write")->required()->check(output_file());
-  c->add_option("--env", a.env, "Environment: " + study_env_names())
-      ->check(CLI::IsMember(study_env_choices()))
-      ->capture_default_str();
+  c->add_option("--env", a.env, study_env_help())->capture_default_str();
+  c->add_option("--profile", a.profile,
+                "A profile whose [environments.<name>] files --env may name (checked first)");
   c->add_option("--trajectories", a.trajectories, "JacoRobot trajectory space size")
       ->check(CLI::Range(int64_t(10), int64_t(1000000)))
       ->capture_default_str();

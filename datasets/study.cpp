@@ -20,14 +20,58 @@ StudyParticipant* Study::find(const std::string& id) {
   return nullptr;
 }
 
+namespace {
+
+const EnvSpec& study_env(const std::string& name) {
+  const EnvSpec* e = nullptr;
+  for (const auto& spec : environments())
+    if (spec.name == name) e = &spec;
+  if (!e)
+    throw std::invalid_argument("the study's environment '" + name + "' is not built in (" +
+                                study_env_names() +
+                                "); an environment from a file needs --profile naming the "
+                                "profile that declares [environments." +
+                                name + "]");
+  if (!e->in_study)
+    throw std::invalid_argument(
+        "the study cannot run on environment '" + name + "' (" + study_env_names() + ")" +
+        (e->from_file ? ": the study page draws a file environment's 2-D points, and its file "
+                        "has none (or 3-D ones)"
+                      : ""));
+  return *e;
+}
+
+}  // namespace
+
 Dataset study_dataset(const Study& s) {
-  const EnvSpec& e = env_spec(s.env);
-  if (!e.in_study)
-    throw std::invalid_argument("the study cannot run on environment '" + s.env + "' (" +
-                                study_env_names() + ")");
+  const EnvSpec& e = study_env(s.env);
+  if (e.from_file) {
+    const std::string have = e.describe_data(EnvConfig{});
+    if (s.env_data.empty())
+      throw std::invalid_argument("the study on '" + s.env +
+                                  "' does not record which environment file it was collected on");
+    if (have != s.env_data)
+      throw std::invalid_argument("the study on '" + s.env + "' was collected on " +
+                                  s.env_data.substr(0, s.env_data.find('\n')) +
+                                  ", the profile declares " + have.substr(0, have.find('\n')) +
+                                  ": not the same trajectories");
+  }
   EnvConfig c;
   if (e.set_sample) e.set_sample(c, s.trajectories, s.data_seed);
   return e.make(c);
+}
+
+Study new_study(const std::string& env, int64_t trajectories, uint64_t data_seed) {
+  const EnvSpec& e = study_env(env);
+  Study s;
+  s.env = env;
+  s.data_seed = data_seed;
+  s.trajectories = trajectories;
+  if (e.from_file) {  // a file's Ξ is what it holds
+    s.trajectories = e.trajectories(EnvConfig{});
+    s.env_data = e.describe_data(EnvConfig{});
+  }
+  return s;
 }
 
 std::string study_env_names() {
@@ -146,10 +190,7 @@ std::string simulated_participant_id(int u) {
 }
 
 Study simulate_cohort(const CohortConfig& c) {
-  Study s;
-  s.env = c.env;
-  s.trajectories = c.trajectories;
-  s.data_seed = c.seed;
+  Study s = new_study(c.env, c.trajectories, c.seed);
   const Dataset d = study_dataset(s);
   Teacher t;
   t.beta = c.beta;

@@ -32,6 +32,9 @@ struct StudyParticipant {
 
 struct Study {
   std::string env = "jaco2";  // an environment with in_study (datasets/environments.h)
+  // For an environment read from a file: its data description (the file's XXH3, group and
+  // streams), so the study is never analysed against another file under the same name.
+  std::string env_data;
   int64_t trajectories = 1000;
   uint64_t data_seed = 0;
   std::vector<StudyParticipant> participants;
@@ -39,8 +42,13 @@ struct Study {
   StudyParticipant* find(const std::string& id);
 };
 
-// The study's trajectory space (deterministic). Throws std::invalid_argument for a bad env.
+// The study's trajectory space (deterministic). Throws std::invalid_argument for a bad env: one
+// not registered (an environment from a file needs the profile that declares it), one the study
+// cannot run on, or a file environment whose file is not the one the study was collected on.
 Dataset study_dataset(const Study& s);
+// A new study's header on `env` (for an environment read from a file, its data description and
+// the file's trajectory count). Throws std::invalid_argument as study_dataset does.
+Study new_study(const std::string& env, int64_t trajectories, uint64_t data_seed);
 // The environments the study may run on, for messages: "grid or jaco2".
 std::string study_env_names();
 

@@ -42,6 +42,10 @@ void declare_file_environment(const FileEnvironment& e) {
   spec.beyond_paper = true;
   spec.streams = e.streams;
   spec.view = data->point_dim == 3 ? EnvView::arm : EnvView::path;
+  // The study page draws a file's 2-D points as paths (its arm view is JacoRobot's table scene,
+  // which a file's 3-D points in their own units would not fit).
+  spec.in_study = data->point_dim == 2;
+  spec.study_features = e.description.empty() ? "the features of " + spec.title : e.description;
   spec.make = [data](const EnvConfig&) { return *data; };
   spec.trajectories = [T = data->count](const EnvConfig&) { return T; };
   spec.input_dim = [D = data->input_dim](const EnvConfig&) { return D; };

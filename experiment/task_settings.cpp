@@ -59,7 +59,11 @@ std::string describe_study(const StudyPlan& s) {
          "\ncohort env=" + c.env + " trajectories=" + exact_number(double(c.trajectories)) +
          " users=" + exact_number(c.users) + " similarity=" + exact_number(double(c.similarity)) +
          " preference=" + exact_number(double(c.preference)) + " beta=" + exact_number(c.beta) +
-         " mistake=" + exact_number(c.mistake) + " seed=" + exact_number(double(c.seed)) + "\n";
+         " mistake=" + exact_number(c.mistake) + " seed=" + exact_number(double(c.seed)) + "\n" +
+         // A cohort on an environment from a file depends on the file's bytes, not its name (a
+         // built-in environment's Ξ is set by the cohort's own fields above).
+         (s.enabled && env_spec(c.env).from_file ? env_spec(c.env).describe_data(EnvConfig{})
+                                                 : std::string());
 }
 
 std::string describe_external(const ExternalMethod& m) {

@@ -25,6 +25,7 @@ void write_study(const std::string& path, const Study& s) {
     f.set_attr("/study", "env", s.env);
     f.set_attr("/study", "trajectories", int64_t(s.trajectories));
     f.set_attr("/study", "data_seed", int64_t(s.data_seed));
+    if (!s.env_data.empty()) f.set_attr("/study", "env_data", s.env_data);
     std::vector<std::string> ids;
     for (const auto& p : s.participants) {
       ids.push_back(p.id);
@@ -65,6 +66,7 @@ Study read_study(const std::string& path) {
   s.env = f.attr_string("/study", "env");
   s.trajectories = f.attr_int("/study", "trajectories");
   s.data_seed = uint64_t(f.attr_int("/study", "data_seed"));
+  if (f.has_attr("/study", "env_data")) s.env_data = f.attr_string("/study", "env_data");
   for (const auto& id : f.read_strings("/study/participant_ids")) {
     StudyParticipant p;
     p.id = id;

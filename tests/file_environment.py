@@ -8,6 +8,10 @@ them (ctest; Debian's python3):
   its /datasets group (@from_file, the points), the figures and the report, whose main claims on
   it are marked beyond the paper; moved elsewhere, the same file is the same environment (every
   task reused from the cache);
+- the user study runs on an environment from a file with 2-D points (`--profile` declares it):
+  simulate, serve (the page's path view draws the file's points) and analyze; the study records
+  the file's digest, so a study is never analysed against another file under the same name, and
+  without the profile, or on a file with 3-D points, it is one line and exit 2;
 - bad files and declarations are one line, exit 2, before anything is written: a wrong digest, a
   missing group, mismatched shapes, NaN, a constant feature, too few trajectories, names missing
   or repeated, a non-HDF5 file, values stored outside the file, a crafted shape of 2^40 values, a
@@ -17,9 +21,11 @@ import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
+import urllib.request
 
 import h5py
 import numpy as np
@@ -158,6 +164,93 @@ def own_environment(tmp):
     return digest, prof
 
 
+def study_on_file(tmp, digest):
+    """The user study on the environment `own_environment` declared in mine.toml."""
+    x, phi, pts = synthetic()
+    sim = ["study", "simulate", "--env", "mine", "--users", "3", "--similarity", "60",
+           "--preference", "20", "--out", "study.h5"]
+    said = run(*sim, cwd=tmp, expect=2).stderr
+    if "--profile" not in said or "mine" not in said or os.path.exists(os.path.join(tmp, "study.h5")):
+        fail(f"a study on an undeclared environment: {said!r}")
+    run(*sim, "--profile", "mine.toml", cwd=tmp)
+    with h5py.File(os.path.join(tmp, "study.h5"), "r") as f:
+        if digest not in f["study"].attrs["env_data"] or f["study"].attrs["trajectories"] != len(x):
+            fail(f"the study file does not record the environment file: {dict(f['study'].attrs)}")
+    analyze = ["study", "analyze", "study.h5", "--out", "study-out", "--seeds", "2", "--splits",
+               "2", "--epochs", "5", "--tpa-epochs", "5"]
+    said = run(*analyze, cwd=tmp, expect=2).stderr
+    if "--profile" not in said or os.path.exists(os.path.join(tmp, "study-out")):
+        fail(f"analyze without the profile that declares the environment: {said!r}")
+    # Another file under the same name: never analysed as if it were the study's.
+    x2, phi2, pts2 = synthetic(seed=4)
+    other = sirl_bench.write_environment(os.path.join(tmp, "other.h5"), x2, phi2,
+                                         names=["reach", "effort", "swing"], points=pts2,
+                                         name="mine")
+    mine = open(os.path.join(tmp, "mine.toml")).read()
+    with open(os.path.join(tmp, "other.toml"), "w") as f:
+        f.write(mine.replace('file = "mine.h5"', 'file = "other.h5"').replace(digest, other))
+    said = run(*analyze, "--profile", "other.toml", cwd=tmp, expect=2).stderr
+    if "not the same trajectories" not in said or os.path.exists(os.path.join(tmp, "study-out")):
+        fail(f"a study analysed against another file under its environment's name: {said!r}")
+    run(*analyze, "--profile", "mine.toml", cwd=tmp)
+    if not os.path.exists(os.path.join(tmp, "study-out", "study_report.md")):
+        fail("analyze wrote no study_report.md")
+    # [study] env = the file's name inside `sirl run`: its cache key is the file's bytes, so a
+    # profile naming another file under the same name recomputes every study task.
+    cohort = ('[study]\nenv = "mine"\nusers = 2\nsimilarity = 40\npreference = 10\nepochs = 5\n'
+              'tpa_epochs = 5\nseeds = 2\nsplits = 2\n')
+    for name, file, d in (("ms", "mine.h5", digest), ("os", "other.h5", other)):
+        with open(os.path.join(tmp, name + ".toml"), "w") as f:
+            f.write(f'name = "{name}"\nenvs = ["mine"]\nseeds = [0]\n{cohort}' + declare("mine", file, d))
+    first = run("run", "ms.toml", "--out", "ms.h5", "--cache", "scache", cwd=tmp).stderr
+    second = run("run", "os.toml", "--out", "os.h5", "--cache", "scache", cwd=tmp).stderr
+    m = re.search(r"(\d+) tasks \((\d+) already done\)", second)
+    if not m or m.group(2) != "0":
+        fail(f"a cohort on another file under the same name reused tasks:\n{second[-600:]}")
+    with sirl_bench.open(os.path.join(tmp, "ms.h5")) as r:
+        if len(r.tables["study"]) == 0:
+            fail(f"sirl run's cohort on the file environment stored no analysis: {list(r.tables)}")
+    # The study page serves it as a path view of the file's points.
+    srv = subprocess.Popen([SIRL, "study", "serve", "--profile", "mine.toml", "--env", "mine",
+                            "--participant", "bob", "--scenario", "reach matters",
+                            "--scenario-features", "reach", "--out", "served.h5", "--port", "0"],
+                           cwd=tmp, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           stdin=subprocess.DEVNULL)
+    try:
+        url = None
+        for line in srv.stdout:
+            if line.startswith("open: "):
+                url = line.split()[1]
+                break
+        if not url:
+            fail(f"sirl study serve printed no URL: {srv.stderr.read()[-800:]}")
+        base, query = url.split("/?")
+        state = json.load(urllib.request.urlopen(f"{base}/api/state?{query}", timeout=10))
+        if state["view"] != "path" or state["features"] != ["reach", "effort", "swing"] or \
+                state["title"] != "Toy robot" or state["env"] != "mine":
+            fail(f"the study page's state for a file environment: {state}")
+        row = state["next"]["trajectories"][0]
+        t = json.load(urllib.request.urlopen(f"{base}/api/trajectory?{query}&id={row}", timeout=10))
+        if not np.allclose(np.array(t["points"]), pts[row], atol=1e-5):
+            fail(f"trajectory {row} is not drawn from the file's points: {t['points']}")
+    finally:
+        srv.send_signal(signal.SIGTERM)
+        srv.wait(timeout=30)
+    # A file with 3-D points: the study page has no view for it, said before anything is written.
+    arm = sirl_bench.write_environment(os.path.join(tmp, "arm3.h5"), x, phi,
+                                       names=["reach", "effort", "swing"],
+                                       points=np.concatenate([pts, pts[:, :, :1]], axis=2),
+                                       name="arm3")
+    with open(os.path.join(tmp, "arm.toml"), "w") as f:
+        f.write(mine.replace("mine", "arm3").replace(digest, arm))
+    said = run("study", "simulate", "--profile", "arm.toml", "--env", "arm3", "--out", "arm-study.h5",
+               cwd=tmp, expect=2).stderr
+    if "2-D points" not in said or os.path.exists(os.path.join(tmp, "arm-study.h5")):
+        fail(f"a study on a file environment with 3-D points: {said!r}")
+    print("ok: the user study on a file environment: simulate, serve (path view of the file's "
+          "points), analyze; refused without its profile, against another file, with 3-D points")
+
+
 def bad_files(tmp, prof):
     x, phi, pts = synthetic()
 
@@ -257,7 +350,8 @@ def bad_files(tmp, prof):
 def main():
     with tempfile.TemporaryDirectory() as tmp:
         round_trip(tmp)
-        _, prof = own_environment(tmp)
+        digest, prof = own_environment(tmp)
+        study_on_file(tmp, digest)
         bad_files(tmp, prof)
     print("file_environment: OK")
 
