@@ -108,14 +108,12 @@ int run_serve() {
                  a.host.c_str(), a.participant.c_str());
   std::optional<FileLock> lock;
   lock_study(lock, a.out);
-  Study s;
+  Study s = new_study(a.env, a.trajectories, a.seed);  // --env checked before the file is read
   if (fs::exists(a.out)) {
     s = read_study(a.out);
     if (s.env != a.env || (env_spec(a.env).sampled && s.trajectories != a.trajectories))
       throw UsageError(a.out + " is a " + s.env + " study over " + std::to_string(s.trajectories) +
                        " trajectories; --env/--trajectories differ");
-  } else {
-    s = new_study(a.env, a.trajectories, a.seed);
   }
   // The port before the file: a server that cannot listen writes nothing.
   httplib::Server srv;

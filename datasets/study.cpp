@@ -1,5 +1,6 @@
 #include "datasets/study.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -22,23 +23,39 @@ StudyParticipant* Study::find(const std::string& id) {
 
 namespace {
 
+// "grid, jaco2, driver" (built in) and the file environments the study may run on.
+std::string study_env_list() {
+  std::string built, files;
+  for (const auto& e : environments())
+    if (e.in_study)
+      (e.from_file ? files : built) +=
+          (e.from_file ? files : built).empty() ? e.name : ", " + e.name;
+  return "built in: " + built + (files.empty() ? "" : "; declared from files: " + files);
+}
+
 const EnvSpec& study_env(const std::string& name) {
   const EnvSpec* e = nullptr;
   for (const auto& spec : environments())
     if (spec.name == name) e = &spec;
   if (!e)
-    throw std::invalid_argument("the study's environment '" + name + "' is not built in (" +
-                                study_env_names() +
-                                "); an environment from a file needs --profile naming the "
-                                "profile that declares [environments." +
+    throw std::invalid_argument("'" + name + "' is not an environment the study can run on (" +
+                                study_env_list() +
+                                "); an environment from a file needs --profile naming a profile "
+                                "that declares [environments." +
                                 name + "]");
   if (!e->in_study)
     throw std::invalid_argument(
-        "the study cannot run on environment '" + name + "' (" + study_env_names() + ")" +
+        "the study cannot run on environment '" + name + "' (" + study_env_list() + ")" +
         (e->from_file ? ": the study page draws a file environment's 2-D points, and its file "
                         "has none (or 3-D ones)"
                       : ""));
   return *e;
+}
+
+// The part of a file environment's data description that fixes Ξ: the file's digest and group
+// ("file xxh3=… group=…"), not the streams its tasks draw from (a study's queries are stored).
+std::string trajectory_set(const std::string& env_data) {
+  return env_data.substr(0, std::min(env_data.find(" streams="), env_data.find('\n')));
 }
 
 }  // namespace
@@ -50,11 +67,10 @@ Dataset study_dataset(const Study& s) {
     if (s.env_data.empty())
       throw std::invalid_argument("the study on '" + s.env +
                                   "' does not record which environment file it was collected on");
-    if (have != s.env_data)
+    if (trajectory_set(have) != trajectory_set(s.env_data))
       throw std::invalid_argument("the study on '" + s.env + "' was collected on " +
-                                  s.env_data.substr(0, s.env_data.find('\n')) +
-                                  ", the profile declares " + have.substr(0, have.find('\n')) +
-                                  ": not the same trajectories");
+                                  trajectory_set(s.env_data) + ", the profile declares " +
+                                  trajectory_set(have) + ": not the same trajectories");
   }
   EnvConfig c;
   if (e.set_sample) e.set_sample(c, s.trajectories, s.data_seed);

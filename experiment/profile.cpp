@@ -699,7 +699,9 @@ void parse_study(Reader& r, const toml::table& root, Profile& p) {
     CohortConfig& c = sp.cohort;
     sp.enabled = true;
     c.env = r.string(*st, "env", c.env);
-    if (!env_is_study(c.env)) r.fail(st->get("env"), "[study] env must be " + study_env_names());
+    if (!env_is_study(c.env))
+      r.fail(st->get("env"), "[study] env must be " + study_env_names() +
+                                 " (an environment from a file, if its file has 2-D points)");
     c.trajectories = r.integer(*st, "trajectories", 1000, 10, 1'000'000);
     c.users = int(r.integer(*st, "users", 10, 2, 10'000));
     c.similarity = r.integer(*st, "similarity", 100, 1, 100'000);

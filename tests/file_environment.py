@@ -10,8 +10,9 @@ them (ctest; Debian's python3):
   task reused from the cache);
 - the user study runs on an environment from a file with 2-D points (`--profile` declares it):
   simulate, serve (the page's path view draws the file's points) and analyze; the study records
-  the file's digest, so a study is never analysed against another file under the same name, and
-  without the profile, or on a file with 3-D points, it is one line and exit 2;
+  the file's digest, so a study is never analysed against another file under the same name (other
+  streams are the same Ξ), merge keeps it and refuses studies on two files, and without the
+  profile, or on a file with 3-D points, it is one line and exit 2;
 - bad files and declarations are one line, exit 2, before anything is written: a wrong digest, a
   missing group, mismatched shapes, NaN, a constant feature, too few trajectories, names missing
   or repeated, a non-HDF5 file, values stored outside the file, a crafted shape of 2^40 values, a
@@ -192,9 +193,33 @@ def study_on_file(tmp, digest):
     said = run(*analyze, "--profile", "other.toml", cwd=tmp, expect=2).stderr
     if "not the same trajectories" not in said or os.path.exists(os.path.join(tmp, "study-out")):
         fail(f"a study analysed against another file under its environment's name: {said!r}")
+    # The same file under other streams is the same Ξ: accepted (the study stores its queries).
+    with open(os.path.join(tmp, "streams.toml"), "w") as f:
+        f.write(mine.replace('title = "Toy robot"', 'title = "Toy robot"\nstreams = "grid"'))
+    run(*[a if a != "study-out" else "study-streams" for a in analyze], "--profile",
+        "streams.toml", cwd=tmp)
     run(*analyze, "--profile", "mine.toml", cwd=tmp)
     if not os.path.exists(os.path.join(tmp, "study-out", "study_report.md")):
         fail("analyze wrote no study_report.md")
+    # merge: two files on the same environment file stay one analysable study; files on two
+    # environment files under one name are not one study.
+    run("study", "simulate", "--profile", "mine.toml", "--env", "mine", "--users", "2",
+        "--seed", "0", "--out", "second.h5", cwd=tmp)
+    with h5py.File(os.path.join(tmp, "second.h5"), "a") as f:  # other participants' ids
+        g = f["study"]
+        ids = [i.decode() for i in g["participant_ids"][()]]
+        for i in ids:
+            g.move(f"participants/{i}", f"participants/b{i}")
+        del g["participant_ids"]
+        g["participant_ids"] = [("b" + i).encode() for i in ids]
+    run("study", "merge", "merged.h5", "study.h5", "second.h5", cwd=tmp)
+    run("study", "analyze", "merged.h5", "--out", "merged-out", "--seeds", "2", "--splits", "2",
+        "--epochs", "5", "--tpa-epochs", "5", "--profile", "mine.toml", cwd=tmp)
+    run("study", "simulate", "--profile", "other.toml", "--env", "mine", "--users", "2",
+        "--out", "third.h5", cwd=tmp)
+    said = run("study", "merge", "mixed.h5", "study.h5", "third.h5", cwd=tmp, expect=2).stderr
+    if "not one study" not in said or os.path.exists(os.path.join(tmp, "mixed.h5")):
+        fail(f"merge of studies on two environment files: {said!r}")
     # [study] env = the file's name inside `sirl run`: its cache key is the file's bytes, so a
     # profile naming another file under the same name recomputes every study task.
     cohort = ('[study]\nenv = "mine"\nusers = 2\nsimilarity = 40\npreference = 10\nepochs = 5\n'
@@ -236,6 +261,10 @@ def study_on_file(tmp, digest):
     finally:
         srv.send_signal(signal.SIGTERM)
         srv.wait(timeout=30)
+    said = run("study", "serve", "--env", "mine", "--participant", "bob", "--scenario", "x",
+               "--out", "served.h5", "--port", "0", cwd=tmp, expect=2).stderr
+    if "--profile" not in said:
+        fail(f"serve resumed without the profile that declares its environment: {said!r}")
     # A file with 3-D points: the study page has no view for it, said before anything is written.
     arm = sirl_bench.write_environment(os.path.join(tmp, "arm3.h5"), x, phi,
                                        names=["reach", "effort", "swing"],
