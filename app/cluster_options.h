@@ -13,7 +13,7 @@ namespace sirl::app {
 struct PlanClusterOptions {
   int nodes = 1, cores_per_node = 0, threads_per_worker = 1, task_threads = 0;
   bool mpi = false;
-  double node_bandwidth_gbs = 0, serial_fraction = 0.25;
+  double node_bandwidth_gbs = 0, serial_fraction = kMeasuredSerialFraction;
 };
 
 ClusterModel cluster_model(const PlanClusterOptions& o);

@@ -407,7 +407,8 @@ void register_plan(CLI::App& app, Runner& run) {
                 "(default: 15.5 GB/s per core, at most 460)")
       ->check(CLI::Range(0.1, 1e6));
   g->add_option("--serial-fraction", co.serial_fraction,
-                "Amdahl serial fraction of one task on several cores")
+                "Amdahl serial fraction of one task on several cores (default: the largest of\n"
+                "the critical-path tasks', measured from 1 and 2 threads: bench/serial_fraction)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   static bool as_json = false;

@@ -22,6 +22,11 @@ double task_speedup(int k, double serial_fraction) {
   return k <= 1 ? 1.0 : double(k) / (1.0 + serial_fraction * double(k - 1));
 }
 
+double serial_fraction_from_speedup(int k, double speedup) {
+  if (k < 2 || !(speedup > 0)) return 1.0;
+  return std::clamp((double(k) / speedup - 1.0) / double(k - 1), 0.0, 1.0);
+}
+
 int usable_cores() {
   return std::max(1, tbb::info::default_concurrency());
 }

@@ -26,6 +26,15 @@ inline constexpr double kThreadedTaskBytes = 4.0 * 1024 * 1024;
 // heads gain on 2 cores.
 inline constexpr double kAssumedSerialFraction = 0.25;
 double task_speedup(int k, double serial_fraction);
+// The serial fraction s for which task_speedup(k, s) == speedup (Amdahl inverted), in [0, 1]:
+// 1 for k < 2 or a speed-up that is not positive, 0 for a speed-up of k or more.
+double serial_fraction_from_speedup(int k, double speedup);
+// What the machine model of `sirl plan` (ClusterModel::serial_fraction, --serial-fraction) takes
+// by default: the largest serial fraction of the paper's critical-path tasks (JacoRobot VAE, SIRL
+// φ, frozen TPA heads), measured by bench/serial_fraction.cpp from 1 and 2 threads: the VAE's
+// epochs, the median of six runs (docs/performance-history.md, "Serial fraction"). Amdahl's law
+// from 2 threads is a model of what 64 give, not a measurement of it.
+inline constexpr double kMeasuredSerialFraction = 0.65;
 
 // What the scheduler knows when it pops a ready task.
 struct CoreOffer {

@@ -39,6 +39,7 @@ ClusterModel cores(int n, int max_task_threads = 1) {
   m.max_task_threads = max_task_threads;
   m.commit_seconds = 0;
   m.mpi_task_seconds = 0;
+  m.serial_fraction = 0.25;  // the cases below are worked by hand at this fraction
   return m;
 }
 
@@ -221,6 +222,25 @@ TEST(TaskThreads, ACriticalChainGetsTheFewestCoresThatFitItInItsShareOfTheWork) 
   EXPECT_EQ(task_threads(big, offer(8, 8, 8, 3, 20, 80, 20)), 3);  // 20 / 2.9 < 10: as above
   // Work in small steps stays on one core, critical or not.
   EXPECT_EQ(task_threads(narrow, offer(8, 8, 8, 3, 20, 80)), 1);
+}
+
+TEST(TaskThreads, TheSerialFractionFromASpeedUpIsAmdahlInverted) {
+  // By hand: 2 cores at 1.6× is 2 / 1.6 − 1 = 0.25; 3 cores at 2× is (1.5 − 1) / 2 = 0.25;
+  // 4 cores at 2.5× is (1.6 − 1) / 3 = 0.2.
+  EXPECT_DOUBLE_EQ(serial_fraction_from_speedup(2, 1.6), 0.25);
+  EXPECT_DOUBLE_EQ(serial_fraction_from_speedup(3, 2.0), 0.25);
+  EXPECT_NEAR(serial_fraction_from_speedup(4, 2.5), 0.2, 1e-15);
+  // Perfect or better scaling is no serial part; none, or a slowdown, is all serial.
+  EXPECT_EQ(serial_fraction_from_speedup(2, 2.0), 0.0);
+  EXPECT_EQ(serial_fraction_from_speedup(2, 2.3), 0.0);
+  EXPECT_EQ(serial_fraction_from_speedup(2, 1.0), 1.0);
+  EXPECT_EQ(serial_fraction_from_speedup(2, 0.8), 1.0);
+  EXPECT_EQ(serial_fraction_from_speedup(1, 1.0), 1.0);
+  EXPECT_EQ(serial_fraction_from_speedup(2, 0.0), 1.0);
+  // task_speedup of the fraction found gives the speed-up back.
+  for (int k : {2, 5, 64})
+    for (double s : {0.0, 0.05, 0.3, 0.9})
+      EXPECT_NEAR(serial_fraction_from_speedup(k, task_speedup(k, s)), s, 1e-12) << k << " " << s;
 }
 
 TEST(ScheduleSim, ACriticalChainIsWidenedWhileOtherTasksFillTheRestOfTheCores) {
