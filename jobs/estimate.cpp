@@ -13,6 +13,8 @@
 #include "experiment/calibration.h"
 #include "experiment/study_tasks.h"
 #include "experiment/task_kinds.h"
+#include "experiment/task_settings.h"
+#include "jobs/calibration_cache.h"
 #include "jobs/schedule_sim.h"
 #include "jobs/scheduler.h"
 
@@ -83,16 +85,28 @@ Dataset time_setup(const std::string& env, const Profile& p, PlanEstimate& e) {
 // The single-thread rate (e.gflops_per_s) and fixed cost per call (e.call_seconds) of each rate
 // class the plan's tasks in env name (experiment/calibration.h), from short runs of the real
 // training code on d.
-void calibrate_rates(const std::string& env, const Dataset& d, const Plan& plan, const Profile& p,
-                     PlanEstimate& e) {
-  std::map<std::string, const RateClass*> classes;  // by name: measured in a fixed order
+using RateClasses = std::map<std::string, const RateClass*>;  // by name: a fixed order
+
+// The rate classes the plan's pending tasks in env name.
+RateClasses classes_of(const std::string& env, const Plan& plan, const PlanEstimate& e) {
+  RateClasses classes;
   for (size_t i = 0; i < plan.tasks.size(); ++i)
     if (const Task& t = plan.tasks[i]; t.env == env && e.pending[i]) {
       const RateClass& c = t.kind.spec().rate(t);
       classes.emplace(c.name, &c);
     }
+  return classes;
+}
+
+// The hyper-parameters env's classes are calibrated with.
+Hyper calibration_hyper(const std::string& env, const Profile& p) {
+  return p.hyper.count(env) ? p.hyper.at(env) : study_config(p).hyper;
+}
+
+void calibrate_rates(const std::string& env, const Dataset& d, const RateClasses& classes,
+                     const Profile& p, PlanEstimate& e) {
   if (classes.empty()) return;
-  const Hyper h = p.hyper.count(env) ? p.hyper.at(env) : study_config(p).hyper;
+  const Hyper h = calibration_hyper(env, p);
   const CalibrationSample sample = make_calibration_sample(d, p.queries, h, env_spec(env).sampled);
   for (const auto& named : classes) {
     const RateClass* c = named.second;  // not a structured binding: the lambdas below capture it
@@ -164,9 +178,39 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads,
   if (p.study.enabled && std::find(envs.begin(), envs.end(), p.study.cohort.env) == envs.end())
     envs.push_back(p.study.cohort.env);
   for (const auto& env : envs) {
+    const RateClasses classes = classes_of(env, plan, e);
+    // What this environment's calibration times (SIRL_CALIBRATION_CACHE keeps it by this text):
+    // Ξ's settings, the query counts, the hyper-parameters and the classes.
+    std::string what = "calibration env=" + env + "\n" + describe_data(p, env) +
+                       describe_queries(p.queries) + describe(calibration_hyper(env, p)) +
+                       "classes";
+    for (const auto& named : classes) what += " " + named.first;
+    what += "\n";
+    const auto axes = p.axes.find(env);
+    const double seeds = axes != p.axes.end() ? double(axes->second.seeds.size()) : 1.0;
+    // Stored: Ξ's and a bundle's seconds, Ξ's bytes, then each class's GFLOP/s and call seconds.
+    if (const auto v = load_calibration(what); v && v->size() == 3 + 2 * classes.size()) {
+      e.dataset_seconds[env] = (*v)[0];
+      e.bundle_seconds[env] = (*v)[1];
+      e.setup_seconds += (*v)[0] + seeds * (*v)[1];
+      e.data_bytes += (*v)[2];
+      size_t k = 3;
+      for (const auto& named : classes) {
+        e.gflops_per_s[env + "/" + named.first] = (*v)[k++];
+        e.call_seconds[env + "/" + named.first] = (*v)[k++];
+      }
+      continue;
+    }
     const Dataset d = time_setup(env, p, e);
-    calibrate_rates(env, d, plan, p, e);
-    e.data_bytes += 4.0 * double(d.inputs.size() + d.features.size() * 2);
+    calibrate_rates(env, d, classes, p, e);
+    const double bytes = 4.0 * double(d.inputs.size() + d.features.size() * 2);
+    e.data_bytes += bytes;
+    std::vector<double> v{e.dataset_seconds[env], e.bundle_seconds[env], bytes};
+    for (const auto& named : classes) {
+      v.push_back(e.gflops_per_s[env + "/" + named.first]);
+      v.push_back(e.call_seconds[env + "/" + named.first]);
+    }
+    save_calibration(what, v);
   }
   e.peak_bytes += e.data_bytes;
   time_tasks(plan, threads, e);

@@ -1,14 +1,21 @@
 // sirl plan's estimate and the cost model behind it.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
 #include "experiment/plan.h"
 #include "experiment/profile.h"
 #include "experiment/simulation_tasks.h"
+#include "jobs/calibration_cache.h"
 #include "jobs/estimate.h"
+#include "tests/scratch_dir.h"
 #include "tests/small_profile.h"
 
 namespace sirl {
@@ -71,6 +78,93 @@ TEST(Estimate, CostModelCountsTheFlopsByHand) {
   const double head = 2.0 * (6 * 32 + 32 * 16 + 16 * 1);
   EXPECT_DOUBLE_EQ(plan.tasks[plan.index.at("grid/s0/sirl/N100/tpa/M10/frozen")].flops,
                    20 * 3 * head * 20 * 500);
+}
+
+// SIRL_CALIBRATION_CACHE set for one test, unset after it.
+struct KeptCalibrations {
+  test::ScratchDir dir{"sirl_cal"};
+  KeptCalibrations() { setenv("SIRL_CALIBRATION_CACHE", dir.path().c_str(), 1); }
+  ~KeptCalibrations() { unsetenv("SIRL_CALIBRATION_CACHE"); }
+  std::vector<std::filesystem::path> files() const {
+    std::vector<std::filesystem::path> v;
+    for (const auto& f : std::filesystem::directory_iterator(dir.path())) v.push_back(f.path());
+    return v;
+  }
+};
+
+TEST(Estimate, AKeptCalibrationGivesTheSameEstimateWithoutTimingAgain) {
+  const KeptCalibrations kept;
+  const Profile p = parse_profile(test::kSmallProfile, "t.toml");
+  const Plan plan = make_plan(p);
+  const PlanEstimate first = estimate_plan(plan, p, 2);
+  ASSERT_EQ(kept.files().size(), 1u);  // one environment
+  EXPECT_GT(first.calibration_wall_seconds, 0);
+  const PlanEstimate again = estimate_plan(plan, p, 2);
+  EXPECT_EQ(again.calibration_wall_seconds, 0);  // nothing timed
+  EXPECT_EQ(again.gflops_per_s, first.gflops_per_s);
+  EXPECT_EQ(again.call_seconds, first.call_seconds);
+  EXPECT_EQ(again.task_seconds, first.task_seconds);
+  EXPECT_EQ(again.seconds, first.seconds);
+  EXPECT_EQ(again.setup_seconds, first.setup_seconds);
+  EXPECT_EQ(again.data_bytes, first.data_bytes);
+  // Another sample (other query counts) is another calibration.
+  std::string text = test::kSmallProfile;
+  text.replace(text.find("tpa_pairs = 100"), 15, "tpa_pairs = 120");
+  const Profile more = parse_profile(text, "t.toml");
+  estimate_plan(make_plan(more), more, 2);
+  EXPECT_EQ(kept.files().size(), 2u);
+}
+
+TEST(Estimate, AKeptCalibrationThatDoesNotReadAsOneIsTimedAgain) {
+  const KeptCalibrations kept;
+  const Profile p = parse_profile(test::kSmallProfile, "t.toml");
+  const Plan plan = make_plan(p);
+  estimate_plan(plan, p, 2);
+  ASSERT_EQ(kept.files().size(), 1u);
+  std::ofstream(kept.files()[0], std::ios::trunc) << "sirl-calibration-1\n1\nnan\n";
+  const PlanEstimate e = estimate_plan(plan, p, 2);
+  EXPECT_GT(e.calibration_wall_seconds, 0);  // timed again, and stored again
+  EXPECT_GT(e.gflops_per_s.at("grid/rep_sirl"), 0.01);
+  EXPECT_EQ(estimate_plan(plan, p, 2).calibration_wall_seconds, 0);
+}
+
+TEST(Estimate, KeptFilesThatDoNotReadAsCalibrationsAreIgnored) {
+  const KeptCalibrations kept;
+  save_calibration("k", {1.0, 2.0});
+  ASSERT_EQ(kept.files().size(), 1u);
+  const std::filesystem::path file = kept.files()[0];
+  const std::vector<std::string> bad{"",
+                                     "sirl-calibration-1\n",
+                                     "other-format\n1\n2\n",
+                                     "sirl-calibration-1\n1\nnan\n",
+                                     "sirl-calibration-1\n1\ninf\n",
+                                     "sirl-calibration-1\n1\n-2\n",
+                                     "sirl-calibration-1\n1x\n2\n",
+                                     "sirl-calibration-1\n1e999\n"};
+  for (const std::string& text : bad) {
+    std::ofstream(file, std::ios::trunc) << text;
+    EXPECT_FALSE(load_calibration("k").has_value()) << text;
+  }
+  std::ofstream(file, std::ios::trunc) << "sirl-calibration-1\n" << std::string(70000, '1') << "\n";
+  EXPECT_FALSE(load_calibration("k").has_value());  // larger than any calibration
+  // A FIFO where the file was is never opened (no hang) nor trusted.
+  std::filesystem::remove(file);
+  ASSERT_EQ(mkfifo(file.c_str(), 0600), 0);
+  EXPECT_FALSE(load_calibration("k").has_value());
+  save_calibration("k", {3.0});  // replaces it, as any stored calibration is replaced
+  EXPECT_EQ(load_calibration("k"), std::vector<double>{3.0});
+}
+
+TEST(Estimate, KeptValuesRoundTripExactlyAndNothingIsKeptWithoutTheFolder) {
+  {
+    const KeptCalibrations kept;
+    const std::vector<double> v{0.1, 1e-300, 123456.789, 0.0, 2.5e9};
+    save_calibration("what", v);
+    EXPECT_EQ(load_calibration("what"), v);
+    EXPECT_FALSE(load_calibration("something else").has_value());
+  }
+  save_calibration("what", {1.0});  // no folder: nothing kept, nothing read
+  EXPECT_FALSE(load_calibration("what").has_value());
 }
 
 }  // namespace
