@@ -33,6 +33,28 @@ LINKED = ["configs", "examples", "bench", "python", "results", "report", "script
 MARK = re.compile(r"<!--\s*docs-test:\s*(skip|setup):\s*(.*?)\s*-->\s*$")
 
 
+def commands(lang, code):
+    """A block's commands without its comments and spacing (a shell comment starts at a # outside
+    quotes after a blank), so two blocks that differ only there run once."""
+    if lang != "sh":
+        return code
+    out = []
+    for line in code.split("\n"):
+        quote, cut = None, len(line)
+        for i, c in enumerate(line):
+            if quote:
+                quote = None if c == quote else quote
+            elif c in "'\"":
+                quote = c
+            elif c == "#" and (i == 0 or line[i - 1] in " \t"):
+                cut = i
+                break
+        line = " ".join(line[:cut].split())
+        if line:
+            out.append(line)
+    return "\n".join(out)
+
+
 def fail(msg):
     print("docs_blocks: FAIL:", msg)
     sys.exit(1)
@@ -96,10 +118,10 @@ def main():
                 skipped.append(f"{where} ({skip[0]})")
                 continue
             code = rewrite(code)
-            if (lang, code) in seen:
-                print(f"ok: {where}: the same block as one above")
+            if (lang, commands(lang, code)) in seen:
+                print(f"ok: {where}: the same commands as a block above (comments aside)")
                 continue
-            seen.add((lang, code))
+            seen.add((lang, commands(lang, code)))
             for kind, cmd in marks:
                 if kind == "setup":
                     s = subprocess.run(["bash", "-euo", "pipefail", "-c", rewrite(cmd)], cwd=work,
