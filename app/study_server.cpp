@@ -289,7 +289,9 @@ void register_study_import(CLI::App& study) {
       "kind similarity: 3 rows of the trajectory space, answer = position (0-2) of the odd\n"
       "one out; kind preference: 2 rows, answer 1 = first, 0 = second, 0.5 = equal.\n"
       "scenario and scenario_features (CSV: ';'-separated) come from a participant's first "
-      "record.");
+      "record.\nRefused, with nothing written: an answer already in the study (same participant,\n"
+      "trajectories, answer, response time and timestamp: the file imported before), and answers\n"
+      "for a participant whose `serve` queries are still open.");
   ImportArgs& a = g_import;
   c->add_option("file", a.file, "CSV or JSON file")->required()->check(CLI::ExistingFile);
   c->add_option("--format", a.format, "csv, json, or auto (by extension)")

@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -23,7 +25,43 @@ struct Record {
   double answer = NAN, response_ms = NAN, timestamp = 0;
 };
 
-void add(const Record& r, const Dataset& d, Study& s, const std::string& where) {
+// Every answered record of the study, by its participant, kind, rows, answer, response time and
+// timestamp: a record met again is the same answer imported twice (the same file imported again,
+// or a row repeated), which would count that answer twice in the analysis.
+class SeenRecords {
+ public:
+  explicit SeenRecords(const Study& s) {
+    for (const StudyParticipant& p : s.participants) {
+      for (int64_t i = 0; i < p.similarity_done(); ++i)
+        keys_.insert(key(p.id, "similarity", p.similarity.data() + 3 * i, 3,
+                         double(p.similarity_answer[size_t(i)]), p.similarity_ms[size_t(i)],
+                         p.similarity_time[size_t(i)]));
+      for (int64_t i = 0; i < p.preference_done(); ++i)
+        keys_.insert(key(p.id, "preference", p.preference.data() + 2 * i, 2,
+                         double(p.preference_answer[size_t(i)]), p.preference_ms[size_t(i)],
+                         p.preference_time[size_t(i)]));
+    }
+  }
+  // False if the record was there already.
+  bool insert(const std::string& id, const std::string& kind, const std::vector<int32_t>& rows,
+              double answer, float ms, double time) {
+    return keys_.insert(key(id, kind.c_str(), rows.data(), int(rows.size()), answer, ms, time))
+        .second;
+  }
+
+ private:
+  static std::string key(const std::string& id, const char* kind, const int32_t* rows, int n,
+                         double answer, float ms, double time) {
+    std::string k = id + "/" + kind;
+    char buf[64];
+    for (int i = 0; i < n; ++i) k += "/" + std::to_string(rows[i]);
+    std::snprintf(buf, sizeof buf, "/%.17g/%.9g/%.17g", answer, double(ms), time);
+    return k + buf;
+  }
+  std::set<std::string> keys_;
+};
+
+void add(const Record& r, const Dataset& d, Study& s, SeenRecords& seen, const std::string& where) {
   auto bad = [&](const std::string& what) { return std::invalid_argument(where + ": " + what); };
   try {
     validate_participant_id(r.participant);
@@ -54,6 +92,19 @@ void add(const Record& r, const Dataset& d, Study& s, const std::string& where) 
     s.participants.push_back(std::move(np));
     p = &s.participants.back();
   }
+  // Queries a server planned and the participant has not answered yet come before any imported
+  // one: an answer appended behind them would be read as the answer to the first open query.
+  if (p->similarity_done() < p->similarity_count() || p->preference_done() < p->preference_count())
+    throw bad("participant " + r.participant + " has queries from `sirl study serve` still open (" +
+              std::to_string(p->similarity_count() - p->similarity_done()) + " similarity, " +
+              std::to_string(p->preference_count() - p->preference_done()) +
+              " preference): finish serving them, or import these answers under another id");
+  if ((r.kind == "similarity" || r.kind == "preference") &&
+      !seen.insert(r.participant, r.kind == "similarity" ? "similarity" : "preference", rows,
+                   r.answer, float(r.response_ms), r.timestamp))
+    throw bad("this " + r.kind + " answer of " + r.participant +
+              " (same trajectories, answer, response time and timestamp) is already in the study: "
+              "the file imported before, or a repeated row");
   if (r.kind == "similarity") {
     if (rows.size() != 3) throw bad("a similarity record has 3 trajectories");
     if (!(r.answer == 0 || r.answer == 1 || r.answer == 2))
@@ -142,6 +193,7 @@ void import_study_csv(const std::string& path, const Dataset& d, Study& s) {
   if (line.rfind(header, 0) != 0)
     throw std::invalid_argument(path + ":1: the header must be: " + header);
   int64_t row = 1;
+  SeenRecords seen(s);
   while (std::getline(in, line)) {
     ++row;
     if (line.empty() || line == "\r") continue;
@@ -162,7 +214,7 @@ void import_study_csv(const std::string& path, const Dataset& d, Study& s) {
     std::string feat;
     while (std::getline(ss, feat, ';'))
       if (!feat.empty()) r.scenario_features.push_back(feat);
-    add(r, d, s, where);
+    add(r, d, s, seen, where);
   }
 }
 
@@ -198,6 +250,7 @@ void import_study_json(const std::string& path, const Dataset& d, Study& s) {
     list = &doc["answers"];
   }
   if (!list->is_array()) throw std::invalid_argument(path + ": \"answers\" must be an array");
+  SeenRecords seen(s);
   for (size_t k = 0; k < list->size(); ++k) {
     const std::string where = path + ": record " + std::to_string(k);
     const json& o = (*list)[k];
@@ -231,7 +284,7 @@ void import_study_json(const std::string& path, const Dataset& d, Study& s) {
         if (!f.is_string()) throw std::invalid_argument(where + ": scenario_features are strings");
         r.scenario_features.push_back(f.get<std::string>());
       }
-    add(r, d, s, where);
+    add(r, d, s, seen, where);
   }
 }
 

@@ -7,16 +7,17 @@ import` must then end with one line naming the cause and exit 1, never a crash; 
 temporary or partial file behind; leave the good file already at --out untouched; and succeed
 once there is room again.
 """
-import hashlib
 import os
 import resource
 import signal
-import subprocess
+import sys
 import tempfile
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
-MICRO = os.path.join(SRC, "tests", "data", "micro.toml")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+from sirl_testing import sha256_file as digest  # noqa: E402
+
+MICRO = sirl_testing.data_path("micro.toml")
 LIMIT = 8_192  # bytes: below every output here (the smallest, an imported study, is ~14 KB)
 
 
@@ -28,13 +29,7 @@ def limited(n=LIMIT):
 
 
 def sirl(args, limit=False, size=LIMIT):
-    return subprocess.run([SIRL, *args], capture_output=True, text=True, stdin=subprocess.DEVNULL,
-                          preexec_fn=limited(size) if limit else None)
-
-
-def digest(path):
-    with open(path, "rb") as f:
-        return hashlib.sha256(f.read()).hexdigest()
+    return sirl_testing.run_sirl(*args, preexec_fn=limited(size) if limit else None)
 
 
 with tempfile.TemporaryDirectory() as tmp:
@@ -42,17 +37,27 @@ with tempfile.TemporaryDirectory() as tmp:
     for i, s in enumerate(shards):
         p = sirl(["run", MICRO, "--out", s, "--shard", f"{i}/2", "--quiet"])
         assert p.returncode == 0, p.stderr
-    answers = os.path.join(tmp, "answers.csv")
-    with open(answers, "w") as f:
-        f.write("participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features\n"
-                "ann,similarity,1,2,3,2,1500,1700000000.5,Stay away,laptop_distance\n"
-                "ann,preference,7,8,,1,700,1700000002,,\n")
+    answered = []
+
+    def new_answers():
+        """An answers file whose records no earlier one has (other timestamps)."""
+        answers = os.path.join(tmp, f"answers{len(answered)}.csv")
+        t = 1700000000 + 10 * len(answered)
+        with open(answers, "w") as f:
+            f.write("participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,"
+                    "scenario_features\n"
+                    f"ann,similarity,1,2,3,2,1500,{t}.5,Stay away,laptop_distance\n"
+                    f"ann,preference,7,8,,1,700,{t + 2},,\n")
+        answered.append(answers)
+        return answers
     cases = [
         ("dataset", lambda out: ["dataset", "--env", "grid", "--out", out, "--force"]),
         ("merge", lambda out: ["merge", "--force", out, *shards]),
         ("study simulate", lambda out: ["study", "simulate", "--env", "grid", "--users", "2",
                                         "--out", out, "--force"]),
-        ("study import", lambda out: ["study", "import", answers, "--env", "grid", "--out", out]),
+        # each attempt imports new answers (the same answers twice are refused before any write)
+        ("study import", lambda out: ["study", "import", new_answers(), "--env", "grid", "--out",
+                                      out]),
     ]
     for name, args in cases:
         out = os.path.join(tmp, name.replace(" ", "_") + ".h5")

@@ -160,5 +160,75 @@ TEST(StudyImport, BadRecordsNameTheLineAndTheProblem) {
   EXPECT_TRUE(has(m, "\"participant\" has the wrong type")) << m;
 }
 
+// The same answers imported twice (the file again, or a row repeated, CSV or JSON) are refused
+// with the record's place, and the study is left as it was: an answer counted twice would weigh
+// twice in the analysis. The same trajectories answered again at another time are a new answer.
+TEST(StudyImport, AnAnswerAlreadyInTheStudyIsRefused) {
+  Study s;
+  s.env = "grid";
+  const Dataset d = study_dataset(s);
+  const std::string head =
+      "participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features\n";
+  const std::string first =
+      write_temp("sirl_once.csv", head +
+                                      "ann,similarity,1,2,3,2,1500,1700000000,,\n"
+                                      "ann,preference,7,8,,1,700,1700000002,,\n");
+  import_study_csv(first, d, s);
+  const Study before = s;
+  try {
+    import_study_csv(first, d, s);
+    ADD_FAILURE() << "the same file was imported twice";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("sirl_once.csv:2: this similarity answer of ann"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("already in the study"), std::string::npos) << e.what();
+  }
+  const std::string json = write_temp("sirl_again.json", R"({"answers": [
+      {"participant": "ann", "kind": "preference", "trajectories": [7, 8], "answer": 1,
+       "response_ms": 700, "timestamp": 1700000002}]})");
+  EXPECT_THROW(import_study_json(json, d, s), std::invalid_argument);
+  const std::string twice = write_temp("sirl_twice.csv", head +
+                                                             "bob,similarity,4,5,6,0,900,5,,\n"
+                                                             "bob,similarity,4,5,6,0,900,5,,\n");
+  Study other = before;
+  try {
+    import_study_csv(twice, d, other);
+    ADD_FAILURE() << "a repeated row was imported";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("sirl_twice.csv:3:"), std::string::npos) << e.what();
+  }
+  // Asked again later, answered again: a new answer.
+  const std::string later =
+      write_temp("sirl_later.csv", head + "ann,similarity,1,2,3,2,1500,1700000100,,\n");
+  Study again = before;
+  import_study_csv(later, d, again);
+  EXPECT_EQ(again.participants[0].similarity_answer, (std::vector<int32_t>{2, 2}));
+}
+
+// A participant whose server-planned queries are not all answered: an imported answer appended
+// behind them would be read as the answer to the first open query, so it is refused.
+TEST(StudyImport, AParticipantWithOpenQueriesTakesNoImportedAnswer) {
+  Study s;
+  s.env = "grid";
+  const Dataset d = study_dataset(s);
+  s.participants.push_back(plan_participant(d, "ann", 5, 2, 0));
+  s.participants[0].similarity_answer = {1, 0};  // 2 of 5 answered
+  s.participants[0].similarity_ms = {900, 800};
+  s.participants[0].similarity_time = {1, 2};
+  const std::string csv = write_temp(
+      "sirl_open.csv",
+      "participant,kind,t1,t2,t3,answer,response_ms,timestamp,scenario,scenario_features\n"
+      "ann,similarity,1,2,3,2,1500,1700000000,,\n");
+  try {
+    import_study_csv(csv, d, s);
+    ADD_FAILURE() << "an answer went behind open queries";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("still open (3 similarity, 2 preference)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace sirl
