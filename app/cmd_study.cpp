@@ -180,7 +180,7 @@ CLI::App* register_study_simulate(CLI::App& study) {
       "about every feature).");
   sim->add_option("--env", s_env, study_env_help())->capture_default_str();
   sim->add_option("--profile", s_profile,
-                  "A profile whose [environments.<name>] files --env may name");
+                  "A profile whose [environments.<name>] (files) --env may name");
   sim->add_option("--trajectories", s_traj, "JacoRobot trajectory space size")
       ->check(CLI::Range(int64_t(10), int64_t(1000000)))
       ->capture_default_str();

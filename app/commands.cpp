@@ -242,7 +242,7 @@ std::vector<std::string> env_choices() {
 
 std::string study_env_help() {
   return "Environment: " + study_env_names() +
-         " (jaco2 is the paper's), or one --profile declares from a file with 2-D points";
+         " (jaco2 is the paper's),\nor one --profile declares from a file with 2-D points";
 }
 
 void declare_profile_environments(const std::string& profile) {

@@ -246,7 +246,7 @@ void register_study_serve(CLI::App& study) {
   ServeArgs& a = g_serve;
   c->add_option("--env", a.env, study_env_help())->capture_default_str();
   c->add_option("--profile", a.profile,
-                "A profile whose [environments.<name>] files --env may name (checked first)");
+                "A profile whose [environments.<name>] (files) --env may name");
   c->add_option("--participant", a.participant, "Participant id (A-Z a-z 0-9 _ -)")->required();
   c->add_option("--similarity", a.similarity, "Recorded similarity queries")
       ->check(CLI::Range(int64_t(1), int64_t(10000)))
@@ -300,7 +300,7 @@ void register_study_import(CLI::App& study) {
   c->add_option("--out", a.out, "Study file to write")->required()->check(output_file());
   c->add_option("--env", a.env, study_env_help())->capture_default_str();
   c->add_option("--profile", a.profile,
-                "A profile whose [environments.<name>] files --env may name (checked first)");
+                "A profile whose [environments.<name>] (files) --env may name");
   c->add_option("--trajectories", a.trajectories, "JacoRobot trajectory space size")
       ->check(CLI::Range(int64_t(10), int64_t(1000000)))
       ->capture_default_str();
