@@ -22,8 +22,11 @@ import time
 import h5py
 import pandas as pd
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
+SIRL = sirl_testing.sirl_binary()
+SRC = sirl_testing.source_dir()
 sys.path.insert(0, os.path.join(SRC, "report"))
 import plot_beyond  # noqa: E402
 
@@ -69,7 +72,7 @@ def fail(msg):
 
 
 def run(*args):
-    p = subprocess.run([SIRL, *args], capture_output=True, text=True, stdin=subprocess.DEVNULL)
+    p = sirl_testing.run_sirl(*args)
     if p.returncode != 0:
         fail(f"sirl {' '.join(args)} exited {p.returncode}\n{p.stdout}\n{p.stderr}")
     return p

@@ -8,19 +8,19 @@ wrong TOML type (30.0 or "30" for an integer key, also as a value of an axis: [3
 """
 import os
 import re
-import subprocess
 import sys
 import tempfile
 
-SIRL = os.environ["SIRL"]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
 OPTION = re.compile(r"^\s+(?:-\w,)?(--[\w-]+)\s+(INT|UINT|FLOAT)\b(.*)$")
 BAD_INT = ["010", "0x10", "+3", " 3", "nan", "inf", "1e3", "30.0", "-1"]
 BAD_REAL = ["010", "0x10", "+3", " 3", "nan", "3.", ".5", "1e"]
 
 
 def sirl(*args):
-    return subprocess.run([SIRL, *args], capture_output=True, text=True, stdin=subprocess.DEVNULL,
-                          timeout=60)
+    return sirl_testing.run_sirl(*args, timeout=60)
 
 
 def commands():

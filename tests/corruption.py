@@ -17,19 +17,16 @@ import subprocess
 import sys
 import tempfile
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
+SIRL = sirl_testing.sirl_binary()
 SINGLE, PAIRS = 120, 60
-
-
-def fail(msg):
-    print("corruption: FAIL:", msg)
-    sys.exit(1)
+fail = sirl_testing.make_fail("corruption")
 
 
 def export(path, out):
-    return subprocess.run([SIRL, "export", path, "--csv", out], capture_output=True, text=True,
-                          timeout=120)
+    return sirl_testing.run_sirl("export", path, "--csv", out, stdin=None, timeout=120)
 
 
 def flipped(src, dst, flips):
@@ -71,7 +68,7 @@ def main():
               "without the sidecar) refused")
         # `inspect` reads a results file's datasets: the last corrupted copy is refused there too.
         flipped(good, bad, cases[0])
-        p = subprocess.run([SIRL, "inspect", bad], capture_output=True, text=True, timeout=60)
+        p = sirl_testing.run_sirl("inspect", bad, stdin=None, timeout=60)
         if p.returncode == 0 or "checksum" not in p.stderr:
             fail(f"inspect read a corrupted results file: rc {p.returncode}, {p.stderr!r}")
 
@@ -88,7 +85,7 @@ def main():
         print("ok: a copied .h5 verifies by its own digest; xxh128sum -c accepts the sidecar")
 
         old = os.path.join(tmp, "v1.h5")
-        shutil.copy(os.path.join(SRC, "tests", "data", "results_v1.h5"), old)
+        shutil.copy(sirl_testing.data_path("results_v1.h5"), old)
         p = export(old, os.path.join(tmp, "csv3"))
         if p.returncode != 0 or p.stderr.count("cannot be verified") != 1:
             fail(f"an old file without a checksum: rc {p.returncode}, {p.stderr!r}")

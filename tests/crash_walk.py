@@ -7,15 +7,16 @@ and every dataset and attribute under /runs, timing fields excepted), with its c
 and no staging folder, temporary or partial file left behind.
 """
 import os
-import subprocess
+import sys
 import tempfile
 
 import h5py
 import numpy as np
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
-MICRO = os.path.join(SRC, "tests", "data", "micro.toml")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
+MICRO = sirl_testing.data_path("micro.toml")
 TIMING = {"seconds", "threads", "wall_seconds", "started", "finished", "roof_fp32_gflops_per_core",
           "roof_bf16_gflops_per_core", "stream_gbs_per_core"}
 TIMING_COLUMNS = {"seconds", "gflops", "roof_percent", "threads", "memory_roof_gflops",
@@ -35,9 +36,8 @@ def run(out, crash_at=None, threads="1", after_commits=None, checkpoints="5"):
         env["SIRL_CRASH_AT"] = str(crash_at)
     if after_commits is not None:
         env["SIRL_CRASH_AFTER_COMMITS"] = str(after_commits)
-    return subprocess.run([SIRL, "run", MICRO, "--out", out, "--threads", threads, "--quiet",
-                           "--checkpoint-minutes", checkpoints],
-                          stdin=subprocess.DEVNULL, capture_output=True, text=True, env=env)
+    return sirl_testing.run_sirl("run", MICRO, "--out", out, "--threads", threads, "--quiet",
+                                 "--checkpoint-minutes", checkpoints, env=env)
 
 
 def content(path):

@@ -5,18 +5,18 @@ profile table of docs/running.md against configs/. A change that makes a sentenc
 here, not in a reader's hands."""
 import os
 import re
-import subprocess
 import sys
 import tempfile
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
+SRC = sirl_testing.source_dir()
 PY = "/usr/bin/python3"
 
 
 def tasks(profile):
-    p = subprocess.run([SIRL, "plan", profile, "--tasks"], capture_output=True, text=True,
-                       stdin=subprocess.DEVNULL, timeout=300)
+    p = sirl_testing.run_sirl("plan", profile, "--tasks", timeout=300)
     if p.returncode != 0:
         sys.exit(f"FAIL: sirl plan {profile} --tasks: {p.stderr}")
     return [line.split()[0] for line in p.stdout.splitlines() if line.strip()]

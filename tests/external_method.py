@@ -24,21 +24,19 @@ import tempfile
 import h5py
 import numpy as np
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
+SRC = sirl_testing.source_dir()
 sys.path.insert(0, os.path.join(SRC, "python"))
 import sirl_bench  # noqa: E402
 
 KEYS = ["env", "seed", "N"]
-
-
-def fail(msg):
-    print("external_method: FAIL:", msg)
-    sys.exit(1)
+fail = sirl_testing.make_fail("external_method")
 
 
 def run(*args, expect=0):
-    p = subprocess.run([SIRL, *args], capture_output=True, text=True)
+    p = sirl_testing.run_sirl(*args, stdin=None)
     if p.returncode != expect:
         fail(f"sirl {' '.join(args)}: exit {p.returncode}, expected {expect}\n{p.stdout}{p.stderr}")
     return p

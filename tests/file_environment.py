@@ -31,8 +31,11 @@ import urllib.request
 import h5py
 import numpy as np
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
+SIRL = sirl_testing.sirl_binary()
+SRC = sirl_testing.source_dir()
 sys.path.insert(0, os.path.join(SRC, "python"))
 import sirl_bench  # noqa: E402
 
@@ -55,14 +58,11 @@ frozen = "best"
 """
 
 
-def fail(msg):
-    print("file_environment: FAIL:", msg)
-    sys.exit(1)
+fail = sirl_testing.make_fail("file_environment")
 
 
 def run(*args, cwd, expect=0):
-    p = subprocess.run([SIRL, *args], capture_output=True, text=True, cwd=cwd,
-                       stdin=subprocess.DEVNULL, timeout=900)
+    p = sirl_testing.run_sirl(*args, cwd=cwd, timeout=900)
     if p.returncode != expect:
         fail(f"sirl {' '.join(args)}: exit {p.returncode}, expected {expect}:\n{p.stderr[-2000:]}")
     return p

@@ -26,19 +26,18 @@ import tempfile
 import h5py
 import numpy as np
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
+SIRL = sirl_testing.sirl_binary()
+SRC = sirl_testing.source_dir()
 SMOKE = os.path.join(SRC, "configs", "smoke.toml")
 TIMING = {"seconds", "threads"}  # record fields that describe the run, not the result
-
-
-def fail(msg):
-    print("incremental_runs: FAIL:", msg)
-    sys.exit(1)
+fail = sirl_testing.make_fail("incremental_runs")
 
 
 def run(*args, expect=0):
-    p = subprocess.run([SIRL, *args], capture_output=True, text=True)
+    p = sirl_testing.run_sirl(*args, stdin=None)
     if p.returncode != expect:
         fail(f"sirl {' '.join(args)} exited {p.returncode}, not {expect}:\n{p.stderr[-3000:]}")
     return p

@@ -19,16 +19,17 @@ import subprocess
 import sys
 import tempfile
 
-SRC = os.environ["SIRL_SOURCE_DIR"]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
+SRC = sirl_testing.source_dir()
 sys.path.insert(0, os.path.join(SRC, "bench"))
 import history  # noqa: E402
 
 BENCH = "BM_SirlStep/in:19/hidden:128/threads:1/real_time"
 
 
-def fail(msg):
-    print("nightly_history: FAIL:", msg)
-    sys.exit(1)
+fail = sirl_testing.make_fail("nightly_history")
 
 
 def build(path, levels, seed=1, cls="AMD EPYC Zen 5", cores=2, science=None, start=0):

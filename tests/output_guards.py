@@ -9,30 +9,22 @@
 - files of an older engine (the schema-1 fixture, engine 0.1.0) still merge and export.
 """
 import fcntl
-import hashlib
 import os
 import shutil
 import subprocess
 import sys
 import tempfile
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
-FIXTURE = os.path.join(SRC, "tests", "data", "results_v1.h5")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+from sirl_testing import run_sirl, sha256_file as digest  # noqa: E402
+
+FIXTURE = sirl_testing.data_path("results_v1.h5")
+fail = sirl_testing.make_fail("output_guards")
 
 
 def sirl(*args):
-    return subprocess.run([SIRL, *args], capture_output=True, text=True, stdin=subprocess.DEVNULL,
-                          timeout=120)
-
-
-def digest(path):
-    return hashlib.sha256(open(path, "rb").read()).hexdigest()
-
-
-def fail(msg):
-    print("output_guards: FAIL:", msg)
-    sys.exit(1)
+    return run_sirl(*args, timeout=120)
 
 
 def main():
@@ -102,8 +94,7 @@ def main():
         for args in (["dataset", "--out", ""], ["dataset", "--out", cwd + "/"],
                      ["run", "smoke", "--out", ""], ["merge", "", FIXTURE],
                      ["study", "simulate", "--out", ""], ["export", FIXTURE, "--csv", ""]):
-            p = subprocess.run([SIRL, *args], capture_output=True, text=True, cwd=cwd,
-                               stdin=subprocess.DEVNULL, timeout=60)
+            p = run_sirl(*args, cwd=cwd, timeout=60)
             if p.returncode != 2 or "must name a" not in p.stderr or p.stderr.count("\n") != 1:
                 fail(f"sirl {' '.join(args)}: rc {p.returncode}, {p.stderr!r}")
             if os.listdir(cwd):
@@ -111,7 +102,7 @@ def main():
         # A file that exists but is not HDF5: the reason is its content, not a stale OS error.
         text = os.path.join(cwd, "notes.h5")
         open(text, "w").write("not hdf5\n")
-        p = subprocess.run([SIRL, "inspect", text], capture_output=True, text=True, timeout=60)
+        p = run_sirl("inspect", text, stdin=None, timeout=60)
         if p.returncode == 0 or "not an HDF5 file" not in p.stderr or "No such file" in p.stderr:
             fail(f"inspect on a text file: {p.stderr!r}")
     print("ok: empty and folder output paths refused in one line; no stale OS reason")
@@ -124,8 +115,7 @@ def main():
                      ["run", "smoke", "--out", fifo], ["merge", fifo, FIXTURE],
                      ["dataset", "--env", "grid", "--out", fifo]):
             try:
-                p = subprocess.run([SIRL, *args], capture_output=True, text=True, cwd=cwd,
-                                   stdin=subprocess.DEVNULL, timeout=30)
+                p = run_sirl(*args, cwd=cwd, timeout=30)
             except subprocess.TimeoutExpired:
                 fail(f"sirl {' '.join(args[:2])} blocked on a FIFO")
             if p.returncode == 0 or "regular file" not in p.stderr or p.stderr.count("\n") != 1:
@@ -138,8 +128,7 @@ def main():
                      ["study", "import", os.path.join(cwd, "answers.csv"), "--out",
                       os.path.join(cwd, "st.h5"), "--env", "jaco2"]):
             try:
-                p = subprocess.run([SIRL, *args], capture_output=True, text=True, cwd=cwd,
-                                   stdin=subprocess.DEVNULL, timeout=30)
+                p = run_sirl(*args, cwd=cwd, timeout=30)
             except subprocess.TimeoutExpired:
                 fail(f"sirl {' '.join(args[:2])} blocked on a FIFO")
             if p.returncode == 0 or "regular file" not in p.stderr:
@@ -147,9 +136,7 @@ def main():
         # submit's --out is a folder: an existing file is refused before anything is calibrated.
         plain = os.path.join(cwd, "notes")
         open(plain, "w").write("mine\n")
-        p = subprocess.run([SIRL, "submit", "smoke", "--shards", "2", "--out", plain],
-                           capture_output=True, text=True, cwd=cwd, stdin=subprocess.DEVNULL,
-                           timeout=60)
+        p = run_sirl("submit", "smoke", "--shards", "2", "--out", plain, cwd=cwd, timeout=60)
         if p.returncode != 2 or "must name a folder" not in p.stderr or \
                 open(plain).read() != "mine\n" or "filesystem error" in p.stderr:
             fail(f"submit --out FILE: rc {p.returncode}, {p.stderr!r}")

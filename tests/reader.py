@@ -26,22 +26,19 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
 from results_frame import reframe  # noqa: E402
 
 import h5py
 import numpy as np
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
+SIRL = sirl_testing.sirl_binary()
+SRC = sirl_testing.source_dir()
 sys.path.insert(0, os.path.join(SRC, "python"))
 import sirl_bench  # noqa: E402
 
 FLAGS = set(sirl_bench.FLAG_COLUMNS)
-
-
-def fail(msg):
-    print("reader: FAIL:", msg)
-    sys.exit(1)
+fail = sirl_testing.make_fail("reader")
 
 
 def check_tables(path):
@@ -165,19 +162,25 @@ def check_methods(r):
     if not variants <= set(m.index):
         fail(f"/methods lacks {sorted(variants - set(m.index))}")
     want = declared_methods.Declared.methods
-    for v in sorted(set(want.index) & set(m.index)):
+    shared = sorted(set(want.index) & set(m.index))
+    for v in shared:
         for c in want.columns:
-            if c in ("selection_order",):
+            # Positions in the catalog move when a method is added: their order is checked below.
+            if c in ("selection_order", "catalog_order"):
                 continue
             if m.at[v, c] != want.at[v, c]:
                 fail(f"/methods/{v} {c} is {m.at[v, c]!r}, the fixture says {want.at[v, c]!r}")
+    by_file = sorted(shared, key=lambda v: (m.at[v, "catalog_order"], v))
+    by_fixture = sorted(shared, key=lambda v: (want.at[v, "catalog_order"], v))
+    if by_file != by_fixture:
+        fail(f"/methods catalog order {by_file}, the fixture's {by_fixture}")
     if not {"sirl", "vae", "random", "truth", "raw"} <= set(m.index):
         fail(f"smoke's /methods: {sorted(m.index)}")
     print(f"ok: /methods declares the file's {len(m)} variants as the fixture does")
 
 
 def check_refusals(smoke, tmp):
-    v1 = sirl_bench.open(os.path.join(SRC, "tests", "data", "results_v1.h5"))
+    v1 = sirl_bench.open(sirl_testing.data_path("results_v1.h5"))
     if v1.schema_version != 1 or len(v1.tables["tpa"]) != 1 or len(v1.records) != 5:
         fail("the schema-1 fixture does not open as written")
     t1, f1 = v1.tables["tpa"], v1.tables["fpe"]

@@ -26,13 +26,13 @@ import tempfile
 import tomllib
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
 from results_frame import reframe  # noqa: E402
 
 import h5py  # noqa: E402
 import numpy as np  # noqa: E402
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
+SRC = sirl_testing.source_dir()
 sys.path.insert(0, os.path.join(SRC, "python"))
 import sirl_bench  # noqa: E402
 from sirl_bench import attributes as A  # noqa: E402
@@ -41,13 +41,11 @@ PY_TYPE = {"an integer": A.INT, "a number": A.FLOAT, "true or false": A.FLAG,
            "an array of integers": A.INTS, "a string": A.TEXT}
 
 
-def fail(msg):
-    print("reader_typed: FAIL:", msg)
-    sys.exit(1)
+fail = sirl_testing.make_fail("reader_typed")
 
 
 def sirl(*args, expect=0):
-    p = subprocess.run([SIRL, *args], capture_output=True, text=True, stdin=subprocess.DEVNULL)
+    p = sirl_testing.run_sirl(*args)
     if p.returncode != expect:
         fail(f"sirl {' '.join(args)}: exit {p.returncode}, expected {expect}\n{p.stdout}{p.stderr}")
     return p

@@ -9,21 +9,19 @@
 """
 import os
 import re
-import subprocess
 import sys
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+from sirl_testing import run_sirl  # noqa: E402
+
+SRC = sirl_testing.source_dir()
 README = open(os.path.join(SRC, "README.md")).read()
-
-
-def fail(msg):
-    print("readme_commands: FAIL:", msg)
-    sys.exit(1)
+fail = sirl_testing.make_fail("readme_commands")
 
 
 def help_text(*cmd):
-    return subprocess.run([SIRL, *cmd, "--help"], capture_output=True, text=True, timeout=60).stdout
+    return run_sirl(*cmd, "--help", stdin=None, timeout=60).stdout
 
 
 def main():
@@ -64,8 +62,8 @@ def main():
 
     # `sirl --version` (README's command table lists it): exit 0, one line, `sirl version`'s
     # version and commit.
-    v = subprocess.run([SIRL, "--version"], capture_output=True, text=True, timeout=60)
-    full = subprocess.run([SIRL, "version"], capture_output=True, text=True, timeout=120).stdout
+    v = run_sirl("--version", stdin=None, timeout=60)
+    full = run_sirl("version", stdin=None, timeout=120).stdout
     commit = re.search(r"^commit:\s+(\S+)", full, re.M).group(1)
     if v.returncode or v.stdout.count("\n") != 1 or not v.stdout.startswith(full.split("\n")[0]) \
             or commit not in v.stdout:

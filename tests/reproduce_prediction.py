@@ -6,18 +6,16 @@ nothing of the kind for a profile without one, and draws its figures beside the 
 """
 import os
 import re
-import subprocess
 import sys
 import tempfile
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+from sirl_testing import run_sirl  # noqa: E402
+
+SRC = sirl_testing.source_dir()
 SMOKE = os.path.join(SRC, "configs", "smoke.toml")
-
-
-def fail(msg):
-    print("reproduce_prediction: FAIL:", msg)
-    sys.exit(1)
+fail = sirl_testing.make_fail("reproduce_prediction")
 
 
 def main():
@@ -26,9 +24,8 @@ def main():
         with open(tight, "w") as f:  # smoke with a budget of 0.06 s: any machine is over it
             f.write(f'extends = "{SMOKE}"\nname = "tight"\nbudget_minutes = 0.001\n')
         out = os.path.join(tmp, "res", "tight.h5")
-        p = subprocess.run([SIRL, "reproduce", "--profile", tight, "--out", out, "--no-study",
-                            "--threads", "2"], capture_output=True, text=True, cwd=tmp,
-                           stdin=subprocess.DEVNULL, timeout=900)
+        p = run_sirl("reproduce", "--profile", tight, "--out", out, "--no-study", "--threads", "2",
+                     cwd=tmp, timeout=900)
         if p.returncode != 0:
             fail(f"reproduce exited {p.returncode}:\n{p.stderr[-2000:]}")
         m = re.search(r"tight is predicted to take (\S+) on 2 thread\(s\) here", p.stderr)
@@ -56,17 +53,15 @@ def main():
                 {k: h[k] for k in ("env", "claim", "protocol", "verdict")} for h in written]:
             fail(f"the stored verdicts differ from the report's:\n{stored}")
         os.rename(figs, figs + ".moved")
-        shown = json.loads(subprocess.run([SIRL, "show", out, "--json"], capture_output=True,
-                                          text=True, check=True).stdout)
+        shown = json.loads(run_sirl("show", out, "--json", stdin=None, check=True).stdout)
         if shown.get("verdicts_from") != out + " (/verdicts)" or [
                 v["verdict"] for v in shown["verdicts"]] != [
                 h["verdict"] for h in written if h["main"]]:
             fail(f"sirl show did not read the verdicts stored in the file: {shown}")
         print(f"ok: {len(written)} verdicts stored in the results file; the reader and sirl show "
               "read them without the figures folder")
-        p = subprocess.run([SIRL, "reproduce", "--profile", SMOKE, "--out",
-                            os.path.join(tmp, "smoke.h5"), "--no-study"], capture_output=True,
-                           text=True, cwd=tmp, stdin=subprocess.DEVNULL, timeout=900)
+        p = run_sirl("reproduce", "--profile", SMOKE, "--out", os.path.join(tmp, "smoke.h5"),
+                     "--no-study", cwd=tmp, timeout=900)
         if p.returncode != 0 or "predicted to take" in p.stderr:
             fail(f"smoke (no budget): rc {p.returncode}, or it calibrated:\n{p.stderr[:1000]}")
         print("ok: a profile without a budget starts at once")

@@ -15,8 +15,11 @@ from pathlib import Path
 import h5py
 import pandas as pd
 
-SIRL = os.environ["SIRL"]
-SLOW = str(Path(os.environ["SIRL_SOURCE_DIR"]) / "tests" / "data" / "slow-training.toml")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
+SIRL = sirl_testing.sirl_binary()
+SLOW = sirl_testing.data_path("slow-training.toml")
 
 
 def fail(msg):
@@ -29,8 +32,7 @@ def tables(path):
 
 
 def run(out, *extra):
-    p = subprocess.run([SIRL, "run", SLOW, "--out", str(out), "--threads", "1", *extra],
-                       capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=300)
+    p = sirl_testing.run_sirl("run", SLOW, "--out", str(out), "--threads", "1", *extra, timeout=300)
     if p.returncode != 0:
         fail(f"sirl run exited {p.returncode}\n{p.stderr}")
     return p

@@ -19,8 +19,12 @@ import urllib.request
 
 import h5py
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+from sirl_testing import run_sirl  # noqa: E402
+
+SIRL = sirl_testing.sirl_binary()
+SRC = sirl_testing.source_dir()
 
 
 def serve(study, participant, port=0, n_sim=3, n_pref=2, file_size_limit=None):
@@ -76,10 +80,10 @@ with tempfile.TemporaryDirectory() as tmp:
     assert url.startswith(f"http://127.0.0.1:{port}/?p=alice&t="), url
     # A second server on the busy port must refuse to start (no SO_REUSEPORT: two servers would
     # split one participant's requests between them).
-    second = subprocess.run([SIRL, "study", "serve", "--env", "grid", "--participant", "bob",
-                             "--scenario", "Keep away from the laptop.", "--scenario-features",
-                             "laptop_distance", "--out", study + ".other.h5", "--port", str(port)],
-                            capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=30)
+    second = run_sirl("study", "serve", "--env", "grid", "--participant", "bob",
+                      "--scenario", "Keep away from the laptop.", "--scenario-features",
+                      "laptop_distance", "--out", study + ".other.h5", "--port", str(port),
+                      timeout=30)
     assert second.returncode == 2 and "cannot listen" in second.stderr, (second.returncode,
                                                                          second.stderr)
     print("ok: a second server on a busy port is refused:", second.stderr.strip())
@@ -124,10 +128,8 @@ with tempfile.TemporaryDirectory() as tmp:
 
     # One server per study file: each rewrites the whole file from its memory, so a second one
     # (another participant, same file) must be refused while the first runs.
-    second = subprocess.run([SIRL, "study", "serve", "--env", "grid", "--participant", "bob",
-                             "--scenario", "Stay low.", "--out", study, "--port", "0"],
-                            capture_output=True, text=True,
-                            stdin=subprocess.DEVNULL, timeout=30)
+    second = run_sirl("study", "serve", "--env", "grid", "--participant", "bob",
+                      "--scenario", "Stay low.", "--out", study, "--port", "0", timeout=30)
     assert second.returncode == 2 and "in use by sirl study serve" in second.stderr, \
         second.stderr
     with h5py.File(study, "r") as f:
@@ -317,10 +319,9 @@ with tempfile.TemporaryDirectory() as tmp:
     # and a working URL.
     fresh = os.path.join(tmp, "host.h5")
     for bad_host in ("", "not a host", "999.1.1.1"):
-        q = subprocess.run([SIRL, "study", "serve", "--env", "grid", "--participant", "dan",
-                            "--scenario", "x", "--out", fresh, "--host", bad_host,
-                            "--port", "0"], capture_output=True, text=True,
-                           stdin=subprocess.DEVNULL, timeout=30)
+        q = run_sirl("study", "serve", "--env", "grid", "--participant", "dan",
+                     "--scenario", "x", "--out", fresh, "--host", bad_host, "--port", "0",
+                     timeout=30)
         assert q.returncode == 2 and "--host" in q.stderr, (bad_host, q.returncode, q.stderr)
         assert not os.path.exists(fresh), f"--host {bad_host!r} wrote the study file"
     pa = subprocess.Popen([SIRL, "study", "serve", "--env", "grid", "--participant", "dan",

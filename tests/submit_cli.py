@@ -5,17 +5,17 @@ calibrations) the same time, and one clear line with exit 2 for every wrong use.
 import json
 import os
 import re
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-SIRL = os.environ["SIRL"]
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
 
 
 def sirl(*args, expect=0):
-    p = subprocess.run([SIRL, *args], capture_output=True, text=True, stdin=subprocess.DEVNULL,
-                       timeout=300, env=dict(os.environ, SLURM_CONF="/nonexistent"))  # no Slurm
+    p = sirl_testing.run_sirl(*args, timeout=300,
+                              env=dict(os.environ, SLURM_CONF="/nonexistent"))  # no Slurm
     if p.returncode != expect:
         sys.exit(f"FAIL: sirl {' '.join(args)} exited {p.returncode}, expected {expect}\n"
                  f"{p.stdout}\n{p.stderr}")

@@ -6,33 +6,27 @@ creates beside OUT (OUT.partial or a study's OUT.tmp, OUT.lock, OUT.sum.tmp, and
 folder OUT.tasks), pointing at a victim file or folder, makes the command stop with one line
 naming the link, and the victim is untouched.
 """
-import hashlib
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
-MICRO = os.path.join(SRC, "tests", "data", "micro.toml")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
+MICRO = sirl_testing.data_path("micro.toml")
+fail = sirl_testing.make_fail("symlinks")
 
 
 def sirl(*args):
-    return subprocess.run([SIRL, *args], capture_output=True, text=True, stdin=subprocess.DEVNULL,
-                          timeout=300)
+    return sirl_testing.run_sirl(*args, timeout=300)
 
 
 def state(path):
     """The victim's content: a file's digest, or a folder's names and digests."""
     if os.path.isdir(path):
         return {n: state(os.path.join(path, n)) for n in sorted(os.listdir(path))}
-    return hashlib.sha256(open(path, "rb").read()).hexdigest()
-
-
-def fail(msg):
-    print("symlinks: FAIL:", msg)
-    sys.exit(1)
+    return sirl_testing.sha256_file(path)
 
 
 def main():

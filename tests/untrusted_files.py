@@ -21,16 +21,14 @@ import h5py
 import numpy as np
 import xxhash
 
-SIRL = os.environ["SIRL"]
-SRC = os.environ["SIRL_SOURCE_DIR"]
-FIXTURE = os.path.join(SRC, "tests", "data", "results_v1.h5")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
+SRC = sirl_testing.source_dir()
+FIXTURE = sirl_testing.data_path("results_v1.h5")
 PY = "/usr/bin/python3"
 READER = os.path.join(SRC, "python")
-
-
-def fail(msg):
-    print("untrusted_files: FAIL:", msg)
-    sys.exit(1)
+fail = sirl_testing.make_fail("untrusted_files")
 
 
 def framed(body: bytes) -> bytes:
@@ -46,7 +44,7 @@ def write(path, data):
 
 
 def sirl(*args):
-    return subprocess.run([SIRL, *args], capture_output=True, stdin=subprocess.DEVNULL, timeout=120)
+    return sirl_testing.run_sirl(*args, text=False, timeout=120)
 
 
 def reader(path):
