@@ -275,13 +275,12 @@ int study_merge() {
       merged.data_seed = s.data_seed;
     } else if (s.env_data != merged.env_data) {
       // Two studies on an environment from a file: the same file, or not one study.
-      throw UsageError(
-          in + " was collected on " + s.env + " from " +
-          (s.env_data.empty() ? "no file" : s.env_data.substr(0, s.env_data.find('\n'))) + ", " +
-          m_inputs.front() + " from " +
-          (merged.env_data.empty() ? "no file"
-                                   : merged.env_data.substr(0, merged.env_data.find('\n'))) +
-          ": not one study");
+      const auto file = [](const Study& st) {
+        return st.env_data.empty() ? std::string("no file")
+                                   : st.env_data.substr(0, st.env_data.find('\n'));
+      };
+      throw UsageError(in + " was collected on " + s.env + " from " + file(s) + ", " +
+                       m_inputs.front() + " from " + file(merged) + ": not one study");
     } else if (s.env != merged.env || s.trajectories != merged.trajectories ||
                s.data_seed != merged.data_seed) {
       throw UsageError(in + " is a study on " + s.env + " (" + std::to_string(s.trajectories) +

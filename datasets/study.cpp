@@ -27,9 +27,10 @@ namespace {
 std::string study_env_list() {
   std::string built, files;
   for (const auto& e : environments())
-    if (e.in_study)
-      (e.from_file ? files : built) +=
-          (e.from_file ? files : built).empty() ? e.name : ", " + e.name;
+    if (e.in_study) {
+      std::string& list = e.from_file ? files : built;
+      list += (list.empty() ? "" : ", ") + e.name;
+    }
   return "built in: " + built + (files.empty() ? "" : "; declared from files: " + files);
 }
 

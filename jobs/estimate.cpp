@@ -58,6 +58,12 @@ double seconds_of(PlanEstimate& e, const std::function<void()>& f) {
 
 namespace {
 
+// The seeds env runs (each builds its own query bundle).
+double seed_count(const Profile& p, const std::string& env) {
+  const auto axes = p.axes.find(env);
+  return axes != p.axes.end() ? double(axes->second.seeds.size()) : 1.0;
+}
+
 // Times the making of env's Ξ (from a small one when it is sampled trajectory by trajectory) and
 // of one seed's query bundle into e; returns the small Ξ the rates are calibrated on.
 Dataset time_setup(const std::string& env, const Profile& p, PlanEstimate& e) {
@@ -74,11 +80,9 @@ Dataset time_setup(const std::string& env, const Profile& p, PlanEstimate& e) {
   QueryBundleConfig full = p.queries;
   full.fpe_trajectories = std::min<int64_t>(full.fpe_trajectories, d.count);
   const double bundle = seconds_of(e, [&] { make_query_bundle(d, full, 1); });
-  const auto axes = p.axes.find(env);
-  const double seeds = axes != p.axes.end() ? double(axes->second.seeds.size()) : 1.0;
   e.dataset_seconds[env] = gen;
   e.bundle_seconds[env] = bundle;
-  e.setup_seconds += gen + seeds * bundle;
+  e.setup_seconds += gen + seed_count(p, env) * bundle;
   return d;
 }
 
@@ -186,13 +190,11 @@ PlanEstimate estimate_plan(const Plan& plan, const Profile& p, int threads,
                        "classes";
     for (const auto& named : classes) what += " " + named.first;
     what += "\n";
-    const auto axes = p.axes.find(env);
-    const double seeds = axes != p.axes.end() ? double(axes->second.seeds.size()) : 1.0;
     // Stored: Ξ's and a bundle's seconds, Ξ's bytes, then each class's GFLOP/s and call seconds.
     if (const auto v = load_calibration(what); v && v->size() == 3 + 2 * classes.size()) {
       e.dataset_seconds[env] = (*v)[0];
       e.bundle_seconds[env] = (*v)[1];
-      e.setup_seconds += (*v)[0] + seeds * (*v)[1];
+      e.setup_seconds += (*v)[0] + seed_count(p, env) * (*v)[1];
       e.data_bytes += (*v)[2];
       size_t k = 3;
       for (const auto& named : classes) {

@@ -64,6 +64,33 @@ def http(method, url, data=None):
         return e.code, e.read().decode()
 
 
+def browse_to_the_end(tmp, web, env, who, scenario, view):
+    """Serves `who` 2 similarity and 1 preference queries on `env` (a 200-trajectory space) and
+    has chromium answer them through the page in `view`; every answer must be in the file."""
+    study = os.path.join(tmp, env + ".h5")
+    server = subprocess.Popen([SIRL, "study", "serve", "--env", env, "--trajectories", "200",
+                               "--participant", who, "--similarity", "2", "--preference", "1",
+                               "--practice", "1", "--scenario", scenario, "--out", study,
+                               "--port", "0"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              stdin=subprocess.DEVNULL)
+    line = ""
+    while not line.startswith("open: "):
+        line = server.stdout.readline()
+        if not line:
+            sys.exit(f"FAIL: {env} server did not start: {server.stderr.read()}")
+    p = subprocess.run(["node", os.path.join(SRC, "tests", "study_browser.mjs"),
+                        line.split("open: ")[1].strip(), view], cwd=web, capture_output=True,
+                       text=True, timeout=300)
+    server.kill()
+    if p.returncode != 0:
+        sys.exit(f"FAIL: {env} browser test\n{p.stdout}\n{p.stderr}")
+    with h5py.File(study, "r") as f:
+        g = f[f"study/participants/{who}"]
+        assert len(g["similarity_answer"]) == 2 and len(g["preference_answer"]) == 1
+    print(p.stdout.strip())
+
+
 def answers(study, who):
     with h5py.File(study, "r") as f:
         g = f[f"study/participants/{who}"]
@@ -453,53 +480,11 @@ with tempfile.TemporaryDirectory() as tmp:
         assert sim[:2] == [2, 0] and len(sim) == 3 and len(pref) == 2, (sim, pref)
         assert all(m > 0 for m in ms[2:]), ms
         print("ok: chromium answered the rest through the page; the file holds every answer")
-        # The JacoRobot page (three.js 3-D views, replay buttons) runs in chromium as well.
-        jaco = os.path.join(tmp, "jaco.h5")
-        pj = subprocess.Popen([SIRL, "study", "serve", "--env", "jaco2", "--trajectories", "200",
-                               "--participant", "carol", "--similarity", "2", "--preference", "1",
-                               "--practice", "1", "--scenario", "Stay high above the table.",
-                               "--out", jaco, "--port", "0"],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                              stdin=subprocess.DEVNULL)
-        line = ""
-        while not line.startswith("open: "):
-            line = pj.stdout.readline()
-            if not line:
-                sys.exit(f"FAIL: jaco2 server did not start: {pj.stderr.read()}")
-        p = subprocess.run(["node", os.path.join(SRC, "tests", "study_browser.mjs"),
-                            line.split("open: ")[1].strip(), "arm"], cwd=web, capture_output=True,
-                           text=True, timeout=300)
-        pj.kill()
-        if p.returncode != 0:
-            sys.exit(f"FAIL: jaco2 browser test\n{p.stdout}\n{p.stderr}")
-        with h5py.File(jaco, "r") as f:
-            g = f["study/participants/carol"]
-            assert len(g["similarity_answer"]) == 2 and len(g["preference_answer"]) == 1
-        print(p.stdout.strip())
+        # The JacoRobot page (three.js 3-D views, replay buttons) and Driver's (each trajectory a
+        # path of road points) run in chromium to the end as well.
+        browse_to_the_end(tmp, web, "jaco2", "carol", "Stay high above the table.", "arm")
         print("ok: the JacoRobot page (3-D arm views, shared camera, keys) ran to the end in chromium")
-        # Driver's page draws each trajectory as a path of road points (view "path").
-        drv = os.path.join(tmp, "driver.h5")
-        pd_ = subprocess.Popen([SIRL, "study", "serve", "--env", "driver", "--trajectories", "200",
-                                "--participant", "dora", "--similarity", "2", "--preference", "1",
-                                "--practice", "1", "--scenario", "Keep to your lane.",
-                                "--out", drv, "--port", "0"],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               stdin=subprocess.DEVNULL)
-        line = ""
-        while not line.startswith("open: "):
-            line = pd_.stdout.readline()
-            if not line:
-                sys.exit(f"FAIL: driver server did not start: {pd_.stderr.read()}")
-        p = subprocess.run(["node", os.path.join(SRC, "tests", "study_browser.mjs"),
-                            line.split("open: ")[1].strip(), "path"], cwd=web,
-                           capture_output=True, text=True, timeout=300)
-        pd_.kill()
-        if p.returncode != 0:
-            sys.exit(f"FAIL: driver browser test\n{p.stdout}\n{p.stderr}")
-        with h5py.File(drv, "r") as f:
-            g = f["study/participants/dora"]
-            assert len(g["similarity_answer"]) == 2 and len(g["preference_answer"]) == 1
-        print(p.stdout.strip())
+        browse_to_the_end(tmp, web, "driver", "dora", "Keep to your lane.", "path")
         print("ok: the Driver page (road paths drawn to fit) ran to the end in chromium")
     srv.kill()
 print("PASS")
