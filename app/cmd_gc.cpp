@@ -51,7 +51,7 @@ void register_gc(CLI::App& app, Runner& run) {
       } catch (const ProfileError& e) {
         throw UsageError(e.what());
       }
-      for (const std::string& d : task_digests(make_plan(p), p)) keep.insert(d);
+      for (const std::string& d : task_digests(make_plan(p))) keep.insert(d);
     }
     const GcSummary s = collect_garbage(dir, keep, dry_run);
     std::printf("sirl gc: %s %lld results and checkpoints (%s); kept %lld (%s)",

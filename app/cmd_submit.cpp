@@ -115,7 +115,7 @@ std::set<std::string> digests_in(const fs::path& dir) {
 std::vector<ShardReport> shard_reports(const SlurmSubmission& s, bool& queue_known) {
   const Profile p = load_or_usage(s.profile_path().string());
   const Plan plan = make_plan(p);
-  const std::vector<std::string> digests = task_digests(plan, p);
+  const std::vector<std::string> digests = task_digests(plan);
   const std::set<std::string> committed = digests_in(s.cache_path());
   const std::set<std::string> saved = digests_in(s.cache_path() / "checkpoints");
   const std::map<std::string, std::string> queue = queue_states(s, queue_known);

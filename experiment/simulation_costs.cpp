@@ -7,6 +7,7 @@
 #include "engine/tpa.h"
 #include "experiment/cost_model.h"
 #include "experiment/expected_epochs.h"
+#include "experiment/task_config.h"
 #include "kernels/linear_bradley_terry.h"
 #include "kernels/vae.h"
 
@@ -90,18 +91,18 @@ void linear_tpa_cost(Task& t, const Profile& p) {
   t.bytes = 8.0 * ((n + held) * w + 2 * g * g + n * w);
 }
 
-ActiveConfig active_config(const Task& t, const Profile& p) {
+ActiveConfig active_config(const Task& t, const Profile& p, const Hyper& hyper) {
   ActiveConfig c;
   static_cast<ActiveRounds&>(c) = p.active.at(t.env);
   c.rule = t.variant.selection;
   c.budget = queries_for(p, t.teacher).similarity;  // as many as the uniform set holds
-  c.hyper = t.hyper_values();
+  c.hyper = hyper;
   return c;
 }
 
 void active_cost(Task& t, const Profile& p) {
   const EnvSizes z = env_sizes(t, p);
-  const ActiveConfig c = active_config(t, p);
+  const ActiveConfig& c = *t.compiled().active;
   // Round r ≥ 1 trains K members for E epochs on the r·batch triplets answered before it, then
   // embeds its pool's rows (≤ 3·pool) with each member.
   t.flops = 0;

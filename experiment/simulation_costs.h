@@ -16,7 +16,8 @@ void linear_tpa_cost(Task& t, const Profile& p);
 void active_cost(Task& t, const Profile& p);
 
 // What an active task runs with (its runner and its cost read the same): the environment's
-// [active] rounds, its rule, the uniform set's budget and the task's hyper-parameters.
-ActiveConfig active_config(const Task& t, const Profile& p);
+// [active] rounds, its rule, the uniform set's budget and the task's hyper-parameters: compiled
+// once into the task's configuration (TaskConfig::active).
+ActiveConfig active_config(const Task& t, const Profile& p, const Hyper& hyper);
 
 }  // namespace sirl

@@ -15,6 +15,7 @@
 #include "experiment/calibration.h"
 #include "experiment/cost_model.h"
 #include "experiment/simulation_costs.h"
+#include "experiment/task_config.h"
 #include "experiment/task_outputs.h"
 #include "experiment/task_settings.h"
 #include "kernels/vae.h"
@@ -153,11 +154,10 @@ void describe_variant(const Task& t, TaskRecord& r) {
 // it learned from are from the perfect oracle's (AnswerError).
 void record_teacher(const Task& t, RunContext& ctx, TaskRecord& r) {
   r.text["teacher"] = t.teacher;
-  for (const auto& tp : ctx.profile().robustness.teachers)
-    if (tp.tag == t.teacher) {
-      r.text["axis"] = tp.axis;
-      r.num["level"] = tp.level;
-    }
+  if (const auto& tp = t.compiled().teacher) {
+    r.text["axis"] = tp->axis;
+    r.num["level"] = tp->level;
+  }
   const AnswerError& e = ctx.bundle(t.env, t.seed, t.teacher).answer_error;
   r.num["similarity_error"] = e.similarity;
   r.num["preference_error"] = e.preference;
@@ -217,7 +217,7 @@ std::string rep_hyper(const Variant& v, const Hyper& h) {
 // An external method's "training" is reading its embedding of Ξ for this (env, seed, N): the
 // record holds it as a learned φ's holds its own, so FPE and TPA read it the same way.
 void run_external_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const ExternalMethod& m = external_method(ctx.profile(), t.variant.external);
+  const ExternalMethod& m = *t.compiled().external;
   const Dataset& d = ctx.dataset(t.env);
   ExternalEmbedding e = read_external_embedding(m.embeddings, m.xxh3, t.env, t.seed, t.N, d.count);
   const Representation rep = table_representation(std::move(e.values), d.count, e.dim, d.input_dim);
@@ -384,7 +384,7 @@ void run_linear_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
 // ---- active ----
 
 void run_active(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const ActiveConfig c = active_config(t, ctx.profile());
+  const ActiveConfig& c = *t.compiled().active;
   const auto checkpoint = ctx.checkpointer(t.key);
   // The teacher as the bundle has it (an attend teacher's mask drawn for this seed).
   const Teacher& teacher = ctx.bundle(t.env, t.seed, t.teacher).config.teacher;
@@ -409,15 +409,21 @@ std::string tpa_cell_key(const Task& t) {
   return cell_prefix(t) + "tpa/M" + std::to_string(t.M) + (t.frozen ? "/frozen" : "/unfrozen");
 }
 
-// ---- hyper-parameters: resolved once per task when it is planned (Task::resolved_hyper) ----
+// ---- compiled once per task when it is planned (experiment/task_config.h) ----
 
-// Its environment's values at its hyper-parameter point.
-Hyper env_point_hyper(const Task& t, const Profile& p) {
-  return hyper_at(p, t.env, t.hyper);
+// A representation: its point's hyper-parameters; an external method's declaration.
+void compile_rep(const Task& t, const Profile& p, TaskConfig& c) {
+  compile_env_point(t, p, c);
+  if (t.variant.method == Method::external) c.external = external_method(p, t.variant.external);
 }
-// A TPA cell's: its point's, with its method's stop rule ([tpa] stop).
-Hyper tpa_hyper(const Task& t, const Profile& p) {
-  return tpa_cell_hyper(p, t.env, t.hyper, t.variant);
+// A TPA cell: its point's hyper-parameters, with its method's stop rule ([tpa] stop).
+void compile_tpa(const Task& t, const Profile& p, TaskConfig& c) {
+  c.hyper = tpa_cell_hyper(p, t.env, t.hyper, t.variant);
+}
+// An active task: its rounds, rule and budget at its point's hyper-parameters.
+void compile_active(const Task& t, const Profile& p, TaskConfig& c) {
+  compile_env_point(t, p, c);
+  c.active = active_config(t, p, *c.hyper);
 }
 
 // ---- settings: what each kind reads of the profile (experiment/task_settings.h) ----
@@ -428,7 +434,7 @@ std::string vae_settings(const Task& t, const Profile& p) {
 
 std::string rep_settings(const Task& t, const Profile& p) {
   if (t.variant.method == Method::external)
-    return describe_data(p, t.env) + describe_external(external_method(p, t.variant.external));
+    return describe_data(p, t.env) + describe_external(*t.compiled().external);
   // Every φ is handed its seed's query bundle (methods that ask nothing ignore it).
   return describe_data(p, t.env) + describe_queries(queries_for(p, t.teacher)) +
          rep_hyper(t.variant, t.hyper_values());
@@ -571,7 +577,7 @@ const TaskKindSpec& vae_kind() {
       .table = {},
       .lacks_fields = vae_lacks_cell_fields,
       .complete_fields = name_vae_cell,
-      .resolve_hyper = env_point_hyper,
+      .compile = compile_env_point,
   };
   return kind;
 }
@@ -599,7 +605,7 @@ const TaskKindSpec& rep_kind() {
       .table = {},
       .lacks_fields = lacks_cell_fields,
       .complete_fields = complete_cell_fields,
-      .resolve_hyper = env_point_hyper,
+      .compile = compile_rep,
   };
   return kind;
 }
@@ -634,7 +640,7 @@ const TaskKindSpec& fpe_kind() {
                  {"reference", C::Int, "reference", true}}},
       .lacks_fields = lacks_cell_fields,
       .complete_fields = complete_cell_fields,
-      .resolve_hyper = env_point_hyper,
+      .compile = compile_env_point,
   };
   return kind;
 }
@@ -679,7 +685,7 @@ const TaskKindSpec& tpa_kind() {
                 {"tpa_linear"}},
       .lacks_fields = lacks_cell_fields,
       .complete_fields = complete_cell_fields,
-      .resolve_hyper = tpa_hyper,
+      .compile = compile_tpa,
   };
   return kind;
 }
@@ -702,7 +708,7 @@ const TaskKindSpec& linear_tpa_kind() {
       .describe = describe_linear_tpa,
       .run = run_linear_tpa,
       .table = {},
-      .resolve_hyper = env_point_hyper,
+      .compile = compile_env_point,
   };
   return kind;
 }
@@ -761,7 +767,7 @@ const TaskKindSpec& active_kind() {
       .describe = describe_active,
       .run = run_active,
       .table = {},
-      .resolve_hyper = env_point_hyper,
+      .compile = compile_active,
   };
   return kind;
 }

@@ -8,6 +8,7 @@
 #include "datasets/queries.h"
 #include "engine/tpa.h"
 #include "experiment/simulation_tasks.h"
+#include "experiment/task_config.h"
 #include "experiment/task_outputs.h"
 #include "experiment/task_settings.h"
 
@@ -147,16 +148,16 @@ void study_simulated_cost(Task& t, const Profile& p) {
             tpa_flops(z.head_unfrozen, c.simulated_rewards, M, c.hyper.tpa.epochs);
 }
 
-// The study's configuration on the cores the scheduler gave the task (results do not depend on
-// the thread count).
-StudyAnalysisConfig config_for(const Task& t, const Profile& p) {
-  StudyAnalysisConfig c = study_config(p);
+// The study's configuration, compiled with the task, on the cores the scheduler gave it (results
+// do not depend on the thread count).
+StudyAnalysisConfig config_for(const Task& t) {
+  StudyAnalysisConfig c = *t.compiled().study;
   c.threads = t.threads;
   return c;
 }
 
 void run_study_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const StudyAnalysisConfig c = config_for(t, ctx.profile());
+  const StudyAnalysisConfig c = config_for(t);
   const Dataset& d = ctx.study_dataset();
   const std::vector<int32_t> pooled = study_triplets(ctx.study());
   const Representation phi = t.variant.method == Method::sirl
@@ -171,7 +172,7 @@ void run_study_rep(const Task& t, RunContext& ctx, TaskRecord& r) {
 
 void run_study_heldout(const Task& t, RunContext& ctx, TaskRecord& r) {
   const Representation phi =
-      study_heldout(ctx.study(), ctx.study_dataset(), t.participant, config_for(t, ctx.profile()));
+      study_heldout(ctx.study(), ctx.study_dataset(), t.participant, config_for(t));
   if (phi.params.empty())
     throw std::runtime_error("no other participant answered a similarity query");
   put_representation(phi, r);
@@ -186,7 +187,7 @@ void run_study_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   const ParticipantTpa a = study_participant_tpa(
       *p, ctx.study_dataset(), *ctx.representation(study_rep_key(0, Method::sirl)),
       *ctx.representation(study_rep_key(0, Method::random)),
-      *ctx.representation(heldout_key(t.participant)), config_for(t, ctx.profile()));
+      *ctx.representation(heldout_key(t.participant)), config_for(t));
   r.num["ok"] = a.ok;
   r.num["both_features"] = a.both_features;
   r.num["real_sirl"] = a.real_sirl;
@@ -197,9 +198,9 @@ void run_study_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
 }
 
 void run_study_simulated(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const SimulatedTpa a = study_simulated_tpa(
-      ctx.study_dataset(), *ctx.representation(study_rep_key(0, Method::sirl)),
-      *ctx.representation(study_rep_key(0, Method::random)), config_for(t, ctx.profile()));
+  const SimulatedTpa a =
+      study_simulated_tpa(ctx.study_dataset(), *ctx.representation(study_rep_key(0, Method::sirl)),
+                          *ctx.representation(study_rep_key(0, Method::random)), config_for(t));
   // Numbers, not float arrays: the accuracies stay exact doubles, as analyze_study returns them.
   auto put = [&](const std::string& name, const std::vector<double>& v) {
     r.num[name + "_count"] = double(v.size());
@@ -263,11 +264,10 @@ void put_analysis_rows(const StudyAnalysis& a, TaskRecord& r) {
 }
 
 void run_study_analysis(const Task& t, RunContext& ctx, TaskRecord& r) {
-  const Profile& p = ctx.profile();
+  const StudyAnalysisConfig& c = *t.compiled().study;
   std::vector<TaskRecord> in;
-  for (const Task& i : analysis_inputs(t, p)) in.push_back(ctx.record(i.kind.spec().key(i)));
-  const StudyAnalysis a = assemble_study(p, in);
-  const StudyAnalysisConfig c = study_config(p);
+  for (const std::string& key : t.input_keys_in_order) in.push_back(ctx.record(key));
+  const StudyAnalysis a = assemble_study(c, t.compiled().study_users, in);
   put_analysis_rows(a, r);
   r.num["triplets"] = double(a.triplets);
   r.text["random_mode"] = c.random_frozen ? "frozen" : "unfrozen";
@@ -309,6 +309,13 @@ std::string study_settings(const Task&, const Profile& p) {
   return describe_study(p.study) + "precision = " + p.precision + "\n";
 }
 
+// What every study task's runner reads: the analysis' configuration and the cohort's size (both
+// from [study] and the top-level precision, which study_settings describes).
+void compile_study(const Task&, const Profile& p, TaskConfig& c) {
+  c.study = study_config(p);
+  c.study_users = p.study.cohort.users;
+}
+
 }  // namespace
 
 const TaskKindSpec& study_rep_kind() {
@@ -327,6 +334,7 @@ const TaskKindSpec& study_rep_kind() {
       .describe = describe_env_and_seed,
       .run = run_study_rep,
       .table = {},
+      .compile = compile_study,
   };
   return kind;
 }
@@ -346,6 +354,7 @@ const TaskKindSpec& study_heldout_kind() {
       .describe = describe_participant,
       .run = run_study_heldout,
       .table = {},
+      .compile = compile_study,
   };
   return kind;
 }
@@ -370,6 +379,7 @@ const TaskKindSpec& study_tpa_kind() {
       .describe = describe_participant,
       .run = run_study_tpa,
       .table = {},
+      .compile = compile_study,
   };
   return kind;
 }
@@ -391,6 +401,7 @@ const TaskKindSpec& study_simulated_kind() {
       .describe = describe_env_and_seed,
       .run = run_study_simulated,
       .table = {},
+      .compile = compile_study,
   };
   return kind;
 }
@@ -424,6 +435,7 @@ const TaskKindSpec& study_analysis_kind() {
                  {"sirl_epochs", C::Int, "sirl_epochs"},
                  {"tpa_epochs", C::Int, "tpa_epochs"}},
                 "rows"},
+      .compile = compile_study,
   };
   return kind;
 }
@@ -436,6 +448,11 @@ namespace {
 }  // namespace
 
 StudyAnalysis assemble_study(const Profile& p, const std::vector<TaskRecord>& records) {
+  return assemble_study(study_config(p), p.study.cohort.users, records);
+}
+
+StudyAnalysis assemble_study(const StudyAnalysisConfig& c, int users,
+                             const std::vector<TaskRecord>& records) {
   std::map<std::string, const TaskRecord*> by_key;
   for (const auto& r : records) by_key[r.key] = &r;
   auto need = [&](const std::string& key) -> const TaskRecord& {
@@ -443,14 +460,13 @@ StudyAnalysis assemble_study(const Profile& p, const std::vector<TaskRecord>& re
     if (it == by_key.end()) throw std::runtime_error("the study's task " + key + " has not run");
     return *it->second;
   };
-  const StudyAnalysisConfig c = study_config(p);
   StudyAnalysis a;
   a.triplets = int64_t(need(study_rep_key(0, Method::sirl)).num.at("triplets"));
   for (int64_t k = 0; k < c.seeds; ++k) {
     a.fpe_sirl.push_back(need(study_rep_key(k, Method::sirl)).num.at("fpe"));
     a.fpe_random.push_back(need(study_rep_key(k, Method::random)).num.at("fpe"));
   }
-  for (int u = 0; u < p.study.cohort.users; ++u) {
+  for (int u = 0; u < users; ++u) {
     const std::string id = simulated_participant_id(u);
     const TaskRecord& r = need(tpa_key(id));
     ParticipantTpa t;

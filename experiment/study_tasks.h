@@ -35,5 +35,9 @@ const TaskKindSpec& study_analysis_kind();
 
 // The analysis from the study tasks' records. Throws std::runtime_error naming a missing task.
 StudyAnalysis assemble_study(const Profile& p, const std::vector<TaskRecord>& records);
+// The same from the analysis' configuration and the cohort's size (what the analysis task's
+// runner has: experiment/task_config.h).
+StudyAnalysis assemble_study(const StudyAnalysisConfig& c, int users,
+                             const std::vector<TaskRecord>& records);
 
 }  // namespace sirl

@@ -12,6 +12,7 @@
 namespace sirl {
 
 struct TaskKindSpec;
+struct TaskConfig;  // experiment/task_config.h
 
 // Which kind a task is: its declaration, compared by identity. Converts from the declaration
 // (`t.kind = tpa_kind()`); an unset kind throws std::logic_error when read.
@@ -48,16 +49,21 @@ struct Task {
   // or inputs the point changes (a φ is shared by every point of a "tpa.lr" axis), and its key
   // then carries it after the seed: "grid/s0/sirl.epochs=300/sirl/N100/rep".
   std::string hyper;
-  // The hyper-parameters it runs at, resolved once when it is planned (add_task, by its kind's
-  // `resolve_hyper`): its environment's values at its point and, for a TPA cell, its method's
-  // stop rule. Its settings, cost and runner all read these. Null for kinds that read none.
-  std::shared_ptr<const Hyper> resolved_hyper;
-  // *resolved_hyper; std::logic_error when the task was not planned by add_task.
+  // Everything its runner reads of the profile (experiment/task_config.h), compiled once when it
+  // is planned (add_task, by its kind's `compile`): its hyper-parameters at its point, its
+  // settings text for the digest, and its kind's own section. Runners receive no Profile.
+  std::shared_ptr<const TaskConfig> config;
+  // *config; std::logic_error when the task was not planned by add_task.
+  const TaskConfig& compiled() const;
+  // compiled().hyper; std::logic_error for a kind that reads none.
   const Hyper& hyper_values() const;
   std::vector<int> deps;  // indices into Plan::tasks (set by add_task)
   // The key of the input of each kind it reads, by kind name (set by add_task): a runner finds
   // its φ, VAE or active queries here, whichever point they were planned at.
   std::map<std::string, std::string> input_keys;
+  // The keys of every task it reads, in the order its kind's `inputs` lists them (set by
+  // add_task): for a kind that reads several tasks of one kind (the study's analysis).
+  std::vector<std::string> input_keys_in_order;
   // The key of its input of kind k (std::out_of_range if it reads none).
   const std::string& input(TaskKind k) const;
   double flops = 0;  // estimated floating-point operations executed (add_task)

@@ -7,6 +7,7 @@
 
 #include "engine/checkpoint.h"
 #include "engine/method_catalog.h"
+#include "experiment/task_config.h"
 #include "kernels/gemm_bf16.h"
 #include "probes/cpu_class.h"
 
@@ -58,11 +59,18 @@ const std::string& Task::input(TaskKind k) const {
   return it->second;
 }
 
-const Hyper& Task::hyper_values() const {
-  if (!resolved_hyper)
+const TaskConfig& Task::compiled() const {
+  if (!config)
     throw std::logic_error("task " + key +
-                           " has no resolved hyper-parameters (not planned by add_task)");
-  return *resolved_hyper;
+                           " has no compiled configuration (not planned by add_task)");
+  return *config;
+}
+
+const Hyper& Task::hyper_values() const {
+  const TaskConfig& c = compiled();
+  if (!c.hyper)
+    throw std::logic_error("task " + key + " (" + kind.name() + ") reads no hyper-parameters");
+  return *c.hyper;
 }
 
 int Plan::count(TaskKind k) const {
@@ -94,6 +102,27 @@ bool never_bf16(const Task&, const Profile&) {
   return false;
 }
 
+void compile_env_point(const Task& t, const Profile& p, TaskConfig& c) {
+  c.hyper = hyper_at(p, t.env, t.hyper);
+}
+
+namespace {
+// The task's configuration: its kind's section, then what every kind has (add_task).
+std::shared_ptr<const TaskConfig> compile_task(const Task& t, const Profile& p) {
+  const TaskKindSpec& kind = t.kind.spec();
+  Task x = t;  // the kind's settings and bf16 choice read the hyper-parameters compiled first
+  auto c = std::make_shared<TaskConfig>();
+  if (kind.compile) kind.compile(t, p, *c);
+  if (!t.teacher.empty())
+    for (const TeacherPoint& tp : p.robustness.teachers)
+      if (tp.tag == t.teacher) c->teacher = tp;
+  x.config = c;
+  c->settings = kind.settings(x, p);
+  c->bf16_products = kind.bf16_products(x, p);
+  return c;
+}
+}  // namespace
+
 void describe_env_and_seed(const Task& t, TaskRecord& r) {
   r.text["env"] = t.env;
   r.num["seed"] = double(t.seed);
@@ -104,28 +133,23 @@ int add_task(Plan& plan, const Profile& p, Task t) {
   const TaskKindSpec& kind = t.kind.spec();
   t.deps.clear();
   t.input_keys.clear();
+  t.input_keys_in_order.clear();
   bool input_at_point = false;
   for (Task& in : kind.inputs(t, p)) {
     const int d = add_task(plan, p, std::move(in));
     const Task& dep = plan.tasks[size_t(d)];
     t.deps.push_back(d);
     t.input_keys[dep.kind.name()] = dep.key;
+    t.input_keys_in_order.push_back(dep.key);
     input_at_point = input_at_point || !dep.hyper.empty();
   }
-  const auto resolve = [&](Task& x) {
-    if (kind.resolve_hyper)
-      x.resolved_hyper = std::make_shared<const Hyper>(kind.resolve_hyper(x, p));
-  };
-  resolve(t);
+  t.config = compile_task(t, p);
   // A hyper-parameter point it does not read (and no input of it read) is the base task.
   if (!t.hyper.empty() && !input_at_point) {
     Task base = t;
     base.hyper.clear();
-    resolve(base);
-    if (kind.settings(t, p) == kind.settings(base, p)) {
-      t.hyper.clear();
-      t.resolved_hyper = base.resolved_hyper;
-    }
+    base.config = compile_task(base, p);
+    if (t.config->settings == base.config->settings) t = std::move(base);
   }
   t.key = kind.key(t);
   if (!t.hyper.empty()) {  // after "<env>/s<seed>/"
@@ -148,13 +172,13 @@ int add_task(Plan& plan, const Profile& p, Task t) {
   return i;
 }
 
-bool runs_bf16_products(const Task& t, const Profile& p) {
-  return t.kind->bf16_products(t, p);
+bool runs_bf16_products(const Task& t) {
+  return t.compiled().bf16_products;
 }
 
-std::string task_cpu_class(const Task& t, const Profile& p) {
+std::string task_cpu_class(const Task& t) {
   // bf16 products run natively or emulated: different bits, so a different class.
-  return cpu_class() + (runs_bf16_products(t, p) ? std::string(", bf16 ") + bf16_backend() : "");
+  return cpu_class() + (runs_bf16_products(t) ? std::string(", bf16 ") + bf16_backend() : "");
 }
 
 TaskRecord run_task(const Task& t, RunContext& ctx) {
@@ -175,8 +199,8 @@ TaskRecord run_task(const Task& t, RunContext& ctx) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   r.num["threads"] = t.threads;  // like seconds, a fact of this run's scheduling, not a result
   // Whether its networks' products ran in bf16 (/tables/timings holds it to the bf16 roof).
-  if (runs_bf16_products(t, ctx.profile())) r.num["bf16_products"] = 1;
-  r.text["cpu_class"] = task_cpu_class(t, ctx.profile());  // what computed these bits
+  if (runs_bf16_products(t)) r.num["bf16_products"] = 1;
+  r.text["cpu_class"] = task_cpu_class(t);  // what computed these bits
   // What it streams from main memory (the cost model's estimate, deterministic): with the
   // bandwidth the run measures, its memory roof in /tables/timings.
   if (t.stream_bytes > 0) r.num["stream_bytes"] = t.stream_bytes;

@@ -50,9 +50,11 @@ struct TaskKindSpec {
   // fills them in (both null: its records have not changed).
   bool (*lacks_fields)(const TaskRecord& r) = nullptr;
   bool (*complete_fields)(TaskRecord& r) = nullptr;
-  // The hyper-parameters a task of this kind runs at (Task::resolved_hyper), worked out once by
-  // add_task; null: the kind reads none.
-  Hyper (*resolve_hyper)(const Task& t, const Profile& p) = nullptr;
+  // Compiles what its runner reads of the profile into the task's configuration
+  // (experiment/task_config.h): its hyper-parameters and its kind's own section. add_task calls it
+  // once per task, then adds the settings text, the bf16 choice and a noisy teacher's point; null:
+  // the kind reads nothing more.
+  void (*compile)(const Task& t, const Profile& p, TaskConfig& c) = nullptr;
 };
 
 // Registers a kind with the engine, from a static object in the kind's own file:
@@ -70,6 +72,9 @@ const std::vector<const TaskKindSpec*>& task_kinds();
 bool env_precision_is_bf16(const Task& t, const Profile& p);
 bool never_bf16(const Task& t, const Profile& p);
 
+// The compile steps kinds share: the environment's hyper-parameters at the task's point.
+void compile_env_point(const Task& t, const Profile& p, TaskConfig& c);
+
 // The most tasks a plan may hold: about 8 times the paper's whole protocol.
 inline constexpr size_t kMaxPlanTasks = 50000;
 
@@ -86,12 +91,12 @@ void describe_env_and_seed(const Task& t, TaskRecord& r);
 // the task on any failure (divergence, bad inputs).
 TaskRecord run_task(const Task& t, RunContext& ctx);
 
-// Whether the task's networks multiply in bf16 (its kind says).
-bool runs_bf16_products(const Task& t, const Profile& p);
+// Whether the task's networks multiply in bf16 (its kind said, when it was compiled).
+bool runs_bf16_products(const Task& t);
 // The CPU class whose bits the task's result has (probes/cpu_class.h; with the bf16 backend
 // when its products run in bf16): recorded as its record's "cpu_class", and the class the task
 // cache files it under.
-std::string task_cpu_class(const Task& t, const Profile& p);
+std::string task_cpu_class(const Task& t);
 
 // The results file's tables from its records: every kind's table, then the cross-kind ones, with
 // the roofs the run measured (results_file.h: build_tables).

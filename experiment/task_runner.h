@@ -24,8 +24,9 @@ namespace sirl {
 class RunContext {
  public:
   // `load` fetches a committed record by key (for resumed runs); may throw if absent.
+  // The profile builds the shared data only (Ξ, the query bundles, the cohort): a runner reads
+  // its settings from its task's compiled configuration (experiment/task_config.h), never here.
   RunContext(const Profile& p, std::function<TaskRecord(const std::string&)> load);
-  const Profile& profile() const { return profile_; }
   const Dataset& dataset(const std::string& env);
   // The queries of (env, seed) answered by `teacher` ("" = the profile's main teacher).
   const QueryBundle& bundle(const std::string& env, int64_t seed, const std::string& teacher = "");

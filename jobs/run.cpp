@@ -138,12 +138,12 @@ RunSummary run_profile(const Profile& p, const RunOptions& o) {
     // the one filed under this worker's CPU class first, or from the results file of an earlier
     // run.
     const Plan plan = make_plan(p);
-    const std::vector<std::string> digests = task_digests(plan, p);
+    const std::vector<std::string> digests = task_digests(plan);
     const fs::path cache = cache_dir(o);
     RunContext ctx(p, [&](const std::string& key) -> TaskRecord {
       const int i = plan.index.at(key);
       const std::string& digest = digests[size_t(i)];
-      const std::string own = TaskCache::id(digest, task_cpu_class(plan.tasks[size_t(i)], p));
+      const std::string own = TaskCache::id(digest, task_cpu_class(plan.tasks[size_t(i)]));
       try {
         return TaskStore::load_from(cache, own, key);
       } catch (const H5Error&) {
@@ -194,12 +194,12 @@ CacheHoldings cache_holdings(const Plan& plan, const Profile& p, const fs::path&
   const std::set<std::string> have(ids.begin(), ids.end());
   std::set<std::string> digests;  // of any class
   for (const std::string& id : ids) digests.insert(id.substr(0, id.find('-')));
-  const std::vector<std::string> dig = task_digests(plan, p);
+  const std::vector<std::string> dig = task_digests(plan);
   CacheHoldings h;
   h.held.assign(plan.tasks.size(), 0);
   for (size_t i = 0; i < plan.tasks.size(); ++i) {
     const Task& t = plan.tasks[i];
-    if (have.count(TaskCache::id(dig[i], task_cpu_class(t, p)))) {
+    if (have.count(TaskCache::id(dig[i], task_cpu_class(t)))) {
       h.held[i] = 1;
       ++h.tasks;
       h.flops += t.flops;
@@ -252,7 +252,7 @@ std::map<std::string, TaskRecord> load_prior(const Profile& p, const RunOptions&
     const Task& t = plan.tasks[size_t(it->second)];
     const auto dig = r.text.find("task_digest"), cls = r.text.find("cpu_class");
     if (dig == r.text.end() || dig->second != digests[size_t(it->second)] || cls == r.text.end() ||
-        (!o.any_cpu_class && cls->second != task_cpu_class(t, p)))
+        (!o.any_cpu_class && cls->second != task_cpu_class(t)))
       continue;
     prior[r.key] = std::move(r);
   }
@@ -296,7 +296,7 @@ PendingSet find_pending(const Profile& p, const Plan& plan, const std::vector<ch
     if (!mine[i]) continue;
     ++ps.total;
     const Task& t = plan.tasks[i];
-    const std::string cls = task_cpu_class(t, p);
+    const std::string cls = task_cpu_class(t);
     if (!o.force) {
       if (const std::string id = cache.find(digests[i], cls, o.any_cpu_class); !id.empty()) {
         // Checked before anything reads it: a damaged file is removed and the task computed.
@@ -369,7 +369,7 @@ struct PlanExecution {
                      t.key.c_str());
     });
     const std::string done =
-        o.force ? "" : cache.find(digests[size_t(i)], task_cpu_class(t, p), o.any_cpu_class);
+        o.force ? "" : cache.find(digests[size_t(i)], task_cpu_class(t), o.any_cpu_class);
     if (!done.empty()) {  // committed by another run while this one waited
       sources.set(size_t(i), done);
       ++elsewhere;
@@ -583,7 +583,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::string started = now_iso();
   const Plan plan = make_plan(p);
-  const std::vector<std::string> digests = task_digests(plan, p);
+  const std::vector<std::string> digests = task_digests(plan);
   const std::vector<char> mine = shard_tasks(plan, o.shard_index, o.shard_count);
   refuse_tasks_beyond_memory(plan, mine);
   const int threads = run_threads(o, mpi_size);

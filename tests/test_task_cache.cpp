@@ -263,7 +263,7 @@ TEST(TaskCache, VerifyNamesAndRemovesADamagedResult) {
 
 std::map<std::string, std::string> plan_digests_by_key(const Profile& p) {
   const Plan plan = make_plan(p);
-  const std::vector<std::string> d = task_digests(plan, p);
+  const std::vector<std::string> d = task_digests(plan);
   std::map<std::string, std::string> out;
   for (size_t i = 0; i < plan.tasks.size(); ++i) out[plan.tasks[i].key] = d[i];
   return out;
