@@ -378,12 +378,14 @@ void register_plan(CLI::App& app, Runner& run) {
       "CPU (MPI ranks pulling tasks from rank 0), with its critical path.");
   static std::string profile;
   static int threads = 0;
-  static bool list_tasks = false, resolved = false;
+  static bool list_tasks = false, resolved = false, keys = false;
   static std::string cache;
   static PlanClusterOptions co;
   cmd->add_option("profile", profile,
-                  "Profile: a name in configs/ (" + bundled_profile_names() + ") or a .toml path")
-      ->required();
+                  "Profile: a name in configs/ (" + bundled_profile_names() + ") or a .toml path");
+  cmd->add_flag("--keys", keys,
+                "Print the keys of [queries], [active] and [study] instead (type, accepted values, "
+                "default, what each sets) as Markdown; no profile needed");
   cmd->add_option("--threads", threads, "Worker threads to plan for (default: every core)")
       ->check(CLI::Range(1, 4096));
   cmd->add_flag("--tasks", list_tasks,
@@ -425,6 +427,11 @@ void register_plan(CLI::App& app, Runner& run) {
       ->check(CLI::ExistingDirectory);
   add_set_option(cmd);
   run = [] {
+    if (keys) {
+      std::fputs(profile_keys_markdown().c_str(), stdout);
+      return 0;
+    }
+    if (profile.empty()) throw UsageError("sirl plan: a profile is required (or --keys)");
     const Profile p = load_or_usage(profile);
     if (resolved) {
       std::fputs(p.text.c_str(), stdout);

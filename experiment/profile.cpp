@@ -1,6 +1,7 @@
 #include "experiment/profile.h"
 
 #include "experiment/file_environments.h"
+#include "experiment/profile_settings.h"
 #include "experiment/suggest.h"
 
 #include "engine/method_catalog.h"
@@ -264,6 +265,93 @@ class Reader {
   std::string path_;
 };
 
+// One declared key of table t (experiment/profile_settings.h) into its field, its type and range
+// checked; an absent key leaves the field as it is (its struct's default, or the value a wider
+// table gave: [active] under [active.<env>]).
+void read_setting(const Reader& r, const toml::table& t, const std::string&, const SettingInfo& k,
+                  int& v) {
+  v = int(r.integer(t, k.key, v, int64_t(k.lo), int64_t(k.hi)));
+}
+void read_setting(const Reader& r, const toml::table& t, const std::string&, const SettingInfo& k,
+                  int64_t& v) {
+  v = r.integer(t, k.key, v, int64_t(k.lo), int64_t(k.hi));
+}
+void read_setting(const Reader& r, const toml::table& t, const std::string&, const SettingInfo& k,
+                  double& v) {
+  v = r.number(t, k.key, v, k.lo, k.hi);
+}
+void read_setting(const Reader& r, const toml::table& t, const std::string&, const SettingInfo& k,
+                  std::string& v) {
+  v = r.string(t, k.key, v);
+}
+void read_setting(const Reader& r, const toml::table& t, const std::string& table,
+                  const SettingInfo& k, bool& v) {
+  const std::string w = r.string(t, k.key, k.words[v ? 1 : 0]);
+  if (w != k.words[0] && w != k.words[1])
+    r.fail(t.get(k.key),
+           table + " " + k.key + " must be \"" + k.words[0] + "\" or \"" + k.words[1] + "\"");
+  v = w == k.words[1];
+}
+
+// Every key of a declared section, for only_keys.
+template <class Settings, class S>
+std::set<std::string> setting_keys(Settings settings, const S& s) {
+  std::set<std::string> keys;
+  settings(s, [&](const SettingInfo& k, const auto&) { keys.insert(k.key); });
+  return keys;
+}
+
+// Every declared key of `table` (named `name` in errors) into s.
+template <class Settings, class S>
+void read_settings(const Reader& r, const toml::table& t, const std::string& name,
+                   Settings settings, S& s) {
+  settings(s, [&](const SettingInfo& k, auto& field) { read_setting(r, t, name, k, field); });
+}
+
+// ---- the reference of the declared sections (`sirl plan --keys`) ----
+
+// A value as a reader writes it: 10000000, 0.05, 1e-09, ∞ (the digest's exact text is for
+// machines).
+std::string plain(double v) {
+  if (std::isinf(v)) return "∞";
+  std::ostringstream o;
+  o.precision(15);
+  o << v;
+  return o.str();
+}
+
+// One row per key: | key | type | accepted | default | what it sets |
+template <class Settings, class S>
+std::string key_rows(Settings settings, const S& defaults) {
+  std::string out;
+  settings(defaults, [&](const SettingInfo& k, const auto& field) {
+    using T = std::decay_t<decltype(field)>;
+    std::string type, accepted, def;
+    if constexpr (std::is_same_v<T, std::string>) {
+      type = "string";
+      accepted = "—";
+      def = "`\"" + field + "\"`";
+    } else if constexpr (std::is_same_v<T, bool>) {
+      type = "string";
+      accepted = std::string("`\"") + k.words[0] + "\"`, `\"" + k.words[1] + "\"`";
+      def = std::string("`\"") + k.words[field ? 1 : 0] + "\"`";
+    } else {
+      type = std::is_integral_v<T> ? "integer" : "number";
+      accepted = plain(k.lo) + " – " + plain(k.hi);
+      def = "`" + plain(double(field)) + "`";
+    }
+    out += "| `" + std::string(k.key) + "` | " + type + " | " + accepted + " | " + def + " | " +
+           k.doc + " |\n";
+  });
+  return out;
+}
+
+std::string keys_section(const char* title, const char* note, const std::string& rows) {
+  return std::string("## ") + title + "\n\n" + note + "\n\n" +
+         "| key | type | accepted | default | what it sets |\n|---|---|---|---|---|\n" + rows +
+         "\n";
+}
+
 // A TOML scalar or array as the typed value set_hyper takes, refused unless its TOML type is the
 // key's (an integer key takes 30, not 30.0, "30" or [30]; a number key takes 30 or 0.5).
 HyperValue hyper_value(const Reader& r, const toml::node& n, const std::string& key) {
@@ -435,11 +523,8 @@ namespace {
 // [queries] and [teacher]: the budgets and the simulated human.
 void parse_queries(Reader& r, const toml::table& root, Profile& p) {
   if (const auto* q = r.table(root, "queries", false)) {
-    r.only_keys(*q, "[queries]", {"similarity", "preference", "tpa_pairs", "fpe_trajectories"});
-    p.queries.similarity = r.integer(*q, "similarity", 1000, 1, 10'000'000);
-    p.queries.preference = r.integer(*q, "preference", 1000, 1, 10'000'000);
-    p.queries.tpa_pairs = r.integer(*q, "tpa_pairs", 250, 2, 10'000'000);
-    p.queries.fpe_trajectories = r.integer(*q, "fpe_trajectories", 1000, 2, 10'000'000);
+    r.only_keys(*q, "[queries]", setting_keys(kQueriesSettings, p.queries));
+    read_settings(r, *q, "[queries]", kQueriesSettings, p.queries);
   }
   const auto* t = r.table(root, "teacher", false);
   if (!t) return;
@@ -499,13 +584,9 @@ void parse_active(Reader& r, const toml::table& root, Profile& p) {
   for (const auto& env : p.envs) p.active[env] = ActiveRounds{};
   const auto* at = r.table(root, "active", false);
   if (!at) return;
-  const std::set<std::string> keys{"members", "pool", "batch", "round_epochs", "mu"};
+  const std::set<std::string> keys = setting_keys(kActiveSettings, ActiveRounds{});
   auto read = [&](const toml::table& t, const std::string& name, ActiveRounds& a) {
-    a.members = int(r.integer(t, "members", a.members, 2, 64));
-    a.pool = r.integer(t, "pool", a.pool, 1, 10'000'000);
-    a.batch = r.integer(t, "batch", a.batch, 1, 10'000'000);
-    a.round_epochs = int(r.integer(t, "round_epochs", a.round_epochs, 1, 1'000'000));
-    a.mu = r.number(t, "mu", a.mu, 1e-9, 1e9);
+    read_settings(r, t, name, kActiveSettings, a);
     if (a.pool < a.batch)
       r.fail(&t, name + ": pool = " + std::to_string(a.pool) + " is below batch = " +
                      std::to_string(a.batch) + " (a round picks its batch from the pool)");
@@ -692,30 +773,12 @@ void parse_env_axes(Reader& r, const toml::table& root, Profile& p) {
 // [study]: the simulated cohort of the user-study pipeline.
 void parse_study(Reader& r, const toml::table& root, Profile& p) {
   if (const auto* st = r.table(root, "study", false)) {
-    r.only_keys(*st, "[study]",
-                {"env", "trajectories", "users", "similarity", "preference", "beta", "mistake",
-                 "epochs", "tpa_epochs", "seeds", "splits", "random"});
-    StudyPlan& sp = p.study;
-    CohortConfig& c = sp.cohort;
-    sp.enabled = true;
-    c.env = r.string(*st, "env", c.env);
-    if (!env_is_study(c.env))
+    r.only_keys(*st, "[study]", setting_keys(kStudySettings, p.study));
+    p.study.enabled = true;
+    read_settings(r, *st, "[study]", kStudySettings, p.study);
+    if (!env_is_study(p.study.cohort.env))
       r.fail(st->get("env"), "[study] env must be " + study_env_names() +
                                  " (an environment from a file, if its file has 2-D points)");
-    c.trajectories = r.integer(*st, "trajectories", 1000, 10, 1'000'000);
-    c.users = int(r.integer(*st, "users", 10, 2, 10'000));
-    c.similarity = r.integer(*st, "similarity", 100, 1, 100'000);
-    c.preference = r.integer(*st, "preference", 100, 4, 100'000);
-    c.beta = r.number(*st, "beta", 20, 1e-9, std::numeric_limits<double>::infinity());
-    c.mistake = r.number(*st, "mistake", 0.05, 0, 1);
-    sp.epochs = int(r.integer(*st, "epochs", 3000, 1, 1'000'000));
-    sp.tpa_epochs = int(r.integer(*st, "tpa_epochs", 1000, 1, 1'000'000));
-    sp.seeds = int(r.integer(*st, "seeds", 5, 2, 100));
-    sp.splits = int(r.integer(*st, "splits", 50, 1, 1000));
-    const std::string random = r.string(*st, "random", "unfrozen");
-    if (random != "unfrozen" && random != "frozen")
-      r.fail(st->get("random"), "[study] random must be \"unfrozen\" or \"frozen\"");
-    sp.random_frozen = random == "frozen";
   }
 }
 
@@ -1001,6 +1064,20 @@ Profile parse_profile_table(const toml::table& root, const std::string& text,
 }
 
 }  // namespace
+
+std::string profile_keys_markdown() {
+  return keys_section("[queries]", "Each seed's query budgets.",
+                      key_rows(kQueriesSettings, QueryBundleConfig{})) +
+         keys_section("[active], [active.<env>]",
+                      "How an active variant's ensemble asks (`sirl@vote`, `sirl@infogain`); "
+                      "`[active.<env>]` overrides `[active]` key by key; pool must be at least "
+                      "batch.",
+                      key_rows(kActiveSettings, ActiveRounds{})) +
+         keys_section("[study]",
+                      "The user study's simulated cohort and its analysis; the table's presence "
+                      "runs the study.",
+                      key_rows(kStudySettings, StudyPlan{}));
+}
 
 const QueryBundleConfig& queries_for(const Profile& p, const std::string& teacher) {
   if (teacher.empty()) return p.queries;

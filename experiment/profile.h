@@ -110,13 +110,13 @@ struct Profile {
   std::vector<Variant> fpe_methods;
   std::vector<int64_t> fpe_N;
   TpaGrid tpa;
-  // [tpa] stop = { <variant> = "<rule>", <env> = { <variant> = "<rule>" } }: the tpa.stop rule ("fixed", "converged",
-  // "converged-unfrozen") of every TPA cell of that variant — [tpa]'s, [ablation]'s and
-  // [robustness]'s — over [hyper]'s, e.g. the paper's epochs for the one method where a stopping
-  // rule was not equivalent (configs/jaco-fig5.toml). A rule is a property of the method, not of
-  // the grid a cell is listed in, so a cell two grids share is one task. An environment's entry
-  // wins over the one for every environment (the rules were tested per environment). Keys:
-  // tpa_stop_key(env or "", variant name).
+  // [tpa] stop = { <variant> = "<rule>", <env> = { <variant> = "<rule>" } }: the tpa.stop rule
+  // ("fixed", "converged", "converged-unfrozen") of every TPA cell of that variant — [tpa]'s,
+  // [ablation]'s and [robustness]'s — over [hyper]'s, e.g. the paper's epochs for the one method
+  // where a stopping rule was not equivalent (configs/jaco-fig5.toml). A rule is a property of the
+  // method, not of the grid a cell is listed in, so a cell two grids share is one task. An
+  // environment's entry wins over the one for every environment (the rules were tested per
+  // environment). Keys: tpa_stop_key(env or "", variant name).
   std::map<std::string, std::string> tpa_stop_by_method;
   // [tpa] protocols: how [tpa]'s cells score a representation: "paper" (the paper's reward head,
   // engine/tpa.h) and "linear" (linear evaluation: a Bradley–Terry linear head fit to convergence,
@@ -195,6 +195,11 @@ const std::string& precision_of(const Profile& p, const std::string& env);
 // that set the bad value (or "--set KEY=VALUE"). Throws ProfileError.
 Profile load_profile(const std::string& path_or_name,
                      const std::vector<std::string>& settings = {});
+
+// The keys of the sections declared as data (experiment/profile_settings.h: [queries], [active],
+// [study]) as Markdown tables: type, accepted values, default, what each sets (`sirl plan --keys`;
+// docs/profile-keys.md).
+std::string profile_keys_markdown();
 
 // The names of the profiles shipped in configs/ ("beyond, jaco-fig5, paper, …"), for --help.
 std::string bundled_profile_names();

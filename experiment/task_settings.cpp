@@ -4,6 +4,7 @@
 
 #include "datasets/environments.h"
 #include "datasets/exact_text.h"
+#include "experiment/profile_settings.h"
 
 namespace sirl {
 
@@ -13,7 +14,8 @@ static_assert(sizeof(QueryBundleConfig) == 96, "describe the new field in descri
 static_assert(sizeof(Teacher) == 56, "describe the new Teacher field in describe_queries");
 static_assert(sizeof(CohortConfig) == 88, "describe the new CohortConfig field in describe_study");
 static_assert(sizeof(StudyPlan) == 120, "describe the new StudyPlan field in describe_study");
-static_assert(sizeof(ActiveRounds) == 40, "describe the new ActiveRounds field in describe_active");
+static_assert(sizeof(ActiveRounds) == 40,
+              "declare the new ActiveRounds field in kActiveSettings (profile_settings.h)");
 static_assert(sizeof(ExternalMethod) == 152, "describe the new field in describe_external");
 
 std::string hyper_lines(const Hyper& h, std::initializer_list<std::string_view> prefixes) {
@@ -36,19 +38,14 @@ std::string describe_data(const Profile& p, const std::string& env) {
 std::string describe_queries(const QueryBundleConfig& q) {
   std::string mask;
   for (uint8_t m : q.teacher.mask) mask += char('0' + (m != 0));
-  return "queries similarity=" + exact_number(double(q.similarity)) +
-         " preference=" + exact_number(double(q.preference)) +
-         " tpa_pairs=" + exact_number(double(q.tpa_pairs)) +
-         " fpe_trajectories=" + exact_number(double(q.fpe_trajectories)) +
-         " attend=" + exact_number(q.attend) + " teacher beta=" + exact_number(q.teacher.beta) +
+  return "queries" + settings_text(q, kQueriesSettings) + " attend=" + exact_number(q.attend) +
+         " teacher beta=" + exact_number(q.teacher.beta) +
          " mistake=" + exact_number(q.teacher.mistake) + " skip=" + exact_number(q.teacher.skip) +
          " equal=" + exact_number(q.teacher.equal) + " mask=" + mask + "\n";
 }
 
 std::string describe_active(const ActiveRounds& a) {
-  return "active members=" + exact_number(a.members) + " pool=" + exact_number(double(a.pool)) +
-         " batch=" + exact_number(double(a.batch)) +
-         " round_epochs=" + exact_number(a.round_epochs) + " mu=" + exact_number(a.mu) + "\n";
+  return "active" + settings_text(a, kActiveSettings) + "\n";
 }
 
 std::string describe_study(const StudyPlan& s) {

@@ -236,9 +236,9 @@ MUTANTS = [
     # the task cache, task digests and hyper-parameter axes (0.10.0)
     ("experiment/simulation_tasks.cpp", '    s += hyper_lines(h, {own});', "      ;",
      "ctest:incremental_runs", "a trained φ's digest blind to its method's settings (a stale φ reused)"),
-    ("experiment/task_settings.cpp", '  return "queries similarity=" + exact_number(double(q.similarity)) +',
-     '  return std::string("queries") +', "TaskDigest.*",
-     "the similarity budget left out of the digests"),
+    ("experiment/task_settings.cpp", '  return "queries" + settings_text(q, kQueriesSettings) + " attend=" + exact_number(q.attend) +',
+     '  return std::string("queries") + " attend=" + exact_number(q.attend) +', "TaskDigest.*",
+     "the query budgets left out of the digests"),
     ("experiment/task_kinds.cpp", "    if (t.config->settings == base.config->settings) t = std::move(base);",
      "    if (false) t = std::move(base);", "HyperAxes.*", "every task copied at every hyper-parameter point"),
     ("jobs/run.cpp", "        const std::string bad = cache.store().verify(id, t.key);",

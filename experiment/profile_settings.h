@@ -1,0 +1,100 @@
+// The profile's scalar sections declared once, as data: each key with its field, its accepted
+// range and one line saying what it sets. From these declarations come the parsing (unknown keys,
+// types and ranges refused with file:line: experiment/profile.cpp), the digest's text of a
+// section (experiment/task_settings.cpp), and the reference table `sirl plan --keys` prints
+// (profile_keys_markdown in experiment/profile.h; docs/profile-keys.md is that output). A field's
+// default is its struct's initial value, so it is written once too. A new setting of these sections
+// is one line here plus its use.
+//
+// A section's declaration is a visitor: kActiveSettings(a, f) calls f(info, field) for each key in
+// order (a may be const).
+#pragma once
+#include <array>
+#include <limits>
+#include <string>
+#include <type_traits>
+
+#include "datasets/exact_text.h"
+
+namespace sirl {
+
+inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+struct SettingInfo {
+  const char* key;
+  double lo = 0, hi = 0;  // integers and numbers: the values accepted
+  const char* doc = "";   // what it sets, one line
+  // A true/false field set by one of two words ({false's, true's}); empty for other fields.
+  std::array<const char*, 2> words{};
+};
+
+// [queries]: each seed's query budgets.
+inline constexpr auto kQueriesSettings = [](auto& q, auto&& f) {
+  f(SettingInfo{"similarity", 1, 1e7, "similarity triplets answered per seed (the largest N)"},
+    q.similarity);
+  f(SettingInfo{"preference", 1, 1e7,
+                "preference pairs per seed for each of SinglePref, MultiPref-10 and -50"},
+    q.preference);
+  f(SettingInfo{"tpa_pairs", 2, 1e7,
+                "labelled pairs per test reward (80 % train: M up to 0.8 tpa_pairs)"},
+    q.tpa_pairs);
+  f(SettingInfo{"fpe_trajectories", 2, 1e7,
+                "labelled trajectories for FPE's probe (clamped to the trajectory count)"},
+    q.fpe_trajectories);
+};
+
+// [active] and [active.<env>]: how an active variant's ensemble asks, round by round.
+inline constexpr auto kActiveSettings = [](auto& a, auto&& f) {
+  f(SettingInfo{"members", 2, 64, "K: the ensemble's members"}, a.members);
+  f(SettingInfo{"pool", 1, 1e7, "candidate triplets drawn per round (at least batch)"}, a.pool);
+  f(SettingInfo{"batch", 1, 1e7, "triplets asked per round"}, a.batch);
+  f(SettingInfo{"round_epochs", 1, 1e6, "epochs each member trains per round (warm start)"},
+    a.round_epochs);
+  f(SettingInfo{"mu", 1e-9, 1e9, "crowd-kernel μ, in units of a member's median pair distance"},
+    a.mu);
+};
+
+// [study]: the simulated cohort of the user-study pipeline and its analysis.
+inline constexpr auto kStudySettings = [](auto& s, auto&& f) {
+  f(SettingInfo{"env", 0, 0, "the cohort's environment (2-D points: jaco2, grid or a file's)"},
+    s.cohort.env);
+  f(SettingInfo{"trajectories", 10, 1e6, "the trajectory space's size"}, s.cohort.trajectories);
+  f(SettingInfo{"users", 2, 1e4, "simulated participants"}, s.cohort.users);
+  f(SettingInfo{"similarity", 1, 1e5, "similarity queries each participant answers"},
+    s.cohort.similarity);
+  f(SettingInfo{"preference", 4, 1e5, "preference queries each participant answers"},
+    s.cohort.preference);
+  f(SettingInfo{"beta", 1e-9, kInfinity, "the simulated participants' Boltzmann rationality β"},
+    s.cohort.beta);
+  f(SettingInfo{"mistake", 0, 1, "probability a participant flips an answer"}, s.cohort.mistake);
+  f(SettingInfo{"epochs", 1, 1e6, "SIRL's epochs on the pooled answers"}, s.epochs);
+  f(SettingInfo{"tpa_epochs", 1, 1e6, "reward heads' epochs"}, s.tpa_epochs);
+  f(SettingInfo{"seeds", 2, 100, "training seeds for FPE"}, s.seeds);
+  f(SettingInfo{"splits", 1, 1000, "70/30 splits of each participant's preferences"}, s.splits);
+  f(SettingInfo{"random",
+                0,
+                0,
+                "the mode Random is evaluated in (the paper's best: unfrozen)",
+                {"unfrozen", "frozen"}},
+    s.random_frozen);
+};
+
+// " key=value" for each key `visit` declares, in order, values as exact text (a word field by
+// its word): a section's part of a task digest's text (experiment/task_settings.cpp).
+template <class S, class Visit>
+std::string settings_text(const S& s, Visit visit) {
+  std::string out;
+  visit(s, [&](const SettingInfo& k, const auto& field) {
+    using T = std::decay_t<decltype(field)>;
+    out += std::string(" ") + k.key + "=";
+    if constexpr (std::is_same_v<T, std::string>)
+      out += field;
+    else if constexpr (std::is_same_v<T, bool>)
+      out += k.words[0] ? k.words[field ? 1 : 0] : (field ? "1" : "0");
+    else
+      out += exact_number(field);
+  });
+  return out;
+}
+
+}  // namespace sirl
