@@ -165,8 +165,9 @@ def check_methods(r):
     shared = sorted(set(want.index) & set(m.index))
     for v in shared:
         for c in want.columns:
-            # Positions in the catalog move when a method is added: their order is checked below.
-            if c in ("selection_order", "catalog_order"):
+            # Positions in the catalog and the figures move when a method is added: their order
+            # (and whether a variant is drawn at all) is checked below.
+            if c in ("selection_order", "catalog_order", "figure_order"):
                 continue
             if m.at[v, c] != want.at[v, c]:
                 fail(f"/methods/{v} {c} is {m.at[v, c]!r}, the fixture says {want.at[v, c]!r}")
@@ -174,6 +175,12 @@ def check_methods(r):
     by_fixture = sorted(shared, key=lambda v: (want.at[v, "catalog_order"], v))
     if by_file != by_fixture:
         fail(f"/methods catalog order {by_file}, the fixture's {by_fixture}")
+    drawn = [v for v in shared if m.at[v, "figure_order"] >= 0]
+    if drawn != [v for v in shared if want.at[v, "figure_order"] >= 0]:
+        fail(f"/methods: the variants Figs. 4-5 draw are {drawn}, the fixture's differ")
+    if sorted(drawn, key=lambda v: m.at[v, "figure_order"]) != \
+            sorted(drawn, key=lambda v: want.at[v, "figure_order"]):
+        fail("/methods: the figures' order of the drawn variants is not the fixture's")
     if not {"sirl", "vae", "random", "truth", "raw"} <= set(m.index):
         fail(f"smoke's /methods: {sorted(m.index)}")
     print(f"ok: /methods declares the file's {len(m)} variants as the fixture does")
