@@ -71,10 +71,11 @@ std::string sbatch(const SlurmSubmission& s, const std::string& indices) {
 }
 
 // Each job's state in Slurm's queue ("PENDING", "RUNNING", ...; array tasks as "ID_i"), for the
-// jobs still known there. `known` false (and nothing) when no Slurm answers here.
+// jobs still known there. `known` false (and nothing) when no Slurm answers here within 20 s (a
+// client whose controller is down or whose slurm.conf is missing retries for a minute).
 std::map<std::string, std::string> queue_states(const SlurmSubmission& s, bool& known) {
   std::map<std::string, std::string> states;
-  known = std::system("sinfo -h -o %a >/dev/null 2>&1") == 0;
+  known = std::system("timeout 20 sinfo -h -o %a >/dev/null 2>&1") == 0;
   if (!known) return states;
   for (const std::string& job : s.jobs) {
     std::string out;
@@ -309,7 +310,9 @@ int rerun_failed(const SubmitOptions& o) {
   bool known = false;
   const std::vector<int> again = shards_to_rerun(shard_reports(s, known));
   if (!known)
-    throw UsageError("no Slurm answers here (sinfo failed): cannot tell which shards still run");
+    throw UsageError(
+        "no Slurm answers here (sinfo failed or gave no answer in 20 s): cannot tell which shards "
+        "still run");
   if (again.empty()) {
     std::printf("sirl submit: nothing to rerun in %s (every shard is complete or queued)\n",
                 s.dir.c_str());

@@ -14,8 +14,9 @@ import sirl_testing  # noqa: E402
 
 
 def sirl(*args, expect=0):
-    p = sirl_testing.run_sirl(*args, timeout=300,
-                              env=dict(os.environ, SLURM_CONF="/nonexistent"))  # no Slurm
+    # No Slurm here: an empty slurm.conf makes every Slurm client fail at once (a missing one
+    # makes sinfo retry for a minute, which `sirl status` cuts at 20 s).
+    p = sirl_testing.run_sirl(*args, timeout=300, env=dict(os.environ, SLURM_CONF="/dev/null"))
     if p.returncode != expect:
         sys.exit(f"FAIL: sirl {' '.join(args)} exited {p.returncode}, expected {expect}\n"
                  f"{p.stdout}\n{p.stderr}")
