@@ -270,9 +270,9 @@ CacheHoldings print_plan_summary(const Profile& p, const Plan& plan, const std::
     // Trainings that end early by rule: the FLOPs above are what they are expected to execute.
     const bool heads_stop =
         std::any_of(p.hyper.begin(), p.hyper.end(),
-                    [](const auto& kv) { return kv.second.tpa_stop != "fixed"; }) ||
+                    [](const auto& kv) { return tpa_stop_may_end_early(kv.second.tpa_stop); }) ||
         std::any_of(p.tpa_stop_by_method.begin(), p.tpa_stop_by_method.end(),
-                    [](const auto& kv) { return kv.second != "fixed"; });
+                    [](const auto& kv) { return tpa_stop_may_end_early(kv.second); });
     std::printf("%-16s %8s %14.1f  every epoch of every schedule\n", "protocol", "",
                 protocol * 1e-9);
     std::printf(

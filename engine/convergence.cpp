@@ -27,6 +27,27 @@ Convergence check_convergence(const std::vector<float>& curve, double rel_tol, d
 
 namespace sirl {
 
+const TpaStopRule* find_tpa_stop_rule(std::string_view name) {
+  for (const TpaStopRule& r : kTpaStopRules)
+    if (name == r.name) return &r;
+  return nullptr;
+}
+
+bool tpa_stop_may_end_early(std::string_view name) {
+  const TpaStopRule* r = find_tpa_stop_rule(name);
+  return r && (r->stops_unfrozen || r->stops_frozen);
+}
+
+std::string tpa_stop_rule_list() {
+  std::string s;
+  const size_t n = std::size(kTpaStopRules);
+  for (size_t i = 0; i < n; ++i) {
+    if (i > 0) s += i + 1 == n ? " or " : ", ";
+    s += std::string("\"") + kTpaStopRules[i].name + "\" (" + kTpaStopRules[i].doc + ")";
+  }
+  return s;
+}
+
 bool stops_after(const StopRule& rule, const float* curve, int e) {
   if (!rule.converged || e < std::max(2, rule.min_epochs)) return false;
   return check_convergence(std::vector<float>(curve, curve + e), rule.rel_tol).converged;

@@ -7,6 +7,8 @@
 // over windows, not single epochs, so mini-batch noise does not decide it. Fewer than 20 epochs
 // give windows of one epoch; fewer than 2 epochs cannot be judged (converged = false).
 #pragma once
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace sirl {
@@ -41,5 +43,26 @@ struct StopRule {
 
 // Whether a head whose curve so far is curve[0, e) stops after epoch e under `rule`.
 bool stops_after(const StopRule& rule, const float* curve, int e);
+
+// The reward heads' stop rules (the values of tpa.stop), each declared once: its name, the cells
+// whose heads it may end early (by StopRule, at that mode's tolerance) and what it does. The
+// hyper-parameters' check, tpa_stop_rule and `sirl plan` read these entries; a new rule over
+// the same StopRule is one entry.
+struct TpaStopRule {
+  const char* name;
+  bool stops_unfrozen, stops_frozen;
+  const char* doc;
+};
+inline constexpr TpaStopRule kTpaStopRules[] = {
+    {"fixed", false, false, "every epoch, the paper's"},
+    {"converged", true, true, "each head stops once its loss has converged"},
+    {"converged-unfrozen", true, false, "only unfrozen cells' heads stop early"},
+};
+// The entry named `name`; nullptr when there is none.
+const TpaStopRule* find_tpa_stop_rule(std::string_view name);
+// Whether rule `name` may end any head early (false for "fixed" and for unknown names).
+bool tpa_stop_may_end_early(std::string_view name);
+// Every rule for messages: "\"fixed\" (every epoch, the paper's), … or \"converged-unfrozen\" (…)".
+std::string tpa_stop_rule_list();
 
 }  // namespace sirl

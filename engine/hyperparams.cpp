@@ -218,7 +218,8 @@ std::string describe(const Hyper& h) {
 
 StopRule tpa_stop_rule(const Hyper& h, bool frozen) {
   StopRule r;
-  r.converged = h.tpa_stop == "converged" || (h.tpa_stop == "converged-unfrozen" && !frozen);
+  const TpaStopRule* rule = find_tpa_stop_rule(h.tpa_stop);
+  r.converged = rule && (frozen ? rule->stops_frozen : rule->stops_unfrozen);
   r.min_epochs = h.tpa_stop_min_epochs;
   r.rel_tol = frozen ? h.tpa_stop_frozen_rel_tol : h.tpa_stop_rel_tol;
   return r;
@@ -264,12 +265,8 @@ void validate(const Hyper& h) {
         h.vae_elbo + "\"");
   if (h.pref_l2 < 0) fail("pref.l2 must be >= 0");
   if (h.tpa_l2 < 0) fail("tpa.l2 must be >= 0");
-  if (h.tpa_stop != "fixed" && h.tpa_stop != "converged" && h.tpa_stop != "converged-unfrozen")
-    fail(
-        "tpa.stop must be \"fixed\" (every epoch, the paper's), \"converged\" (each head "
-        "stops once its loss has converged) or \"converged-unfrozen\" (only unfrozen cells' "
-        "heads stop early), got \"" +
-        h.tpa_stop + "\"");
+  if (!find_tpa_stop_rule(h.tpa_stop))
+    fail("tpa.stop must be " + tpa_stop_rule_list() + ", got \"" + h.tpa_stop + "\"");
   if (h.tpa_stop_min_epochs < 2) fail("tpa.stop_min_epochs must be >= 2");
   if (!(h.tpa_stop_rel_tol > 0 && h.tpa_stop_rel_tol < 1))
     fail("tpa.stop_rel_tol must be in (0, 1)");

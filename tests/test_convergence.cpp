@@ -3,9 +3,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "engine/convergence.h"
+#include "engine/hyperparams.h"
 
 namespace sirl {
 namespace {
@@ -59,6 +62,45 @@ TEST(Convergence, AConvergedRuleStopsAtTheFirstConvergedEpochAfterItsMinimum) {
   EXPECT_TRUE(stops_after(rule, slope.data(), 100));
   rule.rel_tol = 0.001;
   EXPECT_FALSE(stops_after(rule, slope.data(), 100));
+}
+
+}  // namespace
+}  // namespace sirl
+
+namespace sirl {
+namespace {
+
+// Each declared tpa.stop rule is accepted by the hyper-parameters' check and gives each mode's
+// heads the StopRule its entry says, at that mode's tolerance; an unknown name is refused with
+// every declared name in the message.
+TEST(Convergence, EveryDeclaredTpaStopRuleValidatesAndStopsTheModesItNames) {
+  for (const TpaStopRule& entry : kTpaStopRules) {
+    Hyper h = paper_hyper("grid");
+    h.tpa_stop = entry.name;
+    h.tpa_stop_rel_tol = 0.02;
+    h.tpa_stop_frozen_rel_tol = 0.005;
+    EXPECT_NO_THROW(validate(h)) << entry.name;
+    EXPECT_EQ(tpa_stop_rule(h, false).converged, entry.stops_unfrozen) << entry.name;
+    EXPECT_EQ(tpa_stop_rule(h, true).converged, entry.stops_frozen) << entry.name;
+    EXPECT_EQ(tpa_stop_rule(h, false).rel_tol, 0.02);
+    EXPECT_EQ(tpa_stop_rule(h, true).rel_tol, 0.005);
+    EXPECT_EQ(tpa_stop_may_end_early(entry.name), entry.stops_unfrozen || entry.stops_frozen);
+  }
+  EXPECT_FALSE(tpa_stop_may_end_early("fixed"));
+  EXPECT_FALSE(tpa_stop_may_end_early("sometimes"));
+  Hyper h = paper_hyper("grid");
+  h.tpa_stop = "sometimes";
+  try {
+    validate(h);
+    ADD_FAILURE() << "an undeclared rule was accepted";
+  } catch (const std::invalid_argument& e) {
+    const std::string m = e.what();
+    for (const TpaStopRule& entry : kTpaStopRules)
+      EXPECT_NE(m.find(std::string("\"") + entry.name + "\" (" + entry.doc + ")"),
+                std::string::npos)
+          << m;
+    EXPECT_NE(m.find("got \"sometimes\""), std::string::npos) << m;
+  }
 }
 
 }  // namespace
