@@ -192,16 +192,19 @@ ModelCurves run_model_epochs(int64_t n, int epochs, int batch, std::vector<Rng>&
 
 // One model (run_model_epochs with R = 1, one epoch a stretch): step(rows, b) trains on the b
 // example indices rows[0..b) and returns that batch's mean loss. Returns each epoch's mean loss
-// (empty when n = 0). at_fixed_point(done) as EpochLoopOptions' for this model.
+// (empty when n = 0). at_fixed_point(done) and stop as EpochLoopOptions' for this model (a stopped
+// model's curve is NaN from its stop on).
 template <typename Step>
 std::vector<float> run_epochs(int64_t n, int epochs, int batch, Rng& rng, Step&& step,
                               const ResumableState* resume = nullptr,
-                              const std::function<bool(int)>& at_fixed_point = {}) {
+                              const std::function<bool(int)>& at_fixed_point = {},
+                              const StopRule& stop = {}) {
   if (n <= 0) return {};
   std::vector<Rng> rngs{rng};
   EpochLoopOptions opt;
   opt.resume = resume;
   opt.stretch_steps = 0;
+  opt.stop = stop;
   if (at_fixed_point) opt.at_fixed_point = [&](int, int done) { return at_fixed_point(done); };
   ModelCurves run = run_model_epochs(
       n, epochs, batch, rngs,

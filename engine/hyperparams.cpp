@@ -44,6 +44,9 @@ void for_each_field(H& h, F&& f) {
   f("vae.standardize", h.vae_standardize);
   schedule("pref", h.pref);
   f("pref.l2", h.pref_l2);
+  f("pref.stop", h.pref_stop);
+  f("pref.stop_min_epochs", h.pref_stop_min_epochs);
+  f("pref.stop_rel_tol", h.pref_stop_rel_tol);
   schedule("tpa", h.tpa);
   f("tpa.hidden", h.tpa_hidden);
   f("tpa.l2", h.tpa_l2);
@@ -264,6 +267,14 @@ void validate(const Hyper& h) {
         "over inputs), got \"" +
         h.vae_elbo + "\"");
   if (h.pref_l2 < 0) fail("pref.l2 must be >= 0");
+  if (h.pref_stop != "fixed" && h.pref_stop != "converged")
+    fail(
+        "pref.stop must be \"fixed\" (every epoch, the paper's) or \"converged\" (the "
+        "training ends once its loss has converged), got \"" +
+        h.pref_stop + "\"");
+  if (h.pref_stop_min_epochs < 2) fail("pref.stop_min_epochs must be >= 2");
+  if (!(h.pref_stop_rel_tol > 0 && h.pref_stop_rel_tol < 1))
+    fail("pref.stop_rel_tol must be in (0, 1)");
   if (h.tpa_l2 < 0) fail("tpa.l2 must be >= 0");
   if (!find_tpa_stop_rule(h.tpa_stop))
     fail("tpa.stop must be " + tpa_stop_rule_list() + ", got \"" + h.tpa_stop + "\"");

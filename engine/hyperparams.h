@@ -45,6 +45,13 @@ struct Hyper {
   bool vae_standardize = true;
   TrainSchedule pref{5000, 32, {0.01, 1.0}};  // MultiPref-K and SinglePref
   double pref_l2 = 10;
+  // When a preference φ's training ends: "fixed" runs pref.epochs (the paper's protocol);
+  // "converged" ends it at the first epoch e >= pref.stop_min_epochs at which its training loss
+  // (shared φ and its K heads) satisfies check_convergence at pref.stop_rel_tol; pref.epochs is the
+  // cap. Its test is written down in docs/stopping-rule.md, before any run.
+  std::string pref_stop = "fixed";
+  int pref_stop_min_epochs = 500;
+  double pref_stop_rel_tol = 0.01;
   TrainSchedule tpa{500, 64, {0.001, 1.0}};  // the TPA reward heads
   std::vector<int> tpa_hidden{128, 128};
   double tpa_l2 = 10;

@@ -22,8 +22,9 @@ struct Representation {
   // memory for inspection; not part of a task's record (FPE and TPA use φ alone).
   std::vector<float> heads;
   double train_flops = 0;  // multiply-adds ×2 spent training (excluding VAE pre-training)
-  // What the epochs skipped at a fixed point would have cost (SIRL's exact skip,
-  // engine/train_sirl.cpp): train_flops + skipped_flops is the protocol's count.
+  // What the epochs not run would have cost (SIRL's exact skip at a fixed point,
+  // engine/train_sirl.cpp; a preference φ stopped by pref.stop): train_flops + skipped_flops is
+  // the protocol's count.
   double skipped_flops = 0;
   // φ(Ξ) [T, d] when it is known: a learned φ's embedding of Ξ as its task stored it, or an
   // external representation's as handed in (then params are empty and shape is {input width, d},

@@ -1,5 +1,7 @@
 // The preference baselines (paper §4.3: MultiPref-K, SinglePref): a shared φ and one linear
 // reward head per human, trained on N preference pairs of the method's own set (N/K per human).
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "datasets/query_bundle.h"
@@ -51,7 +53,19 @@ void train_preferences(const Dataset& d, const QueryBundle& bundle, const Method
             t, 0, adam_begin_step(s.adam, t.adam), K, d.inputs.data(), pairs.data(), label.data(),
             human.data(), b, float(cfg.hyper.pref_l2), ex.threads);
       },
-      &resume);
+      &resume, {},
+      StopRule{cfg.hyper.pref_stop == "converged", cfg.hyper.pref_stop_min_epochs,
+               cfg.hyper.pref_stop_rel_tol});
+  // A training that stopped by pref.stop after k epochs is the fixed run of k epochs: its curve
+  // holds the k epochs it ran, and the protocol's count adds the epochs it did not (every epoch
+  // has the same batches, so the same FLOPs).
+  const auto ran = std::find_if(rep.loss_curve.begin(), rep.loss_curve.end(),
+                                [](float x) { return std::isnan(x); });
+  if (ran != rep.loss_curve.end()) {
+    const double k = double(ran - rep.loss_curve.begin());
+    rep.skipped_flops = rep.train_flops / k * (double(s.epochs) - k);
+    rep.loss_curve.erase(ran, rep.loss_curve.end());
+  }
   rep.params.assign(t.params.begin(), t.params.begin() + P);  // φ; the heads on the side
   rep.heads.assign(t.params.begin() + P, t.params.end());
 }

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <initializer_list>
+#include <sstream>
+#include <string>
 #include <string_view>
 
 #include "datasets/environments.h"
@@ -208,8 +210,20 @@ bool reads_vae(const Variant& v) {
 // method's schedule, and the VAE's when it starts from (or is) the VAE's encoder.
 std::string rep_hyper(const Variant& v, const Hyper& h) {
   std::string s = hyper_lines(h, {"phi.", "precision"});
-  if (const char* own = method_spec(v.method).training.hyper_prefix; *own)
-    s += hyper_lines(h, {own});
+  if (const char* own = method_spec(v.method).training.hyper_prefix; *own) {
+    std::string lines = hyper_lines(h, {own});
+    // Under the paper's "fixed" schedule a preference φ's bits do not depend on the stop rule's
+    // minimum and tolerance: its digest leaves the rule out, as before the rule existed, so
+    // results computed then are still found.
+    if (h.pref_stop == "fixed") {
+      std::string kept, line;
+      std::istringstream in(lines);
+      while (std::getline(in, line))
+        if (!line.starts_with("pref.stop")) kept += line + "\n";
+      lines = kept;
+    }
+    s += lines;
+  }
   if (reads_vae(v)) s += hyper_lines(h, {"vae."});
   return s;
 }

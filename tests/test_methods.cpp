@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/convergence.h"
 #include "engine/fpe.h"
 #include "engine/methods.h"
 #include "engine/train_step.h"
@@ -244,6 +245,44 @@ TEST(Methods, SirlSkipsToTheEndAtAFixedPointWithTheFullRunsBits) {
   // A training that never reaches its fixed point (too few epochs) runs every epoch.
   skip.hyper.sirl.epochs = 20;
   EXPECT_EQ(train_representation(w.d, w.bundle, skip, 6).skipped_flops, 0.0);
+}
+
+// pref.stop = "converged": a preference φ ends at the first epoch from its minimum at which its own
+// loss curve has converged, and is then bit for bit the φ (and curve) of a fixed run of that many
+// epochs; executed + skipped FLOPs are the full schedule's. The stopping epoch is checked against
+// the rule applied by hand to the full run's curve.
+TEST(Methods, APreferencePhiStoppedByItsRuleIsTheFixedRunsPhiAtItsStoppingEpoch) {
+  const World& w = world();
+  Hyper h = fast_hyper();
+  h.pref.epochs = 200;
+  MethodConfig full{Method::multipref10, 500, false, h};
+  const Representation ref = train_representation(w.d, w.bundle, full, 7);
+  MethodConfig stop = full;
+  stop.hyper.pref_stop = "converged";
+  stop.hyper.pref_stop_min_epochs = 20;
+  stop.hyper.pref_stop_rel_tol = 0.05;
+  // Where the rule says the full run's curve converges first (at or after the minimum).
+  int want = h.pref.epochs;
+  for (int e = stop.hyper.pref_stop_min_epochs; e < h.pref.epochs; ++e) {
+    const std::vector<float> so_far(ref.loss_curve.begin(), ref.loss_curve.begin() + e);
+    if (check_convergence(so_far, 0.05).converged) {
+      want = e;
+      break;
+    }
+  }
+  ASSERT_LT(want, h.pref.epochs) << "the setting no longer converges before its cap";
+  const Representation r = train_representation(w.d, w.bundle, stop, 7);
+  ASSERT_EQ(int(r.loss_curve.size()), want);
+  MethodConfig shorter = full;
+  shorter.hyper.pref.epochs = want;
+  const Representation cut = train_representation(w.d, w.bundle, shorter, 7);
+  EXPECT_EQ(r.params, cut.params);
+  EXPECT_EQ(r.heads, cut.heads);
+  EXPECT_EQ(r.loss_curve, cut.loss_curve);
+  EXPECT_EQ(r.train_flops, cut.train_flops);
+  EXPECT_NEAR(r.train_flops + r.skipped_flops, ref.train_flops, 1e-9 * ref.train_flops);
+  EXPECT_EQ(ref.skipped_flops, 0.0);
+  EXPECT_EQ(cut.skipped_flops, 0.0);
 }
 
 // ∂L/∂params of the multi-head step against finite differences of an independent double

@@ -121,6 +121,46 @@ TEST(TaskConfig, ATaskRunsWithWhatWasCompiledWhenItWasPlanned) {
   EXPECT_GT(compared, 0);
 }
 
+// A preference φ's digest leaves pref.stop's minimum and tolerance out under the paper's "fixed"
+// schedule (they change no bit: results stored before the rule existed are still found), and
+// names the rule and both values once it can end training.
+TEST(TaskConfig, APreferencePhisDigestNamesItsStopRuleOnlyWhenTheRuleCanEndIt) {
+  std::string text = test::kSmallProfile;
+  const Profile fixed = parse_profile(text, "t.toml");
+  text.replace(text.find("[hyper.grid]\n"), 13,
+               "[hyper.grid]\n\"pref.stop\" = \"converged\"\n\"pref.stop_min_epochs\" = 50\n");
+  const Profile converged = parse_profile(text, "t.toml");
+  int reps = 0;
+  for (const Profile* p : {&fixed, &converged})
+    for (const Task& t : make_plan(*p).tasks) {
+      if (!(t.kind == rep_kind())) continue;
+      const std::string& s = t.compiled().settings;
+      if (t.variant.method != Method::multipref10) {
+        EXPECT_EQ(s.find("pref.stop"), std::string::npos) << t.key << "\n" << s;
+        continue;
+      }
+      ++reps;
+      if (p == &fixed) {
+        EXPECT_EQ(s.find("pref.stop"), std::string::npos) << s;
+        EXPECT_NE(s.find("pref.epochs = "), std::string::npos) << s;
+      } else {
+        EXPECT_NE(s.find("pref.stop = converged\n"), std::string::npos) << s;
+        EXPECT_NE(s.find("pref.stop_min_epochs = 50\n"), std::string::npos) << s;
+        EXPECT_NE(s.find("pref.stop_rel_tol = "), std::string::npos) << s;
+      }
+    }
+  EXPECT_GT(reps, 0);
+  std::string bad = test::kSmallProfile;
+  bad.replace(bad.find("[hyper.grid]\n"), 13, "[hyper.grid]\n\"pref.stop\" = \"sometimes\"\n");
+  try {
+    parse_profile(bad, "t.toml");
+    ADD_FAILURE() << "an unknown pref.stop was accepted";
+  } catch (const ProfileError& e) {
+    EXPECT_NE(std::string(e.what()).find("pref.stop must be \"fixed\""), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(TaskConfig, ATaskNotPlannedByAddTaskHasNoConfigurationAndAStudyTaskNoHyperParameters) {
   Task t;
   t.key = "grid/s0/vae";
