@@ -77,7 +77,8 @@ HYPER_TYPES = {
     **{f"{p}.{k}": t for p in ("sirl", "vae", "pref", "tpa")
        for k, t in (("epochs", INT), ("batch", INT), ("lr", FLOAT), ("lr_decay", FLOAT))},
     "sirl.margin": FLOAT, "vae.kl_weight": FLOAT, "vae.elbo": TEXT, "vae.standardize": FLAG,
-    "pref.l2": FLOAT, "tpa.hidden": INTS, "tpa.l2": FLOAT, "tpa.stop": TEXT,
+    "pref.l2": FLOAT, "pref.stop": TEXT, "pref.stop_min_epochs": INT, "pref.stop_rel_tol": FLOAT,
+    "tpa.hidden": INTS, "tpa.l2": FLOAT, "tpa.stop": TEXT,
     "tpa.stop_min_epochs": INT, "tpa.stop_rel_tol": FLOAT, "tpa.stop_frozen_rel_tol": FLOAT,
     "precision": TEXT,
 }
