@@ -31,6 +31,8 @@ SIRL = os.environ["SIRL"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
 sys.path.insert(0, os.path.join(SRC, "python"))
 import sirl_bench  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
 
 REAL_SMOKE = os.path.join(SRC, "configs", "smoke.toml")
 SMOKE = os.path.join(SRC, "tests", "data", "engine-test.toml")
@@ -110,14 +112,18 @@ with tempfile.TemporaryDirectory() as tmp:
     # smoke's real widths (Grid's 128-wide layers: several GEMM slices per product).
     s1, s2 = os.path.join(tmp, "smoke1.h5"), os.path.join(tmp, "smoke2.h5")
     run("run", REAL_SMOKE, "--out", s1, "--threads", "1", "--quiet")
-    run("run", REAL_SMOKE, "--out", s2, "--threads", "2", "--quiet")
+    # The --threads 2 side: the smoke fixture's file (`sirl run smoke --threads 2 --quiet` from an
+    # empty cache, by this binary), or computed here without the fixture.
+    if not sirl_testing.copy_fixture("smoke", s2, with_cache=False):
+        run("run", REAL_SMOKE, "--out", s2, "--threads", "2", "--quiet")
     same(tables(s1), tables(s2), "smoke: --threads 1 and --threads 2 give identical tables")
     same_runs(s1, s2, "smoke: --threads 1 and --threads 2 give identical files")
 
     one = os.path.join(tmp, "one.h5")
     two = os.path.join(tmp, "two.h5")
     run("run", SMOKE, "--out", one, "--threads", "1", "--quiet")
-    run("run", SMOKE, "--out", two, "--threads", "2", "--quiet")
+    if not sirl_testing.copy_fixture("engine-test", two, with_cache=False):  # as s2 above
+        run("run", SMOKE, "--out", two, "--threads", "2", "--quiet")
     ref = tables(one)
     with h5py.File(one, "r") as f:
         n_all = int(f.attrs["tasks_total"])
@@ -403,7 +409,8 @@ with tempfile.TemporaryDirectory() as tmp:
     print("ok: another profile (tpa.epochs) on the same cache computes its TPA cells only:",
           out.strip())
     foreign = os.path.join(tmp, "foreign.h5")
-    run("run", other, "--out", foreign, "--shard", "1/2", "--quiet")
+    # Its tasks are all in `cache` (other.h5 above): the shard is written, nothing computed.
+    run("run", other, "--out", foreign, "--shard", "1/2", "--quiet", "--cache", cache)
     p = run("merge", os.path.join(tmp, "bad.h5"), shards[0], foreign, check=False)
     assert p.returncode == 2 and "profile" in p.stderr, p.stderr
     print("ok: merging shards of different profiles is refused")

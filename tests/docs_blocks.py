@@ -18,6 +18,12 @@ A block that cannot run here says why on the line before its fence:
 and one that needs a file made first names the command:
     <!-- docs-test: setup: sirl dataset --env grid --out grid.h5 -->
 Skipped blocks are listed by file and line in the output; a skip without a reason fails.
+
+The blocks are checked by their exit codes only, so the work folder starts with what the smoke
+fixture holds (tests/make_smoke_fixture.py, $SIRL_SMOKE_FIXTURE): out/smoke.h5 with its .sum and
+cache, and a copy of smoke's task cache wherever a block runs smoke into another output (SEEDED);
+their runs reuse those tasks instead of training smoke again. Without the fixture (run by hand)
+the folder starts empty and every block computes.
 """
 import os
 import re
@@ -27,9 +33,19 @@ import sys
 import tempfile
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
 SIRL_BUILD = os.environ["SIRL_BUILD_DIR"]
 SRC = os.environ["SIRL_SOURCE_DIR"]
 LINKED = ["configs", "examples", "bench", "python", "results", "report", "scripts", "docs"]
+# (results file or None, task cache) seeded from the smoke fixture, relative to the work folder:
+# README's and docs/running.md's out/smoke.h5; the caches of README's out/q.h5 (docs/running.md's
+# my-smoke run shares it), docs/cluster.md's shards, docs/running.md's setup shards, and README's
+# `sirl evaluate … --name torch_sirl` (its default output out/smoke+torch_sirl.h5).
+SEEDED = [("out/smoke.h5", "out/smoke.h5.tasks"), (None, "out/q.h5.tasks"),
+          (None, "out/c/tasks"), (None, "shard0.h5.tasks"), (None, "shard1.h5.tasks"),
+          (None, "out/smoke+torch_sirl.h5.tasks")]
 MARK = re.compile(r"<!--\s*docs-test:\s*(skip|setup):\s*(.*?)\s*-->\s*$")
 
 
@@ -105,6 +121,11 @@ def main():
         os.symlink(SIRL_BUILD, os.path.join(work, "build", "release"))
         for d in LINKED:
             os.symlink(os.path.join(SRC, d), os.path.join(work, d))
+        if os.environ.get("SIRL_SMOKE_FIXTURE"):  # without it, every block computes
+            os.makedirs(os.path.join(work, "out"))
+            for h5, cache in SEEDED:
+                sirl_testing.copy_fixture("smoke", h5 and os.path.join(work, h5),
+                                          with_file=bool(h5), cache_dest=os.path.join(work, cache))
         env = dict(os.environ, PATH=os.path.join(prefix, "bin") + ":" + os.environ["PATH"],
                    PYTHONPATH=os.path.join(prefix, "share", "sirl-bench", "python"),
                    MPLBACKEND="Agg", SIRL_PYTHON="/usr/bin/python3")

@@ -27,6 +27,7 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
 from results_frame import reframe  # noqa: E402
 
 import h5py
@@ -612,7 +613,15 @@ with tempfile.TemporaryDirectory() as tmp:
     check_synthetic(tmp)
     check_paths(tmp)
     full = os.path.join(tmp, "smoke.h5")
-    sh(SIRL, "run", SMOKE, "--out", full, "--quiet")
+    # The engine-test fixture's file and a copy of its cache (the runs below reuse what they
+    # share with it); without the fixture, computed here.
+    if sirl_testing.copy_fixture("engine-test", full, with_file=True, with_cache=False):
+        cache = os.path.join(tmp, "engine-test.tasks")
+        sirl_testing.copy_fixture("engine-test", with_file=False, cache_dest=cache)
+        reuse = ["--cache", cache]
+    else:
+        sh(SIRL, "run", SMOKE, "--out", full, "--quiet")
+        reuse = []
     check_smoke(full, tmp)
 
     # `sirl show`: the file summarised, its verdicts those of the report beside it.
@@ -650,7 +659,7 @@ with tempfile.TemporaryDirectory() as tmp:
     with open(over, "w") as f:
         f.write(f'extends = "{SMOKE}"\n[jaco]\nablation_M = [80]\n')
     ov = os.path.join(tmp, "override.h5")
-    sh(SIRL, "run", over, "--out", ov, "--quiet")
+    sh(SIRL, "run", over, "--out", ov, "--quiet", *reuse)
     # Links planted at the names the figures take (issue 65: savefig and open() wrote through
     # them): each is replaced by the figure, its target left as it was.
     os.makedirs(os.path.join(tmp, "ov"))
@@ -674,7 +683,7 @@ with tempfile.TemporaryDirectory() as tmp:
     print("ok: Fig. 7 draws every ablation cell of the file, per environment:", fig7)
 
     part = os.path.join(tmp, "shard.h5")
-    sh(SIRL, "run", SMOKE, "--out", part, "--shard", "0/2", "--quiet")
+    sh(SIRL, "run", SMOKE, "--out", part, "--shard", "0/2", "--quiet", *reuse)
     sh("/usr/bin/python3", PLOT, part, "--out", os.path.join(tmp, "part"))
     rep = check_outputs(os.path.join(tmp, "part"))
     assert "missing" in rep or "not evaluated" in rep or "n/a" in rep, rep

@@ -5,7 +5,8 @@
 falling back to the build's source folder), from an unrelated working folder:
 - `sirl run --help` lists the bundled profiles; `sirl reproduce --profile smoke` runs, draws the
   figures and writes the report, with the figure scripts run by the interpreter $SIRL_PYTHON
-  names (a wrapper that records it was used);
+  names (a wrapper that records it was used); its task cache is a copy of the smoke fixture's
+  (tests/make_smoke_fixture.py), so it trains nothing when the fixture is there;
 - the installed reader imports from P/share/sirl-bench/python and opens the results file;
 - every relative link of the installed README (docs, examples, CHANGELOG, ...) resolves inside
   P/share/sirl-bench, and so does every link between the installed docs pages;
@@ -17,6 +18,9 @@ import shutil
 import subprocess
 import sys
 import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
 
 SIRL_BUILD = os.environ["SIRL_BUILD_DIR"]
 
@@ -71,6 +75,9 @@ def main():
         if "quick" not in h.stdout or "smoke" not in h.stdout:
             fail(f"`sirl run --help` does not list the bundled profiles:\n{h.stdout[:800]}")
         out = os.path.join(work, "smoke.h5")
+        # The smoke fixture's task cache as the run's (OUT.tasks): the installed binary plans,
+        # writes the results file and draws from it without training again.
+        sirl_testing.copy_fixture("smoke", out, with_file=False)
         r = subprocess.run([sirl, "reproduce", "--profile", "smoke", "--out", out, "--figures",
                             os.path.join(work, "figs"), "--no-study"],
                            capture_output=True, text=True, env=env, cwd=work, timeout=900)

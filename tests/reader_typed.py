@@ -511,7 +511,8 @@ def check_xarray(smoke):
 def main():
     with tempfile.TemporaryDirectory() as tmp:
         smoke, ds = os.path.join(tmp, "smoke.h5"), os.path.join(tmp, "ds.h5")
-        sirl("run", "smoke", "--out", smoke, "--threads", "2", "--quiet")
+        if not sirl_testing.copy_fixture("smoke", smoke, with_cache=False):
+            sirl("run", "smoke", "--out", smoke, "--threads", "2", "--quiet")
         sirl("dataset", "--profile", "smoke", "--out", ds)
         prof = profile()
         d, axes = check_dataset_file(ds, prof)

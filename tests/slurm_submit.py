@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import sirl_testing  # noqa: E402
 from one_node_slurm import OneNodeSlurm, missing_programs  # noqa: E402
 
 SIRL = os.environ["SIRL"]
@@ -92,8 +93,9 @@ def wait_for(what, predicate, s, timeout=300):
 
 
 def array_with_a_failed_shard(s, tmp):
-    single = tmp / "single.h5"
-    sirl(s, "run", ENGINE_TEST, "--out", str(single), "--threads", "2", "--quiet")
+    single = tmp / "single.h5"  # the reference: the engine-test fixture's file, or computed
+    if not sirl_testing.copy_fixture("engine-test", str(single), with_cache=False):
+        sirl(s, "run", ENGINE_TEST, "--out", str(single), "--threads", "2", "--quiet")
     sub = tmp / "array"
     (sub / "shard-1.h5").mkdir(parents=True)  # shard 1's output is a folder: `sirl run` refuses it
     p = sirl(s, "submit", ENGINE_TEST, "--shards", "3", "--cpus-per-task", "1", "--out", str(sub),
