@@ -234,7 +234,7 @@ MUTANTS = [
     ("results/external_embeddings.cpp", "  if (digest != xxh3)", "  if (false)",
      "ctest:external_method", "an embeddings file that changed is read"),
     # the task cache, task digests and hyper-parameter axes (0.10.0)
-    ("experiment/simulation_tasks.cpp", '    s += hyper_lines(h, {own});', "      ;",
+    ("experiment/simulation_tasks.cpp", '    std::string lines = hyper_lines(h, {own});', "    std::string lines;",
      "ctest:incremental_runs", "a trained φ's digest blind to its method's settings (a stale φ reused)"),
     ("experiment/task_settings.cpp", '  return "queries" + settings_text(q, kQueriesSettings) + " attend=" + exact_number(q.attend) +',
      '  return std::string("queries") + " attend=" + exact_number(q.attend) +', "TaskDigest.*",
