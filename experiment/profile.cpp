@@ -4,6 +4,7 @@
 #include "experiment/profile_settings.h"
 #include "experiment/suggest.h"
 
+#include "engine/convergence.h"
 #include "engine/method_catalog.h"
 
 #include "experiment/install_paths.h"
@@ -286,11 +287,23 @@ void read_setting(const Reader& r, const toml::table& t, const std::string&, con
 }
 void read_setting(const Reader& r, const toml::table& t, const std::string& table,
                   const SettingInfo& k, bool& v) {
+  if (!k.words[0]) {  // a TOML true/false
+    if (const toml::node* n = t.get(k.key)) {
+      if (!n->is_boolean()) r.fail(n, std::string(k.key) + " must be true or false");
+      v = *n->value<bool>();
+    }
+    return;
+  }
   const std::string w = r.string(t, k.key, k.words[v ? 1 : 0]);
   if (w != k.words[0] && w != k.words[1])
     r.fail(t.get(k.key),
            table + " " + k.key + " must be \"" + k.words[0] + "\" or \"" + k.words[1] + "\"");
   v = w == k.words[1];
+}
+// A list of integers, each in the declared range; an empty list is allowed.
+void read_setting(const Reader& r, const toml::table& t, const std::string&, const SettingInfo& k,
+                  std::vector<int64_t>& v) {
+  if (t.get(k.key)) v = r.int_list(t, k.key, int64_t(k.lo), int64_t(k.hi), false);
 }
 
 // Every key of a declared section, for only_keys.
@@ -327,19 +340,30 @@ std::string key_rows(Settings settings, const S& defaults) {
   settings(defaults, [&](const SettingInfo& k, const auto& field) {
     using T = std::decay_t<decltype(field)>;
     std::string type, accepted, def;
-    if constexpr (std::is_same_v<T, std::string>) {
+    if constexpr (std::is_same_v<T, std::vector<int64_t>>) {
+      type = "integer list";
+      accepted = "each " + plain(k.lo) + " – " + plain(k.hi);
+    } else if constexpr (std::is_same_v<T, std::string>) {
       type = "string";
       accepted = "—";
       def = "`\"" + field + "\"`";
     } else if constexpr (std::is_same_v<T, bool>) {
-      type = "string";
-      accepted = std::string("`\"") + k.words[0] + "\"`, `\"" + k.words[1] + "\"`";
-      def = std::string("`\"") + k.words[field ? 1 : 0] + "\"`";
+      if (!k.words[0]) {
+        type = "boolean";
+        accepted = "`true`, `false`";
+        def = field ? "`true`" : "`false`";
+      } else {
+        type = "string";
+        accepted = std::string("`\"") + k.words[0] + "\"`, `\"" + k.words[1] + "\"`";
+        def = std::string("`\"") + k.words[field ? 1 : 0] + "\"`";
+      }
     } else {
       type = std::is_integral_v<T> ? "integer" : "number";
       accepted = plain(k.lo) + " – " + plain(k.hi);
       def = "`" + plain(double(field)) + "`";
+      if (k.axis) type += " or list";
     }
+    if (k.default_text) def = k.default_text;
     out += "| `" + std::string(k.key) + "` | " + type + " | " + accepted + " | " + def + " | " +
            k.doc + " |\n";
   });
@@ -456,20 +480,25 @@ void parse_tpa_stop(const Reader& r, const toml::table& tpa, Profile& p) {
   }
 }
 
-// [tpa] protocols = ["paper", "linear"]: one or both, each once.
+// [tpa] protocols = ["paper", "linear"]: one or more of kTpaProtocols, each once.
 void parse_tpa_protocols(const Reader& r, const toml::table& tpa, Profile& p) {
   const toml::node* n = tpa.get("protocols");
   if (!n) return;
-  const char* expect =
-      "[tpa] protocols must be a non-empty array of \"paper\" (the paper's reward head) and "
-      "\"linear\" (linear evaluation), each at most once";
+  std::string expect = "[tpa] protocols must be a non-empty array of ";
+  for (size_t i = 0; i < kTpaProtocols.size(); ++i)
+    expect += std::string(i == 0                          ? ""
+                          : i + 1 == kTpaProtocols.size() ? " and "
+                                                          : ", ") +
+              "\"" + kTpaProtocols[i].name + "\" (" + kTpaProtocols[i].doc + ")";
+  expect += ", each at most once";
   const toml::array* a = n->as_array();
   if (!a || a->empty()) r.fail(n, expect);
   p.tpa_protocols.clear();
   for (auto&& e : *a) {
     const std::optional<std::string> s = e.value<std::string>();
-    if (!e.is_string() || (*s != "paper" && *s != "linear") || p.runs_protocol(*s))
-      r.fail(&e, expect);
+    const bool known = s && std::any_of(kTpaProtocols.begin(), kTpaProtocols.end(),
+                                        [&](const ProtocolInfo& c) { return *s == c.name; });
+    if (!known || p.runs_protocol(*s)) r.fail(&e, expect);
     p.tpa_protocols.push_back(*s);
   }
 }
@@ -496,8 +525,7 @@ struct TomlDataTable : DataTableReader {
 // Each environment's table ([grid], [jaco], …): the grid's axes, and where the environment owns
 // a data table, the keys it reads itself (EnvSpec::read_data).
 void parse_data_tables(Reader& r, const toml::table& root, EnvConfig& data) {
-  const std::set<std::string> axis_keys{"seeds",      "fpe_N",      "tpa_N",        "tpa_M",
-                                        "ablation_N", "ablation_M", "store_weights"};
+  const std::set<std::string> axis_keys = setting_keys(kEnvTableSettings, EnvAxes{});
   for (const auto& e : environments()) {
     const auto* t = r.table(root, e.name.c_str(), false);
     if (!t) continue;
@@ -528,43 +556,35 @@ void parse_queries(Reader& r, const toml::table& root, Profile& p) {
   }
   const auto* t = r.table(root, "teacher", false);
   if (!t) return;
-  r.only_keys(*t, "[teacher]", {"beta", "mistake", "skip", "equal", "attend"});
-  const double inf = std::numeric_limits<double>::infinity();
-  struct Axis {
+  r.only_keys(*t, "[teacher]", setting_keys(kTeacherSettings, p.queries));
+  // A scalar sets the main teacher; a list (for an axis key) keeps the main teacher's default for
+  // that key and makes each listed value one teacher of a noise axis (its cells: [robustness]).
+  struct NoiseAxis {
     const char* key;
-    double def, lo, hi;
+    double main;  // the main teacher's value: the axis's reference point, not a noisy teacher
+    std::vector<double> values;
   };
-  // A scalar sets the main teacher; a list keeps the main teacher's default for that key and
-  // makes each listed value one teacher of a noise axis (its cells: [robustness]).
-  std::vector<std::pair<Axis, std::vector<double>>> lists;
-  std::map<std::string, double> main;
-  for (const Axis& a :
-       {Axis{"beta", inf, 0, inf}, Axis{"mistake", 0, 0, 1}, Axis{"attend", 1, 1e-9, 1}}) {
-    const toml::node* n = t->get(a.key);
-    main[a.key] = a.def;
-    if (!n) continue;
-    if (!n->is_array()) {
-      main[a.key] = r.number_of(*n, n, a.key, a.lo, a.hi);
-      continue;
+  std::vector<NoiseAxis> axes;
+  kTeacherSettings(p.queries, [&](const SettingInfo& k, double& field) {
+    const toml::node* n = t->get(k.key);
+    if (!n) return;
+    if (!k.axis || !n->is_array()) {
+      field = r.number_of(*n, n, k.key, k.lo, k.hi);
+      return;
     }
     std::vector<double> values;
     for (auto&& e : *n->as_array()) {
-      const double v = r.number_of(e, n, a.key, a.lo, a.hi);
+      const double v = r.number_of(e, n, k.key, k.lo, k.hi);
       if (std::find(values.begin(), values.end(), v) != values.end())
-        r.fail(n, std::string(a.key) + ": a value is listed twice");
+        r.fail(n, std::string(k.key) + ": a value is listed twice");
       values.push_back(v);
     }
-    if (values.empty()) r.fail(n, std::string(a.key) + " must not be an empty list");
-    lists.push_back({a, values});
-  }
-  p.queries.teacher.beta = main["beta"];
-  p.queries.teacher.mistake = main["mistake"];
-  p.queries.attend = main["attend"];
-  p.queries.teacher.skip = r.number(*t, "skip", 0, 0, inf);
-  p.queries.teacher.equal = r.number(*t, "equal", 0, 0, inf);
-  for (const auto& [a, values] : lists)
-    for (double v : values) {
-      if (v == a.def) continue;  // the main teacher itself: the axis's reference point
+    if (values.empty()) r.fail(n, std::string(k.key) + " must not be an empty list");
+    axes.push_back({k.key, field, values});
+  });
+  for (const NoiseAxis& a : axes)
+    for (double v : a.values) {
+      if (v == a.main) continue;
       TeacherPoint tp;
       tp.axis = a.key;
       tp.level = v;
@@ -572,9 +592,9 @@ void parse_queries(Reader& r, const toml::table& root, Profile& p) {
       o << a.key << "=" << v;
       tp.tag = o.str();
       tp.queries = p.queries;
-      if (tp.axis == "beta") tp.queries.teacher.beta = v;
-      if (tp.axis == "mistake") tp.queries.teacher.mistake = v;
-      if (tp.axis == "attend") tp.queries.attend = v;
+      kTeacherSettings(tp.queries, [&](const SettingInfo& k, double& field) {
+        if (tp.axis == k.key) field = v;
+      });
       p.robustness.teachers.push_back(tp);
     }
 }
@@ -750,21 +770,8 @@ void parse_env_axes(Reader& r, const toml::table& root, Profile& p) {
     EnvAxes g{p.seeds, p.fpe_N, p.tpa.N, p.tpa.M, p.ablation_N, p.ablation_M};
     g.store_weights = !env_spec(env).sampled;  // JacoRobot's 3.1 M-float networks: off
     if (const auto* t = r.table(root, env.c_str(), false)) {
-      auto axis = [&](const char* key, std::vector<int64_t>& out, int64_t lo, int64_t hi) {
-        // An empty list is allowed here: "this environment runs no such cell".
-        if (t->get(key)) out = r.int_list(*t, key, lo, hi, false);
-      };
-      axis("seeds", g.seeds, 0, 1'000'000'000);
+      read_settings(r, *t, "[" + env + "]", kEnvTableSettings, g);
       if (g.seeds.empty()) r.fail(t->get("seeds"), "seeds must not be empty");
-      axis("fpe_N", g.fpe_N, 1, 10'000'000);
-      axis("tpa_N", g.tpa_N, 1, 10'000'000);
-      axis("tpa_M", g.tpa_M, 1, 10'000'000);
-      axis("ablation_N", g.ablation_N, 1, 10'000'000);
-      axis("ablation_M", g.ablation_M, 1, 10'000'000);
-      if (const toml::node* w = t->get("store_weights")) {
-        if (!w->is_boolean()) r.fail(w, "store_weights must be true or false");
-        g.store_weights = *w->value<bool>();
-      }
     }
     p.axes[env] = g;
   }
@@ -1065,9 +1072,40 @@ Profile parse_profile_table(const toml::table& root, const std::string& text,
 
 }  // namespace
 
+namespace {
+
+// [tpa] protocols and [tpa] stop: the names each accepts (kTpaProtocols, kTpaStopRules).
+std::string protocols_section() {
+  std::string out =
+      "## [tpa] protocols, [tpa] stop\n\n"
+      "`protocols` lists how TPA cells read out a reward (default: every one); `stop` maps a "
+      "method of `[tpa] methods` (or, under an environment's name, a method there) to the rule "
+      "its reward heads stop by (default: the `tpa.stop` hyper-parameter).\n\n"
+      "| key | accepts | what it is |\n|---|---|---|\n";
+  for (const ProtocolInfo& c : kTpaProtocols)
+    out += std::string("| `protocols` | `\"") + c.name + "\"` | " + c.doc + " |\n";
+  for (const TpaStopRule& rule : kTpaStopRules)
+    out += std::string("| `stop` | `\"") + rule.name + "\"` | " + rule.doc + " |\n";
+  return out + "\n";
+}
+
+}  // namespace
+
 std::string profile_keys_markdown() {
   return keys_section("[queries]", "Each seed's query budgets.",
                       key_rows(kQueriesSettings, QueryBundleConfig{})) +
+         keys_section("[teacher]",
+                      "The simulated human who answers every query (the paper's: the perfect "
+                      "oracle). A list for `beta`, `mistake` or `attend` keeps the main teacher's "
+                      "default for that key and adds one noisy teacher per other listed value; "
+                      "`[robustness]` (methods, N, M, frozen, as in `[tpa]`) names their cells.",
+                      key_rows(kTeacherSettings, QueryBundleConfig{})) +
+         keys_section("[<env>] ([grid], [jaco], a file environment's name)",
+                      "The grid's lists for one environment alone (an empty list: no such cell "
+                      "there). The table that holds an environment's data also takes the keys "
+                      "that environment reads (`trajectories`, …; see running.md).",
+                      key_rows(kEnvTableSettings, EnvAxes{})) +
+         protocols_section() +
          keys_section("[active], [active.<env>]",
                       "How an active variant's ensemble asks (`sirl@vote`, `sirl@infogain`); "
                       "`[active.<env>]` overrides `[active]` key by key; pool must be at least "

@@ -24,8 +24,14 @@ struct SettingInfo {
   const char* key;
   double lo = 0, hi = 0;  // integers and numbers: the values accepted
   const char* doc = "";   // what it sets, one line
-  // A true/false field set by one of two words ({false's, true's}); empty for other fields.
+  // A true/false field set by one of two words ({false's, true's}); empty for other fields (a
+  // bool without words is a TOML true/false).
   std::array<const char*, 2> words{};
+  // [teacher]: a list of values, instead of one, makes a noise axis (one teacher per value).
+  bool axis = false;
+  // The default as the reference page states it, where it is not the struct's value (an
+  // environment's lists default to the profile's).
+  const char* default_text = nullptr;
 };
 
 // [queries]: each seed's query budgets.
@@ -78,6 +84,68 @@ inline constexpr auto kStudySettings = [](auto& s, auto&& f) {
                 {"unfrozen", "frozen"}},
     s.random_frozen);
 };
+
+// [teacher]: the main simulated human (datasets/simulated_human.h); a list for an axis key keeps
+// the main teacher's value of that key and makes each listed value one noisy teacher, whose
+// cells [robustness] names.
+inline constexpr auto kTeacherSettings = [](auto& q, auto&& f) {
+  f(SettingInfo{"beta",
+                0,
+                kInfinity,
+                "Boltzmann rationality β (\"inf\": the perfect oracle); a list: a noise axis",
+                {},
+                true},
+    q.teacher.beta);
+  f(
+      SettingInfo{
+          "mistake", 0, 1, "probability of flipping an answer; a list: a noise axis", {}, true},
+      q.teacher.mistake);
+  f(SettingInfo{"skip", 0, kInfinity,
+                "an answer is withheld when its options differ by less than this"},
+    q.teacher.skip);
+  f(SettingInfo{"equal", 0, kInfinity,
+                "near-ties within this are answered as ties (preference 0.5, a coin flip)"},
+    q.teacher.equal);
+  f(SettingInfo{"attend",
+                1e-9,
+                1,
+                "share of the features the teacher perceives (a per-seed subset); a list: a noise "
+                "axis",
+                {},
+                true},
+    q.attend);
+};
+
+// [<env>] ([grid], [jaco], a file environment's name): the grid's lists for that environment
+// alone (an empty list: no such cell there) and whether its weights are kept. The table that holds
+// an environment's data also takes the keys the environment reads itself (EnvSpec::data_keys).
+inline constexpr auto kEnvTableSettings = [](auto& g, auto&& f) {
+  f(SettingInfo{"seeds", 0, 1e9, "the seeds it runs (not empty)", {}, false, "the profile's seeds"},
+    g.seeds);
+  f(SettingInfo{"fpe_N", 1, 1e7, "FPE's N", {}, false, "[fpe] N"}, g.fpe_N);
+  f(SettingInfo{"tpa_N", 1, 1e7, "TPA's N", {}, false, "[tpa] N"}, g.tpa_N);
+  f(SettingInfo{"tpa_M", 1, 1e7, "TPA's M", {}, false, "[tpa] M"}, g.tpa_M);
+  f(SettingInfo{"ablation_N", 1, 1e7, "the ablation's N", {}, false, "[ablation] N"}, g.ablation_N);
+  f(SettingInfo{"ablation_M", 1, 1e7, "the ablation's M", {}, false, "[ablation] M"}, g.ablation_M);
+  f(SettingInfo{"store_weights",
+                0,
+                0,
+                "keep the networks' weights in the results file",
+                {},
+                false,
+                "true; false for sampled environments (JacoRobot's 3.1 M-float φ)"},
+    g.store_weights);
+};
+
+// [tpa] protocols: the ways a TPA cell reads out a reward from φ, each listed at most once.
+struct ProtocolInfo {
+  const char* name;
+  const char* doc;
+};
+inline constexpr std::array<ProtocolInfo, 2> kTpaProtocols = {{
+    {"paper", "the paper's reward head on φ, trained by Adam (engine/tpa.h)"},
+    {"linear", "linear evaluation: a Bradley–Terry linear head fit to convergence"},
+}};
 
 // " key=value" for each key `visit` declares, in order, values as exact text (a word field by
 // its word): a section's part of a task digest's text (experiment/task_settings.cpp).

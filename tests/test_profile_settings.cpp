@@ -127,14 +127,129 @@ TEST(ProfileSettings, EveryDeclaredKeyIsReadWithItsDeclaredRangeAndType) {
                         [](const Profile& p, const std::string& key) {
                           return declared_field(kStudySettings, p.study, key);
                         });
+  check_declared_ranges("teacher", kTeacherSettings, QueryBundleConfig{}, {},
+                        [](const Profile& p, const std::string& key) {
+                          return declared_field(kTeacherSettings, p.queries, key);
+                        });
+}
+
+// Every list key of an environment's table: its declared lower bound is read into that
+// environment's axes (the other environments keep the profile's), one below it is refused with
+// file:line, an empty list means "no such cell here" (seeds excepted); store_weights is a TOML
+// boolean.
+TEST(ProfileSettings, AnEnvironmentsTableReadsEachDeclaredListWithItsRange) {
+  int lists = 0;
+  const EnvAxes defaults;
+  kEnvTableSettings(defaults, [&](const SettingInfo& k, const auto& field) {
+    using T = std::decay_t<decltype(field)>;
+    if constexpr (std::is_same_v<T, std::vector<int64_t>>) {
+      ++lists;
+      SCOPED_TRACE(k.key);
+      int line = 0;
+      const auto at = [&](const std::string& v) {
+        return with_section("grid", {{k.key, v}}, k.key, &line);
+      };
+      const Profile p = parse_profile(at("[" + toml_number(k.lo, true) + "]"), "t.toml");
+      kEnvTableSettings(p.axes.at("grid"), [&](const SettingInfo& j, const auto& read) {
+        if constexpr (std::is_same_v<std::decay_t<decltype(read)>, std::vector<int64_t>>)
+          if (std::string(j.key) == k.key) {
+            EXPECT_EQ(read, std::vector<int64_t>{int64_t(k.lo)});
+          }
+      });
+      const std::string below = test::profile_error_of(at("[" + toml_number(k.lo - 1, true) + "]"));
+      EXPECT_NE(below.find("bad.toml:" + std::to_string(line) + ": " + k.key + ": "),
+                std::string::npos)
+          << below;
+      EXPECT_NE(below.find("is outside ["), std::string::npos) << below;
+      const std::string empty = test::profile_error_of(at("[]"));
+      if (std::string(k.key) == "seeds")
+        EXPECT_NE(empty.find("seeds must not be empty"), std::string::npos) << empty;
+      else
+        EXPECT_EQ(empty, "no error");
+    }
+  });
+  EXPECT_EQ(lists, 6);
+  int line = 0;
+  const std::string m = test::profile_error_of(
+      with_section("grid", {{"store_weights", "\"no\""}}, "store_weights", &line));
+  EXPECT_NE(m.find("bad.toml:" + std::to_string(line) + ": store_weights must be true or false"),
+            std::string::npos)
+      << m;
+  EXPECT_FALSE(parse_profile(with_section("grid", {{"store_weights", "false"}}, "", &line), "t")
+                   .axes.at("grid")
+                   .store_weights);
+}
+
+// A list for each [teacher] axis key makes one noisy teacher per value other than the main
+// teacher's, each differing from the main teacher in that key alone; a list for a key that is not
+// an axis is refused.
+TEST(ProfileSettings, ATeacherListIsANoiseAxisOnlyForTheDeclaredAxisKeys) {
+  const std::string robustness = "[robustness]\nmethods = [\"sirl\"]\nN = [100]\nM = [10]\n";
+  const QueryBundleConfig defaults;
+  kTeacherSettings(defaults, [&](const SettingInfo& k, const double& main) {
+    SCOPED_TRACE(k.key);
+    const double a = std::isinf(k.hi) ? 0.5 : k.hi / 2, b = std::isinf(k.hi) ? 2 : k.hi / 4;
+    const std::string list = "[" + toml_number(a, false) + ", " + toml_number(main, false) + ", " +
+                             toml_number(b, false) + "]";
+    int line = 0;
+    const std::string text = with_section("teacher", {{k.key, list}}, k.key, &line) + robustness;
+    if (!k.axis) {
+      const std::string m = test::profile_error_of(text);
+      EXPECT_NE(m.find("bad.toml:" + std::to_string(line) + ": " + k.key + " must be a number"),
+                std::string::npos)
+          << m;
+      return;
+    }
+    if (std::isinf(main)) return;  // "inf" is a string in TOML: beta's list is checked below
+    const Profile p = parse_profile(text, "t.toml");
+    ASSERT_EQ(p.robustness.teachers.size(), 2u);  // the main teacher's value is the reference
+    for (const TeacherPoint& tp : p.robustness.teachers) {
+      EXPECT_EQ(tp.axis, k.key);
+      EXPECT_EQ(declared_field(kTeacherSettings, tp.queries, k.key), tp.level);
+      kTeacherSettings(tp.queries, [&](const SettingInfo& j, const double& v) {
+        if (std::string(j.key) != k.key) {
+          EXPECT_EQ(v, declared_field(kTeacherSettings, p.queries, j.key)) << j.key;
+        }
+      });
+    }
+    EXPECT_EQ(p.robustness.teachers[0].level, a);
+    EXPECT_EQ(p.robustness.teachers[1].level, b);
+  });
+  const Profile p =
+      parse_profile(std::string(test::kSmallProfile) +
+                        "[teacher]\nbeta = [\"inf\", 10, 1]\nmistake = 0.1\n" + robustness,
+                    "t.toml");
+  ASSERT_EQ(p.robustness.teachers.size(), 2u);
+  EXPECT_EQ(p.robustness.teachers[0].tag, "beta=10");
+  EXPECT_EQ(p.robustness.teachers[1].tag, "beta=1");
+  EXPECT_EQ(p.robustness.teachers[1].queries.teacher.beta, 1);
+  EXPECT_EQ(p.robustness.teachers[1].queries.teacher.mistake, 0.1);  // the main teacher's
+  EXPECT_TRUE(std::isinf(p.queries.teacher.beta));
+}
+
+// [tpa] protocols: each declared protocol alone is accepted; an unknown name is refused with a
+// message naming every declared one; a profile without the key runs all of them.
+TEST(ProfileSettings, TpaProtocolsAreTheDeclaredOnes) {
+  std::vector<std::string> all;
+  for (const ProtocolInfo& c : kTpaProtocols) {
+    all.push_back(c.name);
+    std::string text = test::kSmallProfile;
+    text.insert(text.find("[ablation]"), std::string("protocols = [\"") + c.name + "\"]\n");
+    EXPECT_EQ(parse_profile(text, "t.toml").tpa_protocols, std::vector<std::string>{c.name});
+  }
+  EXPECT_EQ(parse_profile(test::kSmallProfile, "t.toml").tpa_protocols, all);
+  std::string text = test::kSmallProfile;
+  text.insert(text.find("[ablation]"), "protocols = [\"paper\", \"cubic\"]\n");
+  const std::string m = test::profile_error_of(text);
+  for (const ProtocolInfo& c : kTpaProtocols)
+    EXPECT_NE(m.find(std::string("\"") + c.name + "\" (" + c.doc + ")"), std::string::npos) << m;
 }
 
 // An empty table leaves every key at its struct's default: the declaration's defaults are the
 // structs' own (one source), and the digest's text of a default section is the default struct's.
 TEST(ProfileSettings, AnAbsentKeyIsItsStructsDefault) {
   const Profile p = parse_profile(
-      small_profile_base() + "[queries]\n[active]\n[study]\nenv = \"grid\"\n",
-      "t.toml");
+      small_profile_base() + "[queries]\n[active]\n[study]\nenv = \"grid\"\n", "t.toml");
   EXPECT_EQ(settings_text(p.queries, kQueriesSettings),
             settings_text(QueryBundleConfig{}, kQueriesSettings));
   EXPECT_EQ(describe_active(p.active.at("grid")), describe_active(ActiveRounds{}));
