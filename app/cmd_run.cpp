@@ -273,13 +273,23 @@ CacheHoldings print_plan_summary(const Profile& p, const Plan& plan, const std::
                     [](const auto& kv) { return tpa_stop_may_end_early(kv.second.tpa_stop); }) ||
         std::any_of(p.tpa_stop_by_method.begin(), p.tpa_stop_by_method.end(),
                     [](const auto& kv) { return tpa_stop_may_end_early(kv.second); });
+    const bool phis_stop =
+        std::any_of(p.hyper.begin(), p.hyper.end(),
+                    [](const auto& kv) { return kv.second.pref_stop == "converged"; }) ||
+        std::any_of(p.pref_stop_by_method.begin(), p.pref_stop_by_method.end(),
+                    [](const auto& kv) { return kv.second == "converged"; });
     std::printf("%-16s %8s %14.1f  every epoch of every schedule\n", "protocol", "",
                 protocol * 1e-9);
+    std::vector<std::string> ends{"SIRL's exact skip"};
+    if (heads_stop) ends.push_back("reward heads stopped by the profile's tpa.stop rules");
+    if (phis_stop) ends.push_back("preference φ stopped by its pref.stop rules");
+    std::string expect;
+    for (size_t i = 0; i < ends.size(); ++i)
+      expect += (i == 0 ? "" : i + 1 == ends.size() ? " and " : ", ") + ends[i];
     std::printf(
         "executes %.3g PFLOP of the protocol's %.3g PFLOP (%.1f %%): the rows above expect"
-        " SIRL's exact skip%s (measured stopping epochs: experiment/expected_epochs.cpp)\n",
-        total * 1e-15, protocol * 1e-15, 100 * total / protocol,
-        heads_stop ? " and reward heads stopped by the profile's tpa.stop rules" : "");
+        " %s (measured stopping epochs: experiment/expected_epochs.cpp)\n",
+        total * 1e-15, protocol * 1e-15, 100 * total / protocol, expect.c_str());
   }
   if (cache.empty()) return {};
   const CacheHoldings h = cache_holdings(plan, p, cache);

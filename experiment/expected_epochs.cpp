@@ -73,7 +73,33 @@ const std::vector<HeadStops>& head_stops() {
   return t;
 }
 
+struct PrefStops {
+  const char* env;
+  const char* method;
+  bool vae_pretrain;
+  int min_epochs;           // the rule's pref.stop_min_epochs and pref.stop_rel_tol they were
+  double rel_tol;           // measured at
+  std::vector<Point> at_N;  // the stopping epoch, median over seeds
+};
+
+// Measured: (none yet).
+const std::vector<PrefStops>& pref_stops() {
+  static const std::vector<PrefStops> t = {};
+  return t;
+}
+
 }  // namespace
+
+double expected_pref_epochs(const std::string& env, const std::string& method, int64_t N,
+                            bool vae_pretrain, const Hyper& h) {
+  if (h.pref_stop != "converged") return h.pref.epochs;
+  for (const auto& s : pref_stops())
+    if (env == s.env && method == s.method && vae_pretrain == s.vae_pretrain &&
+        h.pref_stop_min_epochs == s.min_epochs && h.pref_stop_rel_tol == s.rel_tol)
+      return std::min(double(h.pref.epochs),
+                      std::max(double(s.min_epochs), interpolate(s.at_N, N)));
+  return h.pref.epochs;
+}
 
 double expected_sirl_epochs(const std::string& env, int64_t N, bool vae_pretrain, const Hyper& h) {
   for (const auto& s : sirl_skips())

@@ -439,45 +439,101 @@ void parse_tpa(const Reader& r, const toml::table& tpa, TpaGrid& g) {
   }
 }
 
-// [tpa] stop = { sirl = "fixed", jaco = { "sirl+vae" = "converged" } }: a stop rule per variant
-// listed in [tpa] methods, in every environment or (under an environment's name) in that one.
-void parse_tpa_stop(const Reader& r, const toml::table& tpa, Profile& p) {
-  const toml::node* n = tpa.get("stop");
+// stop = { sirl = "fixed", jaco = { "sirl+vae" = "converged" } } in `table` ("[tpa]", "[pref]"):
+// a rule per variant, in every environment or (under an environment's name) in that one, into
+// `out` (keys: tpa_stop_key). `why_not(name)` says why a variant may not have one ("" if it may);
+// `check(rule)` throws std::invalid_argument (naming the rules) for a rule that is not one.
+template <class WhyNot, class Check>
+void parse_stop_rules(const Reader& r, const toml::table& t, const std::string& table,
+                      const Profile& p, WhyNot why_not, Check check,
+                      std::map<std::string, std::string>& out) {
+  const toml::node* n = t.get("stop");
   if (!n) return;
-  const toml::table* t = n->as_table();
-  if (!t)
-    r.fail(n, "[tpa] stop must be a table of method = rule, e.g. stop = { sirl = \"fixed\" }");
+  const toml::table* rules = n->as_table();
+  if (!rules)
+    r.fail(n, table + " stop must be a table of method = rule, e.g. stop = { sirl = \"fixed\" }");
   const auto one = [&](const std::string& env, const std::string& name, const toml::node& value) {
-    const std::string where = "[tpa] stop." + (env.empty() ? "" : env + ".") + name;
-    const bool listed = std::any_of(p.tpa.methods.begin(), p.tpa.methods.end(),
-                                    [&](const Variant& v) { return v.name() == name; });
-    if (!listed)
-      r.fail(&value, "[tpa] stop" + (env.empty() ? "" : "." + env) + ": '" + name +
-                         "' is not one of [tpa] methods");
-    if (!value.is_string()) r.fail(&value, where + " must be a string: a tpa.stop rule");
-    Hyper check;  // validate() names the rules
-    check.tpa_stop = *value.value<std::string>();
+    const std::string where = table + " stop." + (env.empty() ? "" : env + ".") + name;
+    if (const std::string why = why_not(name); !why.empty())
+      r.fail(&value, table + " stop" + (env.empty() ? "" : "." + env) + ": '" + name + "' " + why);
+    if (!value.is_string()) r.fail(&value, where + " must be a string: a rule");
     try {
-      validate(check);
+      check(*value.value<std::string>());
     } catch (const std::invalid_argument& e) {
       r.fail(&value, where + ": " + e.what());
     }
-    p.tpa_stop_by_method[tpa_stop_key(env, name)] = check.tpa_stop;
+    out[tpa_stop_key(env, name)] = *value.value<std::string>();
   };
-  for (auto&& [key, value] : *t) {
+  for (auto&& [key, value] : *rules) {
     const std::string name(key.str());
     if (const toml::table* per_env = value.as_table()) {
       if (std::find(p.envs.begin(), p.envs.end(), name) == p.envs.end()) {
         std::string envs;
         for (const std::string& e : p.envs) envs += (envs.empty() ? "" : ", ") + e;
-        r.fail(&value, "[tpa] stop." + name + ": a table here must be named after one of envs (" +
-                           envs + "), with method = rule inside");
+        r.fail(&value, table + " stop." + name +
+                           ": a table here must be named after one of envs (" + envs +
+                           "), with method = rule inside");
       }
       for (auto&& [k, v] : *per_env) one(name, std::string(k.str()), v);
     } else {
       one("", name, value);
     }
   }
+}
+
+// [tpa] stop: a tpa.stop rule per variant listed in [tpa] methods.
+void parse_tpa_stop(const Reader& r, const toml::table& tpa, Profile& p) {
+  parse_stop_rules(
+      r, tpa, "[tpa]", p,
+      [&](const std::string& name) {
+        const bool listed = std::any_of(p.tpa.methods.begin(), p.tpa.methods.end(),
+                                        [&](const Variant& v) { return v.name() == name; });
+        return listed ? std::string() : std::string("is not one of [tpa] methods");
+      },
+      [](const std::string& rule) {
+        Hyper check;  // validate() names the rules
+        check.tpa_stop = rule;
+        validate(check);
+      },
+      p.tpa_stop_by_method);
+}
+
+// [pref] stop: a pref.stop rule per preference-trained variant the profile runs.
+void parse_pref(const Reader& r, const toml::table& root, Profile& p) {
+  const toml::node* n = root.get("pref");
+  if (!n) return;
+  if (!n->is_table()) r.fail(n, "pref must be a table");
+  r.only_keys(*n->as_table(), "[pref]", {"stop"});
+  parse_stop_rules(
+      r, *n->as_table(), "[pref]", p,
+      [&](const std::string& name) {
+        Variant v;
+        try {
+          v = parse_variant(name);
+        } catch (const std::invalid_argument& e) {
+          return std::string("is not a method: ") + e.what();
+        }
+        if (!method_spec(v.method).training.preferences)
+          return std::string(
+              "is not trained on preferences (singlepref, multipref10, multipref50 and their "
+              "+vae variants are)");
+        const auto named = [&](const std::vector<Variant>& vs) {
+          return std::any_of(vs.begin(), vs.end(),
+                             [&](const Variant& u) { return u.name() == name; });
+        };
+        const bool ablation = std::find(p.ablation_methods.begin(), p.ablation_methods.end(),
+                                        v.method) != p.ablation_methods.end();
+        if (!named(p.fpe_methods) && !named(p.tpa.methods) && !named(p.robustness.methods) &&
+            !ablation)
+          return std::string("is not run by this profile ([fpe], [tpa], [ablation], [robustness])");
+        return std::string();
+      },
+      [](const std::string& rule) {
+        Hyper check;
+        check.pref_stop = rule;
+        validate(check);
+      },
+      p.pref_stop_by_method);
 }
 
 // [tpa] protocols = ["paper", "linear"]: one or more of kTpaProtocols, each once.
@@ -1019,10 +1075,11 @@ namespace {
 Profile parse_profile_table(const toml::table& root, const std::string& text,
                             const std::string& path) {
   Reader r(root, path);
-  std::set<std::string> top{
-      "name",   "description", "envs",     "seeds",      "queries",        "teacher",
-      "fpe",    "tpa",         "ablation", "hyper",      "study",          "robustness",
-      "active", "precision",   "external", "references", "budget_minutes", "environments"};
+  std::set<std::string> top{"name",           "description",  "envs",     "seeds",
+                            "queries",        "teacher",      "fpe",      "tpa",
+                            "ablation",       "hyper",        "study",    "robustness",
+                            "active",         "precision",    "external", "references",
+                            "budget_minutes", "environments", "pref"};
   parse_file_environments(r, root, path, top);
   for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
   r.only_keys(root, "the profile", top);
@@ -1062,6 +1119,7 @@ Profile parse_profile_table(const toml::table& root, const std::string& text,
   parse_cells(r, root, p);
   parse_external(r, root, p);
   parse_robustness(r, root, p);
+  parse_pref(r, root, p);
   parse_active(r, root, p);
   parse_env_axes(r, root, p);
   parse_study(r, root, p);
@@ -1086,6 +1144,15 @@ std::string protocols_section() {
     out += std::string("| `protocols` | `\"") + c.name + "\"` | " + c.doc + " |\n";
   for (const TpaStopRule& rule : kTpaStopRules)
     out += std::string("| `stop` | `\"") + rule.name + "\"` | " + rule.doc + " |\n";
+  out +=
+      "\n## [pref] stop\n\n"
+      "`stop` maps a preference-trained variant the profile runs (`singlepref`, `multipref10`, "
+      "`multipref50`, their `+vae` variants), or under an environment's name a variant there, to "
+      "the rule its φ trains by (default: the `pref.stop` hyper-parameter, `\"fixed\"`).\n\n"
+      "| key | accepts | what it is |\n|---|---|---|\n"
+      "| `stop` | `\"fixed\"` | every epoch of `pref.epochs`, the paper's |\n"
+      "| `stop` | `\"converged\"` | φ stops once its training loss has converged "
+      "(`pref.stop_min_epochs`, `pref.stop_rel_tol`) |\n";
   return out + "\n";
 }
 
@@ -1160,6 +1227,17 @@ Hyper tpa_cell_hyper(const Profile& p, const std::string& env, const std::string
   for (const std::string& key : {tpa_stop_key(env, v.name()), tpa_stop_key("", v.name())})
     if (auto it = p.tpa_stop_by_method.find(key); it != p.tpa_stop_by_method.end()) {
       h.tpa_stop = it->second;
+      break;
+    }
+  return h;
+}
+
+Hyper rep_task_hyper(const Profile& p, const std::string& env, const std::string& tag,
+                     const Variant& v) {
+  Hyper h = hyper_at(p, env, tag);
+  for (const std::string& key : {tpa_stop_key(env, v.name()), tpa_stop_key("", v.name())})
+    if (auto it = p.pref_stop_by_method.find(key); it != p.pref_stop_by_method.end()) {
+      h.pref_stop = it->second;
       break;
     }
   return h;

@@ -118,6 +118,11 @@ struct Profile {
   // environment's entry wins over the one for every environment (the rules were tested per
   // environment). Keys: tpa_stop_key(env or "", variant name).
   std::map<std::string, std::string> tpa_stop_by_method;
+  // [pref] stop = { <variant> = "<rule>", <env> = { <variant> = "<rule>" } }: the pref.stop rule
+  // ("fixed", "converged") a preference-trained variant's φ trains by, over [hyper]'s, in every
+  // environment or in the one named (its entry wins). A rule tested equivalent for one method is
+  // applied to that method alone (docs/stopping-rule.md). Keys: tpa_stop_key(env or "", variant).
+  std::map<std::string, std::string> pref_stop_by_method;
   // [tpa] protocols: how [tpa]'s cells score a representation: "paper" (the paper's reward head,
   // engine/tpa.h) and "linear" (linear evaluation: a Bradley–Terry linear head fit to convergence,
   // engine/linear_tpa.h). Default: both. [ablation] and [robustness] cells are the paper's.
@@ -163,6 +168,11 @@ std::string tpa_stop_key(const std::string& env, const std::string& variant);
 // What a TPA cell of variant v trains its heads with: hyper_at's values with the variant's
 // [tpa] stop rule, if the profile gives it one.
 Hyper tpa_cell_hyper(const Profile& p, const std::string& env, const std::string& tag,
+                     const Variant& v);
+
+// What a representation of variant v trains with: hyper_at's values with the variant's [pref]
+// stop rule, if the profile gives it one.
+Hyper rep_task_hyper(const Profile& p, const std::string& env, const std::string& tag,
                      const Variant& v);
 
 // Whether variant v has cells in environment env: every method has, but an external method only

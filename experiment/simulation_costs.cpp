@@ -47,6 +47,14 @@ void rep_cost(Task& t, const Profile& p) {
         t.flops *= e / s.epochs;
     t.bytes = working_set(z.phi, batch_rows);
     t.stream_bytes = stream_bytes(z.phi, rows, batch_rows, s.epochs);
+    // Preference φ stopped by pref.stop: the epochs they are expected to run, their traffic too.
+    if (how.preferences)
+      if (const double e = expected_pref_epochs(t.env, method_spec(t.variant.method).name, t.N,
+                                                t.variant.vae, z.h);
+          e < s.epochs) {
+        t.flops *= e / s.epochs;
+        t.stream_bytes *= e / s.epochs;
+      }
   }
   t.flops += z.phi.forward_flops(int(z.trajectories));  // the embedding of Ξ it stores
   t.protocol_flops += z.phi.forward_flops(int(z.trajectories));

@@ -425,9 +425,10 @@ std::string tpa_cell_key(const Task& t) {
 
 // ---- compiled once per task when it is planned (experiment/task_config.h) ----
 
-// A representation: its point's hyper-parameters; an external method's declaration.
+// A representation: its point's hyper-parameters with its method's stop rule ([pref] stop); an
+// external method's declaration.
 void compile_rep(const Task& t, const Profile& p, TaskConfig& c) {
-  compile_env_point(t, p, c);
+  c.hyper = rep_task_hyper(p, t.env, t.hyper, t.variant);
   if (t.variant.method == Method::external) c.external = external_method(p, t.variant.external);
 }
 // A TPA cell: its point's hyper-parameters, with its method's stop rule ([tpa] stop).

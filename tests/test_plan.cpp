@@ -116,6 +116,70 @@ TEST(Plan, AMethodsStopRuleOverridesHyperForEveryTpaCellOfThatMethod) {
       EXPECT_NE(tpa_kind().settings(t, q).find("tpa.stop = converged"), std::string::npos);
 }
 
+// [pref] stop = { singlepref = "converged", grid2 = { singlepref = "fixed" } }: the φ of that
+// variant alone trains by the rule (its +VAE variant and the other preference methods keep
+// [hyper]'s), in every environment but the one whose own entry says otherwise; the rule is in
+// the φ's settings, so in its digest.
+TEST(Plan, APreferenceMethodsStopRuleReachesItsOwnPhiOnly) {
+  const std::string text =
+      "name = \"t\"\nenvs = [\"grid\", \"grid2\"]\nseeds = [0]\n"
+      "[queries]\nsimilarity = 300\npreference = 300\ntpa_pairs = 100\n"
+      "[fpe]\nmethods = [\"singlepref\", \"singlepref+vae\", \"multipref10\"]\nN = [100]\n"
+      "[pref]\nstop = { singlepref = \"converged\", grid2 = { singlepref = \"fixed\" } }\n";
+  const Profile p = parse_profile(text, "t.toml");
+  int reps = 0;
+  for (const Task& t : make_plan(p).tasks) {
+    if (!(t.kind == rep_kind())) continue;
+    ++reps;
+    const bool stops = t.variant.name() == "singlepref" && t.env == "grid";
+    EXPECT_EQ(rep_task_hyper(p, t.env, t.hyper, t.variant).pref_stop, stops ? "converged" : "fixed")
+        << t.key;
+    EXPECT_EQ(t.hyper_values().pref_stop, stops ? "converged" : "fixed") << t.key;
+    const std::string settings = rep_kind().settings(t, p);
+    EXPECT_EQ(settings.find("pref.stop = converged") != std::string::npos, stops) << t.key << "\n"
+                                                                                  << settings;
+  }
+  EXPECT_EQ(reps, 2 * 3);
+  // The same φ without the table is [hyper]'s "fixed": a different digest.
+  std::string plain = text;
+  plain.erase(plain.find("[pref]"));
+  const Plan a = make_plan(p), b = make_plan(parse_profile(plain, "t.toml"));
+  const auto settings_of = [](const Plan& plan, const Profile& q, const std::string& key) {
+    for (const Task& t : plan.tasks)
+      if (t.key == key) return rep_kind().settings(t, q);
+    return std::string("missing ") + key;
+  };
+  const Profile q = parse_profile(plain, "t.toml");
+  EXPECT_NE(settings_of(a, p, "grid/s0/singlepref/N100/rep"),
+            settings_of(b, q, "grid/s0/singlepref/N100/rep"));
+  EXPECT_EQ(settings_of(a, p, "grid/s0/multipref10/N100/rep"),
+            settings_of(b, q, "grid/s0/multipref10/N100/rep"));
+
+  // Refused: a method not trained on preferences, one the profile does not run, a rule that is
+  // not one, another key in [pref].
+  const auto error_of = [&](const std::string& table) {
+    try {
+      parse_profile(text.substr(0, text.find("[pref]")) + table, "bad.toml");
+    } catch (const ProfileError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error_of("[pref]\nstop = { sirl = \"converged\" }\n")
+                .find("[pref] stop: 'sirl' is not trained on preferences"),
+            std::string::npos);
+  EXPECT_NE(error_of("[pref]\nstop = { multipref50 = \"converged\" }\n")
+                .find("[pref] stop: 'multipref50' is not run by this profile"),
+            std::string::npos);
+  const std::string rule = error_of("[pref]\nstop = { singlepref = \"sometimes\" }\n");
+  EXPECT_NE(rule.find("bad.toml:"), std::string::npos) << rule;
+  EXPECT_NE(rule.find("[pref] stop.singlepref: hyper-parameter pref.stop must be \"fixed\""),
+            std::string::npos)
+      << rule;
+  EXPECT_NE(error_of("[pref]\nepochs = 3\n").find("unknown key 'epochs' in [pref]"),
+            std::string::npos);
+}
+
 // [tpa] stop = { sirl = "fixed", jaco = { "sirl+vae" = "converged" } }: an environment's entry
 // applies in that environment only and wins over the entry for every environment; a table must
 // be named after one of the profile's envs.
