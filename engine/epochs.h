@@ -125,6 +125,13 @@ struct EpochLoopOptions {
   // one's. If so the model takes no further step and its remaining epochs get that loss: its
   // weights and curve are the full run's.
   std::function<bool(int, int)> at_fixed_point;
+  // A second rule that only watches (the shadow): at_shadow_stop(m, done), when given, is called
+  // once, after the first of model m's epochs but the last at which `shadow` would have stopped
+  // it, and the model trains on. Its weights then are bit for bit those of a run stopped by that
+  // rule, so the caller can score that run's model from this one. On resume a model whose curve
+  // already met the shadow rule is not called again (the caller keeps what it recorded).
+  StopRule shadow;
+  std::function<void(int, int)> at_shadow_stop;
 };
 struct ModelCurves {
   std::vector<float> curves;    // [R, epochs]: each epoch's mean loss; NaN after a model stopped
@@ -145,6 +152,12 @@ ModelCurves run_model_epochs(int64_t n, int epochs, int batch, std::vector<Rng>&
   std::vector<char> stopped(size_t(R), 0);
   const int first =
       epochs_detail::resume_models(opt.resume, epochs, out.curves, rngs, out.epochs_run, stopped);
+  // Which models' shadow rule has fired: from the curves, so a resumed loop knows it too.
+  std::vector<char> shadowed(size_t(R), 0);
+  if (opt.at_shadow_stop)
+    for (int m = 0; m < R; ++m)
+      for (int e = 1; e <= std::min(first, epochs - 1) && !shadowed[m]; ++e)
+        shadowed[m] = stops_after(opt.shadow, out.curves.data() + size_t(m) * epochs, e);
   const int stretch =
       int(std::max<int64_t>(1, (std::max(1, opt.stretch_steps) + per_epoch - 1) / per_epoch));
   auto all_stopped = [&] {
@@ -168,6 +181,10 @@ ModelCurves run_model_epochs(int64_t n, int epochs, int batch, std::vector<Rng>&
         curve[e] = float(sum / double(n));
         out.epochs_run[m] = e + 1;
         if (e + 1 >= epochs) continue;
+        if (opt.at_shadow_stop && !shadowed[m] && stops_after(opt.shadow, curve, e + 1)) {
+          shadowed[m] = 1;
+          opt.at_shadow_stop(m, e + 1);
+        }
         if (opt.at_fixed_point && opt.at_fixed_point(m, e + 1)) {
           stopped[m] = 1;
           std::fill(curve + e + 1, curve + epochs, curve[e]);

@@ -54,6 +54,7 @@ void for_each_field(H& h, F&& f) {
   f("tpa.stop_min_epochs", h.tpa_stop_min_epochs);
   f("tpa.stop_rel_tol", h.tpa_stop_rel_tol);
   f("tpa.stop_frozen_rel_tol", h.tpa_stop_frozen_rel_tol);
+  f("tpa.shadow_rel_tol", h.tpa_shadow_rel_tol);
   f("precision", h.precision);
 }
 
@@ -219,6 +220,14 @@ std::string describe(const Hyper& h) {
   return s;
 }
 
+StopRule tpa_shadow_rule(const Hyper& h, bool frozen) {
+  StopRule r;
+  r.converged = h.tpa_shadow_rel_tol > 0 && !tpa_stop_rule(h, frozen).converged;
+  r.min_epochs = h.tpa_stop_min_epochs;
+  r.rel_tol = h.tpa_shadow_rel_tol;
+  return r;
+}
+
 StopRule tpa_stop_rule(const Hyper& h, bool frozen) {
   StopRule r;
   const TpaStopRule* rule = find_tpa_stop_rule(h.tpa_stop);
@@ -283,6 +292,8 @@ void validate(const Hyper& h) {
     fail("tpa.stop_rel_tol must be in (0, 1)");
   if (!(h.tpa_stop_frozen_rel_tol > 0 && h.tpa_stop_frozen_rel_tol < 1))
     fail("tpa.stop_frozen_rel_tol must be in (0, 1)");
+  if (!(h.tpa_shadow_rel_tol >= 0 && h.tpa_shadow_rel_tol < 1))
+    fail("tpa.shadow_rel_tol must be in [0, 1) (0: no shadow rule)");
   try {
     validate_precision(h.precision);
   } catch (const std::invalid_argument& e) {

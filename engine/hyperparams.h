@@ -67,6 +67,11 @@ struct Hyper {
   int tpa_stop_min_epochs = 100;
   double tpa_stop_rel_tol = 0.01;
   double tpa_stop_frozen_rel_tol = 0.01;
+  // Above 0, a shadow rule in cells whose heads run every epoch: each head is also scored at
+  // the first epoch the "converged" rule at this tolerance (minimum tpa.stop_min_epochs) would
+  // have stopped it, and trains on. One run at the paper's epochs then holds both sides of an
+  // equivalence test of that rule (TpaResult::shadow_*). 0 (the default): no shadow.
+  double tpa_shadow_rel_tol = 0;
   // "fp32" (the paper's) or "bf16": every network's matrix products in bf16 with fp32
   // accumulation, master weights and Adam state in fp32 (MlpShape::bf16_products).
   std::string precision = "fp32";
@@ -82,6 +87,9 @@ inline bool bf16_products(const Hyper& h) {
 
 // The stopping rule that h.tpa_stop* give a cell's reward heads (frozen φ or not).
 StopRule tpa_stop_rule(const Hyper& h, bool frozen);
+// The shadow rule of h.tpa_shadow_rel_tol for a cell: "converged" at that tolerance and
+// tpa.stop_min_epochs where the cell's heads run every epoch; off (not converged) elsewhere.
+StopRule tpa_shadow_rule(const Hyper& h, bool frozen);
 
 // The paper's values for a registered environment (datasets/environments.h: the engine's
 // defaults plus the environment's HyperDefault list); throws std::invalid_argument for an unknown

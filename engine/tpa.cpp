@@ -101,6 +101,18 @@ std::vector<float> initial_heads(const Representation& rep, const TpaConfig& cfg
   return init;
 }
 
+// A head's accuracy (params p [P]) on `pairs` [2n] of rows.X with their labels [n]; tape and xb
+// are the caller's scratch.
+double head_accuracy(const MlpShape& net, const float* p, const CellRows& rows,
+                     const std::vector<int32_t>& pairs, const float* labels, MlpTape<float>& tape,
+                     std::vector<float>& xb, int threads) {
+  const int n = int(pairs.size() / 2), w = net.in();
+  xb.resize(size_t(2) * n * w);
+  gather_by_role(rows.X.data(), w, pairs.data(), n, 2, xb.data());
+  mlp_forward(net, p, xb.data(), 2 * n, tape, threads);
+  return preference_accuracy(tape.output(), labels, n);
+}
+
 // Each head's held-out and training accuracy, how far its copy of φ moved (unfrozen), and the
 // cell's mean and standard deviation over heads. params: [R, P] (φ's weights first, unfrozen).
 void score_heads(const MlpShape& net, const std::vector<float>& params, const Representation& rep,
@@ -114,11 +126,7 @@ void score_heads(const MlpShape& net, const std::vector<float>& params, const Re
   res.train_accuracy.resize(R);
   res.phi_drift.assign(R, 0.f);
   auto accuracy_on = [&](const float* p, const std::vector<int32_t>& pairs, const float* labels) {
-    const int n = int(pairs.size() / 2), w = net.in();
-    xb.resize(size_t(2) * n * w);
-    gather_by_role(rows.X.data(), w, pairs.data(), n, 2, xb.data());
-    mlp_forward(net, p, xb.data(), 2 * n, tape, threads);
-    return preference_accuracy(tape.output(), labels, n);
+    return head_accuracy(net, p, rows, pairs, labels, tape, xb, threads);
   };
   for (int r = 0; r < R; ++r) {
     const float* p = params.data() + size_t(r) * P;
@@ -173,6 +181,41 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   loop.threads = ex.threads;
   loop.stretch_steps = ex.stretch_steps;
   loop.stop = tpa_stop_rule(h, cfg.frozen);
+  // The shadow rule: each head scored where that rule would have stopped it, kept in checkpoints
+  // (numbers "tpa/shadow/<r>/epochs" and ".../accuracy") since the weights then are gone.
+  ResumableState shadow_resume = resume;
+  if (const StopRule shadow = tpa_shadow_rule(h, cfg.frozen); shadow.converged) {
+    res.shadow_epochs.assign(size_t(R), 0);
+    res.shadow_accuracy.assign(size_t(R), 0.0);
+    const size_t P = net.param_count();
+    loop.shadow = shadow;
+    loop.at_shadow_stop = [&, P](int r, int done) {
+      MlpTape<float> tape;  // the heads train on several threads: scratch of its own
+      std::vector<float> xb;
+      res.shadow_epochs[r] = done;
+      res.shadow_accuracy[r] =
+          head_accuracy(net, t.params.data() + size_t(r) * P, rows, rows.test[r],
+                        sets[r].pairs.label.data() + sets[r].train, tape, xb, 1);
+    };
+    const auto name = [](int r, const char* what) {
+      return "tpa/shadow/" + std::to_string(r) + "/" + what;
+    };
+    shadow_resume.save = [&, name, base = resume.save](TrainingSnapshot& s) {
+      if (base) base(s);
+      for (int r = 0; r < R; ++r) {
+        s.numbers[name(r, "epochs")] = res.shadow_epochs[r];
+        s.numbers[name(r, "accuracy")] = res.shadow_accuracy[r];
+      }
+    };
+    shadow_resume.restore = [&, name, base = resume.restore](const TrainingSnapshot& s) {
+      if (base) base(s);
+      for (int r = 0; r < R; ++r) {
+        res.shadow_epochs[r] = int(s.number(name(r, "epochs")));
+        res.shadow_accuracy[r] = s.number(name(r, "accuracy"));
+      }
+    };
+    loop.resume = &shadow_resume;
+  }
   ModelCurves run = run_model_epochs(
       M, res.epochs, h.tpa.batch, order_rng,
       [&](int r, const int32_t* order, int b, int64_t step) {
@@ -203,6 +246,17 @@ TpaResult evaluate_tpa(const Representation& rep, const Dataset& d, const std::v
   require_finite(t.params, "TPA head weights");
 
   score_heads(net, t.params, rep, rows, sets, cfg, ex.threads, res);
+  if (!res.shadow_epochs.empty()) {
+    double sum = 0;  // summed as score_heads sums a cell's accuracies
+    for (int r = 0; r < R; ++r) {
+      if (res.shadow_epochs[r] == 0) {  // never met the rule: the run to the cap is its run
+        res.shadow_epochs[r] = res.epochs;
+        res.shadow_accuracy[r] = res.accuracy[r];
+      }
+      sum += res.shadow_accuracy[r];
+    }
+    res.shadow_mean = sum / R;
+  }
   return res;
 }
 

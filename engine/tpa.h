@@ -33,6 +33,12 @@ struct TpaResult {
   std::vector<float> phi_drift;        // [R] max |Δ| of the head's copy of φ (0 when frozen)
   double train_flops = 0;              // FLOPs the heads' training executed
   double protocol_flops = 0;  // FLOPs of every head's full schedule (== train_flops when fixed)
+  // The shadow rule (tpa.shadow_rel_tol, where the heads run every epoch; empty otherwise): the
+  // epoch each head would have stopped at under it (the cap when it never would) and its
+  // held-out accuracy there: bit for bit a run stopped by that rule.
+  std::vector<int> shadow_epochs;       // [R]
+  std::vector<double> shadow_accuracy;  // [R]
+  double shadow_mean = 0;               // the mean of shadow_accuracy: that run's TPA
 };
 
 // The network each head trains: frozen → the head alone on φ(ξ) (embedding → tpa_hidden… → 1);

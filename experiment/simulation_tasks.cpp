@@ -338,6 +338,13 @@ void run_tpa(const Task& t, RunContext& ctx, TaskRecord& r) {
   r.arrays["head_epochs"] =
       TaskRecord::Array::of(std::vector<float>(res.head_epochs.begin(), res.head_epochs.end()));
   r.text["stop"] = tpa_stop_rule(h, t.frozen).converged ? "converged" : "fixed";  // its heads'
+  if (!res.shadow_epochs.empty()) {  // tpa.shadow_rel_tol: the heads a shadow rule would stop
+    r.num["tpa_shadow"] = res.shadow_mean;
+    r.arrays["shadow_epochs"] = TaskRecord::Array::of(
+        std::vector<float>(res.shadow_epochs.begin(), res.shadow_epochs.end()));
+    r.arrays["shadow_accuracy"] = TaskRecord::Array::of(
+        std::vector<float>(res.shadow_accuracy.begin(), res.shadow_accuracy.end()));
+  }
   record_heads_convergence(res, r);
   if (!t.teacher.empty()) r.text["teacher"] = t.teacher;
 }

@@ -80,6 +80,7 @@ HYPER_TYPES = {
     "pref.l2": FLOAT, "pref.stop": TEXT, "pref.stop_min_epochs": INT, "pref.stop_rel_tol": FLOAT,
     "tpa.hidden": INTS, "tpa.l2": FLOAT, "tpa.stop": TEXT,
     "tpa.stop_min_epochs": INT, "tpa.stop_rel_tol": FLOAT, "tpa.stop_frozen_rel_tol": FLOAT,
+    "tpa.shadow_rel_tol": FLOAT,
     "precision": TEXT,
 }
 
