@@ -34,6 +34,16 @@ compute is the preference φ's (rep tasks). Either verdict exits 0; a failed che
 
   /usr/bin/python3 bench/stop_equivalence.py --rule pref
                                              --profile bench/stop-equivalence-jaco-pref.toml
+
+--rule shadow needs one run, not two: the profile sets "tpa.shadow_rel_tol" (engine/tpa.h), so every
+head of a cell whose heads run every epoch is also scored where "converged" at that tolerance
+(minimum tpa.stop_min_epochs) would have stopped it: bit for bit the stopped run's head. Each
+head's shadow epoch is checked against the rule applied to its curve, then per environment and
+method (references too) the same TOST on TPA (±0.02), "converged" being the shadow's TPA. The
+compute of the rule's side is counted from the shadow epochs (no task-seconds: it did not run).
+
+  /usr/bin/python3 bench/stop_equivalence.py --rule shadow
+                                             --profile bench/stop-equivalence-jaco-frozen-groups.toml
 """
 import argparse
 import json
@@ -158,10 +168,9 @@ def compare(fixed_path, conv_path):
     return rows, cells, cost
 
 
-def report(rows, cells, cost, profile):
+def report(rows, cells, cost, profile, title='tpa.stop = "converged" against "fixed"'):
     ok = all(r["equivalent"] for r in rows)
-    lines = [f"# tpa.stop = \"converged\" against \"fixed\": equivalence (TOST, α = {ALPHA}) on "
-             f"{profile}", "",
+    lines = [f"# {title}: equivalence (TOST, α = {ALPHA}) on {profile}", "",
              "Per seed: the method's mean TPA over its cells; d = converged − fixed, paired by "
              f"seed. Equivalent when the 90 % CI of the mean d lies inside ±{MARGIN}.", "",
              "| env | method | seeds | fixed | converged | mean d | 90 % CI | TOST p | verdict |",
@@ -180,10 +189,14 @@ def report(rows, cells, cost, profile):
               "| | fixed | converged | ratio |", "|---|---:|---:|---:|",
               f"| TPA FLOPs executed | {f['tpa_flops']:.4g} | {c['tpa_flops']:.4g} | "
               f"{f['tpa_flops'] / max(c['tpa_flops'], 1):.2f}× |",
-              f"| TPA task-seconds | {f['tpa_task_seconds']:.0f} | {c['tpa_task_seconds']:.0f} | "
-              f"{f['tpa_task_seconds'] / max(c['tpa_task_seconds'], 1e-9):.2f}× |",
-              f"| all task-seconds | {f['all_task_seconds']:.0f} | {c['all_task_seconds']:.0f} | |",
-              "", "## Every cell", "",
+              ]
+    if c.get("tpa_task_seconds") is not None:  # a shadow rule did not run: no seconds of its own
+        lines += [f"| TPA task-seconds | {f['tpa_task_seconds']:.0f} | "
+                  f"{c['tpa_task_seconds']:.0f} | "
+                  f"{f['tpa_task_seconds'] / max(c['tpa_task_seconds'], 1e-9):.2f}× |",
+                  f"| all task-seconds | {f['all_task_seconds']:.0f} | "
+                  f"{c['all_task_seconds']:.0f} | |"]
+    lines += ["", "## Every cell", "",
               "| env | method | N | M | frozen | seed | fixed | converged | d | head epochs "
               "min / median / max | stopped |",
               "|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|"]
@@ -193,6 +206,89 @@ def report(rows, cells, cost, profile):
                      f"{r.fixed:.4f} | {r.converged:.4f} | {r.d:+.4f} | {r.epochs_min:.0f} / "
                      f"{r.epochs_median:.0f} / {r.epochs_max:.0f} | {100 * r.stopped:.0f} % |")
     return "\n".join(lines) + "\n", ok
+
+
+# ---- --rule shadow: a head rule watched in one run (tpa.shadow_rel_tol) ----
+
+def check_shadow_stops(path):
+    """Every head with a shadow score must have run every epoch, and its shadow epoch must be where
+    the rule, applied to its own curve, says. Returns the number of heads checked."""
+    res = sirl_bench.open(path)
+    prof = tomllib.loads(res.provenance["profile_text"])
+    recs = res.records
+    checked = 0
+    for r in recs[recs.arrays.str.split(",").map(lambda a: "shadow_epochs" in a)].itertuples():
+        hy = prof.get("hyper", {}).get(r.env, {})
+        min_epochs = int(hy.get("tpa.stop_min_epochs", 100))
+        rel_tol = float(hy.get("tpa.shadow_rel_tol", 0))
+        curves = res.array(r.key, "loss_curves")
+        ran = res.array(r.key, "head_epochs")
+        got = res.array(r.key, "shadow_epochs")
+        for h, c in enumerate(curves):
+            if int(ran[h]) != len(c):
+                sys.exit(f"stop_equivalence: {r.key} head {h} ran {int(ran[h])} of {len(c)} "
+                         "epochs: a shadow rule is only scored where heads run every epoch")
+            want = rule_stop(c, min_epochs, rel_tol)
+            if int(got[h]) != want:
+                sys.exit(f"stop_equivalence: {r.key} head {h}'s shadow epoch is {int(got[h])}; "
+                         f"the rule on its curve says {want}")
+            checked += 1
+    if checked == 0:
+        sys.exit('stop_equivalence: no TPA cell has a shadow rule (set [hyper.<env>] '
+                 '"tpa.shadow_rel_tol" and run heads every epoch)')
+    return checked
+
+
+def compare_shadow(path):
+    """The fixed run's TPA against the shadow's, per cell and per method (references too)."""
+    res = sirl_bench.open(path)
+    recs = res.records
+    recs = recs[(recs.kind == "tpa") & recs.arrays.str.split(",").map(
+        lambda a: "shadow_epochs" in a)]
+    cells, flops = [], {"fixed": 0.0, "converged": 0.0, "protocol": 0.0}
+    for r in recs.itertuples():
+        e = res.array(r.key, "shadow_epochs")
+        cap = res.array(r.key, "loss_curves").shape[1]
+        cells.append({"env": r.env, "variant": r.variant, "N": r.N, "M": r.M,
+                      "frozen": r.frozen, "seed": r.seed, "fixed": float(r.tpa),
+                      "converged": float(r.tpa_shadow), "epochs_min": float(e.min()),
+                      "epochs_median": float(pd.Series(e).median()),
+                      "epochs_max": float(e.max()), "stopped": float((e < cap).mean())})
+        flops["fixed"] += float(r.flops)
+        flops["protocol"] += float(r.protocol_flops)
+        flops["converged"] += float(r.protocol_flops) * float(e.mean()) / cap
+    cells = pd.DataFrame(cells)
+    cells["d"] = cells.converged - cells.fixed
+    rows = []
+    per_seed = cells.groupby(["env", "variant", "seed"])[["fixed", "converged"]].mean()
+    for (env, variant), g in per_seed.groupby(level=[0, 1]):
+        diffs = list((g.converged - g.fixed).astype(float))
+        mean, ci, p = tost(diffs, MARGIN)
+        rows.append({"env": env, "method": variant, "seeds": len(diffs),
+                     "fixed": float(g.fixed.mean()), "converged": float(g.converged.mean()),
+                     "diff": mean, "ci90": ci, "margin": MARGIN, "p_tost": p,
+                     "equivalent": bool(p < ALPHA)})
+    cost = {"fixed": {"tpa_flops": flops["fixed"], "tpa_protocol_flops": flops["protocol"]},
+            "converged": {"tpa_flops": flops["converged"],
+                          "tpa_protocol_flops": flops["protocol"], "tpa_task_seconds": None}}
+    return rows, cells, cost
+
+
+def main_shadow(a, path, out):
+    checked = check_shadow_stops(path)
+    print(f"stop_equivalence: {checked} heads' shadow epochs are where the rule on their curves "
+          "says", flush=True)
+    rows, cells, cost = compare_shadow(path)
+    text, ok = report(rows, cells, cost, os.path.relpath(a.profile, ROOT),
+                      title='the rule watched (tpa.shadow_rel_tol) against every epoch')
+    text += (f"\n{checked} heads checked: each head's shadow epoch is where the rule, applied to "
+             "its curve, says; its shadow score is that stopped head's (engine/tpa.h).\n")
+    with open(os.path.join(out, "stop-equivalence.md"), "w", encoding="utf-8") as f:
+        f.write(text)
+    with open(os.path.join(out, "stop-equivalence.json"), "w", encoding="utf-8") as f:
+        json.dump({"profile": a.profile, "rule": "tpa.shadow_rel_tol", "equivalent": ok,
+                   "rows": rows, "cost": cost, "heads_checked": checked}, f, indent=1)
+    print(text)
 
 
 # ---- --rule pref: the preference φ's rule (pref.stop), FPE and TPA ----
@@ -384,9 +480,9 @@ def main_pref(a, paths, out):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--rule", choices=("tpa", "pref"), default="tpa",
-                    help='the rule to test: tpa.stop (the reward heads, default) or pref.stop (the '
-                    'preference φ; FPE and TPA)')
+    ap.add_argument("--rule", choices=("tpa", "pref", "shadow"), default="tpa",
+                    help='the rule to test: tpa.stop (the reward heads, default), pref.stop (the '
+                    'preference φ; FPE and TPA) or the profile\'s tpa.shadow_rel_tol (one run)')
     ap.add_argument("--profile", default=None,
                     help="default bench/stop-equivalence-jaco.toml (--rule pref: "
                     "bench/stop-equivalence-jaco-pref.toml)")
@@ -403,6 +499,13 @@ def main():
     if not a.analyse_only and not os.access(a.sirl, os.X_OK):
         sys.exit(f"stop_equivalence: no sirl binary at {a.sirl} (./scripts/build.sh release)")
     os.makedirs(out, exist_ok=True)
+    if a.rule == "shadow":  # one run: the profile as it is
+        path = os.path.join(out, "fixed.h5")
+        if not a.analyse_only:
+            run(a.sirl, a.profile, [], path, a.threads, ["--cache", os.path.join(out, "tasks")])
+        if not os.path.isfile(path):
+            sys.exit(f"stop_equivalence: {path}: no results file (run without --analyse-only)")
+        return main_shadow(a, path, out)
     paths = {stop: os.path.join(out, stop + ".h5") for stop in ("fixed", "converged")}
     if not a.analyse_only:
         p = subprocess.run([a.sirl, "plan", a.profile, "--resolved"], capture_output=True,
