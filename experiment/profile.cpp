@@ -481,14 +481,18 @@ void parse_stop_rules(const Reader& r, const toml::table& t, const std::string& 
   }
 }
 
-// [tpa] stop: a tpa.stop rule per variant listed in [tpa] methods.
+// [tpa] stop: a tpa.stop rule per variant listed in [tpa] methods, or for the reference truth
+// (its paper-protocol cells are frozen heads on the true features) when the profile has
+// references.
 void parse_tpa_stop(const Reader& r, const toml::table& tpa, Profile& p) {
   parse_stop_rules(
       r, tpa, "[tpa]", p,
       [&](const std::string& name) {
         const bool listed = std::any_of(p.tpa.methods.begin(), p.tpa.methods.end(),
                                         [&](const Variant& v) { return v.name() == name; });
-        return listed ? std::string() : std::string("is not one of [tpa] methods");
+        if (listed || (p.references && name == Variant{Method::truth}.name())) return std::string();
+        return std::string("is not one of [tpa] methods") +
+               (p.references ? " nor the reference truth" : "");
       },
       [](const std::string& rule) {
         Hyper check;  // validate() names the rules

@@ -202,6 +202,27 @@ TEST(Plan, AnEnvironmentsStopRuleAppliesThereOnlyAndWinsOverTheGeneralOne) {
   EXPECT_EQ(rule("jaco", "sirl"), "fixed");
   EXPECT_EQ(rule("jaco", "random"), "converged-unfrozen");  // no entry: [hyper.jaco]'s rule
   EXPECT_EQ(rule("grid", "random"), "fixed");               // no entry: the default
+  // The reference truth's heads (frozen, on the true features) take a rule of their own too; a
+  // profile without references has no truth cells to give one.
+  const Profile t =
+      parse_profile(head + "stop = { jaco = { truth = \"converged\" } }\n" + hyper, "t.toml");
+  EXPECT_EQ(tpa_cell_hyper(t, "jaco", "", Variant{Method::truth}).tpa_stop, "converged");
+  EXPECT_EQ(tpa_cell_hyper(t, "jaco", "", parse_variant("sirl")).tpa_stop, "converged-unfrozen");
+  bool truth_cell = false;
+  for (const Task& c : make_plan(t).tasks)
+    if (c.kind == tpa_kind() && c.variant.method == Method::truth && c.env == "jaco") {
+      truth_cell = true;
+      EXPECT_EQ(c.hyper_values().tpa_stop, "converged") << c.key;
+    }
+  EXPECT_TRUE(truth_cell);
+  try {
+    parse_profile("references = false\n" + head + "stop = { truth = \"converged\" }\n" + hyper,
+                  "t.toml");
+    ADD_FAILURE() << "a rule for truth in a profile without references was accepted";
+  } catch (const ProfileError& e) {
+    EXPECT_NE(std::string(e.what()).find("'truth' is not one of [tpa] methods"), std::string::npos)
+        << e.what();
+  }
   const auto error = [&](const std::string& stop) {
     try {
       parse_profile(head + stop + hyper, "t.toml");
