@@ -300,10 +300,48 @@ void read_setting(const Reader& r, const toml::table& t, const std::string& tabl
            table + " " + k.key + " must be \"" + k.words[0] + "\" or \"" + k.words[1] + "\"");
   v = w == k.words[1];
 }
-// A list of integers, each in the declared range; an empty list is allowed.
+// A list of integers, each in the declared range; an empty list is allowed unless required.
 void read_setting(const Reader& r, const toml::table& t, const std::string&, const SettingInfo& k,
                   std::vector<int64_t>& v) {
-  if (t.get(k.key)) v = r.int_list(t, k.key, int64_t(k.lo), int64_t(k.hi), false);
+  if (t.get(k.key) || k.required)
+    v = r.int_list(t, k.key, int64_t(k.lo), int64_t(k.hi), k.required);
+}
+// Variant names ("sirl+vae", "sirl@vote"), each once; always required.
+void read_setting(const Reader& r, const toml::table& t, const std::string&, const SettingInfo& k,
+                  std::vector<Variant>& v) {
+  v = r.variants(t, k.key);
+}
+// Method names (the ablation's).
+void read_setting(const Reader& r, const toml::table& t, const std::string&, const SettingInfo& k,
+                  std::vector<Method>& v) {
+  v.clear();
+  for (const auto& s : r.string_list(t, k.key, k.required)) {
+    try {
+      v.push_back(parse_method(s));
+    } catch (const std::invalid_argument& e) {
+      r.fail(t.get(k.key), std::string(k.key) + ": " + e.what());
+    }
+  }
+}
+// "best" (empty: the paper's best mode per method) or a non-empty list of booleans.
+void read_setting(const Reader& r, const toml::table& t, const std::string&, const SettingInfo& k,
+                  std::vector<bool>& v) {
+  const toml::node* f = t.get(k.key);
+  if (!f) return;
+  const std::string expect = std::string(k.key) + " must be \"best\" or an array of booleans";
+  if (f->is_string()) {
+    if (*f->value<std::string>() != "best") r.fail(f, expect);
+    v.clear();
+  } else if (f->is_array()) {
+    v.clear();
+    for (auto&& e : *f->as_array()) {
+      if (!e.is_boolean()) r.fail(f, expect);
+      v.push_back(*e.value<bool>());
+    }
+    if (v.empty()) r.fail(f, std::string(k.key) + " must not be empty");
+  } else {
+    r.fail(f, expect);
+  }
 }
 
 // Every key of a declared section, for only_keys.
@@ -343,6 +381,15 @@ std::string key_rows(Settings settings, const S& defaults) {
     if constexpr (std::is_same_v<T, std::vector<int64_t>>) {
       type = "integer list";
       accepted = "each " + plain(k.lo) + " – " + plain(k.hi);
+    } else if constexpr (std::is_same_v<T, std::vector<Variant>>) {
+      type = "string list";
+      accepted = "variants: a method, `+vae`, `@<selection>` (methods.md)";
+    } else if constexpr (std::is_same_v<T, std::vector<Method>>) {
+      type = "string list";
+      accepted = "method names (methods.md)";
+    } else if constexpr (std::is_same_v<T, std::vector<bool>>) {
+      type = "string or boolean list";
+      accepted = "`\"best\"`, `[true]`, `[false]`, `[true, false]`";
     } else if constexpr (std::is_same_v<T, std::string>) {
       type = "string";
       accepted = "—";
@@ -364,6 +411,7 @@ std::string key_rows(Settings settings, const S& defaults) {
       if (k.axis) type += " or list";
     }
     if (k.default_text) def = k.default_text;
+    if (k.required) def = "required";
     out += "| `" + std::string(k.key) + "` | " + type + " | " + accepted + " | " + def + " | " +
            k.doc + " |\n";
   });
@@ -419,24 +467,8 @@ HyperValue hyper_value(const Reader& r, const toml::node& n, const std::string& 
 
 // [tpa] or [robustness] (the caller checks the table's keys): methods, N, M and which of
 // frozen/unfrozen to run.
-void parse_tpa(const Reader& r, const toml::table& tpa, TpaGrid& g) {
-  g.methods = r.variants(tpa, "methods");
-  g.N = r.int_list(tpa, "N", 1, 10'000'000, true);
-  g.M = r.int_list(tpa, "M", 1, 10'000'000, true);
-  if (const toml::node* f = tpa.get("frozen")) {
-    if (f->is_string()) {
-      if (*f->value<std::string>() != "best")
-        r.fail(f, "frozen must be \"best\" or an array of booleans");
-    } else if (f->is_array()) {
-      for (auto&& e : *f->as_array()) {
-        if (!e.is_boolean()) r.fail(f, "frozen must be \"best\" or an array of booleans");
-        g.frozen.push_back(*e.value<bool>());
-      }
-      if (g.frozen.empty()) r.fail(f, "frozen must not be empty");
-    } else {
-      r.fail(f, "frozen must be \"best\" or an array of booleans");
-    }
-  }
+void parse_tpa(const Reader& r, const toml::table& tpa, const std::string& name, TpaGrid& g) {
+  read_settings(r, tpa, name, kTpaSettings, g);
 }
 
 // stop = { sirl = "fixed", jaco = { "sirl+vae" = "converged" } } in `table` ("[tpa]", "[pref]"):
@@ -700,8 +732,8 @@ void parse_robustness(Reader& r, const toml::table& root, Profile& p) {
     r.fail(rb,
            "[robustness] needs noisy teachers: give a list for beta, mistake or attend in "
            "[teacher] (e.g. beta = [10, 1, 0])");
-  r.only_keys(*rb, "[robustness]", {"methods", "N", "M", "frozen"});
-  parse_tpa(r, *rb, p.robustness);  // its cells, as a [tpa] table's
+  r.only_keys(*rb, "[robustness]", setting_keys(kTpaSettings, TpaGrid{}));
+  parse_tpa(r, *rb, "[robustness]", p.robustness);  // its cells, as a [tpa] table's
 }
 
 // [fpe], [tpa], [ablation]: which cells run.
@@ -716,28 +748,20 @@ void parse_cells(Reader& r, const toml::table& root, Profile& p) {
            "nothing to run: give at least one of [fpe], [tpa], [ablation], [robustness] or "
            "[study]");
   if (fpe) {
-    r.only_keys(*fpe, "[fpe]", {"methods", "N"});
-    p.fpe_methods = r.variants(*fpe, "methods");
-    p.fpe_N = r.int_list(*fpe, "N", 1, 10'000'000, true);
+    r.only_keys(*fpe, "[fpe]", setting_keys(kFpeSettings, p));
+    read_settings(r, *fpe, "[fpe]", kFpeSettings, p);
   }
   if (tpa) {
-    r.only_keys(*tpa, "[tpa]", {"methods", "N", "M", "frozen", "stop", "protocols"});
-    parse_tpa(r, *tpa, p.tpa);
+    std::set<std::string> keys = setting_keys(kTpaSettings, p.tpa);
+    keys.insert({"stop", "protocols"});
+    r.only_keys(*tpa, "[tpa]", keys);
+    parse_tpa(r, *tpa, "[tpa]", p.tpa);
     parse_tpa_stop(r, *tpa, p);
     parse_tpa_protocols(r, *tpa, p);
   }
-
   if (const auto* ab = r.table(root, "ablation", false)) {
-    r.only_keys(*ab, "[ablation]", {"methods", "N", "M"});
-    for (const auto& s : r.string_list(*ab, "methods", true)) {
-      try {
-        p.ablation_methods.push_back(parse_method(s));
-      } catch (const std::invalid_argument& e) {
-        r.fail(ab->get("methods"), std::string("methods: ") + e.what());
-      }
-    }
-    p.ablation_N = r.int_list(*ab, "N", 1, 10'000'000, true);
-    p.ablation_M = r.int_list(*ab, "M", 1, 10'000'000, true);
+    r.only_keys(*ab, "[ablation]", setting_keys(kAblationSettings, p));
+    read_settings(r, *ab, "[ablation]", kAblationSettings, p);
   }
 }
 
@@ -1165,6 +1189,16 @@ std::string protocols_section() {
 std::string profile_keys_markdown() {
   return keys_section("[queries]", "Each seed's query budgets.",
                       key_rows(kQueriesSettings, QueryBundleConfig{})) +
+         keys_section("[fpe]", "Which FPE cells run (Fig. 4): every method at every N.",
+                      key_rows(kFpeSettings, Profile{})) +
+         keys_section("[tpa], [robustness]",
+                      "Which TPA cells run (Fig. 5): every method at every N × M in the modes "
+                      "`frozen` gives. `[robustness]` takes the same keys for the cells of the "
+                      "noisy teachers `[teacher]` lists; `[tpa]` also takes `stop` and "
+                      "`protocols` (below).",
+                      key_rows(kTpaSettings, TpaGrid{})) +
+         keys_section("[ablation]", "Fig. 7: the pre-training and fine-tuning ablation.",
+                      key_rows(kAblationSettings, Profile{})) +
          keys_section("[teacher]",
                       "The simulated human who answers every query (the paper's: the perfect "
                       "oracle). A list for `beta`, `mistake` or `attend` keeps the main teacher's "

@@ -32,6 +32,7 @@ struct SettingInfo {
   // The default as the reference page states it, where it is not the struct's value (an
   // environment's lists default to the profile's).
   const char* default_text = nullptr;
+  bool required = false;  // the table must give it (a list: not empty)
 };
 
 // [queries]: each seed's query budgets.
@@ -135,6 +136,57 @@ inline constexpr auto kEnvTableSettings = [](auto& g, auto&& f) {
                 false,
                 "true; false for sampled environments (JacoRobot's 3.1 M-float φ)"},
     g.store_weights);
+};
+
+// The grid: which cells run. A table's presence runs its part of the grid; [tpa] also takes
+// `stop` and `protocols` (below), [robustness] is read as [tpa]'s cells for the noisy teachers.
+// Methods are variant names (`sirl`, `sirl+vae`, `sirl@vote`, …: docs/methods.md); [ablation]
+// takes method names and runs each with and without VAE pre-training, frozen and unfrozen.
+inline constexpr auto kFpeSettings = [](auto& p, auto&& f) {
+  f(SettingInfo{.key = "methods", .doc = "the methods whose FPE is measured", .required = true},
+    p.fpe_methods);
+  f(SettingInfo{.key = "N",
+                .lo = 1,
+                .hi = 1e7,
+                .doc = "similarity triplets each φ learns from",
+                .required = true},
+    p.fpe_N);
+};
+inline constexpr auto kTpaSettings = [](auto& g, auto&& f) {
+  f(SettingInfo{.key = "methods", .doc = "the methods whose TPA is measured", .required = true},
+    g.methods);
+  f(
+      SettingInfo{
+          .key = "N", .lo = 1, .hi = 1e7, .doc = "triplets each φ learns from", .required = true},
+      g.N);
+  f(SettingInfo{.key = "M",
+                .lo = 1,
+                .hi = 1e7,
+                .doc = "labelled pairs each reward head learns from",
+                .required = true},
+    g.M);
+  f(SettingInfo{.key = "frozen",
+                .doc = "\"best\" (the paper's: SIRL frozen, the others unfrozen) or a list of "
+                       "booleans (each mode listed runs for every method)",
+                .default_text = "`\"best\"`"},
+    g.frozen);
+};
+inline constexpr auto kAblationSettings = [](auto& p, auto&& f) {
+  f(SettingInfo{.key = "methods",
+                .doc = "methods (not variants), each run with and without VAE pre-training, "
+                       "frozen and unfrozen",
+                .required = true},
+    p.ablation_methods);
+  f(
+      SettingInfo{
+          .key = "N", .lo = 1, .hi = 1e7, .doc = "triplets each φ learns from", .required = true},
+      p.ablation_N);
+  f(SettingInfo{.key = "M",
+                .lo = 1,
+                .hi = 1e7,
+                .doc = "labelled pairs each reward head learns from",
+                .required = true},
+    p.ablation_M);
 };
 
 // [tpa] protocols: the ways a TPA cell reads out a reward from φ, each listed at most once.

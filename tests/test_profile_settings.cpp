@@ -227,6 +227,61 @@ TEST(ProfileSettings, ATeacherListIsANoiseAxisOnlyForTheDeclaredAxisKeys) {
   EXPECT_TRUE(std::isinf(p.queries.teacher.beta));
 }
 
+// The grid's tables: each required key of [fpe], [tpa] and [ablation], left out, is refused by
+// name with the table's line; each integer list's declared lower bound is accepted and one
+// below it refused with the value and the range.
+TEST(ProfileSettings, EveryRequiredKeyOfTheGridsTablesIsDemandedAndItsListsRanged) {
+  const std::string base = test::kSmallProfile;
+  const auto table_text = [&](const std::string& name) {
+    const size_t from = base.find("[" + name + "]");
+    const size_t to = base.find("\n[", from + 1);
+    return std::make_pair(from, to + 1);
+  };
+  const auto check = [&](const std::string& name, auto settings, const auto& defaults) {
+    int required = 0;
+    settings(defaults, [&](const SettingInfo& k, const auto& field) {
+      if (!k.required) return;
+      ++required;
+      SCOPED_TRACE("[" + name + "] " + k.key);
+      const auto [from, to] = table_text(name);
+      std::string table = base.substr(from, to - from), text = base;
+      const size_t at = table.find("\n" + std::string(k.key) + " = ");
+      ASSERT_NE(at, std::string::npos) << table;
+      const size_t end = table.find('\n', at + 1);
+      std::string without = table;
+      without.erase(at, end - at);
+      text.replace(from, to - from, without);
+      const int line = int(std::count(base.begin(), base.begin() + from, '\n')) + 1;
+      const std::string m = test::profile_error_of(text);
+      EXPECT_NE(m.find("bad.toml:" + std::to_string(line) + ": missing key '" + k.key + "'"),
+                std::string::npos)
+          << m;
+      using T = std::decay_t<decltype(field)>;
+      if constexpr (std::is_same_v<T, std::vector<int64_t>>) {
+        for (const auto& [v, ok] : {std::pair{k.lo, true}, {k.lo - 1, false}}) {
+          std::string with = table;
+          with.replace(at + 1, end - at - 1,
+                       std::string(k.key) + " = [" + toml_number(v, true) + "]");
+          std::string t2 = base;
+          t2.replace(from, to - from, with);
+          const std::string e = test::profile_error_of(t2);
+          if (ok)
+            EXPECT_EQ(e.find("is outside"), std::string::npos) << e;
+          else
+            EXPECT_NE(e.find(std::string(k.key) + ": " + toml_number(v, true) + " is outside [" +
+                             toml_number(k.lo, true) + ", "),
+                      std::string::npos)
+                << e;
+        }
+      }
+    });
+    EXPECT_GE(required, 2) << name;
+  };
+  check("fpe", kFpeSettings, Profile{});
+  check("tpa", kTpaSettings, TpaGrid{});
+  check("ablation", kAblationSettings, Profile{});
+}
+
 // [tpa] protocols: each declared protocol alone is accepted; an unknown name is refused with a
 // message naming every declared one; a profile without the key runs all of them.
 TEST(ProfileSettings, TpaProtocolsAreTheDeclaredOnes) {
