@@ -283,7 +283,12 @@ void read_setting(const Reader& r, const toml::table& t, const std::string&, con
 }
 void read_setting(const Reader& r, const toml::table& t, const std::string&, const SettingInfo& k,
                   std::string& v) {
-  v = r.string(t, k.key, v);
+  v = r.string(t, k.key, v, k.required);
+}
+// A list of strings (names checked by the caller).
+void read_setting(const Reader& r, const toml::table& t, const std::string&, const SettingInfo& k,
+                  std::vector<std::string>& v) {
+  if (t.get(k.key) || k.required) v = r.string_list(t, k.key, k.required);
 }
 void read_setting(const Reader& r, const toml::table& t, const std::string& table,
                   const SettingInfo& k, bool& v) {
@@ -378,7 +383,10 @@ std::string key_rows(Settings settings, const S& defaults) {
   settings(defaults, [&](const SettingInfo& k, const auto& field) {
     using T = std::decay_t<decltype(field)>;
     std::string type, accepted, def;
-    if constexpr (std::is_same_v<T, std::vector<int64_t>>) {
+    if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+      type = "string list";
+      accepted = "—";
+    } else if constexpr (std::is_same_v<T, std::vector<int64_t>>) {
       type = "integer list";
       accepted = "each " + plain(k.lo) + " – " + plain(k.hi);
     } else if constexpr (std::is_same_v<T, std::vector<Variant>>) {
@@ -1103,25 +1111,22 @@ namespace {
 Profile parse_profile_table(const toml::table& root, const std::string& text,
                             const std::string& path) {
   Reader r(root, path);
-  std::set<std::string> top{"name",           "description",  "envs",     "seeds",
-                            "queries",        "teacher",      "fpe",      "tpa",
-                            "ablation",       "hyper",        "study",    "robustness",
-                            "active",         "precision",    "external", "references",
-                            "budget_minutes", "environments", "pref"};
+  Profile p;
+  // The top level: its declared keys and the tables.
+  std::set<std::string> top = setting_keys(kProfileSettings, p);
+  top.insert({"queries", "teacher", "fpe", "tpa", "ablation", "hyper", "study", "robustness",
+              "active", "external", "environments", "pref"});
   parse_file_environments(r, root, path, top);
   for (const auto& e : environments()) top.insert(e.name);  // each environment's own table
   r.only_keys(root, "the profile", top);
-  Profile p;
   p.path = path;
   p.text = text;
-  p.name = r.string(root, "name", "", true);
-  p.description = r.string(root, "description", "");
+  read_settings(r, root, "the profile", kProfileSettings, p);
   if (p.description.size() > kMaxDescriptionBytes)
     r.fail(root.get("description"), "description: " + std::to_string(p.description.size()) +
                                         " characters; at most " +
                                         std::to_string(kMaxDescriptionBytes) +
                                         " (a few lines: it heads `sirl plan` and the report)");
-  p.envs = r.string_list(root, "envs", true);
   for (const auto& e : p.envs) {
     try {
       env_spec(e);
@@ -1129,20 +1134,12 @@ Profile parse_profile_table(const toml::table& root, const std::string& text,
       r.fail(root.get("envs"), err.what());
     }
   }
-  parse_data_tables(r, root, p.data);
-  p.budget_minutes = r.number(root, "budget_minutes", 0, 0, 1e8);
-  p.precision = r.string(root, "precision", "fp32");
-  if (const toml::node* n = root.get("references")) {
-    if (!n->is_boolean())
-      r.fail(n, "references must be true (the default: truth and raw beside the methods) or false");
-    p.references = *n->value<bool>();
-  }
   try {
     validate_precision(p.precision);
   } catch (const std::invalid_argument& e) {
     r.fail(root.get("precision"), e.what());
   }
-  p.seeds = r.int_list(root, "seeds", 0, 1'000'000'000, true);
+  parse_data_tables(r, root, p.data);
   parse_queries(r, root, p);
   parse_cells(r, root, p);
   parse_external(r, root, p);
@@ -1187,7 +1184,11 @@ std::string protocols_section() {
 }  // namespace
 
 std::string profile_keys_markdown() {
-  return keys_section("[queries]", "Each seed's query budgets.",
+  return keys_section("the top level",
+                      "What the profile is and runs on; `extends = \"P\"` (or a list) starts "
+                      "from another profile's tables (running.md).",
+                      key_rows(kProfileSettings, Profile{})) +
+         keys_section("[queries]", "Each seed's query budgets.",
                       key_rows(kQueriesSettings, QueryBundleConfig{})) +
          keys_section("[fpe]", "Which FPE cells run (Fig. 4): every method at every N.",
                       key_rows(kFpeSettings, Profile{})) +

@@ -138,6 +138,38 @@ inline constexpr auto kEnvTableSettings = [](auto& g, auto&& f) {
     g.store_weights);
 };
 
+// The top level: what the profile is and what it runs on (the tables are read by their own
+// declarations). `extends` is resolved before (load_profile).
+inline constexpr auto kProfileSettings = [](auto& p, auto&& f) {
+  f(SettingInfo{.key = "name", .doc = "the profile's name (results, reports)", .required = true},
+    p.name);
+  f(SettingInfo{.key = "description", .doc = "a few lines heading `sirl plan` and the report"},
+    p.description);
+  f(SettingInfo{.key = "envs",
+                .doc = "the environments it runs (grid, grid2, jaco, jaco2, "
+                       "driver, or a file's: [environments.<name>])",
+                .required = true},
+    p.envs);
+  f(SettingInfo{.key = "seeds",
+                .lo = 0,
+                .hi = 1e9,
+                .doc = "the seeds every environment runs",
+                .required = true},
+    p.seeds);
+  f(SettingInfo{.key = "budget_minutes",
+                .lo = 0,
+                .hi = 1e8,
+                .doc = "the wall time it is meant to fit (0: none); `sirl reproduce` warns when "
+                       "this machine's prediction is well over"},
+    p.budget_minutes);
+  f(SettingInfo{.key = "precision",
+                .doc = "\"fp32\" (the paper's) or \"bf16\" matrix products (fp32 accumulation)"},
+    p.precision);
+  f(SettingInfo{.key = "references",
+                .doc = "score the references truth and raw beside the methods"},
+    p.references);
+};
+
 // The grid: which cells run. A table's presence runs its part of the grid; [tpa] also takes
 // `stop` and `protocols` (below), [robustness] is read as [tpa]'s cells for the noisy teachers.
 // Methods are variant names (`sirl`, `sirl+vae`, `sirl@vote`, …: docs/methods.md); [ablation]
