@@ -785,19 +785,18 @@ void parse_external(Reader& r, const toml::table& root, Profile& p) {
     if (!node.is_table()) r.fail(&node, "[external." + name + "] must be a table");
     const toml::table& t = *node.as_table();
     if (const std::string why = external_name_problem(name); !why.empty()) r.fail(&node, why);
-    r.only_keys(t, "[external." + name + "]", {"embeddings", "xxh3", "description", "envs"});
+    r.only_keys(t, "[external." + name + "]", setting_keys(kExternalSettings, ExternalMethod{}));
     ExternalMethod m;
     m.name = name;
-    m.embeddings = r.string(t, "embeddings", "", true);
+    m.envs = p.envs;
+    read_settings(r, t, "[external." + name + "]", kExternalSettings, m);
     if (m.embeddings.empty()) r.fail(t.get("embeddings"), "embeddings must name a file");
+    if (t.get("envs") && m.envs.empty()) r.fail(t.get("envs"), "envs must not be empty");
     m.embeddings = (base / m.embeddings).lexically_normal().string();
-    m.xxh3 = r.string(t, "xxh3", "", true);
     if (m.xxh3.size() != 32 || m.xxh3.find_first_not_of("0123456789abcdef") != std::string::npos)
       r.fail(t.get("xxh3"),
              "xxh3 must be the file's XXH3-128 as 32 lowercase hex digits (`xxh128sum " +
                  m.embeddings + "` prints it)");
-    m.description = r.string(t, "description", "");
-    m.envs = t.get("envs") ? r.string_list(t, "envs", true) : p.envs;
     for (const auto& e : m.envs)
       if (std::find(p.envs.begin(), p.envs.end(), e) == p.envs.end())
         r.fail(t.get("envs"), "envs: '" + e + "' is not one of the profile's envs");
@@ -829,19 +828,14 @@ void parse_file_environments(Reader& r, const toml::table& root, const std::stri
     // that is a profile section, or [hyper.all], would be read as the wrong table.
     if (sections.count(e.name) || e.name == "all")
       r.fail(&node, where + ": '" + e.name + "' names a profile section; choose another name");
-    r.only_keys(t, where, {"file", "xxh3", "dataset", "title", "description", "streams"});
-    e.path = r.string(t, "file", "", true);
+    r.only_keys(t, where, setting_keys(kFileEnvironmentSettings, FileEnvironment{}));
+    read_settings(r, t, where, kFileEnvironmentSettings, e);
     if (e.path.empty()) r.fail(t.get("file"), "file must name an environment file");
     e.path = (base / e.path).lexically_normal().string();
-    e.xxh3 = r.string(t, "xxh3", "", true);
     if (e.xxh3.size() != 32 || e.xxh3.find_first_not_of("0123456789abcdef") != std::string::npos)
       r.fail(t.get("xxh3"),
              "xxh3 must be the file's XXH3-128 as 32 lowercase hex digits (`xxh128sum " + e.path +
                  "` prints it)");
-    e.group = r.string(t, "dataset", "");
-    e.title = r.string(t, "title", "");
-    e.description = r.string(t, "description", "");
-    e.streams = r.string(t, "streams", "");
     for (const std::string* text : {&e.group, &e.title, &e.description})
       for (char c : *text)
         if ((c >= 0 && c < 0x20) || c == 0x7f)
@@ -1212,6 +1206,16 @@ std::string profile_keys_markdown() {
                       "that environment reads (`trajectories`, …; see running.md).",
                       key_rows(kEnvTableSettings, EnvAxes{})) +
          protocols_section() +
+         keys_section("[external.<name>]",
+                      "A representation trained elsewhere, read from its embeddings file; it joins "
+                      "`[fpe]` and `[tpa]` (frozen) under its name (external-methods.md). A "
+                      "relative path is the profile file's folder's.",
+                      key_rows(kExternalSettings, ExternalMethod{})) +
+         keys_section("[environments.<name>]",
+                      "An environment read from a file (environment-files.md), then named in "
+                      "`envs` like a built-in one. A relative path is the profile file's "
+                      "folder's.",
+                      key_rows(kFileEnvironmentSettings, FileEnvironment{})) +
          keys_section("[active], [active.<env>]",
                       "How an active variant's ensemble asks (`sirl@vote`, `sirl@infogain`); "
                       "`[active.<env>]` overrides `[active]` key by key; pool must be at least "

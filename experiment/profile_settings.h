@@ -221,6 +221,51 @@ inline constexpr auto kAblationSettings = [](auto& p, auto&& f) {
     p.ablation_M);
 };
 
+// [external.<name>]: a representation trained elsewhere, read from its embeddings file (it joins
+// [fpe] and [tpa], frozen; external-methods.md). Paths are the profile file's folder's.
+inline constexpr auto kExternalSettings = [](auto& m, auto&& f) {
+  f(SettingInfo{.key = "embeddings",
+                .doc = "its embeddings file (`sirl evaluate` checks one)",
+                .required = true},
+    m.embeddings);
+  f(SettingInfo{.key = "xxh3",
+                .doc = "the file's XXH3-128, 32 lowercase hex digits (`xxh128sum FILE`): a "
+                       "changed file is refused",
+                .required = true},
+    m.xxh3);
+  f(SettingInfo{.key = "description", .doc = "one line for the report"}, m.description);
+  f(SettingInfo{.key = "envs",
+                .doc = "the environments it has embeddings for",
+                .default_text = "the profile's envs"},
+    m.envs);
+};
+
+// [environments.<name>]: an environment read from a file (environment-files.md), registered
+// before `envs` and the environments' own tables are read.
+inline constexpr auto kFileEnvironmentSettings = [](auto& e, auto&& f) {
+  f(SettingInfo{.key = "file", .doc = "the environment file", .required = true}, e.path);
+  f(SettingInfo{.key = "xxh3",
+                .doc = "the file's XXH3-128, 32 lowercase hex digits (`xxh128sum FILE`)",
+                .required = true},
+    e.xxh3);
+  f(SettingInfo{.key = "dataset",
+                .doc = "its group /datasets/<dataset> in the file (≤ 256 characters)",
+                .default_text = "the name"},
+    e.group);
+  f(SettingInfo{.key = "title",
+                .doc = "its title in figures (≤ 64 characters)",
+                .default_text = "the name"},
+    e.title);
+  f(SettingInfo{.key = "description",
+                .doc = "one line (≤ 400 characters)",
+                .default_text = "read from <file>"},
+    e.description);
+  f(SettingInfo{.key = "streams",
+                .doc = "the environment whose random streams it draws from",
+                .default_text = "its own"},
+    e.streams);
+};
+
 // [tpa] protocols: the ways a TPA cell reads out a reward from φ, each listed at most once.
 struct ProtocolInfo {
   const char* name;
