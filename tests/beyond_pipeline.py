@@ -67,8 +67,7 @@ round_epochs = 10
 """
 
 
-def fail(msg):
-    sys.exit("FAIL: " + msg)
+fail = sirl_testing.make_fail("beyond_pipeline")
 
 
 def run(*args):

@@ -15,6 +15,9 @@ import sys
 import tempfile
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
+
 SRC = os.environ["SIRL_SOURCE_DIR"]
 BUILD = os.environ["SIRL_BUILD_DIR"]
 SCRIPT = os.environ.get("SIRL_COMPARE_KERNELS", os.path.join(SRC, "bench", "compare_kernels.py"))
@@ -29,10 +32,7 @@ FP32_HEADER = "| case | threads | ours ms | ours GFLOP/s |"
 BF16_HEADER = "| case | threads | ours bf16 ms |"
 
 
-def fail(msg, p=None):
-    if p is not None:
-        msg += f"\n--- exit {p.returncode}; stdout:\n{p.stdout}\n--- stderr:\n{p.stderr[-3000:]}"
-    sys.exit("FAIL: " + msg)
+fail = sirl_testing.make_fail("compare_kernels_tiny")
 
 
 def compare(*args, timeout=240):

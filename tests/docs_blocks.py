@@ -71,9 +71,7 @@ def commands(lang, code):
     return "\n".join(out)
 
 
-def fail(msg):
-    print("docs_blocks: FAIL:", msg)
-    sys.exit(1)
+fail = sirl_testing.make_fail("docs_blocks")
 
 
 def blocks():

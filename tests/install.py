@@ -25,9 +25,7 @@ import sirl_testing  # noqa: E402
 SIRL_BUILD = os.environ["SIRL_BUILD_DIR"]
 
 
-def fail(msg):
-    print("install: FAIL:", msg)
-    sys.exit(1)
+fail = sirl_testing.make_fail("install")
 
 
 def main():

@@ -5,8 +5,9 @@ It holds only what three or more tests repeated with the same behaviour:
 - where things are: `sirl_binary()`, `source_dir()`, `build_dir()` read the SIRL,
   SIRL_SOURCE_DIR and SIRL_BUILD_DIR environment variables ctest sets (tests/CMakeLists.txt), a
   missing one raising KeyError as `os.environ[...]` does; `data_path(name)` is tests/data/NAME;
-- `make_fail(test_name)`: a test's `fail(msg)`, which prints "TEST_NAME: FAIL: MSG" to stdout
-  and exits 1;
+- `make_fail(test_name)`: a test's `fail(msg, p=None)`, which prints "TEST_NAME: FAIL: MSG" to
+  stdout (with the exit code and the tails of stdout and stderr of `p`, a CompletedProcess, when
+  given) and exits 1;
 - `run_sirl(*args, timeout=...)`: runs the sirl binary with stdout and stderr captured (text by
   default), stdin closed, and the given timeout; it returns the CompletedProcess and checks
   nothing, each test judging the exit code and wording its own failure message;
@@ -51,8 +52,14 @@ def data_path(name):
 
 
 def make_fail(test_name):
-    """A `fail(msg)` printing "TEST_NAME: FAIL: MSG" and exiting 1."""
-    def fail(msg):
+    """A `fail(msg, p=None)` printing "TEST_NAME: FAIL: MSG" and exiting 1; with `p` (a
+    CompletedProcess) the message ends with its exit code and the tails of its output."""
+    def fail(msg, p=None):
+        if p is not None:
+            out, err = p.stdout or "", p.stderr or ""
+            if isinstance(out, bytes):
+                out, err = out.decode(errors="replace"), err.decode(errors="replace")
+            msg += f"\n--- exit {p.returncode}; stdout:\n{out[-4000:]}\n--- stderr:\n{err[-3000:]}"
         print(f"{test_name}: FAIL:", msg)
         sys.exit(1)
     return fail

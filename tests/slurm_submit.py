@@ -34,8 +34,7 @@ DATA = SRC / "tests" / "data"
 ENGINE_TEST, SLOW = str(DATA / "engine-test.toml"), str(DATA / "slow-training.toml")
 
 
-def fail(msg):
-    sys.exit("FAIL: " + msg)
+fail = sirl_testing.make_fail("slurm_submit")
 
 
 def skip_or_fail(why):

@@ -27,12 +27,11 @@ SEEDS, PREF_EPOCHS = 3, 60  # as the profile says
 sys.path.insert(0, os.path.join(SRC, "python"))
 import sirl_bench  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
 
-def fail(msg, p=None):
-    if p is not None:
-        msg += f"\n--- exit {p.returncode}; stdout:\n{p.stdout[-4000:]}\n--- stderr:\n" \
-               f"{p.stderr[-3000:]}"
-    sys.exit("FAIL: " + msg)
+
+fail = sirl_testing.make_fail("stop_equivalence_pref_tiny")
 
 
 def load_script():

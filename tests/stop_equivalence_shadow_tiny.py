@@ -23,12 +23,11 @@ SEEDS, CELLS_PER_SEED, HEADS = 3, 3 * 2, 20  # sirl, random, truth at M = 10 and
 sys.path.insert(0, os.path.join(SRC, "python"))
 import sirl_bench  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import sirl_testing  # noqa: E402
 
-def fail(msg, p=None):
-    if p is not None:
-        msg += f"\n--- exit {p.returncode}; stdout:\n{p.stdout[-4000:]}\n--- stderr:\n" \
-               f"{p.stderr[-3000:]}"
-    sys.exit("FAIL: " + msg)
+
+fail = sirl_testing.make_fail("stop_equivalence_shadow_tiny")
 
 
 def main():

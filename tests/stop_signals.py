@@ -22,8 +22,7 @@ SIRL = sirl_testing.sirl_binary()
 SLOW = sirl_testing.data_path("slow-training.toml")
 
 
-def fail(msg):
-    sys.exit("FAIL: " + msg)
+fail = sirl_testing.make_fail("stop_signals")
 
 
 def tables(path):
