@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "datasets/environments.h"
+#include "engine/method_catalog.h"
 #include "experiment/expected_epochs.h"
 #include "experiment/plan.h"
 #include "experiment/profile.h"
@@ -262,6 +263,27 @@ TEST(Plan, ThePaperProfileStopsHeadsOnlyWhereARuleWasTestedEquivalent) {
   }
   EXPECT_GT(stopped, 0);
   EXPECT_LT(total, protocol);  // what `sirl plan paper` prints as executed against the protocol
+}
+
+// The paper profile stops a preference φ by pref.stop only where the rule's test held
+// (docs/stopping-rule.md, "Preference φ that stop when they have learned"): JacoRobot's φ of the
+// methods whose FPE and TPA were both equivalent, without VAE pre-training; every other φ runs
+// the paper's 5000 epochs.
+TEST(Plan, ThePaperProfileStopsPreferencePhiOnlyWhereTheRuleWasTestedEquivalent) {
+  const std::set<std::string> held = {};  // the methods equivalent on both metrics
+  const Profile p = load_profile("paper");
+  int prefs = 0;
+  for (const Task& t : make_plan(p).tasks) {
+    if (!(t.kind == rep_kind()) || !method_spec(t.variant.method).training.preferences) continue;
+    ++prefs;
+    const bool want = t.env == "jaco" && !t.variant.vae && held.count(t.variant.name());
+    EXPECT_EQ(t.hyper_values().pref_stop, want ? "converged" : "fixed") << t.key;
+    if (want) {
+      EXPECT_EQ(t.hyper_values().pref_stop_min_epochs, 500) << t.key;
+      EXPECT_EQ(t.hyper_values().pref_stop_rel_tol, 0.01) << t.key;
+    }
+  }
+  EXPECT_GT(prefs, 0);
 }
 
 TEST(Plan, TaskCountsMatchTheGrid) {
