@@ -271,41 +271,44 @@ TEST(Tpa, FrozenHeadsStopAtTheFrozenTolerance) {
 
 // tpa.shadow_rel_tol: a run whose heads train every epoch also scores each head where the
 // "converged" rule at that tolerance would have stopped it. That score must be the run stopped by
-// the rule, bit for bit (its stopping epochs, held-out accuracies and TPA), while the run itself
-// stays the fixed run without a shadow; for any thread count and stretch, and across a resume
-// from a checkpoint taken after some heads' shadow stops.
+// the rule, bit for bit (its stopping epochs, held-out accuracies and TPA), in frozen and unfrozen
+// cells (where each head's parameters include its copy of φ). In a frozen cell also: the run itself
+// stays the fixed run without a shadow, and the shadow is the same for another thread count and
+// stretch and across a resume from a checkpoint taken after some heads' shadow stops. (The
+// unfrozen cell shares that machinery; it is left out of those to keep the test short under the
+// sanitizers.)
 TEST(Tpa, TheShadowRuleScoresEachHeadAsTheRunStoppedByThatRule) {
   const World& w = world();
   for (bool frozen : {true, false}) {
     SCOPED_TRACE(frozen ? "frozen" : "unfrozen");
-    Hyper plain = stopping_hyper(300, "fixed"), watched = plain, stopped = plain;
+    Hyper plain = stopping_hyper(100, "fixed"), watched = plain, stopped = plain;
     watched.tpa_shadow_rel_tol = 0.002;
     stopped.tpa_stop = "converged";
     stopped.tpa_stop_rel_tol = stopped.tpa_stop_frozen_rel_tol = 0.002;
-    const TpaResult fixed = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, {20, frozen, plain}, 5);
     const TpaResult shadow =
         evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, {20, frozen, watched}, 5);
     const TpaResult conv =
         evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, {20, frozen, stopped}, 5);
-    EXPECT_TRUE(fixed.shadow_epochs.empty());  // no shadow unless asked for
-    EXPECT_EQ(shadow.accuracy, fixed.accuracy);
-    EXPECT_TRUE(same_bits(shadow.loss_curves, fixed.loss_curves));
-    EXPECT_EQ(shadow.head_epochs, std::vector<int>(20, 300));
+    EXPECT_EQ(shadow.head_epochs, std::vector<int>(20, 100));
     EXPECT_EQ(shadow.shadow_epochs, conv.head_epochs);
     EXPECT_EQ(shadow.shadow_accuracy, conv.accuracy);
     EXPECT_EQ(shadow.shadow_mean, conv.mean);
     const auto [lo, hi] = std::minmax_element(conv.head_epochs.begin(), conv.head_epochs.end());
     EXPECT_LT(*lo, *hi) << "every head stopped at one epoch: a weak test";
-    EXPECT_LT(*lo, 300) << "no head stopped early: a weak test";
+    EXPECT_LT(*lo, 100) << "no head stopped early: a weak test";
     EXPECT_NE(shadow.shadow_accuracy, shadow.accuracy) << "stopping changed no score: a weak test";
+    if (!frozen) continue;
+    const TpaResult fixed = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, {20, frozen, plain}, 5);
+    EXPECT_TRUE(fixed.shadow_epochs.empty());  // no shadow unless asked for
+    EXPECT_EQ(shadow.accuracy, fixed.accuracy);
+    EXPECT_TRUE(same_bits(shadow.loss_curves, fixed.loss_curves));
     const TpaResult b = evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, {20, frozen, watched}, 5,
                                      {.threads = 2, .stretch_steps = 7});
     EXPECT_EQ(b.shadow_epochs, shadow.shadow_epochs) << "2 threads, stretch 7";
     EXPECT_EQ(b.shadow_accuracy, shadow.shadow_accuracy) << "2 threads, stretch 7";
     // Killed after the epoch by which the earliest head's shadow has fired, then resumed.
-    const int kill_at = *lo + 1;
     MemoryCheckpointer c;
-    c.stop_after = kill_at;
+    c.stop_after = *lo + 1;
     EXPECT_THROW(evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, {20, frozen, watched}, 5,
                               {.threads = 1, .checkpointer = &c, .stretch_steps = 1}),
                  Interrupted);
@@ -318,7 +321,7 @@ TEST(Tpa, TheShadowRuleScoresEachHeadAsTheRunStoppedByThatRule) {
     EXPECT_EQ(resumed.accuracy, shadow.accuracy);
   }
   // Where the heads stop by a real rule there is nothing to watch: no shadow.
-  Hyper both = stopping_hyper(100, "converged");
+  Hyper both = stopping_hyper(40, "converged");
   both.tpa_shadow_rel_tol = 0.002;
   EXPECT_TRUE(
       evaluate_tpa(trained().sirl, w.d, w.bundle.tpa, {20, true, both}, 5).shadow_epochs.empty());
