@@ -138,6 +138,21 @@ def check_stops(fixed_path, conv_path):
     return checked
 
 
+def method_rows(cells, margin, **extra):
+    """Per (env, method): the seed-paired TOST of converged − fixed on the method's mean over its
+    cells (one dict each, `extra` fields first)."""
+    rows = []
+    per_seed = cells.groupby(["env", "variant", "seed"])[["fixed", "converged"]].mean()
+    for (env, variant), g in per_seed.groupby(level=[0, 1]):
+        diffs = list((g.converged - g.fixed).astype(float))
+        mean, ci, p = tost(diffs, margin)
+        rows.append({**extra, "env": env, "method": variant, "seeds": len(diffs),
+                     "fixed": float(g.fixed.mean()), "converged": float(g.converged.mean()),
+                     "diff": mean, "ci90": ci, "margin": margin, "p_tost": p,
+                     "equivalent": bool(p < ALPHA)})
+    return rows
+
+
 def compare(fixed_path, conv_path):
     a, b = tables(fixed_path), tables(conv_path)
     ta, tb = a["tpa"].set_index(CELL).tpa, b["tpa"].set_index(CELL).tpa
@@ -149,15 +164,7 @@ def compare(fixed_path, conv_path):
         epochs_min=("epochs", "min"), epochs_median=("epochs", "median"),
         epochs_max=("epochs", "max"), stopped=("stopped", "mean"))
     cells = cells.join(heads).reset_index()
-    rows = []
-    per_seed = cells.groupby(["env", "variant", "seed"])[["fixed", "converged"]].mean()
-    for (env, variant), g in per_seed.groupby(level=[0, 1]):
-        diffs = list((g.converged - g.fixed).astype(float))
-        mean, ci, p = tost(diffs, MARGIN)
-        rows.append({"env": env, "method": variant, "seeds": len(diffs),
-                     "fixed": float(g.fixed.mean()), "converged": float(g.converged.mean()),
-                     "diff": mean, "ci90": ci, "margin": MARGIN, "p_tost": p,
-                     "equivalent": bool(p < ALPHA)})
+    rows = method_rows(cells, MARGIN)
     cost = {}
     for side, t in (("fixed", a["timings"]), ("converged", b["timings"])):
         tp = t[t.kind == "tpa"]
@@ -259,15 +266,7 @@ def compare_shadow(path):
         flops["converged"] += float(r.protocol_flops) * float(e.mean()) / cap
     cells = pd.DataFrame(cells)
     cells["d"] = cells.converged - cells.fixed
-    rows = []
-    per_seed = cells.groupby(["env", "variant", "seed"])[["fixed", "converged"]].mean()
-    for (env, variant), g in per_seed.groupby(level=[0, 1]):
-        diffs = list((g.converged - g.fixed).astype(float))
-        mean, ci, p = tost(diffs, MARGIN)
-        rows.append({"env": env, "method": variant, "seeds": len(diffs),
-                     "fixed": float(g.fixed.mean()), "converged": float(g.converged.mean()),
-                     "diff": mean, "ci90": ci, "margin": MARGIN, "p_tost": p,
-                     "equivalent": bool(p < ALPHA)})
+    rows = method_rows(cells, MARGIN)
     cost = {"fixed": {"tpa_flops": flops["fixed"], "tpa_protocol_flops": flops["protocol"]},
             "converged": {"tpa_flops": flops["converged"],
                           "tpa_protocol_flops": flops["protocol"], "tpa_task_seconds": None}}
@@ -365,14 +364,7 @@ def compare_pref(fixed_path, conv_path, phis):
         c = pd.DataFrame({"fixed": ta, "converged": tb.reindex(ta.index)})
         c["d"] = c.converged - c.fixed
         cells[metric] = c.reset_index()
-        per_seed = c.groupby(["env", "variant", "seed"])[["fixed", "converged"]].mean()
-        for (env, variant), g in per_seed.groupby(level=[0, 1]):
-            diffs = list((g.converged - g.fixed).astype(float))
-            mean, ci, p = tost(diffs, PREF_MARGINS[metric])
-            rows.append({"metric": metric, "env": env, "method": variant, "seeds": len(diffs),
-                         "fixed": float(g.fixed.mean()), "converged": float(g.converged.mean()),
-                         "diff": mean, "ci90": ci, "margin": PREF_MARGINS[metric], "p_tost": p,
-                         "equivalent": bool(p < ALPHA)})
+        rows += method_rows(cells[metric], PREF_MARGINS[metric], metric=metric)
     # Every φ: its stopping epoch beside its FPE cells (an FPE-less φ keeps NaN there).
     epochs = pd.DataFrame(phis).rename(columns={"method": "variant"})
     fpe = cells["fpe"].astype({"N": int, "seed": int})

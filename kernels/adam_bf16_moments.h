@@ -11,7 +11,7 @@
 // results is an equivalence question, not a property of this kernel.
 //
 // No training uses it: on one Zen 5 core the fp32 update is bound by its arithmetic, and this one
-// is slower (BM_AdamUpdate; docs/performance-history.md, 2026-12-07). It stays as the measured
+// is slower (BM_AdamUpdate; docs/performance-history.md has the runs). It stays as the measured
 // candidate for where the update is memory-bound (cores sharing bandwidth, other CPU classes).
 #pragma once
 #include <cstddef>
