@@ -482,10 +482,10 @@ void parse_tpa(const Reader& r, const toml::table& tpa, const std::string& name,
 // stop = { sirl = "fixed", jaco = { "sirl+vae" = "converged" } } in `table` ("[tpa]", "[pref]"):
 // a rule per variant, in every environment or (under an environment's name) in that one, into
 // `out` (keys: tpa_stop_key). `why_not(name)` says why a variant may not have one ("" if it may);
-// `check(rule)` throws std::invalid_argument (naming the rules) for a rule that is not one.
-template <class WhyNot, class Check>
+// `rule_field` is the Hyper field the rule sets (tpa_stop, pref_stop): validate() names the rules.
+template <class WhyNot>
 void parse_stop_rules(const Reader& r, const toml::table& t, const std::string& table,
-                      const Profile& p, WhyNot why_not, Check check,
+                      const Profile& p, WhyNot why_not, std::string Hyper::*rule_field,
                       std::map<std::string, std::string>& out) {
   const toml::node* n = t.get("stop");
   if (!n) return;
@@ -498,7 +498,9 @@ void parse_stop_rules(const Reader& r, const toml::table& t, const std::string& 
       r.fail(&value, table + " stop" + (env.empty() ? "" : "." + env) + ": '" + name + "' " + why);
     if (!value.is_string()) r.fail(&value, where + " must be a string: a rule");
     try {
-      check(*value.value<std::string>());
+      Hyper check;
+      check.*rule_field = *value.value<std::string>();
+      validate(check);
     } catch (const std::invalid_argument& e) {
       r.fail(&value, where + ": " + e.what());
     }
@@ -534,12 +536,7 @@ void parse_tpa_stop(const Reader& r, const toml::table& tpa, Profile& p) {
         return std::string("is not one of [tpa] methods") +
                (p.references ? " nor the reference truth" : "");
       },
-      [](const std::string& rule) {
-        Hyper check;  // validate() names the rules
-        check.tpa_stop = rule;
-        validate(check);
-      },
-      p.tpa_stop_by_method);
+      &Hyper::tpa_stop, p.tpa_stop_by_method);
 }
 
 // [pref] stop: a pref.stop rule per preference-trained variant the profile runs.
@@ -572,12 +569,7 @@ void parse_pref(const Reader& r, const toml::table& root, Profile& p) {
           return std::string("is not run by this profile ([fpe], [tpa], [ablation], [robustness])");
         return std::string();
       },
-      [](const std::string& rule) {
-        Hyper check;
-        check.pref_stop = rule;
-        validate(check);
-      },
-      p.pref_stop_by_method);
+      &Hyper::pref_stop, p.pref_stop_by_method);
 }
 
 // [tpa] protocols = ["paper", "linear"]: one or more of kTpaProtocols, each once.
