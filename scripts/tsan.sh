@@ -21,7 +21,8 @@ export SIRL_CRASH_WALK_STRIDE=5  # every fifth crash point (the release suite wa
 threaded='^(Scheduler\.|TaskThreads\.|TaskCache\.|ReadyQueue\.|.*ThreadCount$|.*TwoThreads$|Mlp\.ThreadedGemmIsBitIdentical$'
 threaded+='|StudyRequests\.|study_server$|crash_walk$|mpi_run$)'
 status=0
-ctest --preset tsan -j 2 -R "$threaded" || status=$?
+ctest --preset tsan -j $(($(nproc) + 1)) --resource-spec-file "$PWD/build/tsan/ctest-cores.json" -R "$threaded" ||
+  status=$?
 if compgen -G "$reports/tsan.*" >/dev/null; then
   echo "ThreadSanitizer reported data races (full reports in $reports):" >&2
   head -c 20000 "$reports"/tsan.* >&2
