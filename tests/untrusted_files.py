@@ -189,5 +189,25 @@ def main():
             fail(f"flipped byte: {err!r}")
         print("ok: the reader verifies the frame")
 
+        # A file is checked once per process while its bytes stay (the report opens one file
+        # several times); the same path rewritten, here with that flipped byte, is checked again.
+        again = os.path.join(tmp, "again.h5")
+        shutil.copy(good, again)
+        code = ("import os, shutil, sys; sys.path.insert(0, sys.argv[1]); import sirl_bench\n"
+                "forks = []; real = os.fork\n"
+                "os.fork = lambda: (forks.append(1), real())[1]\n"
+                "sirl_bench.open(sys.argv[2]).close(); sirl_bench.open(sys.argv[2]).close()\n"
+                "print(len(forks))\n"
+                "shutil.copyfile(sys.argv[3], sys.argv[2])\n"
+                "try:\n    sirl_bench.open(sys.argv[2])\n"
+                "except sirl_bench.ResultsError as e:\n    print(len(forks), e)\n")
+        p = subprocess.run([PY, "-c", code, READER, again, flip], capture_output=True, text=True,
+                           timeout=120)
+        out = p.stdout.splitlines()
+        if p.returncode != 0 or len(out) != 2 or out[0] != "1" or "checksum mismatch" not in out[1]:
+            fail(f"checked once per unchanged file, again when rewritten: rc {p.returncode}, "
+                 f"{p.stdout!r} {p.stderr[-2000:]!r}")
+        print("ok: an unchanged file is checked once per process; a rewritten one again")
+
 
 main()

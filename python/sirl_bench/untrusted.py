@@ -163,9 +163,35 @@ def _die_with_parent():
         pass  # not Linux: the child still ends when its reading does
 
 
+# Files this process has checked, by what identifies their bytes (device, inode, size and both
+# times: a rewrite changes ctime, which no user can set back) -> check()'s result. A report opens
+# one file several times (the tables, the study, the ledger); the sandboxed read of every object
+# is seconds on a big file and need not run twice on the same bytes.
+_CHECKED: dict[tuple, tuple[bool, bool]] = {}
+
+
+def _identity(path):
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None  # verify() reports it
+    return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+
+
 def check(path) -> tuple[bool, bool]:
     """verify(path), then the file's structures read in a forked child (a crash there is one
-    ResultsError here). Returns (framed, verified)."""
+    ResultsError here). Returns (framed, verified). A file already checked by this process, not
+    changed since, is not read again."""
+    before = _identity(path)
+    if before is not None and before in _CHECKED:
+        return _CHECKED[before]
+    result = _check(path)
+    if before is not None and _identity(path) == before:
+        _CHECKED[before] = result
+    return result
+
+
+def _check(path) -> tuple[bool, bool]:
     framed, verified = verify(path)
     r, w = os.pipe()
     pid = os.fork()
