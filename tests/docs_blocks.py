@@ -41,9 +41,11 @@ SRC = os.environ["SIRL_SOURCE_DIR"]
 LINKED = ["configs", "examples", "bench", "python", "results", "report", "scripts", "docs"]
 # (results file or None, task cache) seeded from the smoke fixture, relative to the work folder:
 # README's and docs/running.md's out/smoke.h5; the caches of README's out/q.h5 (docs/running.md's
-# my-smoke run shares it), docs/cluster.md's shards, docs/running.md's setup shards, and README's
+# my-smoke run shares it), docs/running.md's out/quick.h5 (its `sirl run` and `sirl reproduce`),
+# docs/cluster.md's shards, docs/running.md's setup shards, and README's
 # `sirl evaluate … --name torch_sirl` (its default output out/smoke+torch_sirl.h5).
 SEEDED = [("out/smoke.h5", "out/smoke.h5.tasks"), (None, "out/q.h5.tasks"),
+          (None, "out/quick.h5.tasks"),
           (None, "out/c/tasks"), (None, "shard0.h5.tasks"), (None, "shard1.h5.tasks"),
           (None, "out/smoke+torch_sirl.h5.tasks")]
 MARK = re.compile(r"<!--\s*docs-test:\s*(skip|setup):\s*(.*?)\s*-->\s*$")
