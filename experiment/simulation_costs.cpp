@@ -84,17 +84,18 @@ void tpa_cost(Task& t, const Profile& p) {
 
 void linear_tpa_cost(Task& t, const Profile& p) {
   const EnvSizes z = env_sizes(t, p);
-  // Per reward: cross-validation's grid × folds fits and the final one, each the Gram matrix of
-  // the smaller side of ≤ M pair differences × w features and its eigensolver, about 10 Newton
-  // steps in its span; then the rewards of the held-out rows.
+  // Per reward: the standardisation, Gram matrix of the smaller side of ≤ M pair differences × w
+  // features and its eigensolver once per fold and once for the final fit (every penalty of the
+  // grid reuses its fold's), then about 10 Newton steps in the span per (fold, penalty) and for
+  // the final fit; then the rewards of the held-out rows.
   const LinearBtOptions o;
+  const double spans = double(o.folds) + 1;
   const double fits = double(o.alpha_grid.size()) * o.folds + 1;
   const double w = probed_width(t, z), m = double(t.M), g = std::min(w, m);
   const double held = 2.0 * double(queries_for(p, t.teacher).tpa_pairs);
   const double n = 2.0 * m;
-  t.flops =
-      kTestRewards *
-      (fits * (6 * m * w + 2 * m * w * g + 9 * g * g * g + 10 * 2 * m * g * g) + 2 * held * w);
+  t.flops = kTestRewards * (spans * (6 * m * w + 2 * m * w * g + 9 * g * g * g) +
+                            fits * 10 * 2 * m * g * g + 2 * held * w);
   t.protocol_flops = t.flops;
   t.bytes = 8.0 * ((n + held) * w + 2 * g * g + n * w);
 }

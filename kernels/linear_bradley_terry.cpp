@@ -77,40 +77,52 @@ void check_rows(const int32_t* pairs, int M, int64_t n) {
       throw std::invalid_argument("linear Bradley–Terry fit: row " + std::to_string(pairs[i]) +
                                   " outside [0, " + std::to_string(n) + ")");
 }
-}  // namespace
 
-LinearBtFit fit_linear_bradley_terry(const float* X, int64_t n, int in, const int32_t* pairs,
-                                     const float* label, int M, double alpha,
-                                     const LinearBtOptions& o) {
-  if (M < 1 || in < 1)
-    throw std::invalid_argument("linear Bradley–Terry fit: needs M >= 1 pairs of >= 1 features");
-  if (!(alpha > 0))
-    throw std::invalid_argument("linear Bradley–Terry fit: the penalty must be > 0");
-  check_rows(pairs, M, n);
+// What a fit on one set of training pairs needs before its penalty is known: the features'
+// standardisation over the 2M rows and the span of the pair differences. Cross-validation fits
+// every penalty of its grid on the same folds, so it builds this once per fold, not once per
+// (fold, penalty): the Gram matrix and its eigensolver are most of a wide fit's work.
+struct PairSpan {
+  VecD mu, inv;  // [in] the training rows' means and 1/σ (0 for a constant feature)
+  SpanBasis b;   // Q [in, k], Z [M, k]
+  double flops = 0;
+};
+
+PairSpan pair_span(const float* X, int in, const int32_t* pairs, int M, double rank_tolerance) {
   auto x = [&](int32_t row, int j) { return double(X[int64_t(row) * in + j]); };
+  PairSpan s;
   // μ, σ [in] over the 2M training rows (two passes); σ = 0 (a constant feature) → no weight.
-  VecD mu = VecD::Zero(in), sd = VecD::Zero(in);
+  VecD& mu = s.mu;
+  VecD sd = VecD::Zero(in);
+  mu = VecD::Zero(in);
   for (int i = 0; i < 2 * M; ++i)
     for (int j = 0; j < in; ++j) mu(j) += x(pairs[i], j) / (2.0 * M);
   for (int i = 0; i < 2 * M; ++i)
     for (int j = 0; j < in; ++j) sd(j) += std::pow(x(pairs[i], j) - mu(j), 2) / (2.0 * M);
-  VecD inv = VecD::Zero(in);  // 1/σ, or 0 for a feature constant up to rounding
+  s.inv = VecD::Zero(in);
   for (int j = 0; j < in; ++j) {
-    const double s = std::sqrt(sd(j));
-    if (s > 1e-10 * std::abs(mu(j)) && s > 0) inv(j) = 1.0 / s;
+    const double sj = std::sqrt(sd(j));
+    if (sj > 1e-10 * std::abs(mu(j)) && sj > 0) s.inv(j) = 1.0 / sj;
   }
   // D [M, in]: the standardised differences x̃_A − x̃_B.
   MatD D(M, in);
   for (int i = 0; i < M; ++i)
-    for (int j = 0; j < in; ++j) D(i, j) = (x(pairs[2 * i], j) - x(pairs[2 * i + 1], j)) * inv(j);
+    for (int j = 0; j < in; ++j) D(i, j) = (x(pairs[2 * i], j) - x(pairs[2 * i + 1], j)) * s.inv(j);
+  s.b = span_basis(D, rank_tolerance);
+  s.flops = 6.0 * M * in + s.b.flops;
+  return s;
+}
+
+// The Newton fit at penalty alpha in a prepared span; label [M] as the span's pairs.
+LinearBtFit fit_in_span(const PairSpan& s, const float* label, int M, double alpha,
+                        const LinearBtOptions& o) {
+  const int in = int(s.mu.size());
   const std::vector<double> lab(label, label + M);
-  const SpanBasis b = span_basis(D, o.rank_tolerance);
-  const MatD& Z = b.Z;
+  const MatD& Z = s.b.Z;
   const int k = int(Z.cols());
   LinearBtFit f;
   f.alpha = alpha;
   f.rank = k;
-  f.flops = 6.0 * M * in + b.flops;
   VecD beta = VecD::Zero(k), z, dz, z_try, dz_try;
   double L = loss_at(Z, beta, lab, alpha, z, dz);
   while (k > 0 && f.iterations < o.max_iterations) {
@@ -145,12 +157,27 @@ LinearBtFit fit_linear_bradley_terry(const float* X, int64_t n, int in, const in
   }
   if (k == 0) f.converged = true;  // no direction to fit: every reward is 0
   // Back to the original units: r(x) = Σ_j w̃_j (x_j − μ_j)/σ_j.
-  const VecD wt = k ? VecD(b.Q * beta) : VecD::Zero(in);
+  const VecD wt = k ? VecD(s.b.Q * beta) : VecD::Zero(in);
   f.weights.assign(size_t(in) + 1, 0.0);
   for (int j = 0; j < in; ++j) {
-    f.weights[size_t(j)] = wt(j) * inv(j);
-    f.weights[size_t(in)] -= wt(j) * inv(j) * mu(j);
+    f.weights[size_t(j)] = wt(j) * s.inv(j);
+    f.weights[size_t(in)] -= wt(j) * s.inv(j) * s.mu(j);
   }
+  return f;
+}
+}  // namespace
+
+LinearBtFit fit_linear_bradley_terry(const float* X, int64_t n, int in, const int32_t* pairs,
+                                     const float* label, int M, double alpha,
+                                     const LinearBtOptions& o) {
+  if (M < 1 || in < 1)
+    throw std::invalid_argument("linear Bradley–Terry fit: needs M >= 1 pairs of >= 1 features");
+  if (!(alpha > 0))
+    throw std::invalid_argument("linear Bradley–Terry fit: the penalty must be > 0");
+  check_rows(pairs, M, n);
+  const PairSpan s = pair_span(X, in, pairs, M, o.rank_tolerance);
+  LinearBtFit f = fit_in_span(s, label, M, alpha, o);
+  f.flops += s.flops;
   return f;
 }
 
@@ -159,39 +186,51 @@ LinearBtFit fit_linear_bradley_terry_cv(const float* X, int64_t n, int in, const
   if (o.alpha_grid.empty() || o.folds < 2)
     throw std::invalid_argument("linear Bradley–Terry fit: needs a penalty grid and >= 2 folds");
   if (M < 2) return fit_linear_bradley_terry(X, n, in, pairs, label, M, o.single_pair_alpha, o);
+  if (in < 1)
+    throw std::invalid_argument("linear Bradley–Terry fit: needs M >= 1 pairs of >= 1 features");
   check_rows(pairs, M, n);
   const int folds = std::min(o.folds, M);
-  double flops = 0, best = INFINITY, best_alpha = o.alpha_grid.front();
+  const size_t grid = o.alpha_grid.size();
+  double flops = 0;
   bool converged = true;
-  for (double alpha : o.alpha_grid) {
-    double held_loss = 0;  // Σ over every pair of its BCE when its fold was held out
-    for (int fold = 0; fold < folds; ++fold) {
-      std::vector<int32_t> fit_pairs, held_pairs;
-      std::vector<float> fit_label;
-      std::vector<double> held_label;
-      for (int i = 0; i < M; ++i) {
-        auto& dst = i % folds == fold ? held_pairs : fit_pairs;
-        dst.push_back(pairs[2 * i]);
-        dst.push_back(pairs[2 * i + 1]);
-        if (i % folds == fold)
-          held_label.push_back(label[i]);
-        else
-          fit_label.push_back(label[i]);
-      }
-      const LinearBtFit f = fit_linear_bradley_terry(X, n, in, fit_pairs.data(), fit_label.data(),
-                                                     int(fit_label.size()), alpha, o);
+  // held[a]: Σ over every pair of its BCE when its fold was held out, at penalty alpha_grid[a]
+  // (summed fold by fold in fold order, whatever the loop nesting).
+  std::vector<double> held(grid, 0.0);
+  for (int fold = 0; fold < folds; ++fold) {
+    std::vector<int32_t> fit_pairs, held_pairs;
+    std::vector<float> fit_label;
+    std::vector<double> held_label;
+    for (int i = 0; i < M; ++i) {
+      auto& dst = i % folds == fold ? held_pairs : fit_pairs;
+      dst.push_back(pairs[2 * i]);
+      dst.push_back(pairs[2 * i + 1]);
+      if (i % folds == fold)
+        held_label.push_back(label[i]);
+      else
+        fit_label.push_back(label[i]);
+    }
+    const int m = int(fit_label.size());
+    const PairSpan s = pair_span(X, in, fit_pairs.data(), m, o.rank_tolerance);
+    flops += s.flops;
+    for (size_t a = 0; a < grid; ++a) {
+      if (!(o.alpha_grid[a] > 0))
+        throw std::invalid_argument("linear Bradley–Terry fit: the penalty must be > 0");
+      const LinearBtFit f = fit_in_span(s, fit_label.data(), m, o.alpha_grid[a], o);
       flops += f.flops;
       converged = converged && f.converged;
       const std::vector<double> r =
           linear_rewards(f, X, in, held_pairs.data(), int64_t(held_pairs.size()));
       for (size_t i = 0; i < held_label.size(); ++i)
-        held_loss += pair_bce(r[2 * i] - r[2 * i + 1], held_label[i]);
+        held[a] += pair_bce(r[2 * i] - r[2 * i + 1], held_label[i]);
     }
-    held_loss /= M;
+  }
+  double best = INFINITY, best_alpha = o.alpha_grid.front();
+  for (size_t a = 0; a < grid; ++a) {
+    const double held_loss = held[a] / M;
     // Ascending grid: a larger α of equal loss (up to rounding) wins, the simpler head.
     if (held_loss <= best + 1e-12 * std::abs(best) || !std::isfinite(best)) {
       best = held_loss;
-      best_alpha = alpha;
+      best_alpha = o.alpha_grid[a];
     }
   }
   LinearBtFit f = fit_linear_bradley_terry(X, n, in, pairs, label, M, best_alpha, o);

@@ -53,7 +53,9 @@ LinearBtFit fit_linear_bradley_terry(const float* X, int64_t n, int in, const in
                                      const LinearBtOptions& o = {});
 
 // α chosen from o.alpha_grid by the held-out BCE of o.folds-fold cross-validation over the M
-// pairs (the largest α of equal loss wins), then refit on all M pairs at that α.
+// pairs (the largest α of equal loss wins), then refit on all M pairs at that α. Each fold's
+// standardisation and span are built once and shared by every α of the grid: the same bits as
+// fitting each (fold, α) alone, in a fraction of the work when the features are wide.
 LinearBtFit fit_linear_bradley_terry_cv(const float* X, int64_t n, int in, const int32_t* pairs,
                                         const float* label, int M, const LinearBtOptions& o = {});
 
