@@ -1,5 +1,7 @@
 #!/usr/bin/python3
-"""Incremental runs through the task cache (ctest; Debian's python3):
+"""Incremental runs through the task cache (ctest; Debian's python3), on the smoke plan with
+narrow networks (tests/data/engine-test.toml: smoke's tasks, keys and counts, a fraction of its
+arithmetic; what is checked here is the cache's bookkeeping):
 
 - one more seed: exactly the new seed's tasks are computed (counted from the cache's new files);
 - a comment added and the profile's tables reordered: nothing is computed;
@@ -31,7 +33,7 @@ import sirl_testing  # noqa: E402
 
 SIRL = sirl_testing.sirl_binary()
 SRC = sirl_testing.source_dir()
-SMOKE = os.path.join(SRC, "configs", "smoke.toml")
+SMOKE = sirl_testing.data_path("engine-test.toml")
 TIMING = {"seconds", "threads"}  # record fields that describe the run, not the result
 fail = sirl_testing.make_fail("incremental_runs")
 
@@ -115,7 +117,7 @@ def fresh(tmp, name, *args):
 
 
 def reordered_profile(tmp):
-    """smoke.toml with comments added and its tables in reverse order (same settings)."""
+    """The profile with comments added and its tables in reverse order (same settings)."""
     lines = open(SMOKE).read().splitlines()
     first = next(i for i, ln in enumerate(lines) if ln.startswith("["))
     blocks, cur = [], []
