@@ -8,8 +8,10 @@ installed copy (`cmake --install BUILD --prefix P`), so a block that says `sirl 
 installed binary and one that says `build/release/app/sirl …` runs the build. Python blocks run
 under /usr/bin/python3 with the installed reader on PYTHONPATH.
 
-What the blocks show is run as written except for three rewrites, applied to every block:
+What the blocks show is run as written except for four rewrites, applied to every block:
 - the `quick` profile (15 minutes and more) becomes `smoke` (seconds), everywhere in the block;
+- a seed list `seeds=[0,1,…,n−1]` longer than quick's five seeds keeps its number of extra seeds
+  on smoke's two (`seeds=[0,1,2,3,4,5]`, quick and one more seed, becomes `seeds=[0,1,2]`);
 - an optional part of a synopsis, `[--threads N]`, is left out;
 - `...` at the end of a line (more of the same) is left out.
 
@@ -32,6 +34,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import tomllib
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import sirl_testing  # noqa: E402
@@ -99,7 +102,27 @@ def blocks():
     return out
 
 
+def seed_count(profile):
+    """How many seeds configs/PROFILE.toml's top-level `seeds` lists."""
+    with open(os.path.join(SRC, "configs", profile + ".toml"), "rb") as f:
+        return len(tomllib.load(f)["seeds"])
+
+
+QUICK_SEEDS, SMOKE_SEEDS = seed_count("quick"), seed_count("smoke")
+
+
+def fewer_seeds(m):
+    """`seeds=[0,…,n−1]` with n > QUICK_SEEDS: the same number of seeds beyond smoke's."""
+    seeds = [int(x) for x in m.group(1).split(",")]
+    n = len(seeds)
+    if seeds != list(range(n)) or n <= QUICK_SEEDS:
+        return m.group(0)
+    return "seeds=[" + ",".join(str(i) for i in range(n - QUICK_SEEDS + SMOKE_SEEDS)) + "]"
+
+
 def rewrite(code):
+    if re.search(r"\bquick\b", code):
+        code = re.sub(r"\bseeds=\[([0-9]+(?:,[0-9]+)*)\]", fewer_seeds, code)
     code = re.sub(r"\bquick\b", "smoke", code)
     code = re.sub(r" ?\[[^\]\n]*--[^\]\n]*\]", "", code)       # [--option VALUE …]
     code = re.sub(r" \.\.\.[ \t]*(#.*)?$", r" \1", code, flags=re.M)
