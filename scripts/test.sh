@@ -18,10 +18,9 @@ if [ -z "${TMPDIR:-}" ] && [ -d /dev/shm ] &&
   export TMPDIR
   trap 'rm -rf "$TMPDIR"' EXIT
 fi
-# One ctest job per core, plus one for each of the two tests that mostly wait (slurm_submit and
-# study_server, SIRL_WAITING_TESTS in tests/CMakeLists.txt: cores are a ctest resource they do
-# not take). With one extra job only, a core sat idle whenever both waited at once.
-jobs=$(($(nproc) + 2))
+# One ctest job per core, plus one for the tests that mostly wait (tests/CMakeLists.txt: cores
+# are a ctest resource those tests do not take).
+jobs=$(($(nproc) + 1))
 ctest --preset release -j "$jobs" --resource-spec-file "$PWD/build/release/ctest-cores.json" "$@"
 if [ "${SIRL_SANITIZE:-1}" != 0 ]; then
   cmake --preset asan >/dev/null
