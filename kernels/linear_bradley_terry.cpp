@@ -188,6 +188,9 @@ LinearBtFit fit_linear_bradley_terry_cv(const float* X, int64_t n, int in, const
   if (M < 2) return fit_linear_bradley_terry(X, n, in, pairs, label, M, o.single_pair_alpha, o);
   if (in < 1)
     throw std::invalid_argument("linear Bradley–Terry fit: needs M >= 1 pairs of >= 1 features");
+  for (double alpha : o.alpha_grid)
+    if (!(alpha > 0))
+      throw std::invalid_argument("linear Bradley–Terry fit: the penalty must be > 0");
   check_rows(pairs, M, n);
   const int folds = std::min(o.folds, M);
   const size_t grid = o.alpha_grid.size();
@@ -213,8 +216,6 @@ LinearBtFit fit_linear_bradley_terry_cv(const float* X, int64_t n, int in, const
     const PairSpan s = pair_span(X, in, fit_pairs.data(), m, o.rank_tolerance);
     flops += s.flops;
     for (size_t a = 0; a < grid; ++a) {
-      if (!(o.alpha_grid[a] > 0))
-        throw std::invalid_argument("linear Bradley–Terry fit: the penalty must be > 0");
       const LinearBtFit f = fit_in_span(s, fit_label.data(), m, o.alpha_grid[a], o);
       flops += f.flops;
       converged = converged && f.converged;

@@ -190,6 +190,13 @@ TEST(LinearBradleyTerry, BadInputIsRefused) {
                std::invalid_argument);
   EXPECT_THROW(fit_linear_bradley_terry_cv(X.data(), 2, 1, bad.data(), label.data(), 1),
                std::invalid_argument);
+  // A penalty grid with a non-positive value, whichever fold would reach it first.
+  const std::vector<int32_t> two{0, 1, 1, 0};
+  const std::vector<float> labels{1.f, 0.f};
+  LinearBtOptions zero;
+  zero.alpha_grid = {1.0, 0.0};
+  EXPECT_THROW(fit_linear_bradley_terry_cv(X.data(), 2, 1, two.data(), labels.data(), 2, zero),
+               std::invalid_argument);
 }
 
 TEST(LinearTpa, TheTruthReferenceLearnsLinearRewardsAlmostPerfectly) {

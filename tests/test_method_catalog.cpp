@@ -23,7 +23,9 @@ TEST(MethodCatalog, EveryNameRoundTripsAndIsUnique) {
     EXPECT_STREQ(method_name(s.method), s.name);
     EXPECT_TRUE(names.insert(s.name).second) << s.name;
     EXPECT_TRUE(labels.insert(s.label).second) << s.label;
-    if (s.role != MethodRole::external) EXPECT_TRUE(colours.insert(s.colour).second) << s.colour;
+    if (s.role != MethodRole::external) {
+      EXPECT_TRUE(colours.insert(s.colour).second) << s.colour;
+    }
   }
   // The paper's methods and the references are there (a catalog may hold more).
   for (const char* name :

@@ -38,10 +38,11 @@ int check_every_task(const Profile& p) {
     const bool study = std::string(kind.name).starts_with("study_");
     EXPECT_EQ(c.hyper.has_value(), !study);
     EXPECT_EQ(c.study.has_value(), study);
-    if (c.hyper && (t.kind == tpa_kind() || t.kind == robust_tpa_kind()))
+    if (c.hyper && (t.kind == tpa_kind() || t.kind == robust_tpa_kind())) {
       EXPECT_EQ(describe(*c.hyper), describe(tpa_cell_hyper(p, t.env, t.hyper, t.variant)));
-    else if (c.hyper)
+    } else if (c.hyper) {
       EXPECT_EQ(describe(*c.hyper), describe(hyper_at(p, t.env, t.hyper)));
+    }
     EXPECT_EQ(c.active.has_value(), t.kind == active_kind());
     if (c.active) {
       const ActiveRounds& want = p.active.at(t.env);
@@ -60,7 +61,9 @@ int check_every_task(const Profile& p) {
       EXPECT_EQ(c.study_users, p.study.cohort.users);
     }
     EXPECT_EQ(c.teacher.has_value(), !t.teacher.empty());
-    if (c.teacher) EXPECT_EQ(c.teacher->tag, t.teacher);
+    if (c.teacher) {
+      EXPECT_EQ(c.teacher->tag, t.teacher);
+    }
     EXPECT_EQ(c.external.has_value(), t.variant.method == Method::external && t.kind == rep_kind());
     ++checked;
   }
