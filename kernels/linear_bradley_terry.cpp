@@ -92,9 +92,9 @@ PairSpan pair_span(const float* X, int in, const int32_t* pairs, int M, double r
   auto x = [&](int32_t row, int j) { return double(X[int64_t(row) * in + j]); };
   PairSpan s;
   // μ, σ [in] over the 2M training rows (two passes); σ = 0 (a constant feature) → no weight.
+  s.mu = VecD::Zero(in);
   VecD& mu = s.mu;
   VecD sd = VecD::Zero(in);
-  mu = VecD::Zero(in);
   for (int i = 0; i < 2 * M; ++i)
     for (int j = 0; j < in; ++j) mu(j) += x(pairs[i], j) / (2.0 * M);
   for (int i = 0; i < 2 * M; ++i)
