@@ -12,6 +12,7 @@ simulation of each comparison's t statistic (noncentral t, comparisons taken as 
 It is a planning number for the next run, not evidence: with 2–3 seeds d_z itself is very
 uncertain. Pure numpy/scipy; no file access.
 """
+import functools
 import math
 
 import numpy as np
@@ -94,9 +95,13 @@ def decide(comparisons, better, alpha=ALPHA, adjusted=False):
     return "inconclusive", max(ways, key=key) if ways else comparisons[0]
 
 
-def _simulated_decisions(dzs, n, better, alpha, rng):
+@functools.lru_cache(maxsize=4096)
+def _simulated_decisions(dzs, n, better, alpha):
     """Fraction of POWER_DRAWS simulated runs with n seeds whose Holm verdict is held or not held,
-    each comparison's t drawn from a noncentral t with df n − 1 and noncentrality d_z √n."""
+    each comparison's t drawn from a noncentral t with df n − 1 and noncentrality d_z √n (dzs: a
+    tuple). The draws are seeded by n alone, so a value depends only on the arguments and is kept:
+    a report asks for the same comparisons' power in its claims and in its ledger."""
+    rng = np.random.default_rng(20230313 + n)
     df = n - 1
     m = len(dzs)
     dz = np.clip(np.asarray(dzs, dtype=float), -1e3, 1e3)  # a tiny spread: a huge d_z
@@ -123,7 +128,7 @@ def power(comparisons, better, n=None, alpha=ALPHA):
     n = n if n is not None else min((c["n"] for c in comparisons), default=0)
     if n < 2 or not dzs or not all(np.isfinite(d) for d in dzs):
         return math.nan
-    return _simulated_decisions(dzs, n, better, alpha, np.random.default_rng(20230313 + n))
+    return _simulated_decisions(tuple(float(d) for d in dzs), n, better, alpha)
 
 
 def seeds_for_power(comparisons, better, target=POWER_TARGET, alpha=ALPHA):

@@ -116,6 +116,12 @@ assert claims.seeds_for_power([comp("a", 0.01, 0.5, n=3, dz=0.01)], ">") is None
 p2 = claims.power([comp("a", 1, 0.01, n=6, dz=50.0), comp("b", 0, 0.9, n=6, dz=0.0)], ">")
 assert p2 < 0.1, p2
 assert math.isnan(claims.power([comp("a", 1, 0.5, n=1, dz=float("nan"))], ">"))
+# A report asks for the same comparisons' power twice (claims and ledger): the second answer is
+# the first, served from the cache, not simulated again.
+hits = claims._simulated_decisions.cache_info().hits
+again = claims.power([comp("a", 1.0, 0.5, n=10, dz=1.0)], ">")
+assert again == claims.power([comp("b", 1.0, 0.7, n=10, dz=1.0)], ">"), "same d_z and n, same power"
+assert claims._simulated_decisions.cache_info().hits >= hits + 2, claims._simulated_decisions.cache_info()
 print("ok: simulated power equals the noncentral-t closed form; seeds for 80 % as well")
 
 
