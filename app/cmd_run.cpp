@@ -394,8 +394,9 @@ void register_plan(CLI::App& app, Runner& run) {
   cmd->add_option("profile", profile,
                   "Profile: a name in configs/ (" + bundled_profile_names() + ") or a .toml path");
   cmd->add_flag("--keys", keys,
-                "Print the keys of [queries], [active] and [study] instead (type, accepted values, "
-                "default, what each sets) as Markdown; no profile needed");
+                "Print every profile table's keys instead (type, accepted values, default, what "
+                "each sets; [hyper.<env>]'s too) as Markdown: docs/profile-keys.md; no profile "
+                "needed");
   cmd->add_option("--threads", threads, "Worker threads to plan for (default: every core)")
       ->check(CLI::Range(1, 4096));
   cmd->add_flag("--tasks", list_tasks,

@@ -10,6 +10,7 @@
 
 #include "datasets/enum_names.h"
 #include "datasets/environments.h"
+#include "engine/hyper_key_docs.h"
 
 namespace sirl {
 
@@ -24,38 +25,53 @@ Hyper paper_hyper(const std::string& env) {
 
 namespace {
 
-// Visits every field with its name; the one table both set_hyper and describe read.
+// Visits every field with its name and what it sets: the one table set_hyper, describe and the
+// keys page (hyper_key_docs) read.
 template <typename H, typename F>
 void for_each_field(H& h, F&& f) {
-  f("phi.hidden", h.phi_hidden);
-  f("phi.embedding_dim", h.embedding_dim);
-  f("phi.relu_output", h.phi_relu_output);
-  auto schedule = [&](const std::string& p, auto& s) {
-    f(p + ".epochs", s.epochs);
-    f(p + ".batch", s.batch);
-    f(p + ".lr", s.adam.lr);
-    f(p + ".lr_decay", s.adam.decay);
+  f("phi.hidden", h.phi_hidden, "φ's hidden layer widths (a ReLU after each)");
+  f("phi.embedding_dim", h.embedding_dim, "φ's output: the embedding's dimension");
+  f("phi.relu_output", h.phi_relu_output,
+    "a ReLU on φ's embedding layer too (the lineage code leaves it linear)");
+  auto schedule = [&](const std::string& p, auto& s, const std::string& what,
+                      const std::string& items) {
+    f(p + ".epochs", s.epochs, "epochs of " + what);
+    f(p + ".batch", s.batch, items + " per step of " + what);
+    f(p + ".lr", s.adam.lr, "Adam's learning rate for " + what);
+    f(p + ".lr_decay", s.adam.decay,
+      "the learning rate's factor per step for " + what + " (1: constant)");
   };
-  schedule("sirl", h.sirl);
-  f("sirl.margin", h.triplet_margin);
-  schedule("vae", h.vae);
-  f("vae.kl_weight", h.vae_kl_weight);
-  f("vae.elbo", h.vae_elbo);
-  f("vae.standardize", h.vae_standardize);
-  schedule("pref", h.pref);
-  f("pref.l2", h.pref_l2);
-  f("pref.stop", h.pref_stop);
-  f("pref.stop_min_epochs", h.pref_stop_min_epochs);
-  f("pref.stop_rel_tol", h.pref_stop_rel_tol);
-  schedule("tpa", h.tpa);
-  f("tpa.hidden", h.tpa_hidden);
-  f("tpa.l2", h.tpa_l2);
-  f("tpa.stop", h.tpa_stop);
-  f("tpa.stop_min_epochs", h.tpa_stop_min_epochs);
-  f("tpa.stop_rel_tol", h.tpa_stop_rel_tol);
-  f("tpa.stop_frozen_rel_tol", h.tpa_stop_frozen_rel_tol);
-  f("tpa.shadow_rel_tol", h.tpa_shadow_rel_tol);
-  f("precision", h.precision);
+  schedule("sirl", h.sirl, "SIRL's φ", "triplets");
+  f("sirl.margin", h.triplet_margin, "the triplet loss's margin");
+  schedule("vae", h.vae, "the VAE", "trajectories");
+  f("vae.kl_weight", h.vae_kl_weight, "the KL term's weight λ in the VAE's loss");
+  f("vae.elbo", h.vae_elbo,
+    "\"sum\" (squared error summed over inputs, KL over latents) or \"mean\" (averaged over "
+    "inputs)");
+  f("vae.standardize", h.vae_standardize,
+    "φ is the encoder's mean standardised per latent over Ξ (folded into its last layer)");
+  schedule("pref", h.pref, "a preference φ (SinglePref, MultiPref-K)", "answered pairs");
+  f("pref.l2", h.pref_l2, "the L2 penalty on a preference φ's predicted rewards");
+  f("pref.stop", h.pref_stop,
+    "when a preference φ ends: \"fixed\" (pref.epochs, the paper's) or \"converged\" (its "
+    "loss has converged; pref.epochs the cap)");
+  f("pref.stop_min_epochs", h.pref_stop_min_epochs, "the fewest epochs \"converged\" runs a φ");
+  f("pref.stop_rel_tol", h.pref_stop_rel_tol,
+    "the relative change below which a φ's loss counts as converged");
+  schedule("tpa", h.tpa, "the TPA reward heads", "answered pairs");
+  f("tpa.hidden", h.tpa_hidden, "a reward head's hidden layer widths");
+  f("tpa.l2", h.tpa_l2, "the L2 penalty on a reward head's predicted rewards");
+  f("tpa.stop", h.tpa_stop,
+    "when a reward head stops: " + tpa_stop_rule_list() + " ([tpa] stop sets one per method)");
+  f("tpa.stop_min_epochs", h.tpa_stop_min_epochs, "the fewest epochs a stop rule runs a head");
+  f("tpa.stop_rel_tol", h.tpa_stop_rel_tol, "the convergence tolerance for unfrozen cells' heads");
+  f("tpa.stop_frozen_rel_tol", h.tpa_stop_frozen_rel_tol,
+    "the convergence tolerance for frozen cells' heads");
+  f("tpa.shadow_rel_tol", h.tpa_shadow_rel_tol,
+    "above 0: each head that runs every epoch is also scored where \"converged\" at this "
+    "tolerance would have stopped it");
+  f("precision", h.precision,
+    "\"fp32\" (the paper's) or \"bf16\" matrix products (fp32 accumulation)");
 }
 
 [[noreturn]] void bad(const std::string& key, const HyperValue& value, const char* expected) {
@@ -155,7 +171,7 @@ std::string hyper_value_text(const HyperValue& v) {
 
 void set_hyper(Hyper& h, const std::string& key, const HyperValue& value) {
   bool found = false;
-  for_each_field(h, [&](const std::string& name, auto& field) {
+  for_each_field(h, [&](const std::string& name, auto& field, const std::string&) {
     if (name != key) return;
     found = true;
     assign(key, value, field);
@@ -165,7 +181,7 @@ void set_hyper(Hyper& h, const std::string& key, const HyperValue& value) {
 
 HyperValue hyper_value(const Hyper& h, const std::string& key) {
   std::optional<HyperValue> out;
-  for_each_field(h, [&](const std::string& name, const auto& field) {
+  for_each_field(h, [&](const std::string& name, const auto& field, const std::string&) {
     if (name == key) out = value_of(field);
   });
   if (!out) unknown_key(key);
@@ -175,7 +191,7 @@ HyperValue hyper_value(const Hyper& h, const std::string& key) {
 HyperType hyper_type(const std::string& key) {
   Hyper h;
   std::optional<HyperType> type;
-  for_each_field(h, [&](const std::string& name, auto& field) {
+  for_each_field(h, [&](const std::string& name, auto& field, const std::string&) {
     if (name != key) return;
     using T = std::decay_t<decltype(field)>;
     if constexpr (std::is_same_v<T, bool>)
@@ -208,16 +224,26 @@ const char* hyper_type_name(HyperType t) {
 std::vector<std::string> hyper_keys() {
   Hyper h;
   std::vector<std::string> keys;
-  for_each_field(h, [&](const std::string& name, auto&) { keys.push_back(name); });
+  for_each_field(h,
+                 [&](const std::string& name, auto&, const std::string&) { keys.push_back(name); });
   return keys;
 }
 
 std::string describe(const Hyper& h) {
   std::string s;
-  for_each_field(h, [&](const std::string& name, const auto& field) {
+  for_each_field(h, [&](const std::string& name, const auto& field, const std::string&) {
     s += name + " = " + show(field) + "\n";
   });
   return s;
+}
+
+std::vector<HyperKeyDoc> hyper_key_docs() {
+  Hyper h;
+  std::vector<HyperKeyDoc> out;
+  for_each_field(h, [&](const std::string& name, const auto& field, const std::string& doc) {
+    out.push_back({name, value_of(field), doc});
+  });
+  return out;
 }
 
 StopRule tpa_shadow_rule(const Hyper& h, bool frozen) {

@@ -5,6 +5,7 @@
 #include "experiment/suggest.h"
 
 #include "engine/convergence.h"
+#include "engine/hyper_key_docs.h"
 #include "engine/method_catalog.h"
 
 #include "experiment/install_paths.h"
@@ -424,6 +425,46 @@ std::string key_rows(Settings settings, const S& defaults) {
            k.doc + " |\n";
   });
   return out;
+}
+
+// A hyper-parameter's value as a profile writes it: 3000, 0.004, [128, 128], true, "fixed".
+std::string toml_text(const HyperValue& v) {
+  if (const auto* d = std::get_if<double>(&v)) return plain(*d);
+  if (const auto* s = std::get_if<std::string>(&v)) return "\"" + *s + "\"";
+  if (const auto* w = std::get_if<std::vector<int>>(&v)) {
+    std::string out = "[";
+    for (size_t i = 0; i < w->size(); ++i) out += (i ? ", " : "") + std::to_string((*w)[i]);
+    return out + "]";
+  }
+  return hyper_value_text(v);  // an integer or a boolean
+}
+
+// [hyper.<env>]: one row per engine hyper-parameter (engine/hyperparams.cpp declares them), with
+// the environments that set a default of their own.
+std::string hyper_section() {
+  std::string out =
+      "## [hyper.<env>]\n\n"
+      "The training hyper-parameters of one environment's tasks (the paper's Appendix B-C). A list "
+      "of values makes an axis of the grid (running.md); a value of the wrong type, or out of "
+      "its range, is refused with the key and the range when the profile is read.\n\n"
+      "| key | type | default | an environment's own default | what it sets |\n"
+      "|---|---|---|---|---|\n";
+  for (const HyperKeyDoc& k : hyper_key_docs()) {
+    const HyperType t = hyper_type(k.key);
+    const char* type = t == HyperType::integer        ? "integer"
+                       : t == HyperType::number       ? "number"
+                       : t == HyperType::boolean      ? "boolean"
+                       : t == HyperType::integer_list ? "integer list (widths)"
+                                                      : "string";
+    std::string own;
+    for (const EnvSpec& e : environments())
+      for (const HyperDefault& d : e.hyper)
+        if (d.key == k.key)
+          own += (own.empty() ? "" : ", ") + e.name + ": `" + toml_text(d.value) + "`";
+    out += "| `" + k.key + "` | " + type + " | `" + toml_text(k.value) + "` | " +
+           (own.empty() ? "—" : own) + " | " + k.doc + " |\n";
+  }
+  return out + "\n";
 }
 
 std::string keys_section(const char* title, const char* note, const std::string& rows) {
@@ -1216,7 +1257,8 @@ std::string profile_keys_markdown() {
          keys_section("[study]",
                       "The user study's simulated cohort and its analysis; the table's presence "
                       "runs the study.",
-                      key_rows(kStudySettings, StudyPlan{}));
+                      key_rows(kStudySettings, StudyPlan{})) +
+         hyper_section();
 }
 
 const QueryBundleConfig& queries_for(const Profile& p, const std::string& teacher) {

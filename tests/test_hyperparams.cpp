@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/hyper_key_docs.h"
 #include "engine/hyperparams.h"
 
 namespace sirl {
@@ -59,6 +60,21 @@ TEST(Hyper, SetByNameCopiesEveryKeyExactly) {
   EXPECT_EQ(hyper_value_text(std::vector<int>{128, 64}), "128,64");
   EXPECT_EQ(hyper_value_text(false), "false");
   EXPECT_EQ(hyper_value_text(std::string("bf16")), "bf16");
+}
+
+TEST(Hyper, EveryKeyIsDocumentedWithTheEnginesDefault) {
+  const std::vector<HyperKeyDoc> docs = hyper_key_docs();
+  const std::vector<std::string> keys = hyper_keys();
+  ASSERT_EQ(docs.size(), keys.size());
+  Hyper from_docs = paper_hyper("jaco");  // every value below overwrites jaco's own
+  for (size_t i = 0; i < docs.size(); ++i) {
+    EXPECT_EQ(docs[i].key, keys[i]);
+    EXPECT_GE(docs[i].doc.size(), 10u) << docs[i].key << " has no doc line";
+    set_hyper(from_docs, docs[i].key, docs[i].value);
+  }
+  // The documented defaults are the engine's (GridRobot's) values, every one of them.
+  EXPECT_EQ(describe(from_docs), describe(Hyper{}));
+  EXPECT_EQ(describe(from_docs), describe(paper_hyper("grid")));
 }
 
 TEST(Hyper, BadKeysAndValuesAreRejectedWithTheirName) {
