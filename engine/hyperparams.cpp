@@ -1,10 +1,12 @@
 #include "engine/hyperparams.h"
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <type_traits>
 #include <variant>
 
@@ -25,32 +27,55 @@ Hyper paper_hyper(const std::string& env) {
 
 namespace {
 
-// Visits every field with its name and what it sets: the one table set_hyper, describe and the
-// keys page (hyper_key_docs) read.
+// The doc lines of the four training schedules' keys (epochs, batch, lr, lr_decay), built once:
+// for_each_field runs for every key set and every task described.
+enum Schedule { kSirl, kVae, kPref, kTpa };
+const std::array<std::string, 4>& schedule_docs(Schedule which) {
+  static const auto docs = [] {
+    const char* what[] = {"SIRL's φ", "the VAE", "a preference φ (SinglePref, MultiPref-K)",
+                          "the TPA reward heads"};
+    const char* items[] = {"triplets", "trajectories", "answered pairs", "answered pairs"};
+    std::array<std::array<std::string, 4>, 4> d;
+    for (int i = 0; i < 4; ++i)
+      d[i] = {std::string("epochs of ") + what[i],
+              std::string(items[i]) + " per step of " + what[i],
+              std::string("Adam's learning rate for ") + what[i],
+              std::string("the learning rate's factor per step for ") + what[i] + " (1: constant)"};
+    return d;
+  }();
+  return docs[which];
+}
+const std::string& tpa_stop_doc() {
+  static const std::string doc =
+      "when a reward head stops: " + tpa_stop_rule_list() + " ([tpa] stop sets one per method)";
+  return doc;
+}
+
+// Visits every field with its name and what it sets (f(name, field, doc), doc a string_view):
+// the one table set_hyper, describe and the keys page (hyper_key_docs) read.
 template <typename H, typename F>
 void for_each_field(H& h, F&& f) {
   f("phi.hidden", h.phi_hidden, "φ's hidden layer widths (a ReLU after each)");
   f("phi.embedding_dim", h.embedding_dim, "φ's output: the embedding's dimension");
   f("phi.relu_output", h.phi_relu_output,
     "a ReLU on φ's embedding layer too (the lineage code leaves it linear)");
-  auto schedule = [&](const std::string& p, auto& s, const std::string& what,
-                      const std::string& items) {
-    f(p + ".epochs", s.epochs, "epochs of " + what);
-    f(p + ".batch", s.batch, items + " per step of " + what);
-    f(p + ".lr", s.adam.lr, "Adam's learning rate for " + what);
-    f(p + ".lr_decay", s.adam.decay,
-      "the learning rate's factor per step for " + what + " (1: constant)");
+  auto schedule = [&](const std::string& p, auto& s, Schedule which) {
+    const std::array<std::string, 4>& doc = schedule_docs(which);
+    f(p + ".epochs", s.epochs, doc[0]);
+    f(p + ".batch", s.batch, doc[1]);
+    f(p + ".lr", s.adam.lr, doc[2]);
+    f(p + ".lr_decay", s.adam.decay, doc[3]);
   };
-  schedule("sirl", h.sirl, "SIRL's φ", "triplets");
+  schedule("sirl", h.sirl, kSirl);
   f("sirl.margin", h.triplet_margin, "the triplet loss's margin");
-  schedule("vae", h.vae, "the VAE", "trajectories");
+  schedule("vae", h.vae, kVae);
   f("vae.kl_weight", h.vae_kl_weight, "the KL term's weight λ in the VAE's loss");
   f("vae.elbo", h.vae_elbo,
     "\"sum\" (squared error summed over inputs, KL over latents) or \"mean\" (averaged over "
     "inputs)");
   f("vae.standardize", h.vae_standardize,
     "φ is the encoder's mean standardised per latent over Ξ (folded into its last layer)");
-  schedule("pref", h.pref, "a preference φ (SinglePref, MultiPref-K)", "answered pairs");
+  schedule("pref", h.pref, kPref);
   f("pref.l2", h.pref_l2, "the L2 penalty on a preference φ's predicted rewards");
   f("pref.stop", h.pref_stop,
     "when a preference φ ends: \"fixed\" (pref.epochs, the paper's) or \"converged\" (its "
@@ -58,11 +83,10 @@ void for_each_field(H& h, F&& f) {
   f("pref.stop_min_epochs", h.pref_stop_min_epochs, "the fewest epochs \"converged\" runs a φ");
   f("pref.stop_rel_tol", h.pref_stop_rel_tol,
     "the relative change below which a φ's loss counts as converged");
-  schedule("tpa", h.tpa, "the TPA reward heads", "answered pairs");
+  schedule("tpa", h.tpa, kTpa);
   f("tpa.hidden", h.tpa_hidden, "a reward head's hidden layer widths");
   f("tpa.l2", h.tpa_l2, "the L2 penalty on a reward head's predicted rewards");
-  f("tpa.stop", h.tpa_stop,
-    "when a reward head stops: " + tpa_stop_rule_list() + " ([tpa] stop sets one per method)");
+  f("tpa.stop", h.tpa_stop, tpa_stop_doc());
   f("tpa.stop_min_epochs", h.tpa_stop_min_epochs, "the fewest epochs a stop rule runs a head");
   f("tpa.stop_rel_tol", h.tpa_stop_rel_tol, "the convergence tolerance for unfrozen cells' heads");
   f("tpa.stop_frozen_rel_tol", h.tpa_stop_frozen_rel_tol,
@@ -171,7 +195,7 @@ std::string hyper_value_text(const HyperValue& v) {
 
 void set_hyper(Hyper& h, const std::string& key, const HyperValue& value) {
   bool found = false;
-  for_each_field(h, [&](const std::string& name, auto& field, const std::string&) {
+  for_each_field(h, [&](const std::string& name, auto& field, std::string_view) {
     if (name != key) return;
     found = true;
     assign(key, value, field);
@@ -181,7 +205,7 @@ void set_hyper(Hyper& h, const std::string& key, const HyperValue& value) {
 
 HyperValue hyper_value(const Hyper& h, const std::string& key) {
   std::optional<HyperValue> out;
-  for_each_field(h, [&](const std::string& name, const auto& field, const std::string&) {
+  for_each_field(h, [&](const std::string& name, const auto& field, std::string_view) {
     if (name == key) out = value_of(field);
   });
   if (!out) unknown_key(key);
@@ -191,7 +215,7 @@ HyperValue hyper_value(const Hyper& h, const std::string& key) {
 HyperType hyper_type(const std::string& key) {
   Hyper h;
   std::optional<HyperType> type;
-  for_each_field(h, [&](const std::string& name, auto& field, const std::string&) {
+  for_each_field(h, [&](const std::string& name, auto& field, std::string_view) {
     if (name != key) return;
     using T = std::decay_t<decltype(field)>;
     if constexpr (std::is_same_v<T, bool>)
@@ -225,13 +249,13 @@ std::vector<std::string> hyper_keys() {
   Hyper h;
   std::vector<std::string> keys;
   for_each_field(h,
-                 [&](const std::string& name, auto&, const std::string&) { keys.push_back(name); });
+                 [&](const std::string& name, auto&, std::string_view) { keys.push_back(name); });
   return keys;
 }
 
 std::string describe(const Hyper& h) {
   std::string s;
-  for_each_field(h, [&](const std::string& name, const auto& field, const std::string&) {
+  for_each_field(h, [&](const std::string& name, const auto& field, std::string_view) {
     s += name + " = " + show(field) + "\n";
   });
   return s;
@@ -240,8 +264,8 @@ std::string describe(const Hyper& h) {
 std::vector<HyperKeyDoc> hyper_key_docs() {
   Hyper h;
   std::vector<HyperKeyDoc> out;
-  for_each_field(h, [&](const std::string& name, const auto& field, const std::string& doc) {
-    out.push_back({name, value_of(field), doc});
+  for_each_field(h, [&](const std::string& name, const auto& field, std::string_view doc) {
+    out.push_back({name, value_of(field), std::string(doc)});
   });
   return out;
 }
