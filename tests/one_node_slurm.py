@@ -2,8 +2,10 @@
 and munge, started as root in a temporary folder with their own key and config (no systemd, no
 cgroups: proctrack/linuxproc, task/none), stopped and removed on exit. The machine's cores and
 memory are the node's. Clients find it through SLURM_CONF in `env`."""
+import ctypes
 import os
 import shutil
+import signal
 import socket
 import subprocess
 import tempfile
@@ -60,6 +62,13 @@ PartitionName=debug Nodes=ALL Default=YES MaxTime=INFINITE State=UP
 """
 
 
+def _dies_with_parent():
+    """In the child, before exec: SIGTERM when the process that started it dies, so a test killed
+    mid-way (SIGKILL, a ctest timeout) leaves no daemon running on the machine."""
+    PR_SET_PDEATHSIG = 1
+    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
 class OneNodeSlurm:
     """with OneNodeSlurm() as s: subprocess.run([...], env=s.env)"""
 
@@ -80,11 +89,18 @@ class OneNodeSlurm:
 
     def _start(self, d):
         subprocess.run(["mungekey", "--create", f"--keyfile={d}/munge/munge.key"], check=True)
-        subprocess.run(["munged", f"--socket={d}/msock/munge.socket",
-                        f"--key-file={d}/munge/munge.key", f"--pid-file={d}/munge/munged.pid",
-                        f"--log-file={d}/log/munged.log", f"--seed-file={d}/munge/munged.seed"],
-                       check=True)  # forks; the socket is ready when it returns
-        self.munged = True
+        # In the foreground (no fork), so that it dies with this process; ready once its socket is.
+        self.munged = subprocess.Popen(
+            ["munged", "--foreground", f"--socket={d}/msock/munge.socket",
+             f"--key-file={d}/munge/munge.key", f"--pid-file={d}/munge/munged.pid",
+             f"--log-file={d}/log/munged.log", f"--seed-file={d}/munge/munged.seed"],
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+            stderr=open(d / "log" / "munged.stderr", "w"), preexec_fn=_dies_with_parent)
+        deadline = time.time() + 30
+        while not (d / "msock" / "munge.socket").exists():
+            if self.munged.poll() is not None or time.time() > deadline:
+                raise RuntimeError("munged did not start:\n" + self.logs())
+            time.sleep(0.05)
         # Ports of our own, so a stale daemon elsewhere on the machine is never talked to.
         ports = []
         for _ in range(2):
@@ -98,7 +114,8 @@ class OneNodeSlurm:
         for daemon in ("slurmctld", "slurmd"):
             log = open(d / "log" / f"{daemon}.stdout", "w")
             self.procs.append(subprocess.Popen([daemon, "-D", "-f", str(d / "slurm.conf")],
-                                               stdout=log, stderr=subprocess.STDOUT, env=self.env))
+                                               stdout=log, stderr=subprocess.STDOUT, env=self.env,
+                                               preexec_fn=_dies_with_parent))
         deadline = time.time() + 60
         while time.time() < deadline:
             p = subprocess.run(["sinfo", "-h", "-o", "%T"], capture_output=True, text=True,
@@ -153,7 +170,12 @@ class OneNodeSlurm:
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait()
-        if getattr(self, "munged", False):
-            subprocess.run(["munged", f"--socket={self.dir}/msock/munge.socket", "--stop"],
-                           capture_output=True)
+        munged = getattr(self, "munged", None)
+        if munged is not None:
+            munged.terminate()
+            try:
+                munged.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                munged.kill()
+                munged.wait()
         shutil.rmtree(self.dir, ignore_errors=True)
