@@ -38,11 +38,19 @@ Progress::Counts Progress::counts() {
   return {done_, done_flops_, rate_flops_};
 }
 
+void Progress::resumed_from(const std::string& key, double flops_before) {
+  std::lock_guard lock(mu_);
+  if (flops_before > 0) flops_before_[key] = flops_before;
+}
+
 void Progress::task_done(const std::string& key, double task_flops, double seconds) {
   std::lock_guard lock(mu_);
   ++done_;
   done_flops_ += task_flops;
-  if (!resumed_.count(key)) rate_flops_ += task_flops;
+  if (!resumed_.count(key))
+    rate_flops_ += task_flops;
+  else if (const auto it = flops_before_.find(key); it != flops_before_.end())
+    rate_flops_ += std::max(0.0, task_flops - it->second);  // the part run in this process
   print(key, done_ == total_);
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 #include <chrono>
 #include <cstdio>
+#include <map>
 #include <mutex>
 #include <set>
 #include <string>
@@ -16,6 +17,11 @@ class Progress {
   // started, so they count toward the share done but not toward the rate the ETA divides by
   // (else a large cell finishing soon after a restart reads as an absurd rate).
   void set_resumed(std::set<std::string> keys);
+  // A resumed task's training continued from a checkpoint that had executed flops_before: when
+  // it finishes, what it ran here (its FLOPs less those) counts toward the rate, so a restarted
+  // long run has an ETA before a task it started afresh finishes. 0: not known, the task stays
+  // out of the rate (thread-safe).
+  void resumed_from(const std::string& key, double flops_before);
   // One task finished (thread-safe).
   void task_done(const std::string& key, double task_flops, double seconds);
   void finish();
@@ -34,6 +40,7 @@ class Progress {
   int total_, done_ = 0;
   double total_flops_, done_flops_ = 0, rate_flops_ = 0;  // rate_flops_: of tasks run whole here
   std::set<std::string> resumed_;
+  std::map<std::string, double> flops_before_;  // of resumed tasks whose checkpoint counted them
   bool tty_, quiet_;
   std::chrono::steady_clock::time_point start_, last_print_;
 };

@@ -613,7 +613,11 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
   const int to_run = ps.total - ps.reused;
   if (!o.quiet) announce_run(p, o, ps, threads, mpi_size);
   Progress progress(to_run, ps.flops, o.quiet);
-  if (checkpoints) progress.set_resumed(resumed_keys(*checkpoints, plan, digests));
+  if (checkpoints) {
+    progress.set_resumed(resumed_keys(*checkpoints, plan, digests));
+    checkpoints->on_resume(
+        [&progress](const std::string& key, double flops) { progress.resumed_from(key, flops); });
+  }
   PlanExecution exec{p,     plan,    digests,           ps.pending, ctx,
                      cache, sources, checkpoints.get(), o,          progress};
   const std::exception_ptr failure =
@@ -624,6 +628,7 @@ RunSummary run_rank0(const Profile& p, const RunOptions& o, int mpi_size) {
                                         : threads,
                mpi_size);
   progress.finish();
+  if (checkpoints) checkpoints->on_resume(nullptr);  // progress ends here; the store lives on
 
   // Assemble whatever is finished (a partial file plots with gaps; a rerun completes it).
   const std::vector<TaskRecord> records = finished_records(p, plan, mine, prior, cache, sources);

@@ -15,11 +15,13 @@ using Clock = std::chrono::steady_clock;
 
 class FileCheckpointer : public Checkpointer {
  public:
-  FileCheckpointer(TaskStore& store, std::string key, std::string label, double interval)
+  FileCheckpointer(TaskStore& store, std::string key, std::string label, double interval,
+                   const CheckpointStore::ResumeHook& on_resume)
       : store_(store),
         key_(std::move(key)),
         label_(std::move(label)),
         interval_(interval),
+        on_resume_(on_resume),
         last_(Clock::now()) {}
 
   bool load(TrainingSnapshot& out) override {
@@ -28,6 +30,10 @@ class FileCheckpointer : public Checkpointer {
       out = record_snapshot(store_.load(key_));
       std::fprintf(stderr, "sirl run: %s continues from its checkpoint at epoch %d\n",
                    label_.c_str(), out.epoch);
+      if (on_resume_) {
+        const auto f = out.numbers.find("train_flops");
+        on_resume_(label_, f != out.numbers.end() ? f->second : 0.0);
+      }
       return true;
     } catch (const std::exception& e) {  // corrupt (and then removed by load) or not a snapshot
       std::fprintf(stderr,
@@ -58,6 +64,7 @@ class FileCheckpointer : public Checkpointer {
   std::string key_;
   std::string label_;  // the task's key, for messages
   double interval_;
+  CheckpointStore::ResumeHook on_resume_;
   Clock::time_point last_;
 };
 
@@ -130,7 +137,7 @@ CheckpointStore::CheckpointStore(std::filesystem::path dir, double interval_seco
 std::unique_ptr<Checkpointer> CheckpointStore::for_task(const std::string& id,
                                                         const std::string& label) {
   if (interval_ < 0) return nullptr;
-  return std::make_unique<FileCheckpointer>(store_, id, label, interval_);
+  return std::make_unique<FileCheckpointer>(store_, id, label, interval_, on_resume_);
 }
 
 }  // namespace sirl

@@ -5,6 +5,7 @@
 // the same bits as an uninterrupted run (engine/checkpoint.h).
 #pragma once
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -27,10 +28,15 @@ class CheckpointStore {
   bool empty() const { return store_.empty(); }
   // The tasks with a saved state (each resumes from it when it runs).
   std::vector<std::string> keys() const { return store_.keys(); }
+  // Called as a task continues from its checkpoint, with its label and the FLOPs its training had
+  // executed before (the snapshot's "train_flops"; 0 when the snapshot does not count them).
+  using ResumeHook = std::function<void(const std::string& label, double flops_before)>;
+  void on_resume(ResumeHook hook) { on_resume_ = std::move(hook); }
 
  private:
   TaskStore store_;
   double interval_;
+  ResumeHook on_resume_;
 };
 
 // The record a snapshot is stored as, and back (throws std::runtime_error if it is not one).

@@ -45,5 +45,25 @@ TEST(Progress, ResumedTasksCountTowardTheShareDoneButNotTheRate) {
   EXPECT_DOUBLE_EQ(c.rate_flops, 40e9);
 }
 
+// A resumed task whose checkpoint counted the FLOPs it had executed: what it ran here counts
+// toward the rate, so a restarted run whose first finished tasks were all resumed has an ETA.
+TEST(Progress, AResumedTaskCountsTheWorkItRanHereTowardTheRate) {
+  Progress p(2, 100e9, /*quiet=*/true);
+  p.set_resumed({"rep/counted", "cell/uncounted"});
+  p.resumed_from("rep/counted", 45e9);  // 45 of its 60 GFLOP done before this process
+  p.resumed_from("cell/uncounted", 0);  // its checkpoint does not count them
+  p.task_done("rep/counted", 60e9, 1.0);
+  EXPECT_DOUBLE_EQ(p.counts().rate_flops, 15e9);
+  EXPECT_DOUBLE_EQ(p.counts().done_flops, 60e9);
+  p.task_done("cell/uncounted", 40e9, 1.0);
+  EXPECT_DOUBLE_EQ(p.counts().rate_flops, 15e9);  // still out of the rate, as before
+  // A checkpoint that counted more than the plan's estimate adds nothing, never a negative.
+  Progress q(1, 10e9, true);
+  q.set_resumed({"rep/over"});
+  q.resumed_from("rep/over", 12e9);
+  q.task_done("rep/over", 10e9, 1.0);
+  EXPECT_DOUBLE_EQ(q.counts().rate_flops, 0);
+}
+
 }  // namespace
 }  // namespace sirl

@@ -177,6 +177,32 @@ TEST(StopRequest, ACheckpointerSavesAtOnceAndStopsTheTraining) {
   EXPECT_FALSE(stop_requested());
 }
 
+TEST(StopRequest, AResumedTrainingTellsTheRunWhatItHadExecuted) {
+  ScratchDir d;
+  CheckpointStore store(d.path(), 0);
+  TrainingSnapshot s;
+  s.epoch = 3;
+  s.numbers["train_flops"] = 7e9;
+  store.for_task("0123456789abcdef", "grid/s0/sirl/N10/rep")->save(s);
+  std::string label;
+  double flops = -1;
+  store.on_resume([&](const std::string& l, double f) {
+    label = l;
+    flops = f;
+  });
+  TrainingSnapshot back;
+  ASSERT_TRUE(store.for_task("0123456789abcdef", "grid/s0/sirl/N10/rep")->load(back));
+  EXPECT_EQ(label, "grid/s0/sirl/N10/rep");
+  EXPECT_DOUBLE_EQ(flops, 7e9);
+  // A snapshot without the count: the hook hears 0 (not known).
+  TrainingSnapshot t;
+  t.epoch = 1;
+  store.for_task("fedcba9876543210", "grid/s0/sirl/N10/tpa/M10/frozen")->save(t);
+  ASSERT_TRUE(store.for_task("fedcba9876543210", "grid/s0/sirl/N10/tpa/M10/frozen")->load(back));
+  EXPECT_EQ(label, "grid/s0/sirl/N10/tpa/M10/frozen");
+  EXPECT_DOUBLE_EQ(flops, 0);
+}
+
 TEST(ClusterPrediction, ANodeHoldsItsProcessesDataAndTheLargestTasksThatRunThereAtOnce) {
   Plan plan;
   const double mib = 1024.0 * 1024.0;
