@@ -26,8 +26,8 @@ class Progress {
   void task_done(const std::string& key, double task_flops, double seconds);
   void finish();
 
-  // What the status line is computed from: tasks and FLOPs done, and the FLOPs of tasks run
-  // whole in this process (the rate's numerator).
+  // What the status line is computed from: tasks and FLOPs done, and the FLOPs finished tasks
+  // ran in this process (the rate's numerator).
   struct Counts {
     int done = 0;
     double done_flops = 0, rate_flops = 0;
@@ -38,16 +38,16 @@ class Progress {
   void print(const std::string& last, bool force);
   std::mutex mu_;
   int total_, done_ = 0;
-  double total_flops_, done_flops_ = 0, rate_flops_ = 0;  // rate_flops_: of tasks run whole here
+  double total_flops_, done_flops_ = 0, rate_flops_ = 0;  // rate_flops_: run in this process
   std::set<std::string> resumed_;
   std::map<std::string, double> flops_before_;  // of resumed tasks whose checkpoint counted them
   bool tty_, quiet_;
   std::chrono::steady_clock::time_point start_, last_print_;
 };
 
-// The status line: tasks done of total, the share of the estimated FLOPs done, the rate (FLOPs of
-// tasks run whole in this process over the elapsed time) and the ETA (the FLOPs left at that rate;
-// "?" before any such task finished).
+// The status line: tasks done of total, the share of the estimated FLOPs done, the rate (the FLOPs
+// finished tasks ran in this process over the elapsed time) and the ETA (the FLOPs left at that
+// rate; "?" before any such task finished).
 std::string progress_line(int done, int total, double done_flops, double rate_flops,
                           double total_flops, double elapsed);
 
