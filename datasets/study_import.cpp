@@ -53,7 +53,7 @@ class SeenRecords {
   static std::string key(const std::string& id, const char* kind, const int32_t* rows, int n,
                          double answer, float ms, double time) {
     std::string k = id + "/" + kind;
-    char buf[64];
+    char buf[96];  // 3 separators, two %.17g of up to 24 characters, one %.9g of up to 16
     for (int i = 0; i < n; ++i) k += "/" + std::to_string(rows[i]);
     std::snprintf(buf, sizeof buf, "/%.17g/%.9g/%.17g", answer, double(ms), time);
     return k + buf;

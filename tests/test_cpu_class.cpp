@@ -21,7 +21,9 @@ TEST(CpuClass, NamesTheBuildAndTheLibrariesChoices) {
   EXPECT_EQ(k.rfind("build ", 0), 0u) << k;
   EXPECT_TRUE(contains(k, "gemm " + std::string(gemm_backend()))) << k;
   EXPECT_TRUE(contains(k, "; bf16 ")) << k;
-  if (!libxsmm_target().empty()) EXPECT_TRUE(contains(k, "libxsmm " + libxsmm_target())) << k;
+  if (!libxsmm_target().empty()) {
+    EXPECT_TRUE(contains(k, "libxsmm " + libxsmm_target())) << k;
+  }
 }
 
 // Run by the `avx2_kernels` ctest with LIBXSMM_TARGET=hsw and ONEDNN_MAX_CPU_ISA=AVX2: both
@@ -37,7 +39,9 @@ TEST(CpuClass, FollowsTheLibrariesIsaLimits) {
       EXPECT_FALSE(onednn_avx512());
       EXPECT_TRUE(contains(k, "onednn avx2")) << k;
     }
-    if (!libxsmm_target().empty()) EXPECT_EQ(libxsmm_target(), "hsw");
+    if (!libxsmm_target().empty()) {
+      EXPECT_EQ(libxsmm_target(), "hsw");
+    }
   } else if (onednn_avx512()) {
     EXPECT_TRUE(contains(c, ", avx512")) << c;
   }

@@ -112,9 +112,11 @@ TEST(Plan, AMethodsStopRuleOverridesHyperForEveryTpaCellOfThatMethod) {
   std::string plain = text;
   plain.erase(plain.find("stop = {"), std::string("stop = { sirl = \"fixed\" }\n").size());
   const Profile q = parse_profile(plain, "t.toml");
-  for (const Task& t : make_plan(q).tasks)
-    if (t.kind == tpa_kind())
+  for (const Task& t : make_plan(q).tasks) {
+    if (t.kind == tpa_kind()) {
       EXPECT_NE(tpa_kind().settings(t, q).find("tpa.stop = converged"), std::string::npos);
+    }
+  }
 }
 
 // [pref] stop = { singlepref = "converged", grid2 = { singlepref = "fixed" } }: the φ of that
@@ -258,7 +260,9 @@ TEST(Plan, ThePaperProfileStopsHeadsOnlyWhereARuleWasTestedEquivalent) {
     const bool want = t.env == "jaco" && t.variant.name() != "sirl" &&
                       (!t.frozen || t.variant.name() == "sirl+vae");
     EXPECT_EQ(r.converged, want) << t.key;
-    if (want) EXPECT_EQ(r.rel_tol, t.frozen ? 0.001 : 0.01) << t.key;
+    if (want) {
+      EXPECT_EQ(r.rel_tol, t.frozen ? 0.001 : 0.01) << t.key;
+    }
     stopped += want;
   }
   EXPECT_GT(stopped, 0);
@@ -337,8 +341,11 @@ TEST(Plan, TheTpaProtocolsChooseWhichCellsRun) {
   EXPECT_EQ(paper.count(linear_tpa_kind()), 0);
   EXPECT_EQ(paper.count(tpa_kind()), both.count(tpa_kind()));
   EXPECT_EQ(linear.count(linear_tpa_kind()), both.count(linear_tpa_kind()));
-  for (const Task& t : linear.tasks)
-    if (t.kind == tpa_kind()) EXPECT_TRUE(t.in_ablation && !t.in_main) << t.key;
+  for (const Task& t : linear.tasks) {
+    if (t.kind == tpa_kind()) {
+      EXPECT_TRUE(t.in_ablation && !t.in_main) << t.key;
+    }
+  }
   const Task& cell = both.tasks[size_t(both.index.at("grid/s0/multipref10/N100/tpa/M10/linear"))];
   EXPECT_TRUE(cell.frozen);
   EXPECT_EQ(cell.input(rep_kind()), "grid/s0/multipref10/N100/rep");

@@ -341,7 +341,7 @@ TEST(TaskDigest, AnEnvironmentsDataSettingChangesItsTasksOnly) {
   const std::string base =
       "name = \"t\"\nenvs = [\"grid\", \"jaco\"]\nseeds = [0]\n"
       "[fpe]\nmethods = [\"sirl\", \"random\"]\nN = [100]\n[jaco]\ntrajectories = 200\n";
-  for (const std::string& line : {"data_seed = 3", "max_deformation = 0.25"}) {
+  for (const char* line : {"data_seed = 3", "max_deformation = 0.25"}) {
     const std::set<std::string> c = digest_changes(base, base + line + "\n");
     const auto all = plan_digests_by_key(parse_profile(base));
     ASSERT_EQ(all.size(),
