@@ -90,12 +90,14 @@ class OneNodeSlurm:
     def _start(self, d):
         subprocess.run(["mungekey", "--create", f"--keyfile={d}/munge/munge.key"], check=True)
         # In the foreground (no fork), so that it dies with this process; ready once its socket is.
-        self.munged = subprocess.Popen(
-            ["munged", "--foreground", f"--socket={d}/msock/munge.socket",
-             f"--key-file={d}/munge/munge.key", f"--pid-file={d}/munge/munged.pid",
-             f"--log-file={d}/log/munged.log", f"--seed-file={d}/munge/munged.seed"],
-            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-            stderr=open(d / "log" / "munged.stderr", "w"), preexec_fn=_dies_with_parent)
+        # (Each daemon writes its log through its own copy of the file; ours is closed at once.)
+        with open(d / "log" / "munged.stderr", "w") as log:
+            self.munged = subprocess.Popen(
+                ["munged", "--foreground", f"--socket={d}/msock/munge.socket",
+                 f"--key-file={d}/munge/munge.key", f"--pid-file={d}/munge/munged.pid",
+                 f"--log-file={d}/log/munged.log", f"--seed-file={d}/munge/munged.seed"],
+                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=log,
+                preexec_fn=_dies_with_parent)
         deadline = time.time() + 30
         while not (d / "msock" / "munge.socket").exists():
             if self.munged.poll() is not None or time.time() > deadline:
@@ -112,10 +114,10 @@ class OneNodeSlurm:
                                                     ctld_port=ports[0], d_port=ports[1]))
         self.env = dict(os.environ, SLURM_CONF=str(d / "slurm.conf"))
         for daemon in ("slurmctld", "slurmd"):
-            log = open(d / "log" / f"{daemon}.stdout", "w")
-            self.procs.append(subprocess.Popen([daemon, "-D", "-f", str(d / "slurm.conf")],
-                                               stdout=log, stderr=subprocess.STDOUT, env=self.env,
-                                               preexec_fn=_dies_with_parent))
+            with open(d / "log" / f"{daemon}.stdout", "w") as log:
+                self.procs.append(subprocess.Popen([daemon, "-D", "-f", str(d / "slurm.conf")],
+                                                   stdout=log, stderr=subprocess.STDOUT,
+                                                   env=self.env, preexec_fn=_dies_with_parent))
         deadline = time.time() + 60
         while time.time() < deadline:
             p = subprocess.run(["sinfo", "-h", "-o", "%T"], capture_output=True, text=True,
