@@ -156,6 +156,10 @@ MUTANTS = [
     ("report/claims.py", "    z = rng.standard_normal((POWER_DRAWS, m)) + dz * math.sqrt(n)",
      "    z = rng.standard_normal((POWER_DRAWS, m)) + dz * n", "ctest:claims_stats",
      "power's noncentrality d_z·n instead of d_z·√n"),
+    ("report/claims.py",
+     "    crit = stats.t.isf(alpha / (2.0 * (m - np.arange(m))), df)  # (m,), growing with k",
+     "    crit = stats.t.isf(alpha / (m - np.arange(m)), df)  # (m,), growing with k",
+     "ctest:claims_stats", "power's simulated tests one-sided"),
     # engine 0.5.0 — active selection, noisy teachers as an axis
     ("engine/active_queries.cpp",
      "        if (pass == 0 && (used.count(q[0]) || used.count(q[1]) || used.count(q[2]))) continue;\n",
