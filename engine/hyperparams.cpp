@@ -51,51 +51,87 @@ const std::string& tpa_stop_doc() {
   return doc;
 }
 
-// Visits every field with its name and what it sets (f(name, field, doc), doc a string_view):
-// the one table set_hyper, describe and the keys page (hyper_key_docs) read.
+// The ranges and word lists the keys accept (HyperAccept), built once.
+struct Accepts {
+  HyperAccept any, non_negative, positive, at_least_1, at_least_2, fraction, decay, shadow_tol;
+  HyperAccept elbo, pref_stop, tpa_stop, precision;
+};
+const Accepts& accepts() {
+  static const Accepts a = [] {
+    auto range = [](double lo, double hi, bool lo_open, bool hi_open) {
+      return HyperAccept{lo, hi, lo_open, hi_open, {}};
+    };
+    Accepts x;
+    x.non_negative = range(0, INFINITY, false, false);
+    x.positive = range(0, INFINITY, true, false);
+    x.at_least_1 = range(1, INFINITY, false, false);
+    x.at_least_2 = range(2, INFINITY, false, false);
+    x.fraction = range(0, 1, true, true);
+    x.decay = range(0, 1, true, false);
+    x.shadow_tol = range(0, 1, false, true);
+    x.elbo.words = {{"sum", "the standard ELBO"}, {"mean", "reconstruction averaged over inputs"}};
+    x.pref_stop.words = {{"fixed", "every epoch, the paper's"},
+                         {"converged", "the training ends once its loss has converged"}};
+    for (const TpaStopRule& r : kTpaStopRules) x.tpa_stop.words.push_back({r.name, r.doc});
+    x.precision.words = {{"fp32", ""}, {"bf16", ""}};
+    return x;
+  }();
+  return a;
+}
+
+// Visits every field with its name, what it sets and what it accepts (f(name, field, doc,
+// accept), doc a string_view, accept a HyperAccept): the one table set_hyper, validate, describe
+// and the keys page (hyper_key_docs) read.
 template <typename H, typename F>
 void for_each_field(H& h, F&& f) {
-  f("phi.hidden", h.phi_hidden, "φ's hidden layer widths (a ReLU after each)");
-  f("phi.embedding_dim", h.embedding_dim, "φ's output: the embedding's dimension");
+  const Accepts& a = accepts();
+  f("phi.hidden", h.phi_hidden, "φ's hidden layer widths (a ReLU after each)", a.at_least_1);
+  f("phi.embedding_dim", h.embedding_dim, "φ's output: the embedding's dimension", a.at_least_1);
   f("phi.relu_output", h.phi_relu_output,
-    "a ReLU on φ's embedding layer too (the lineage code leaves it linear)");
+    "a ReLU on φ's embedding layer too (the lineage code leaves it linear)", a.any);
   auto schedule = [&](const std::string& p, auto& s, Schedule which) {
     const std::array<std::string, 4>& doc = schedule_docs(which);
-    f(p + ".epochs", s.epochs, doc[0]);
-    f(p + ".batch", s.batch, doc[1]);
-    f(p + ".lr", s.adam.lr, doc[2]);
-    f(p + ".lr_decay", s.adam.decay, doc[3]);
+    f(p + ".epochs", s.epochs, doc[0], a.non_negative);
+    f(p + ".batch", s.batch, doc[1], a.at_least_1);
+    f(p + ".lr", s.adam.lr, doc[2], a.positive);
+    f(p + ".lr_decay", s.adam.decay, doc[3], a.decay);
   };
   schedule("sirl", h.sirl, kSirl);
-  f("sirl.margin", h.triplet_margin, "the triplet loss's margin");
+  f("sirl.margin", h.triplet_margin, "the triplet loss's margin", a.non_negative);
   schedule("vae", h.vae, kVae);
-  f("vae.kl_weight", h.vae_kl_weight, "the KL term's weight λ in the VAE's loss");
+  f("vae.kl_weight", h.vae_kl_weight, "the KL term's weight λ in the VAE's loss", a.non_negative);
   f("vae.elbo", h.vae_elbo,
     "\"sum\" (squared error summed over inputs, KL over latents) or \"mean\" (averaged over "
-    "inputs)");
+    "inputs)",
+    a.elbo);
   f("vae.standardize", h.vae_standardize,
-    "φ is the encoder's mean standardised per latent over Ξ (folded into its last layer)");
+    "φ is the encoder's mean standardised per latent over Ξ (folded into its last layer)", a.any);
   schedule("pref", h.pref, kPref);
-  f("pref.l2", h.pref_l2, "the L2 penalty on a preference φ's predicted rewards");
+  f("pref.l2", h.pref_l2, "the L2 penalty on a preference φ's predicted rewards", a.non_negative);
   f("pref.stop", h.pref_stop,
     "when a preference φ ends: \"fixed\" (pref.epochs, the paper's) or \"converged\" (its "
-    "loss has converged; pref.epochs the cap)");
-  f("pref.stop_min_epochs", h.pref_stop_min_epochs, "the fewest epochs \"converged\" runs a φ");
+    "loss has converged; pref.epochs the cap)",
+    a.pref_stop);
+  f("pref.stop_min_epochs", h.pref_stop_min_epochs, "the fewest epochs \"converged\" runs a φ",
+    a.at_least_2);
   f("pref.stop_rel_tol", h.pref_stop_rel_tol,
-    "the relative change below which a φ's loss counts as converged");
+    "the relative change below which a φ's loss counts as converged", a.fraction);
   schedule("tpa", h.tpa, kTpa);
-  f("tpa.hidden", h.tpa_hidden, "a reward head's hidden layer widths");
-  f("tpa.l2", h.tpa_l2, "the L2 penalty on a reward head's predicted rewards");
-  f("tpa.stop", h.tpa_stop, tpa_stop_doc());
-  f("tpa.stop_min_epochs", h.tpa_stop_min_epochs, "the fewest epochs a stop rule runs a head");
-  f("tpa.stop_rel_tol", h.tpa_stop_rel_tol, "the convergence tolerance for unfrozen cells' heads");
+  f("tpa.hidden", h.tpa_hidden, "a reward head's hidden layer widths", a.at_least_1);
+  f("tpa.l2", h.tpa_l2, "the L2 penalty on a reward head's predicted rewards", a.non_negative);
+  f("tpa.stop", h.tpa_stop, tpa_stop_doc(), a.tpa_stop);
+  f("tpa.stop_min_epochs", h.tpa_stop_min_epochs, "the fewest epochs a stop rule runs a head",
+    a.at_least_2);
+  f("tpa.stop_rel_tol", h.tpa_stop_rel_tol, "the convergence tolerance for unfrozen cells' heads",
+    a.fraction);
   f("tpa.stop_frozen_rel_tol", h.tpa_stop_frozen_rel_tol,
-    "the convergence tolerance for frozen cells' heads");
+    "the convergence tolerance for frozen cells' heads", a.fraction);
   f("tpa.shadow_rel_tol", h.tpa_shadow_rel_tol,
     "above 0: each head that runs every epoch is also scored where \"converged\" at this "
-    "tolerance would have stopped it");
+    "tolerance would have stopped it (0: no shadow rule)",
+    a.shadow_tol);
   f("precision", h.precision,
-    "\"fp32\" (the paper's) or \"bf16\" matrix products (fp32 accumulation)");
+    "\"fp32\" (the paper's) or \"bf16\" matrix products (fp32 accumulation)", a.precision);
 }
 
 [[noreturn]] void bad(const std::string& key, const HyperValue& value, const char* expected) {
@@ -195,19 +231,21 @@ std::string hyper_value_text(const HyperValue& v) {
 
 void set_hyper(Hyper& h, const std::string& key, const HyperValue& value) {
   bool found = false;
-  for_each_field(h, [&](const std::string& name, auto& field, std::string_view) {
-    if (name != key) return;
-    found = true;
-    assign(key, value, field);
-  });
+  for_each_field(h,
+                 [&](const std::string& name, auto& field, std::string_view, const HyperAccept&) {
+                   if (name != key) return;
+                   found = true;
+                   assign(key, value, field);
+                 });
   if (!found) unknown_key(key);
 }
 
 HyperValue hyper_value(const Hyper& h, const std::string& key) {
   std::optional<HyperValue> out;
-  for_each_field(h, [&](const std::string& name, const auto& field, std::string_view) {
-    if (name == key) out = value_of(field);
-  });
+  for_each_field(
+      h, [&](const std::string& name, const auto& field, std::string_view, const HyperAccept&) {
+        if (name == key) out = value_of(field);
+      });
   if (!out) unknown_key(key);
   return *out;
 }
@@ -215,20 +253,21 @@ HyperValue hyper_value(const Hyper& h, const std::string& key) {
 HyperType hyper_type(const std::string& key) {
   Hyper h;
   std::optional<HyperType> type;
-  for_each_field(h, [&](const std::string& name, auto& field, std::string_view) {
-    if (name != key) return;
-    using T = std::decay_t<decltype(field)>;
-    if constexpr (std::is_same_v<T, bool>)
-      type = HyperType::boolean;
-    else if constexpr (std::is_integral_v<T>)
-      type = HyperType::integer;
-    else if constexpr (std::is_floating_point_v<T>)
-      type = HyperType::number;
-    else if constexpr (std::is_same_v<T, std::vector<int>>)
-      type = HyperType::integer_list;
-    else
-      type = HyperType::word;
-  });
+  for_each_field(h,
+                 [&](const std::string& name, auto& field, std::string_view, const HyperAccept&) {
+                   if (name != key) return;
+                   using T = std::decay_t<decltype(field)>;
+                   if constexpr (std::is_same_v<T, bool>)
+                     type = HyperType::boolean;
+                   else if constexpr (std::is_integral_v<T>)
+                     type = HyperType::integer;
+                   else if constexpr (std::is_floating_point_v<T>)
+                     type = HyperType::number;
+                   else if constexpr (std::is_same_v<T, std::vector<int>>)
+                     type = HyperType::integer_list;
+                   else
+                     type = HyperType::word;
+                 });
   if (!type) throw std::invalid_argument("unknown hyper-parameter '" + key + "'");
   return *type;
 }
@@ -248,24 +287,25 @@ const char* hyper_type_name(HyperType t) {
 std::vector<std::string> hyper_keys() {
   Hyper h;
   std::vector<std::string> keys;
-  for_each_field(h,
-                 [&](const std::string& name, auto&, std::string_view) { keys.push_back(name); });
+  for_each_field(h, [&](const std::string& name, auto&, std::string_view, const HyperAccept&) {
+    keys.push_back(name);
+  });
   return keys;
 }
 
 std::string describe(const Hyper& h) {
   std::string s;
-  for_each_field(h, [&](const std::string& name, const auto& field, std::string_view) {
-    s += name + " = " + show(field) + "\n";
-  });
+  for_each_field(h, [&](const std::string& name, const auto& field, std::string_view,
+                        const HyperAccept&) { s += name + " = " + show(field) + "\n"; });
   return s;
 }
 
 std::vector<HyperKeyDoc> hyper_key_docs() {
   Hyper h;
   std::vector<HyperKeyDoc> out;
-  for_each_field(h, [&](const std::string& name, const auto& field, std::string_view doc) {
-    out.push_back({name, value_of(field), std::string(doc)});
+  for_each_field(h, [&](const std::string& name, const auto& field, std::string_view doc,
+                        const HyperAccept& accept) {
+    out.push_back({name, value_of(field), std::string(doc), accept});
   });
   return out;
 }
@@ -294,61 +334,65 @@ void validate_precision(const std::string& precision) {
         precision + "\"");
 }
 
-void validate(const Hyper& h) {
-  auto fail = [](const std::string& what) {
-    throw std::invalid_argument("hyper-parameter " + what);
+bool accepts(const HyperAccept& a, double x) {
+  return (a.lo_open ? x > a.lo : x >= a.lo) && (a.hi_open ? x < a.hi : x <= a.hi);
+}
+
+std::string range_text(const HyperAccept& a) {
+  auto num = [](double x) {
+    std::ostringstream o;
+    o << x;
+    return o.str();
   };
-  auto widths = [&](const char* name, const std::vector<int>& w) {
-    if (w.size() > kMaxHiddenLayers)
-      fail(std::string(name) + ": at most " + std::to_string(kMaxHiddenLayers) +
-           " hidden layers, got " + std::to_string(w.size()));
-    for (int x : w)
-      if (x < 1) fail(std::string(name) + ": widths must be >= 1");
-  };
-  widths("phi.hidden", h.phi_hidden);
-  widths("tpa.hidden", h.tpa_hidden);
-  if (h.embedding_dim < 1) fail("phi.embedding_dim must be >= 1");
-  auto schedule = [&](const std::string& p, const TrainSchedule& s) {
-    if (s.epochs < 0) fail(p + ".epochs must be >= 0");
-    if (s.batch < 1) fail(p + ".batch must be >= 1");
-    if (!(s.adam.lr > 0)) fail(p + ".lr must be > 0");
-    if (!(s.adam.decay > 0 && s.adam.decay <= 1)) fail(p + ".lr_decay must be in (0, 1]");
-  };
-  schedule("sirl", h.sirl);
-  schedule("vae", h.vae);
-  schedule("pref", h.pref);
-  schedule("tpa", h.tpa);
-  if (h.triplet_margin < 0) fail("sirl.margin must be >= 0");
-  if (h.vae_kl_weight < 0) fail("vae.kl_weight must be >= 0");
-  if (h.vae_elbo != "sum" && h.vae_elbo != "mean")
-    fail(
-        "vae.elbo must be \"sum\" (the standard ELBO) or \"mean\" (reconstruction averaged "
-        "over inputs), got \"" +
-        h.vae_elbo + "\"");
-  if (h.pref_l2 < 0) fail("pref.l2 must be >= 0");
-  if (h.pref_stop != "fixed" && h.pref_stop != "converged")
-    fail(
-        "pref.stop must be \"fixed\" (every epoch, the paper's) or \"converged\" (the "
-        "training ends once its loss has converged), got \"" +
-        h.pref_stop + "\"");
-  if (h.pref_stop_min_epochs < 2) fail("pref.stop_min_epochs must be >= 2");
-  if (!(h.pref_stop_rel_tol > 0 && h.pref_stop_rel_tol < 1))
-    fail("pref.stop_rel_tol must be in (0, 1)");
-  if (h.tpa_l2 < 0) fail("tpa.l2 must be >= 0");
-  if (!find_tpa_stop_rule(h.tpa_stop))
-    fail("tpa.stop must be " + tpa_stop_rule_list() + ", got \"" + h.tpa_stop + "\"");
-  if (h.tpa_stop_min_epochs < 2) fail("tpa.stop_min_epochs must be >= 2");
-  if (!(h.tpa_stop_rel_tol > 0 && h.tpa_stop_rel_tol < 1))
-    fail("tpa.stop_rel_tol must be in (0, 1)");
-  if (!(h.tpa_stop_frozen_rel_tol > 0 && h.tpa_stop_frozen_rel_tol < 1))
-    fail("tpa.stop_frozen_rel_tol must be in (0, 1)");
-  if (!(h.tpa_shadow_rel_tol >= 0 && h.tpa_shadow_rel_tol < 1))
-    fail("tpa.shadow_rel_tol must be in [0, 1) (0: no shadow rule)");
-  try {
-    validate_precision(h.precision);
-  } catch (const std::invalid_argument& e) {
-    fail(e.what());
+  if (std::isinf(a.lo) && std::isinf(a.hi)) return "any value";
+  if (std::isinf(a.hi)) return (a.lo_open ? "> " : ">= ") + num(a.lo);
+  if (std::isinf(a.lo)) return (a.hi_open ? "< " : "<= ") + num(a.hi);
+  return std::string("in ") + (a.lo_open ? "(" : "[") + num(a.lo) + ", " + num(a.hi) +
+         (a.hi_open ? ")" : "]");
+}
+
+std::string words_text(const HyperAccept& a) {
+  std::string s;
+  for (size_t i = 0; i < a.words.size(); ++i) {
+    if (i > 0) s += i + 1 == a.words.size() ? " or " : ", ";
+    s += "\"" + a.words[i].first + "\"";
+    if (!a.words[i].second.empty()) s += " (" + a.words[i].second + ")";
   }
+  return s;
+}
+
+namespace {
+
+[[noreturn]] void refuse(const std::string& what) {
+  throw std::invalid_argument("hyper-parameter " + what);
+}
+void check_accepted(const std::string& key, double x, const HyperAccept& a) {
+  if (!accepts(a, x)) refuse(key + " must be " + range_text(a) + ", got " + show(x));
+}
+void check_accepted(const std::string& key, int x, const HyperAccept& a) {
+  if (!accepts(a, x)) refuse(key + " must be " + range_text(a) + ", got " + std::to_string(x));
+}
+void check_accepted(const std::string&, bool, const HyperAccept&) {}
+void check_accepted(const std::string& key, const std::string& x, const HyperAccept& a) {
+  for (const auto& w : a.words)
+    if (w.first == x) return;
+  refuse(key + " must be " + words_text(a) + ", got \"" + x + "\"");
+}
+void check_accepted(const std::string& key, const std::vector<int>& widths, const HyperAccept& a) {
+  if (widths.size() > kMaxHiddenLayers)
+    refuse(key + ": at most " + std::to_string(kMaxHiddenLayers) + " hidden layers, got " +
+           std::to_string(widths.size()));
+  for (int x : widths)
+    if (!accepts(a, x))
+      refuse(key + ": widths must be " + range_text(a) + ", got " + std::to_string(x));
+}
+
+}  // namespace
+
+// Every key against what its declaration accepts (for_each_field).
+void validate(const Hyper& h) {
+  for_each_field(h, [](const std::string& name, const auto& field, std::string_view,
+                       const HyperAccept& accept) { check_accepted(name, field, accept); });
 }
 
 }  // namespace sirl

@@ -447,8 +447,8 @@ std::string hyper_section() {
       "The training hyper-parameters of one environment's tasks (the paper's Appendix B-C). A list "
       "of values makes an axis of the grid (running.md); a value of the wrong type, or out of "
       "its range, is refused with the key and the range when the profile is read.\n\n"
-      "| key | type | default | an environment's own default | what it sets |\n"
-      "|---|---|---|---|---|\n";
+      "| key | type | accepted | default | an environment's own default | what it sets |\n"
+      "|---|---|---|---|---|---|\n";
   for (const HyperKeyDoc& k : hyper_key_docs()) {
     const HyperType t = hyper_type(k.key);
     const char* type = t == HyperType::integer        ? "integer"
@@ -456,13 +456,23 @@ std::string hyper_section() {
                        : t == HyperType::boolean      ? "boolean"
                        : t == HyperType::integer_list ? "integer list (widths)"
                                                       : "string";
+    std::string accepted;
+    if (!k.accept.words.empty()) {
+      for (const auto& w : k.accept.words)
+        accepted += (accepted.empty() ? "`\"" : ", `\"") + w.first + "\"`";
+    } else if (t == HyperType::integer_list) {
+      accepted = "widths " + range_text(k.accept) + ", at most " +
+                 std::to_string(kMaxHiddenLayers) + " of them";
+    } else if (t != HyperType::boolean) {
+      accepted = range_text(k.accept);
+    }
     std::string own;
     for (const EnvSpec& e : environments())
       for (const HyperDefault& d : e.hyper)
         if (d.key == k.key)
           own += (own.empty() ? "" : ", ") + e.name + ": `" + toml_text(d.value) + "`";
-    out += "| `" + k.key + "` | " + type + " | `" + toml_text(k.value) + "` | " +
-           (own.empty() ? "—" : own) + " | " + k.doc + " |\n";
+    out += "| `" + k.key + "` | " + type + " | " + (accepted.empty() ? "—" : accepted) + " | `" +
+           toml_text(k.value) + "` | " + (own.empty() ? "—" : own) + " | " + k.doc + " |\n";
   }
   return out + "\n";
 }

@@ -1,6 +1,9 @@
 // The paper's hyper-parameters per environment, and setting them by name.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <tuple>
+
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -75,6 +78,67 @@ TEST(Hyper, EveryKeyIsDocumentedWithTheEnginesDefault) {
   // The documented defaults are the engine's (GridRobot's) values, every one of them.
   EXPECT_EQ(describe(from_docs), describe(Hyper{}));
   EXPECT_EQ(describe(from_docs), describe(paper_hyper("grid")));
+}
+
+// Each key's declared range or words (HyperAccept) is what validate() enforces: at a closed bound
+// accepted, at an open one or beyond it refused with the key and the range; each word accepted and
+// any other refused with the key and every word. Holds for any key added to the table.
+TEST(Hyper, EveryKeyRefusesExactlyWhatItsDeclarationDoes) {
+  auto refusal = [](const std::string& key, const HyperValue& v) -> std::string {
+    Hyper h;
+    set_hyper(h, key, v);
+    try {
+      validate(h);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  int numeric = 0, worded = 0;
+  for (const HyperKeyDoc& k : hyper_key_docs()) {
+    const HyperAccept& a = k.accept;
+    const HyperType t = hyper_type(k.key);
+    if (!a.words.empty()) {
+      ASSERT_EQ(t, HyperType::word) << k.key;
+      ++worded;
+      for (const auto& w : a.words) EXPECT_EQ(refusal(k.key, w.first), "") << k.key;
+      const std::string m = refusal(k.key, std::string("nonsense"));
+      EXPECT_NE(m.find("hyper-parameter " + k.key + " must be"), std::string::npos) << m;
+      for (const auto& w : a.words)
+        EXPECT_NE(m.find("\"" + w.first + "\""), std::string::npos) << k.key << ": " << m;
+      continue;
+    }
+    if (t != HyperType::integer && t != HyperType::number && t != HyperType::integer_list) continue;
+    // A value of the key's type: an integer key takes integers, a widths key a list of one.
+    auto value = [&](double x) -> HyperValue {
+      if (t == HyperType::number) return x;
+      if (t == HyperType::integer) return int64_t(x);
+      return std::vector<int>{int(x)};
+    };
+    const double step = t == HyperType::number ? 0.25 : 1;  // beyond a bound, of the key's kind
+    for (const auto& [bound, open, outward] :
+         {std::tuple{a.lo, a.lo_open, -step}, std::tuple{a.hi, a.hi_open, step}}) {
+      if (std::isinf(bound)) continue;
+      ++numeric;
+      const std::string at = refusal(k.key, value(bound));
+      if (open)
+        EXPECT_NE(at.find(k.key), std::string::npos) << k.key << " = " << bound << " accepted";
+      else
+        EXPECT_EQ(at, "") << k.key << " = " << bound;
+      const std::string beyond = refusal(k.key, value(bound + outward));
+      EXPECT_NE(beyond.find(k.key), std::string::npos)
+          << k.key << " = " << bound + outward << " accepted";
+      EXPECT_NE(beyond.find(range_text(a)), std::string::npos) << beyond;
+    }
+  }
+  EXPECT_GE(numeric, 20);  // the schedules' epochs, batches, rates and decays among them
+  EXPECT_EQ(worded, 4);    // vae.elbo, pref.stop, tpa.stop, precision
+  // The texts themselves, by hand.
+  EXPECT_EQ(range_text(HyperAccept{0, 1, true, false, {}}), "in (0, 1]");
+  EXPECT_EQ(range_text(HyperAccept{2, INFINITY, false, false, {}}), ">= 2");
+  EXPECT_EQ(range_text(HyperAccept{0, INFINITY, true, false, {}}), "> 0");
+  EXPECT_EQ(words_text(HyperAccept{0, 0, false, false, {{"a", "one"}, {"b", ""}, {"c", "x"}}}),
+            "\"a\" (one), \"b\" or \"c\" (x)");
 }
 
 TEST(Hyper, BadKeysAndValuesAreRejectedWithTheirName) {
