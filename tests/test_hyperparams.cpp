@@ -163,6 +163,28 @@ TEST(Hyper, BadKeysAndValuesAreRejectedWithTheirName) {
   EXPECT_NE(message("phi.relu_output", int64_t{1}).find("true or false"), std::string::npos);
   EXPECT_NE(message("phi.hidden", std::vector<int>{}).find("a list of widths"), std::string::npos);
   EXPECT_NE(message("precision", 16.0).find("a word"), std::string::npos);
+  // Values that would break the arithmetic, stated here apart from the declarations: a rate or
+  // decay of 0 (no step, or no step after the first), a negative count or penalty, a tolerance of
+  // 1 (every loss "converged"), a convergence window of one epoch.
+  const std::pair<const char*, HyperValue> breaking[] = {{"sirl.lr", 0.0},
+                                                         {"vae.lr_decay", 0.0},
+                                                         {"pref.lr_decay", 1.5},
+                                                         {"tpa.batch", int64_t{0}},
+                                                         {"sirl.epochs", int64_t{-1}},
+                                                         {"tpa.l2", -0.5},
+                                                         {"pref.stop_rel_tol", 1.0},
+                                                         {"tpa.stop_min_epochs", int64_t{1}},
+                                                         {"phi.embedding_dim", int64_t{0}},
+                                                         {"tpa.hidden", std::vector<int>{16, 0}},
+                                                         {"tpa.shadow_rel_tol", -0.1}};
+  for (const auto& [key, v] : breaking) {
+    Hyper h;
+    set_hyper(h, key, v);
+    EXPECT_THROW(validate(h), std::invalid_argument) << key << " = " << hyper_value_text(v);
+  }
+  Hyper off;
+  set_hyper(off, "tpa.shadow_rel_tol", 0.0);  // 0 is "no shadow rule", not an error
+  EXPECT_NO_THROW(validate(off));
   Hyper bad;
   bad.sirl.adam.decay = 1.5;
   EXPECT_THROW(validate(bad), std::invalid_argument);
