@@ -480,6 +480,9 @@ def main():
                     "bench/stop-equivalence-jaco-pref.toml)")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--out", default=None, help="default out/<profile name>")
+    ap.add_argument("--cache", default=None,
+                    help="the task cache (default OUT/tasks): two tests given the same folder "
+                    "train the tasks they share once")
     ap.add_argument("--sirl", default=os.path.join(ROOT, "build", "release", "app", "sirl"))
     ap.add_argument("--analyse-only", action="store_true", help="compare existing results files")
     a = ap.parse_args()
@@ -491,10 +494,11 @@ def main():
     if not a.analyse_only and not os.access(a.sirl, os.X_OK):
         sys.exit(f"stop_equivalence: no sirl binary at {a.sirl} (./scripts/build.sh release)")
     os.makedirs(out, exist_ok=True)
+    cache = a.cache or os.path.join(out, "tasks")
     if a.rule == "shadow":  # one run: the profile as it is
         path = os.path.join(out, "fixed.h5")
         if not a.analyse_only:
-            run(a.sirl, a.profile, [], path, a.threads, ["--cache", os.path.join(out, "tasks")])
+            run(a.sirl, a.profile, [], path, a.threads, ["--cache", cache])
         if not os.path.isfile(path):
             sys.exit(f"stop_equivalence: {path}: no results file (run without --analyse-only)")
         return main_shadow(a, path, out)
@@ -505,7 +509,6 @@ def main():
         if p.returncode != 0:
             sys.exit(f"stop_equivalence: {p.stderr.strip()}")
         sets = {"fixed": [], "converged": converged_settings(tomllib.loads(p.stdout), a.rule)}
-        cache = os.path.join(out, "tasks")
         for stop in ("fixed", "converged"):
             run(a.sirl, a.profile, sets[stop], paths[stop], a.threads, ["--cache", cache])
     for path in paths.values():
