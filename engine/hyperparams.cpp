@@ -73,7 +73,7 @@ const Accepts& accepts() {
     x.pref_stop.words = {{"fixed", "every epoch, the paper's"},
                          {"converged", "the training ends once its loss has converged"}};
     for (const TpaStopRule& r : kTpaStopRules) x.tpa_stop.words.push_back({r.name, r.doc});
-    x.precision.words = {{"fp32", ""}, {"bf16", ""}};
+    x.precision.words = {{"fp32", ""}, {"bf16", "bf16 matrix products, fp32 accumulation"}};
     return x;
   }();
   return a;
@@ -328,10 +328,10 @@ StopRule tpa_stop_rule(const Hyper& h, bool frozen) {
 }
 
 void validate_precision(const std::string& precision) {
-  if (precision != "fp32" && precision != "bf16")
-    throw std::invalid_argument(
-        "precision must be \"fp32\" or \"bf16\" (bf16 matrix products, fp32 accumulation), got \"" +
-        precision + "\"");
+  const HyperAccept& a = accepts().precision;  // the words the hyper-parameter takes
+  for (const auto& w : a.words)
+    if (w.first == precision) return;
+  throw std::invalid_argument("precision must be " + words_text(a) + ", got \"" + precision + "\"");
 }
 
 bool accepts(const HyperAccept& a, double x) {
