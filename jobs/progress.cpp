@@ -35,7 +35,7 @@ void Progress::set_resumed(std::set<std::string> keys) {
 
 Progress::Counts Progress::counts() {
   std::lock_guard lock(mu_);
-  return {done_, done_flops_, rate_flops_};
+  return {done_, done_flops_, rate_flops_, executed_flops_};
 }
 
 void Progress::resumed_from(const std::string& key, double flops_before) {
@@ -43,22 +43,36 @@ void Progress::resumed_from(const std::string& key, double flops_before) {
   if (flops_before > 0) flops_before_[key] = flops_before;
 }
 
-void Progress::task_done(const std::string& key, double task_flops, double seconds) {
+void Progress::task_done(const std::string& key, double task_flops, double seconds,
+                         double executed_flops) {
+  std::lock_guard lock(mu_);
+  const double ran = executed_flops < 0 ? task_flops : executed_flops;
+  ++done_;
+  done_flops_ += task_flops;
+  if (!resumed_.count(key)) {
+    rate_flops_ += task_flops;
+    executed_flops_ += ran;
+  } else if (const auto it = flops_before_.find(key); it != flops_before_.end()) {
+    const double here = std::max(0.0, ran - it->second);  // the part run in this process
+    executed_flops_ += here;
+    if (ran > 0) rate_flops_ += task_flops * here / ran;  // that share of the estimate
+  }
+  print(key, done_ == total_);
+}
+
+void Progress::done_elsewhere(const std::string& key, double task_flops) {
   std::lock_guard lock(mu_);
   ++done_;
   done_flops_ += task_flops;
-  if (!resumed_.count(key))
-    rate_flops_ += task_flops;
-  else if (const auto it = flops_before_.find(key); it != flops_before_.end())
-    rate_flops_ += std::max(0.0, task_flops - it->second);  // the part run in this process
   print(key, done_ == total_);
 }
 
 std::string progress_line(int done, int total, double done_flops, double rate_flops,
-                          double total_flops, double elapsed) {
+                          double executed_flops, double total_flops, double elapsed) {
   // The share of estimated work done (tasks differ in cost by orders of magnitude).
   const double frac = total_flops > 0 ? done_flops / total_flops : double(done) / total;
-  const double rate = elapsed > 0 ? rate_flops / elapsed : 0;  // FLOP/s
+  const double rate = elapsed > 0 ? rate_flops / elapsed : 0;       // estimated FLOPs per second
+  const double speed = elapsed > 0 ? executed_flops / elapsed : 0;  // FLOP/s executed
   const double left = total_flops > 0 ? std::max(0.0, total_flops - done_flops) : 0;
   double eta = NAN;
   if (done == total)
@@ -69,7 +83,7 @@ std::string progress_line(int done, int total, double done_flops, double rate_fl
     eta = elapsed * (1 - frac) / frac;
   char line[256];
   std::snprintf(line, sizeof line, "[%d/%d tasks] %5.1f%% | %.1f GFLOP/s | elapsed %s | ETA %s",
-                done, total, 100 * frac, rate * 1e-9, format_duration(elapsed).c_str(),
+                done, total, 100 * frac, speed * 1e-9, format_duration(elapsed).c_str(),
                 format_duration(eta).c_str());
   return line;
 }
@@ -80,8 +94,8 @@ void Progress::print(const std::string& last, bool force) {
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   if (!tty_ && !force && std::chrono::duration<double>(now - last_print_).count() < 5) return;
   last_print_ = now;
-  const std::string line =
-      progress_line(done_, total_, done_flops_, rate_flops_, total_flops_, elapsed);
+  const std::string line = progress_line(done_, total_, done_flops_, rate_flops_, executed_flops_,
+                                         total_flops_, elapsed);
   if (tty_)
     std::fprintf(stderr, "\r\033[K%s | %s", line.c_str(), last.c_str());
   else

@@ -42,6 +42,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// The FLOPs a task's record says it executed (its timings row's); -1 when it does not say.
+double executed_flops(const TaskRecord& r) {
+  const auto it = r.num.find("flops");
+  return it == r.num.end() ? -1 : it->second;
+}
+
 std::string now_iso() {
   const std::time_t t = std::time(nullptr);
   std::tm tm{};
@@ -373,13 +379,13 @@ struct PlanExecution {
     if (!done.empty()) {  // committed by another run while this one waited
       sources.set(size_t(i), done);
       ++elsewhere;
-      progress.task_done(t.key, t.flops, 0);
+      progress.done_elsewhere(t.key, t.flops);
       return;
     }
     TaskRecord rec = run_task(t, ctx);
     commit(size_t(i), rec);
     if (checkpoints) checkpoints->remove(digests[size_t(i)]);  // the commit supersedes it
-    progress.task_done(t.key, t.flops, rec.num.at("seconds"));
+    progress.task_done(t.key, t.flops, rec.num.at("seconds"), executed_flops(rec));
   }
 
   // Returns the first failure instead of throwing, so the caller still writes what finished.
@@ -398,7 +404,8 @@ struct PlanExecution {
               TaskRecord rec = r;
               commit(size_t(i), rec);
               if (checkpoints) checkpoints->remove(digests[size_t(i)]);
-              progress.task_done(rec.key, plan.tasks[i].flops, rec.num.at("seconds"));
+              progress.task_done(rec.key, plan.tasks[i].flops, rec.num.at("seconds"),
+                                 executed_flops(rec));
             });
         if (!o.quiet) {
           std::string per;
