@@ -23,8 +23,8 @@ TEST(Progress, TheEtaIsTheFlopsLeftAtTheRateOfTasksRunHere) {
   EXPECT_EQ(progress_line(10, 10, 100e9, 0, 0, 100e9, 125),
             "[10/10 tasks] 100.0% | 0.0 GFLOP/s | elapsed 2m05s | ETA 0s");
   // Tasks that stopped early by a rule the plan did not know: 50 of the estimated 100 GFLOP done
-  // in 10 s, but they executed 5: the speed shown is 0.5 GFLOP/s, the ETA still 10 s (the
-  // estimate's units at the estimate's rate).
+  // in 10 s, but they executed 5 GFLOP: the speed shown is the executed FLOPs over the time, while
+  // the ETA stays in the estimate's units at the estimate's rate.
   EXPECT_EQ(progress_line(3, 10, 50e9, 50e9, 5e9, 100e9, 10),
             "[3/10 tasks]  50.0% | 0.5 GFLOP/s | elapsed 10s | ETA 10s");
   // No FLOP estimates (every task 0): the ETA by task count, 2 of 8 in 30 s → 90 s more.
