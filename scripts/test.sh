@@ -37,11 +37,10 @@ start_build() {  # start_build PRESET [TARGET...]: in the background, output to 
   shift
   mkdir -p build
   echo "test.sh: building the $preset preset beside the tests, at the lowest priority (build/$preset.log)"
-  cmake --preset "$preset" >/dev/null  # configured here: at the lowest priority it would wait
   # shellcheck disable=SC2016  # $0 and $@ belong to the inner shell
   (exec setsid bash -c 'echo 19 > /proc/self/autogroup 2>/dev/null || true
-    exec nice -n 19 cmake --build --preset "$0" "$@"' "$preset" "$@") \
-    >"build/$preset.log" 2>&1 </dev/null &
+    p="$0"; cmake --preset "$p" >/dev/null && exec nice -n 19 cmake --build --preset "$p" "$@"' \
+    "$preset" "$@") >"build/$preset.log" 2>&1 </dev/null &
   background=$!
 }
 finish_build() {  # finish_build PRESET: waits for start_build's build; its output either way
