@@ -45,6 +45,32 @@ TEST(Plan, ExpectedHeadEpochsFollowTheMeasuredTableOfTheCellsTolerance) {
   EXPECT_EQ(expected_head_epochs("jaco", false, 50, h), 1000);
 }
 
+// The cost model's expected preference-φ epochs under pref.stop: the measured table's entry of
+// the same environment, method, pre-training, minimum and tolerance, clamped to [minimum, cap];
+// the schedule's epochs for anything not measured.
+TEST(Plan, ExpectedPrefEpochsFollowTheMeasuredTableOfTheRulesSettings) {
+  Hyper h = paper_hyper("jaco");
+  ASSERT_EQ(h.pref.epochs, 5000);
+  EXPECT_EQ(expected_pref_epochs("jaco", "multipref10", 1000, false, h), 5000);  // fixed
+  h.pref_stop = "converged";
+  for (const char* m : {"singlepref", "multipref10", "multipref50"}) {
+    EXPECT_NEAR(expected_pref_epochs("jaco", m, 1000, false, h), 500, 1e-12) << m;
+    EXPECT_NEAR(expected_pref_epochs("jaco", m, 100, false, h), 500, 1e-12) << m;  // nearest N
+  }
+  EXPECT_EQ(expected_pref_epochs("jaco", "multipref10", 1000, true, h), 5000);  // +VAE: none
+  Hyper g = paper_hyper("grid");
+  g.pref_stop = "converged";
+  EXPECT_EQ(expected_pref_epochs("grid", "multipref10", 1000, false, g), g.pref.epochs);  // none
+  h.pref_stop_rel_tol = 0.001;  // another tolerance: never measured
+  EXPECT_EQ(expected_pref_epochs("jaco", "singlepref", 1000, false, h), 5000);
+  h.pref_stop_rel_tol = 0.01;
+  h.pref_stop_min_epochs = 200;  // another minimum: never measured
+  EXPECT_EQ(expected_pref_epochs("jaco", "singlepref", 1000, false, h), 5000);
+  h.pref_stop_min_epochs = 500;
+  h.pref.epochs = 300;  // the schedule caps the expectation
+  EXPECT_NEAR(expected_pref_epochs("jaco", "singlepref", 1000, false, h), 300, 1e-12);
+}
+
 // A representation's cost is its method's declared training (MethodTraining): per epoch of its
 // schedule, 3 rows through φ per SIRL triplet and 2 per preference pair, forward + backward (3 ×
 // a forward's 2·in·out per layer), plus the one forward pass over Ξ it stores. Counted by hand
