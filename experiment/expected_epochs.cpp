@@ -82,11 +82,12 @@ struct PrefStops {
   std::vector<Point> at_N;  // the stopping epoch, median over seeds
 };
 
-// Measured with the rule's minimum of 500 epochs and tolerance 0.01 (the run: docs/stopping-rule.md,
-// "Preference φ that stop when they have learned"; its report docs/stop-equivalence/jaco-pref.md):
-// JacoRobot seeds 0-2 at N = 1000, without VAE pre-training. All nine φ stopped at the minimum;
-// other N are taken to stop there too until they are measured. (The test did not show the rule
-// equivalent, so no shipped profile stops these φ: this table serves a profile that opts in.)
+// Measured with the rule's minimum of 500 epochs and tolerance 0.01 (the run:
+// docs/stopping-rule.md, "Preference φ that stop when they have learned"; its report
+// docs/stop-equivalence/jaco-pref.md): JacoRobot seeds 0-2 at N = 1000, without VAE pre-training.
+// All nine φ stopped at the minimum; other N are taken to stop there too until they are measured.
+// (The test did not show the rule equivalent, so no shipped profile stops these φ: this table
+// serves a profile that opts in.)
 const std::vector<PrefStops>& pref_stops() {
   static const std::vector<PrefStops> t = {
       {"jaco", "singlepref", false, 500, 0.01, {{1000, 500}}},
