@@ -5,6 +5,8 @@
   segfaulted `sirl export`/`merge`/`inspect` and h5py): a raw h5py read dies by a signal (the
   file is hostile), while `sirl export`, `sirl merge` and `sirl_bench.open` end with one line and
   a non-zero exit;
+- a variable-length string whose reference claims 3.5 GiB (HDF5 allocates what it claims): one
+  line from the engine and the reader, within the sandboxed read's memory bound;
 - an HDF5 external link inside a framed file is refused by the engine and the reader;
 - a schema-3 file without its frame (rewritten, or its frame cut off) is refused by both;
 - `sirl merge` refuses an input no checksum verifies unless --accept-unverified, and records it;
@@ -93,6 +95,26 @@ def main():
         one_line_refusal("the reader on crafted metadata", *reader(bad), bad)
         print("ok: crafted HDF5 metadata behind a valid frame: one line, never a signal "
               f"(a raw h5py read died with rc {raw.returncode})")
+
+        # Crafted lengths: the first string of runs_index (a variable-length string dataset)
+        # claims 3.5 GiB through its heap reference's 32-bit length, which HDF5 allocates and
+        # clears before it finds the heap object shorter. Unbounded, every read of this 200 KB
+        # file takes 3.5 GiB and seconds (a few such strings take the machine's memory); the
+        # sandboxed reads bound what a file of its size may need, so it is one line.
+        with h5py.File(FIXTURE, "r") as f:
+            at = f["runs_index"].id.get_offset()
+        b = bytearray(body)
+        struct.pack_into("<I", b, at, 0xE0000000)
+        long_string = write(os.path.join(tmp, "long_string.h5"), framed(bytes(b)))
+        for args in (["export", long_string, "--csv", os.path.join(tmp, "csv_long")],
+                     ["merge", "--partial", os.path.join(tmp, "m2.h5"), long_string, good]):
+            p = sirl(*args)
+            one_line_refusal(f"sirl {args[0]} on a string claiming 3.5 GiB", p.returncode,
+                             p.stderr, long_string)
+        one_line_refusal("the reader on a string claiming 3.5 GiB", *reader(long_string),
+                         long_string)
+        print("ok: a string whose reference claims 3.5 GiB in a 200 KB file: one line, within "
+              "the sandboxed read's memory bound")
 
         # An external link inside a framed file.
         plain = shutil.copy(FIXTURE, os.path.join(tmp, "plain.h5"))

@@ -163,6 +163,40 @@ def _die_with_parent():
         pass  # not Linux: the child still ends when its reading does
 
 
+# What the sandboxed read of a file may use, as the engine bounds its own (results/
+# isolated_read.cpp): memory of 256 MiB plus 64 times the file, CPU time of 30 s plus 1 s per
+# 8 MiB. Every value is stored in the file and deflate expands at most 1032-fold, but crafted
+# metadata claims more than it stores (a variable-length string's 32-bit length, which HDF5
+# allocates and clears before it finds the heap object shorter; a dataspace of never-written
+# storage), and without a bound one small file takes the machine's memory or hangs the reader.
+_OVER_MEMORY = 5
+
+
+def _read_budget(path) -> tuple[int, int]:
+    try:
+        size = max(os.stat(path).st_size, 0)
+    except OSError:
+        size = 0
+    size = min(size, 1 << 39)
+    return (256 << 20) + 64 * size, 30 + size // (8 << 20)
+
+
+def _limit_child(memory: int, cpu_seconds: int):
+    """In the forked child: an address-space limit of what it maps now plus `memory`, and a CPU
+    time limit (SIGXCPU at it, SIGKILL a second later)."""
+    import resource
+    try:
+        with open("/proc/self/statm") as fh:
+            mapped = int(fh.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+        resource.setrlimit(resource.RLIMIT_AS, (mapped + memory, mapped + memory))
+    except (OSError, ValueError):
+        pass  # no /proc: the CPU limit still ends a runaway read
+    try:
+        resource.setrlimit(resource.RLIMIT_CPU, (cpu_seconds, cpu_seconds + 1))
+    except (OSError, ValueError):
+        pass
+
+
 # Files this process has checked, by what identifies their bytes (device, inode, size and both
 # times: a rewrite changes ctime, which no user can set back) -> check()'s result. A report opens
 # one file several times (the tables, the study, the ledger); the sandboxed read of every object
@@ -193,6 +227,7 @@ def check(path) -> tuple[bool, bool]:
 
 def _check(path) -> tuple[bool, bool]:
     framed, verified = verify(path)
+    memory, cpu_seconds = _read_budget(path)
     r, w = os.pipe()
     pid = os.fork()
     if pid == 0:  # the child: read, report, and leave without running the parent's handlers
@@ -201,8 +236,11 @@ def _check(path) -> tuple[bool, bool]:
         try:
             fd = os.open(os.devnull, os.O_WRONLY)
             os.dup2(fd, 2)
+            _limit_child(memory, cpu_seconds)
             _read_structures(str(path))
             code = 0
+        except MemoryError:
+            code = _OVER_MEMORY
         except ResultsError as e:
             os.write(w, str(e).encode("utf-8", "replace")[:4000])
             code = 3
@@ -219,12 +257,26 @@ def _check(path) -> tuple[bool, bool]:
             break
         chunks.append(b)
     os.close(r)
-    _, status = os.waitpid(pid, 0)
+    _, status, usage = os.wait4(pid, 0)
     msg = b"".join(chunks).decode("utf-8", "replace").splitlines()
     if os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0:
         return framed, verified
     if os.WIFEXITED(status) and os.WEXITSTATUS(status) == 3:
         raise ResultsError(msg[0] if msg else f"{path}: malformed HDF5")
+    if os.WIFEXITED(status) and os.WEXITSTATUS(status) == _OVER_MEMORY:
+        raise ResultsError(f"{path}: its HDF5 structures claim more data than the file can hold "
+                           f"(reading them needed more than {memory >> 20} MiB in a sandboxed "
+                           "read); the file was damaged or crafted after its checksum was "
+                           "computed, and cannot be read")
+    import signal
+    if os.WIFSIGNALED(status) and (
+            os.WTERMSIG(status) == signal.SIGXCPU or
+            (os.WTERMSIG(status) == signal.SIGKILL and
+             usage.ru_utime + usage.ru_stime >= cpu_seconds)):
+        raise ResultsError(f"{path}: reading its HDF5 structures did not end within "
+                           f"{cpu_seconds} s of CPU time in a sandboxed read, far more than a "
+                           "file of its size needs; the file was damaged or crafted after its "
+                           "checksum was computed, and cannot be read")
     how = (f"signal {os.WTERMSIG(status)}" if os.WIFSIGNALED(status)
            else f"exit {os.WEXITSTATUS(status)}")
     raise ResultsError(f"{path}: its HDF5 structures are malformed (reading them crashed the HDF5 "
