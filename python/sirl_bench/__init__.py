@@ -24,4 +24,4 @@ __all__ = ["ATTRIBUTE_TYPES", "Datasets", "FLAG_COLUMNS", "Group", "HYPER_TYPES"
            "PROTOCOLS", "Results", "ResultsError", "SCHEMA_VERSIONS", "claims",
            "datasets", "embedding_keys", "embedding_name", "filled", "open", "parse_hyper",
            "study_analysis", "typed", "write_embeddings", "write_environment"]
-__version__ = "0.29.1"
+__version__ = "0.29.2"

@@ -259,6 +259,9 @@ MUTANTS = [
      "  return Claim(fd);", "TaskCache.*", "two computers of one task at once"),
     ("jobs/task_cache.cpp", "    return held_elsewhere(dir / \"locks\" / (digest + \".lock\"));",
      "    return false;", "TaskCache.*", "gc removes a result being computed"),
+    # untrusted files (0.29.2)
+    ("results/isolated_read.cpp", "  ::setrlimit(RLIMIT_AS, &as);", "", "ctest:untrusted_files",
+     "the sandboxed read without its memory bound (a file's claims allocated)"),
 ]
 
 # Mutations the suite cannot catch because they do not change behaviour (none so far).
