@@ -17,7 +17,9 @@ namespace sirl {
 // Runs `read` (which reads `path` and throws std::exception for anything malformed) in a forked
 // child, then returns; throws H5Error with the child's message if it threw, or with one line
 // saying the file's HDF5 structures are malformed if it died by a signal or sanitizer exit, or
-// which bound it broke if it needed more memory or CPU time than a file of its size can.
+// which bound it broke where the bound ended the read (an allocation of ours that failed, the
+// sanitizers' count, the CPU limit). An allocation inside HDF5 that the limit refuses fails there,
+// and the child's message is HDF5's read error.
 // `read` must not write outside the child (it runs in a copy of the process).
 void read_in_child_first(const std::string& path, const std::function<void()>& read);
 
